@@ -1,0 +1,40 @@
+# Install rules: headers, one export set per component (so a consumer that
+# uses only the core never needs OpenCV or hidapi), a Config file that finds
+# each component's dependencies, a version file and a pkg-config file.
+include(CMakePackageConfigHelpers)
+
+set(HAPTICFIELD_CMAKE_DIR "${CMAKE_INSTALL_LIBDIR}/cmake/hapticfield")
+
+install(DIRECTORY "${PROJECT_SOURCE_DIR}/include/hapticfield" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
+
+install(TARGETS hapticfield_core EXPORT hapticfieldCoreTargets)
+install(EXPORT hapticfieldCoreTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+if(HAPTICFIELD_HAS_IMAGE)
+  install(TARGETS hapticfield_image EXPORT hapticfieldImageTargets)
+  install(EXPORT hapticfieldImageTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+endif()
+if(HAPTICFIELD_HAS_HID)
+  install(TARGETS hapticfield_hid EXPORT hapticfieldHidTargets)
+  install(EXPORT hapticfieldHidTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+endif()
+
+configure_package_config_file(
+  "${PROJECT_SOURCE_DIR}/cmake/hapticfieldConfig.cmake.in"
+  "${PROJECT_BINARY_DIR}/hapticfieldConfig.cmake"
+  INSTALL_DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+write_basic_package_version_file(
+  "${PROJECT_BINARY_DIR}/hapticfieldConfigVersion.cmake"
+  COMPATIBILITY SameMinorVersion ARCH_INDEPENDENT)
+install(FILES "${PROJECT_BINARY_DIR}/hapticfieldConfig.cmake"
+              "${PROJECT_BINARY_DIR}/hapticfieldConfigVersion.cmake"
+        DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+
+set(HAPTICFIELD_PC_REQUIRES "glm")
+if(HAPTICFIELD_HAS_IMAGE)
+  string(APPEND HAPTICFIELD_PC_REQUIRES " opencv4")
+endif()
+if(HAPTICFIELD_HAS_HID)
+  string(APPEND HAPTICFIELD_PC_REQUIRES " hidapi-hidraw")
+endif()
+configure_file("${PROJECT_SOURCE_DIR}/cmake/hapticfield.pc.in" "${PROJECT_BINARY_DIR}/hapticfield.pc" @ONLY)
+install(FILES "${PROJECT_BINARY_DIR}/hapticfield.pc" DESTINATION "${CMAKE_INSTALL_DATAROOTDIR}/pkgconfig")

@@ -1,0 +1,31 @@
+#pragma once
+// Counts global operator new calls so tests can prove a servo path does not
+// allocate. Include from exactly one translation unit per test program (it
+// replaces the global allocation functions).
+#include <atomic>
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+
+namespace hapticfield::test {
+inline std::atomic<long> allocation_count{0};
+
+/// Number of operator new calls made while fn runs (on any thread).
+template <class Fn>
+long count_allocations(Fn&& fn) {
+  const long before = allocation_count.load();
+  fn();
+  return allocation_count.load() - before;
+}
+}  // namespace hapticfield::test
+
+void* operator new(std::size_t size) {
+  hapticfield::test::allocation_count.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
