@@ -1,0 +1,7 @@
+#pragma once
+/// @file hapticfield.hpp
+/// Umbrella header: every component of the library that is installed.
+
+#include "hapticfield/core.hpp"
+#include "hapticfield/image.hpp"
+#include "hapticfield/kernels.hpp"

@@ -1,0 +1,52 @@
+#pragma once
+/// @file load.hpp
+/// Loading pictures through OpenCV with errors that say what went wrong.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "hapticfield/image/grayscale.hpp"
+
+namespace hapticfield {
+
+/// Error raised when a picture cannot be used.
+class ImageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Loads a picture unchanged (keeps 16-bit depth and alpha).
+/// @throws ImageError when the file is missing, is not a regular file, cannot
+///         be decoded, or decodes to an empty image.
+[[nodiscard]] inline cv::Mat load_image(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw ImageError("cannot open '" + path + "': no such file");
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw ImageError("cannot open '" + path + "': not a regular file");
+  cv::Mat image;
+  try {
+    image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw ImageError("cannot decode '" + path + "': " + e.what());
+  }
+  if (image.empty())
+    throw ImageError("cannot decode '" + path + "': not a picture OpenCV can read, or corrupt");
+  return image;
+}
+
+/// Loads a picture as gray levels in [0, 255] (see to_gray()).
+/// @throws ImageError as load_image(), or for an unsupported pixel format.
+[[nodiscard]] inline GrayImage load_gray(const std::string& path, GrayWeights weights = GrayWeights::paper) {
+  const cv::Mat image = load_image(path);
+  try {
+    return to_gray(image, weights);
+  } catch (const std::invalid_argument& e) {
+    throw ImageError("cannot use '" + path + "': " + e.what());
+  }
+}
+
+}  // namespace hapticfield

@@ -1,0 +1,393 @@
+// Tests of the tangible-image kernels: masks, direct and O(1) kernels,
+// interpolation, borders, force maps and the field.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "alloc_counter.hpp"
+#include "hapticfield/core.hpp"
+#include "hapticfield/kernels.hpp"
+
+using namespace hapticfield;
+
+namespace {
+
+/// A seeded picture with smooth shapes and noise, gray levels in [0, 255].
+GrayImage test_picture(int width, int height, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> noise(-20.0, 20.0);
+  GrayImage g(width, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const double shape = 128.0 + 90.0 * std::sin(x * 0.11) * std::cos(y * 0.07) + (x > width / 2 ? 20.0 : -20.0);
+      g.at(x, y) = std::clamp(shape + noise(rng), 0.0, 255.0);
+    }
+  return g;
+}
+
+/// Black/white step: white left of column edge, black from it on.
+GrayImage step_picture(int width, int height, int edge) {
+  GrayImage g(width, height, 255.0);
+  for (int y = 0; y < height; ++y)
+    for (int x = edge; x < width; ++x) g.at(x, y) = 0.0;
+  return g;
+}
+
+cv::Mat weights_mat(const Mask<>& mask, bool y) {
+  cv::Mat k(mask.size(), mask.size(), CV_64FC1);
+  for (int r = 0; r < mask.size(); ++r)
+    for (int c = 0; c < mask.size(); ++c) k.at<double>(r, c) = y ? mask.y(r, c) : mask.x(r, c);
+  return k;
+}
+
+int cv_border(Border b) {
+  return b == Border::reflect ? cv::BORDER_REFLECT_101 : cv::BORDER_REPLICATE;
+}
+
+struct MaskCase {
+  MaskKind kind;
+  int size;
+};
+
+const std::vector<MaskCase> all_masks = {
+    {MaskKind::prewitt, 3},  {MaskKind::prewitt, 5},  {MaskKind::prewitt, 17}, {MaskKind::prewitt, 33},
+    {MaskKind::sobel, 3},    {MaskKind::sobel, 5},    {MaskKind::sobel, 7},    {MaskKind::scharr, 3},
+    {MaskKind::roberts, 2},  {MaskKind::gaussian, 5}, {MaskKind::gaussian, 17}, {MaskKind::emboss, 3},
+    {MaskKind::emboss, 9},   {MaskKind::emboss, 33},
+};
+
+constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
+constexpr double infinity = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+TEST_CASE("Prewitt weights are column - centre, y the transpose") {
+  const auto m = Mask<5>::prewitt();
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 5; ++c) {
+      CHECK(m.x(r, c) == c - 2);
+      CHECK(m.y(r, c) == r - 2);
+    }
+  // 255 x (sum of positive weights) = 255 x 5 rows x (1 + 2)
+  CHECK(m.step_response() == 255.0 * 15.0);
+  STATIC_REQUIRE(sizeof(Mask<129>) > 129 * 129 * sizeof(double));  // fixed storage at compile time
+}
+
+TEST_CASE("Sobel weights equal OpenCV's getDerivKernels") {
+  for (int size : {3, 5, 7, 9, 15, 31}) {
+    CAPTURE(size);
+    cv::Mat kx;
+    cv::Mat ky;
+    cv::getDerivKernels(kx, ky, 1, 0, size, false, CV_64F);
+    const auto m = Mask<>::sobel(size);
+    for (int r = 0; r < size; ++r)
+      for (int c = 0; c < size; ++c) REQUIRE(m.x(r, c) == Approx(kx.at<double>(c) * ky.at<double>(r)));
+  }
+  const auto scharr = Mask<3>::scharr();
+  cv::Mat kx;
+  cv::Mat ky;
+  cv::getDerivKernels(kx, ky, 1, 0, cv::FILTER_SCHARR, false, CV_64F);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) CHECK(scharr.x(r, c) == Approx(kx.at<double>(c) * ky.at<double>(r)));
+}
+
+TEST_CASE("the direct kernel equals cv::filter2D on the inverted image") {
+  const GrayImage gray = test_picture(97, 83, 7);
+  const GrayImage inv = inverted(gray);
+  const cv::Mat inv_mat = to_mat(inv);
+  std::mt19937 rng(11);
+  for (const MaskCase& mc : all_masks) {
+    for (Border border : {Border::clamp, Border::reflect, Border::suspend}) {
+      CAPTURE(to_string(mc.kind), mc.size, to_string(border));
+      const auto mask = Mask<>::make(mc.kind, mc.size, 2.5);
+      const DirectKernel<> kernel(inv, mask, border);
+      cv::Mat fx;
+      cv::Mat fy;
+      cv::filter2D(inv_mat, fx, CV_64F, weights_mat(mask, false), cv::Point(-1, -1), 0.0, cv_border(border));
+      cv::filter2D(inv_mat, fy, CV_64F, weights_mat(mask, true), cv::Point(-1, -1), 0.0, cv_border(border));
+      const ImageForce<DirectKernel<>> sampler(kernel);
+      for (int i = 0; i < 200; ++i) {
+        const int x = std::uniform_int_distribution<int>(0, gray.width() - 1)(rng);
+        const int y = std::uniform_int_distribution<int>(0, gray.height() - 1)(rng);
+        if (!sampler.in_domain(x, y)) continue;  // suspend: only where the mask fits
+        const glm::dvec2 f = kernel.at_pixel(x, y);
+        REQUIRE(f.x == Approx(fx.at<double>(y, x) / mask.step_response()).margin(1e-12));
+        REQUIRE(f.y == Approx(fy.at<double>(y, x) / mask.step_response()).margin(1e-12));
+      }
+    }
+  }
+}
+
+TEST_CASE("compile-time and run-time mask sizes give the same kernel") {
+  const GrayImage inv = inverted(test_picture(40, 40, 3));
+  const DirectKernel<7> fixed(inv, Mask<7>::sobel(), Border::clamp);
+  const DirectKernel<> dynamic(inv, Mask<>::sobel(7), Border::clamp);
+  for (int y = 0; y < 40; y += 3)
+    for (int x = 0; x < 40; x += 3) REQUIRE(fixed.at_pixel(x, y) == dynamic.at_pixel(x, y));
+}
+
+TEST_CASE("the O(1) integral kernel equals the direct kernel to 1e-9 of full scale") {
+  const GrayImage gray = test_picture(300, 280, 5);
+  const GrayImage inv = inverted(gray);
+  std::mt19937 rng(13);
+  for (MaskKind kind : {MaskKind::prewitt, MaskKind::emboss}) {
+    for (int size : {3, 5, 17, 33, 65, 129}) {
+      for (Border border : {Border::suspend, Border::clamp, Border::reflect}) {
+        CAPTURE(to_string(kind), size, to_string(border));
+        const DirectKernel<> direct(inv, Mask<>::make(kind, size), border);
+        const IntegralKernel fast(inv, kind, size, border);
+        const ImageForce<IntegralKernel> sampler(fast);
+        for (int i = 0; i < 300; ++i) {
+          const int x = std::uniform_int_distribution<int>(0, gray.width() - 1)(rng);
+          const int y = std::uniform_int_distribution<int>(0, gray.height() - 1)(rng);
+          if (!sampler.in_domain(x, y)) continue;
+          const glm::dvec2 a = direct.at_pixel(x, y);
+          const glm::dvec2 b = fast.at_pixel(x, y);
+          REQUIRE(std::abs(a.x - b.x) <= 1e-9);
+          REQUIRE(std::abs(a.y - b.y) <= 1e-9);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("a black/white step edge gives magnitude 1 toward black, for every mask") {
+  const GrayImage step = step_picture(64, 48, 32);  // black from column 32 on
+  for (const MaskCase& mc : all_masks) {
+    CAPTURE(to_string(mc.kind), mc.size);
+    const TangibleImage image(step, {mc.kind, mc.size, 3.0, Border::suspend, 8.0, KernelChoice::direct});
+    const glm::dvec2 f = image.at(32.0, 24.0);
+    CHECK(f.x == Approx(1.0).epsilon(1e-12));
+    CHECK(f.y == Approx(0.0).margin(1e-12));
+    // The edge turned by 90 degrees: black below row 24 points down (+y).
+    GrayImage turned(48, 64, 255.0);
+    for (int y = 24; y < 64; ++y)
+      for (int x = 0; x < 48; ++x) turned.at(x, y) = 0.0;
+    const TangibleImage down(turned, {mc.kind, mc.size, 3.0, Border::suspend, 8.0, KernelChoice::direct});
+    CHECK(down.at(20.0, 24.0).y == Approx(1.0).epsilon(1e-12));
+    CHECK(down.at(20.0, 24.0).x == Approx(0.0).margin(1e-12));
+  }
+}
+
+TEST_CASE("contrast scales the force linearly") {
+  const GrayImage gray = test_picture(120, 90, 9);
+  const TangibleImage full(gray, {});
+  for (double contrast : {0.25, 0.5, 0.8}) {
+    GrayImage low(gray.width(), gray.height());
+    for (int y = 0; y < gray.height(); ++y)
+      for (int x = 0; x < gray.width(); ++x) low.at(x, y) = 128.0 + contrast * (gray.at(x, y) - 128.0);
+    const TangibleImage scaled(low, {});
+    for (double x = 10.3; x < 110.0; x += 7.9) {
+      const glm::dvec2 a = full.at(x, 45.6);
+      const glm::dvec2 b = scaled.at(x, 45.6);
+      REQUIRE(b.x == Approx(contrast * a.x).margin(1e-12));
+      REQUIRE(b.y == Approx(contrast * a.y).margin(1e-12));
+    }
+  }
+}
+
+TEST_CASE("forces are continuous between pixel centres") {
+  const GrayImage gray = test_picture(200, 150, 21);
+  for (MaskKind kind : {MaskKind::prewitt, MaskKind::sobel, MaskKind::roberts}) {
+    for (Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
+      CAPTURE(to_string(kind), to_string(border));
+      TangibleOptions o;
+      o.mask = kind;
+      o.size = kind == MaskKind::roberts ? 2 : (kind == MaskKind::sobel ? 5 : 9);
+      o.border = border;
+      const TangibleImage image(gray, o);
+      std::mt19937 rng(3);
+      std::uniform_real_distribution<double> ux(-0.5, 199.5);
+      std::uniform_real_distribution<double> uy(-0.5, 149.5);
+      for (int i = 0; i < 3000; ++i) {
+        const double x = ux(rng);
+        const double y = uy(rng);
+        const glm::dvec2 a = image.at(x, y);
+        const glm::dvec2 b = image.at(x + 1e-3, y + 1e-3);
+        // two neighbouring pixel forces differ by at most 2, so 1e-3 px moves
+        // the interpolated force by at most 2 x 2e-3
+        REQUIRE(std::abs(a.x - b.x) <= 4e-3);
+        REQUIRE(std::abs(a.y - b.y) <= 4e-3);
+      }
+      // at a pixel centre the interpolation returns that pixel's force exactly
+      CHECK(image.at(100.0, 75.0) == image.at_pixel(100, 75));
+    }
+  }
+}
+
+TEST_CASE("border policies") {
+  const GrayImage gray = test_picture(60, 50, 2);
+  TangibleOptions o;
+  o.size = 9;  // anchor 4: the mask fits for pixel centres 4 .. width - 5
+
+  SECTION("suspend: zero where the mask leaves the image, the kernel's force inside") {
+    o.border = Border::suspend;
+    const TangibleImage image(gray, o);
+    CHECK(image.at(3.0, 20.0) == glm::dvec2{0.0});
+    CHECK(image.at(56.0, 20.0) == glm::dvec2{0.0});
+    CHECK(image.at(20.0, 46.0) == glm::dvec2{0.0});
+    CHECK(image.at(4.0, 20.0) != glm::dvec2{0.0});
+    // half a pixel past the last full-mask pixel: half its force
+    CHECK(image.at(3.5, 20.0).x == Approx(0.5 * image.at(4.0, 20.0).x));
+  }
+  SECTION("clamp and reflect: a force right up to the picture's edge") {
+    for (Border b : {Border::clamp, Border::reflect}) {
+      o.border = b;
+      const TangibleImage image(gray, o);
+      CHECK(image.at(0.0, 20.0) != glm::dvec2{0.0});
+      CHECK(image.at(-0.25, 20.0) == image.at(0.0, 20.0));  // the outer half pixel keeps the edge force
+      CHECK(image.at(-0.6, 20.0) == glm::dvec2{0.0});       // beyond the picture: nothing
+      CHECK(image.at(59.0, 49.0) != glm::dvec2{0.0});
+    }
+  }
+  SECTION("fade: a linear ramp over the last k pixels") {
+    o.border = Border::fade;
+    o.fade_px = 10.0;
+    const TangibleImage faded(gray, o);
+    o.border = Border::suspend;
+    const TangibleImage hard(gray, o);
+    // anchor 4 is the last full-mask column; 5 px inside is half way up the ramp
+    CHECK(faded.at(4.0, 25.0) == glm::dvec2{0.0});
+    CHECK(faded.at(9.0, 25.0).x == Approx(0.5 * hard.at(9.0, 25.0).x));
+    CHECK(faded.at(14.0, 25.0) == hard.at(14.0, 25.0));
+    CHECK(faded.at(30.0, 25.0) == hard.at(30.0, 25.0));
+  }
+}
+
+TEST_CASE("mirror symmetry: flipping the picture flips fx and keeps fy") {
+  const GrayImage gray = test_picture(81, 61, 17);
+  GrayImage mirrored(81, 61);
+  for (int y = 0; y < 61; ++y)
+    for (int x = 0; x < 81; ++x) mirrored.at(80 - x, y) = gray.at(x, y);
+  for (const MaskCase& mc : all_masks) {
+    if (mc.kind == MaskKind::roberts) continue;  // even size: its anchor is not symmetric
+    CAPTURE(to_string(mc.kind), mc.size);
+    TangibleOptions o{mc.kind, mc.size, 2.0, Border::reflect, 8.0, KernelChoice::automatic};
+    const TangibleImage a(gray, o);
+    const TangibleImage b(mirrored, o);
+    for (double x = 0.0; x <= 80.0; x += 3.7) {
+      const glm::dvec2 fa = a.at(x, 30.3);
+      const glm::dvec2 fb = b.at(80.0 - x, 30.3);
+      REQUIRE(fb.x == Approx(-fa.x).margin(1e-12));
+      REQUIRE(fb.y == Approx(fa.y).margin(1e-12));
+    }
+  }
+}
+
+TEST_CASE("the O(1) Prewitt map equals the per-pixel kernel map") {
+  const GrayImage gray = test_picture(150, 110, 23);
+  for (int size : {3, 17, 65}) {
+    for (Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
+      CAPTURE(size, to_string(border));
+      TangibleOptions o;
+      o.size = size;
+      o.border = border;
+      o.kernel = KernelChoice::direct;
+      const ForceMap reference = force_map(TangibleImage(gray, o));
+      const ForceMap fast = prewitt_force_map(gray, size, border);
+      REQUIRE(fast.width == reference.width);
+      REQUIRE(fast.height == reference.height);
+      for (std::size_t i = 0; i < fast.fx.size(); ++i) {
+        REQUIRE(fast.fx[i] == Approx(reference.fx[i]).margin(1e-6));
+        REQUIRE(fast.fy[i] == Approx(reference.fy[i]).margin(1e-6));
+      }
+    }
+  }
+}
+
+TEST_CASE("bad input: a clear error at setup, zero force at run time") {
+  const GrayImage gray = test_picture(40, 30, 1);
+  SECTION("mask size even or out of range") {
+    CHECK_THROWS_WITH(Mask<>::prewitt(4), Catch::Contains("size 4 px is not allowed"));
+    CHECK_THROWS_AS(Mask<>::prewitt(1), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<>::prewitt(131), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<>::prewitt(-3), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<>::sobel(33), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<>::scharr(5), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<>::roberts(3), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<>::gaussian(0.0, 5), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<>::gaussian(not_a_number, 5), std::invalid_argument);
+    CHECK_THROWS_AS(Mask<5>::prewitt(7), std::invalid_argument);
+    CHECK_THROWS_AS(TangibleImage(gray, {MaskKind::prewitt, 8}), std::invalid_argument);
+    CHECK_THROWS_AS(IntegralKernel(inverted(gray), MaskKind::sobel, 3, Border::clamp), std::invalid_argument);
+    CHECK_THROWS_AS(prewitt_force_map(gray, 6, Border::clamp), std::invalid_argument);
+  }
+  SECTION("empty, 1x1 and smaller-than-mask images") {
+    CHECK_THROWS_WITH(TangibleImage(GrayImage{}, {}), Catch::Contains("empty"));
+    CHECK_THROWS_WITH(TangibleImage(GrayImage(1, 1, 0.0), {MaskKind::prewitt, 3}),
+                      Catch::Contains("smaller than the 3 x 3 mask"));
+    CHECK_THROWS_WITH(TangibleImage(gray, {MaskKind::prewitt, 33}), Catch::Contains("smaller than the 33 x 33"));
+    CHECK_THROWS_AS(prewitt_force_map(GrayImage(2, 2), 3, Border::clamp), std::invalid_argument);
+    CHECK_THROWS_AS(GrayImage(0, 5), std::invalid_argument);
+  }
+  SECTION("bad fade width") {
+    TangibleOptions o;
+    o.size = 3;
+    o.fade_px = 0.0;
+    CHECK_THROWS_AS(TangibleImage(gray, o), std::invalid_argument);
+  }
+  SECTION("NaN / Inf probes and probes outside the picture give zero force") {
+    const TangibleImage image(gray, {MaskKind::prewitt, 3, 0.0, Border::clamp});
+    for (double bad : {not_a_number, infinity, -infinity}) {
+      CHECK(image.at(bad, 10.0) == glm::dvec2{0.0});
+      CHECK(image.at(10.0, bad) == glm::dvec2{0.0});
+    }
+    CHECK(image.at(-1.0, 10.0) == glm::dvec2{0.0});
+    CHECK(image.at(40.0, 10.0) == glm::dvec2{0.0});
+    CHECK(image.at(10.0, 1e300) == glm::dvec2{0.0});
+    CHECK(image.at(-1e300, -1e300) == glm::dvec2{0.0});
+    TangibleImageField<> field(image, PlaneMapping(1.0, {20.0, 15.0}), 2.0);
+    Probe probe;
+    probe.position = {not_a_number, 0.0, 0.0};
+    CHECK(field.force(probe) == glm::dvec3{0.0});
+    probe.position = {1.0, 1.0, 0.0};  // 1 m away: far outside the picture
+    CHECK(field.force(probe) == glm::dvec3{0.0});
+    CHECK_THROWS_AS(TangibleImageField<>(image, PlaneMapping(1.0), -1.0), std::invalid_argument);
+    CHECK_THROWS_AS(TangibleImageField<>(image, PlaneMapping(1.0), not_a_number), std::invalid_argument);
+  }
+}
+
+TEST_CASE("TangibleImageField maps the picture into the device frame") {
+  const GrayImage step = step_picture(64, 48, 32);  // black right of column 32
+  // 1 px/mm, pixel (32, 24) at the device origin
+  TangibleImageField<> field(TangibleImage(step, {MaskKind::prewitt, 5}), PlaneMapping(1.0, {32.0, 24.0}), 1.5);
+  Probe probe;  // at the origin: on the edge
+  const glm::dvec3 f = field.force(probe);
+  CHECK(f.x == Approx(1.5));  // 1.5 N toward black (device +x)
+  CHECK(f.y == Approx(0.0).margin(1e-12));
+  CHECK(f.z == 0.0);
+  probe.position = {-0.020, 0.0, 0.0};  // 20 mm left: flat white
+  CHECK(field.force(probe) == glm::dvec3{0.0});
+
+  // image +y (down) is device -y
+  GrayImage turned(48, 64, 255.0);
+  for (int y = 32; y < 64; ++y)
+    for (int x = 0; x < 48; ++x) turned.at(x, y) = 0.0;
+  AnyField any = TangibleImageField<>(TangibleImage(turned, {MaskKind::sobel, 3}), PlaneMapping(1.0, {24.0, 32.0}), 1.0);
+  CHECK(any.force(Probe{}).y == Approx(-1.0));
+  // composition: clamp to 0.4 N keeps the direction
+  auto clamped = clamp(std::move(any), 0.4);
+  CHECK(clamped.force(Probe{}).y == Approx(-0.4));
+}
+
+TEST_CASE("force queries never allocate") {
+  const GrayImage gray = test_picture(200, 200, 4);
+  TangibleImageField<> integral(TangibleImage(gray, {MaskKind::prewitt, 33}), PlaneMapping(2.0, {100.0, 100.0}), 1.0);
+  AnyField direct = TangibleImageField<>(TangibleImage(gray, {MaskKind::gaussian, 9, 2.0, Border::fade}),
+                                         PlaneMapping(2.0, {100.0, 100.0}), 1.0);
+  Probe probe;
+  glm::dvec3 total{0.0};
+  const long allocations = test::count_allocations([&] {
+    for (int i = 0; i < 10000; ++i) {
+      probe.position = {0.05 * std::sin(i * 0.01), 0.05 * std::cos(i * 0.013), 0.0};
+      total += integral.force(probe) + direct.force(probe);
+    }
+  });
+  CHECK(allocations == 0);
+  CHECK(is_finite(total));
+}
