@@ -179,7 +179,7 @@ int main(int argc, char** argv) {
   try {
     args = parse(argc, argv);
   } catch (const UsageError& e) {
-    std::cerr << "tangible_image: " << e.what() << "\n" << usage;
+    std::cerr << "tangible_image: " << e.what() << " (--help shows the usage)\n";
     return 2;
   }
   try {
