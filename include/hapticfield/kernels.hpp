@@ -11,5 +11,6 @@
 #include "hapticfield/kernels/image_force.hpp"
 #include "hapticfield/kernels/integral_kernel.hpp"
 #include "hapticfield/kernels/mask.hpp"
+#include "hapticfield/kernels/mask_choice.hpp"
 #include "hapticfield/kernels/tangible_field.hpp"
 #include "hapticfield/kernels/tangible_image.hpp"
