@@ -55,11 +55,30 @@ template <class Source>
   return map;
 }
 
+namespace detail {
+
+/// Inverted picture row `row`, columns c_first .. c_first + n - 1, extended
+/// past the picture's sides by the border policy, into out[0 .. n).
+inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int n, Border border, double* out) {
+  const double* src = gray.row(row);
+  const int w = gray.width();
+  const int interior_begin = std::clamp(-c_first, 0, n);
+  const int interior_end = std::clamp(w - c_first, interior_begin, n);
+  for (int q = 0; q < interior_begin; ++q) out[q] = gray_full_scale - src[border_index(c_first + q, w, border)];
+  for (int q = interior_begin; q < interior_end; ++q) out[q] = gray_full_scale - src[c_first + q];
+  for (int q = interior_end; q < n; ++q) out[q] = gray_full_scale - src[border_index(c_first + q, w, border)];
+}
+
+}  // namespace detail
+
 /// The Prewitt map of a gray picture in O(1) per pixel whatever the mask
-/// size: a running vertical box sum B and first moment V down the columns,
-/// then along each row a running sum of V (fy) and a running ramp over B
-/// (fx). Equals force_map() of TangibleImage{prewitt, size, border} to float
-/// rounding.
+/// size. Along each (border-extended) row, running sums give the row's box
+/// sum H0 and first moment H1 under the mask, four rows at a time so their
+/// dependency chains overlap; down the columns, running sums of H1 give fx
+/// and a running ramp over H0 gives fy, vectorised across the row. Rows live
+/// in a small ring buffer, so memory traffic stays near one read of the
+/// picture and one write of the map. Equals force_map() of
+/// TangibleImage{prewitt, size, border} to float rounding.
 /// @throws std::invalid_argument as TangibleImage.
 [[nodiscard]] inline ForceMap prewitt_force_map(const GrayImage& gray, int size, Border border,
                                                 double fade_px = default_fade_px) {
@@ -68,69 +87,122 @@ template <class Source>
   if (!std::isfinite(fade_px) || fade_px <= 0.0)
     throw std::invalid_argument("prewitt_force_map: fade width must be finite and positive [px]");
   const int h = size / 2;
-  const int w = gray.width();
-  const int ht = gray.height();
+  const int width = gray.width();
+  const int height = gray.height();
   const double scale = 1.0 / Mask<>::prewitt(size).step_response();
 
-  // Inverted and padded by h: padded (x + h, y + h) is pixel (x, y).
-  const detail::PaddedImage p(inverted(gray), h, border);
-  const int pw = p.width();
-
-  ForceMap map{w, ht, {}, {}};
-  map.fx.assign(static_cast<std::size_t>(w) * ht, 0.0f);
+  ForceMap map{width, height, {}, {}};
+  map.fx.assign(static_cast<std::size_t>(width) * height, 0.0f);
   map.fy.assign(map.fx.size(), 0.0f);
 
+  // Output pixels [lo, x_hi] x [lo, y_hi]; they read rows and columns h beyond.
   const bool full_mask = needs_full_mask(border);
   const int lo = full_mask ? h : 0;
-  const int x_hi = full_mask ? w - 1 - h : w - 1;
-  const int y_hi = full_mask ? ht - 1 - h : ht - 1;
+  const int x_hi = full_mask ? width - 1 - h : width - 1;
+  const int y_hi = full_mask ? height - 1 - h : height - 1;
+  const int n_out = x_hi - lo + 1;
+  const int n_in = n_out + 2 * h;
+  const int r_last = y_hi + h;
 
-  std::vector<double> box(static_cast<std::size_t>(pw), 0.0);     // B: sum over rows y-h..y+h
-  std::vector<double> moment(static_cast<std::size_t>(pw), 0.0);  // V: sum of (row - y) P
+  // Ring of horizontal results: rows y - h - 1 .. y + h + 3 are alive at once.
+  constexpr int batch = 4;
+  const int ring = 2 * h + 2 + batch;
+  std::vector<double> h0(static_cast<std::size_t>(ring) * n_out);
+  std::vector<double> h1(h0.size());
+  std::vector<double> rows(static_cast<std::size_t>(batch) * n_in);  // interleaved
+  const auto h0_row = [&](int r) { return &h0[static_cast<std::size_t>((r + ring * 4) % ring) * n_out]; };
+  const auto h1_row = [&](int r) { return &h1[static_cast<std::size_t>((r + ring * 4) % ring) * n_out]; };
+
+  // Horizontal pass for rows r .. r + k - 1 (k <= batch). The rows are
+  // interleaved (column q of row b at q * batch + b) so the k running sums
+  // advance together in vector registers.
+  std::vector<double> row(static_cast<std::size_t>(n_in));
+  const auto horizontal = [&](int r, int k) {
+    for (int b = 0; b < batch; ++b) {
+      if (b < k) detail::inverted_padded_row(gray, detail::border_index(r + b, height, border), lo - h, n_in, border, row.data());
+      for (int q = 0; q < n_in; ++q) rows[static_cast<std::size_t>(q) * batch + b] = b < k ? row[q] : 0.0;
+    }
+    double s[batch] = {};
+    double m1[batch] = {};
+    for (int q = 0; q <= 2 * h; ++q)
+      for (int b = 0; b < batch; ++b) {
+        s[b] += rows[q * batch + b];
+        m1[b] += (q - h) * rows[q * batch + b];
+      }
+    double* o0[batch];
+    double* o1[batch];
+    for (int b = 0; b < batch; ++b) {
+      o0[b] = h0_row(r + b);
+      o1[b] = h1_row(r + b);
+    }
+    const auto store = [&](int i) {
+      for (int b = 0; b < k; ++b) {
+        o0[b][i] = s[b];
+        o1[b][i] = m1[b];
+      }
+    };
+    store(0);
+    const double hh = h;
+    for (int i = 1; i < n_out; ++i) {
+      const double* leaving = &rows[static_cast<std::size_t>(i - 1) * batch];
+      const double* entering = &rows[static_cast<std::size_t>(i + 2 * h) * batch];
+      for (int b = 0; b < batch; ++b) {
+        s[b] += entering[b] - leaving[b];
+        m1[b] += hh * leaving[b] + (hh + 1.0) * entering[b] - s[b];  // sum of j P(x + j), from x - 1
+      }
+      store(i);
+    }
+  };
+
+  std::vector<double> box(static_cast<std::size_t>(n_out), 0.0);     // sum of H0 over the window
+  std::vector<double> ramp(static_cast<std::size_t>(n_out), 0.0);    // sum of i H0(y + i): fy
+  std::vector<double> moment(static_cast<std::size_t>(n_out), 0.0);  // sum of H1(y + i): fx
+  int computed = lo - h;  // next row without a horizontal result
+  const auto ensure = [&](int r) {
+    while (computed <= r) {
+      const int k = std::min(batch, r_last - computed + 1);
+      horizontal(computed, k);
+      computed += k;
+    }
+  };
+
+  ensure(lo + h);
   for (int i = -h; i <= h; ++i) {
-    const double* r = p.row(lo + h + i);
-    for (int c = 0; c < pw; ++c) {
-      box[c] += r[c];
-      moment[c] += i * r[c];
+    const double* a = h0_row(lo + i);
+    const double* b = h1_row(lo + i);
+    for (int x = 0; x < n_out; ++x) {
+      box[x] += a[x];
+      ramp[x] += i * a[x];
+      moment[x] += b[x];
     }
   }
   for (int y = lo; y <= y_hi; ++y) {
-    if (y > lo) {  // slide the column window down one row
-      const double* out = p.row(y - 1);          // padded row of y - 1 - h
-      const double* in = p.row(y + 2 * h);        // padded row of y + h
-      for (int c = 0; c < pw; ++c) {
-        box[c] += in[c] - out[c];
-        moment[c] += h * out[c] + (h + 1) * in[c] - box[c];  // V(y) from V(y - 1)
+    if (y > lo) {  // slide the window down: row y - 1 - h leaves, row y + h enters
+      ensure(y + h);
+      const double* out0 = h0_row(y - 1 - h);
+      const double* in0 = h0_row(y + h);
+      const double* out1 = h1_row(y - 1 - h);
+      const double* in1 = h1_row(y + h);
+      for (int x = 0; x < n_out; ++x) {
+        box[x] += in0[x] - out0[x];
+        ramp[x] += h * out0[x] + (h + 1) * in0[x] - box[x];
+        moment[x] += in1[x] - out1[x];
       }
     }
-    // Along the row: S = sum of B over the window, R = sum of j B[x + j],
-    // T = sum of V over the window.
-    double s = 0.0;
-    double ramp = 0.0;
-    double t = 0.0;
-    for (int j = -h; j <= h; ++j) {
-      const int c = lo + h + j;
-      s += box[c];
-      ramp += j * box[c];
-      t += moment[c];
-    }
-    float* fx = &map.fx[map.index(0, y)];
-    float* fy = &map.fy[map.index(0, y)];
-    for (int x = lo; x <= x_hi; ++x) {
-      if (x > lo) {
-        const int leaving = x - 1;        // padded column of x - 1 - h
-        const int entering = x + 2 * h;   // padded column of x + h
-        s += box[entering] - box[leaving];
-        ramp += h * box[leaving] + (h + 1) * box[entering] - s;  // R(x) from R(x - 1)
-        t += moment[entering] - moment[leaving];
+    float* fx = &map.fx[map.index(lo, y)];
+    float* fy = &map.fy[map.index(lo, y)];
+    if (border == Border::fade) {
+      for (int x = 0; x < n_out; ++x) {
+        const double g = scale * std::clamp(std::min(std::min(x, n_out - 1 - x), std::min(y - lo, y_hi - y)) / fade_px,
+                                            0.0, 1.0);
+        fx[x] = static_cast<float>(moment[x] * g);
+        fy[x] = static_cast<float>(ramp[x] * g);
       }
-      double gain = scale;
-      if (border == Border::fade) {
-        const double inside = std::min(std::min(x - lo, x_hi - x), std::min(y - lo, y_hi - y));
-        gain *= std::clamp(inside / fade_px, 0.0, 1.0);
+    } else {
+      for (int x = 0; x < n_out; ++x) {
+        fx[x] = static_cast<float>(moment[x] * scale);
+        fy[x] = static_cast<float>(ramp[x] * scale);
       }
-      fx[x] = static_cast<float>(ramp * gain);
-      fy[x] = static_cast<float>(t * gain);
     }
   }
   return map;

@@ -49,10 +49,7 @@ class IntegralKernel {
     stride_ = padded.width() + 1;
     x0_ = padded.width() / 2;
     y0_ = padded.height() / 2;
-    const std::size_t cells = static_cast<std::size_t>(stride_) * static_cast<std::size_t>(padded.height() + 1);
-    sum_.assign(cells, 0.0);
-    moment_x_.assign(cells, 0.0);
-    moment_y_.assign(cells, 0.0);
+    table_.assign(static_cast<std::size_t>(stride_) * static_cast<std::size_t>(padded.height() + 1), Cell{});
     // Table (r + 1, c + 1) holds the sums over rows 0..r and columns 0..c.
     for (int r = 0; r < padded.height(); ++r) {
       const double* p = padded.row(r);
@@ -64,9 +61,8 @@ class IntegralKernel {
       for (int c = 0; c < padded.width(); ++c) {
         row_sum += p[c];
         row_mx += p[c] * (c - x0_);
-        sum_[here + c + 1] = sum_[above + c + 1] + row_sum;
-        moment_x_[here + c + 1] = moment_x_[above + c + 1] + row_mx;
-        moment_y_[here + c + 1] = moment_y_[above + c + 1] + row_sum * dy;
+        const Cell& up = table_[above + c + 1];
+        table_[here + c + 1] = Cell{up.sum + row_sum, up.moment_x + row_mx, up.moment_y + row_sum * dy};
       }
     }
   }
@@ -89,21 +85,33 @@ class IntegralKernel {
     const int r0 = cy - a;
     const int r1 = r0 + size_;  // exclusive
     if (kind_ == MaskKind::prewitt) {
-      const double m0 = box(sum_, r0, r1, c0, c1);
-      const double fx = box(moment_x_, r0, r1, c0, c1) - (cx - x0_) * m0;
-      const double fy = box(moment_y_, r0, r1, c0, c1) - (cy - y0_) * m0;
+      const Cell b = box(r0, r1, c0, c1);
+      const double fx = b.moment_x - (cx - x0_) * b.sum;
+      const double fy = b.moment_y - (cy - y0_) * b.sum;
       return glm::dvec2{fx * scale_, fy * scale_};
     }
-    const double fx = box(sum_, r0, r1, cx + 1, c1) - box(sum_, r0, r1, c0, cx);
-    const double fy = box(sum_, cy + 1, r1, c0, c1) - box(sum_, r0, cy, c0, c1);
+    const double fx = box(r0, r1, cx + 1, c1).sum - box(r0, r1, c0, cx).sum;
+    const double fy = box(cy + 1, r1, c0, c1).sum - box(r0, cy, c0, c1).sum;
     return glm::dvec2{fx * scale_, fy * scale_};
   }
 
  private:
-  /// Sum over padded rows [r0, r1) and columns [c0, c1) of a table.
-  [[nodiscard]] double box(const std::vector<double>& t, int r0, int r1, int c0, int c1) const noexcept {
+  /// The three tables side by side, so one cache line serves all of them.
+  struct Cell {
+    double sum = 0.0;       ///< sum of P
+    double moment_x = 0.0;  ///< sum of P (c - x0)
+    double moment_y = 0.0;  ///< sum of P (r - y0)
+  };
+
+  /// Sums over padded rows [r0, r1) and columns [c0, c1).
+  [[nodiscard]] Cell box(int r0, int r1, int c0, int c1) const noexcept {
     const std::size_t s = static_cast<std::size_t>(stride_);
-    return t[r1 * s + c1] - t[r0 * s + c1] - t[r1 * s + c0] + t[r0 * s + c0];
+    const Cell& a = table_[r1 * s + c1];
+    const Cell& b = table_[r0 * s + c1];
+    const Cell& c = table_[r1 * s + c0];
+    const Cell& d = table_[r0 * s + c0];
+    return Cell{a.sum - b.sum - c.sum + d.sum, a.moment_x - b.moment_x - c.moment_x + d.moment_x,
+                a.moment_y - b.moment_y - c.moment_y + d.moment_y};
   }
 
   MaskKind kind_;
@@ -116,9 +124,7 @@ class IntegralKernel {
   int x0_ = 0;
   int y0_ = 0;
   double scale_ = 1.0;
-  std::vector<double> sum_;
-  std::vector<double> moment_x_;
-  std::vector<double> moment_y_;
+  std::vector<Cell> table_;
 };
 
 }  // namespace hapticfield

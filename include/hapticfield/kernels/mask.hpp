@@ -101,7 +101,7 @@ class Mask {
   /// Scharr 3 x 3: smoothing [3 10 3], derivative [-1 0 1].
   [[nodiscard]] static Mask scharr(int size = Size) {
     constexpr double smooth[3] = {3.0, 10.0, 3.0};
-    return build(MaskKind::scharr, size, [&](int r, int c, int) { return smooth[r] * (c - 1); });
+    return build(MaskKind::scharr, size, [&](int r, int c, int) { return smooth[r % 3] * (c - 1); });  // size is 3
   }
 
   /// Roberts cross d1 = I(1,1) - I(0,0), d2 = I(1,0) - I(0,1), rotated from
