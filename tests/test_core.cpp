@@ -2,8 +2,10 @@
 // plane mapping.
 #include <catch2/catch.hpp>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
@@ -164,4 +166,53 @@ TEST_CASE("the allocation counter itself sees allocations") {
     delete keep;
   });
   CHECK(allocations == 1);
+}
+
+namespace {
+struct Constant {  // a field that returns its own id as fx
+  double id = 0.0;
+  glm::dvec3 force(const Probe&) const noexcept { return glm::dvec3{id, 0.0, 0.0}; }
+};
+}  // namespace
+
+TEST_CASE("LiveField: a writer replaces the field while the reader ticks, lock- and allocation-free") {
+  LiveField<Constant> live;
+  CHECK(live.force(Probe{}) == glm::dvec3{0.0});  // nothing published yet
+  live.publish(Constant{1.0});
+  CHECK(live.force(Probe{}).x == 1.0);
+  live.publish(Constant{2.0});
+  live.publish(Constant{3.0});  // the reader sees only the newest
+  CHECK(live.force(Probe{}).x == 3.0);
+  CHECK(live.force(Probe{}).x == 3.0);
+
+  constexpr int published = 20000;
+  std::atomic<bool> done{false};
+  std::atomic<bool> reading{false};
+  std::thread writer([&] {
+    while (!reading.load()) std::this_thread::yield();  // overlap the two threads
+    for (int i = 4; i <= published; ++i) live.publish(Constant{static_cast<double>(i)});
+    done = true;
+  });
+  double last = 3.0;
+  bool monotonic = true;
+  long reads = 0;
+  reading = true;
+  do {
+    const double id = live.force(Probe{}).x;
+    monotonic = monotonic && id >= last;
+    last = id;
+    ++reads;
+  } while (!done.load());
+  writer.join();
+  CHECK(monotonic);
+  CHECK(live.force(Probe{}).x == published);
+  CHECK(reads > 0);
+
+  // the reader's side alone never allocates
+  live.publish(Constant{7.0});
+  const long reader_allocations = test::count_allocations([&] {
+    for (int i = 0; i < 1000; ++i) (void)live.force(Probe{});
+  });
+  CHECK(reader_allocations == 0);
+  CHECK(live.force(Probe{}).x == 7.0);
 }

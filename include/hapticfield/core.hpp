@@ -5,6 +5,7 @@
 #include "hapticfield/core/any_field.hpp"
 #include "hapticfield/core/compose.hpp"
 #include "hapticfield/core/field.hpp"
+#include "hapticfield/core/live_field.hpp"
 #include "hapticfield/core/plane_mapping.hpp"
 #include "hapticfield/core/probe.hpp"
 #include "hapticfield/core/vector_math.hpp"
