@@ -38,12 +38,14 @@ TEST_CASE("paper weights: Y = 0.3 R + 0.59 G + 0.11 B, not rounded") {
 }
 
 TEST_CASE("BT.601 weights agree with cv::cvtColor to its rounding") {
+  // cvtColor rounds to whole levels with 14-bit fixed-point weights
+  // (4899, 9617, 1868) / 16384: 0.5 level plus at most 255 x 5e-5.
   const cv::Mat bgr = random_bgr(64, 48, 5);
   cv::Mat reference;
   cv::cvtColor(bgr, reference, cv::COLOR_BGR2GRAY);
   const GrayImage g = to_gray(bgr, GrayWeights::bt601);
   for (int y = 0; y < 48; ++y)
-    for (int x = 0; x < 64; ++x) REQUIRE(std::abs(g.at(x, y) - reference.at<unsigned char>(y, x)) <= 0.5 + 1e-9);
+    for (int x = 0; x < 64; ++x) REQUIRE(std::abs(g.at(x, y) - reference.at<unsigned char>(y, x)) <= 0.5 + 0.013);
 }
 
 TEST_CASE("1-, 3- and 4-channel, 8- and 16-bit pictures convert alike") {
