@@ -11,6 +11,7 @@
 
 #include <glm/vec2.hpp>
 
+#include "hapticfield/core/restrict.hpp"
 #include "hapticfield/image/gray_image.hpp"
 #include "hapticfield/kernels/border.hpp"
 #include "hapticfield/kernels/direct_kernel.hpp"
@@ -58,30 +59,46 @@ template <class Source>
 namespace detail {
 
 /// Inverted picture row `row`, columns c_first .. c_first + n - 1, extended
-/// past the picture's sides by the border policy, into out[0 .. n).
-inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int n, Border border, double* out) {
+/// past the picture's sides by the border policy, into out[q * stride].
+inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int n, Border border, double* out,
+                                int stride) {
   const double* src = gray.row(row);
   const int w = gray.width();
   const int interior_begin = std::clamp(-c_first, 0, n);
   const int interior_end = std::clamp(w - c_first, interior_begin, n);
-  for (int q = 0; q < interior_begin; ++q) out[q] = gray_full_scale - src[border_index(c_first + q, w, border)];
-  for (int q = interior_begin; q < interior_end; ++q) out[q] = gray_full_scale - src[c_first + q];
-  for (int q = interior_end; q < n; ++q) out[q] = gray_full_scale - src[border_index(c_first + q, w, border)];
+  for (int q = 0; q < interior_begin; ++q)
+    out[q * stride] = gray_full_scale - src[border_index(c_first + q, w, border)];
+  for (int q = interior_begin; q < interior_end; ++q) out[q * stride] = gray_full_scale - src[c_first + q];
+  for (int q = interior_end; q < n; ++q) out[q * stride] = gray_full_scale - src[border_index(c_first + q, w, border)];
+}
+
+/// Sets every pixel of the map outside [x0, x1] x [y0, y1] to zero.
+inline void zero_outside(ForceMap& map, int x0, int x1, int y0, int y1) {
+  for (int y = 0; y < map.height; ++y) {
+    float* fx = &map.fx[map.index(0, y)];
+    float* fy = &map.fy[map.index(0, y)];
+    const bool whole = y < y0 || y > y1;
+    for (int x = 0; x < map.width; ++x) {
+      if (whole || x < x0 || x > x1) fx[x] = fy[x] = 0.0f;
+      else x = x1;  // skip the interior
+    }
+  }
 }
 
 }  // namespace detail
 
 /// The Prewitt map of a gray picture in O(1) per pixel whatever the mask
-/// size. Along each (border-extended) row, running sums give the row's box
+/// size, written into `map` (its buffers are reused when already large
+/// enough). Along each border-extended row, running sums give the row's box
 /// sum H0 and first moment H1 under the mask, four rows at a time so their
-/// dependency chains overlap; down the columns, running sums of H1 give fx
-/// and a running ramp over H0 gives fy, vectorised across the row. Rows live
-/// in a small ring buffer, so memory traffic stays near one read of the
-/// picture and one write of the map. Equals force_map() of
+/// dependency chains run side by side; down the columns, running sums of H1
+/// give fx and a running ramp over H0 gives fy, vectorised across the row.
+/// Rows live in a small ring buffer, so memory traffic stays near one read
+/// of the picture and one write of the map. Equals force_map() of
 /// TangibleImage{prewitt, size, border} to float rounding.
 /// @throws std::invalid_argument as TangibleImage.
-[[nodiscard]] inline ForceMap prewitt_force_map(const GrayImage& gray, int size, Border border,
-                                                double fade_px = default_fade_px) {
+inline void prewitt_force_map(const GrayImage& gray, int size, Border border, ForceMap& map,
+                              double fade_px = default_fade_px) {
   validate_mask_size(MaskKind::prewitt, size);
   validate_image_for_mask(gray, size);
   if (!std::isfinite(fade_px) || fade_px <= 0.0)
@@ -91,15 +108,17 @@ inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int
   const int height = gray.height();
   const double scale = 1.0 / Mask<>::prewitt(size).step_response();
 
-  ForceMap map{width, height, {}, {}};
-  map.fx.assign(static_cast<std::size_t>(width) * height, 0.0f);
-  map.fy.assign(map.fx.size(), 0.0f);
+  map.width = width;
+  map.height = height;
+  map.fx.resize(static_cast<std::size_t>(width) * height);
+  map.fy.resize(map.fx.size());
 
   // Output pixels [lo, x_hi] x [lo, y_hi]; they read rows and columns h beyond.
   const bool full_mask = needs_full_mask(border);
   const int lo = full_mask ? h : 0;
   const int x_hi = full_mask ? width - 1 - h : width - 1;
   const int y_hi = full_mask ? height - 1 - h : height - 1;
+  if (full_mask) detail::zero_outside(map, lo, x_hi, lo, y_hi);
   const int n_out = x_hi - lo + 1;
   const int n_in = n_out + 2 * h;
   const int r_last = y_hi + h;
@@ -109,19 +128,17 @@ inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int
   const int ring = 2 * h + 2 + batch;
   std::vector<double> h0(static_cast<std::size_t>(ring) * n_out);
   std::vector<double> h1(h0.size());
-  std::vector<double> rows(static_cast<std::size_t>(batch) * n_in);  // interleaved
   const auto h0_row = [&](int r) { return &h0[static_cast<std::size_t>((r + ring * 4) % ring) * n_out]; };
   const auto h1_row = [&](int r) { return &h1[static_cast<std::size_t>((r + ring * 4) % ring) * n_out]; };
 
   // Horizontal pass for rows r .. r + k - 1 (k <= batch). The rows are
-  // interleaved (column q of row b at q * batch + b) so the k running sums
-  // advance together in vector registers.
-  std::vector<double> row(static_cast<std::size_t>(n_in));
+  // interleaved (column q of row b at q * batch + b) so the running sums of
+  // the batch advance together in vector registers.
+  std::vector<double> rows(static_cast<std::size_t>(batch) * n_in, 0.0);
   const auto horizontal = [&](int r, int k) {
-    for (int b = 0; b < batch; ++b) {
-      if (b < k) detail::inverted_padded_row(gray, detail::border_index(r + b, height, border), lo - h, n_in, border, row.data());
-      for (int q = 0; q < n_in; ++q) rows[static_cast<std::size_t>(q) * batch + b] = b < k ? row[q] : 0.0;
-    }
+    for (int b = 0; b < k; ++b)
+      detail::inverted_padded_row(gray, detail::border_index(r + b, height, border), lo - h, n_in, border,
+                                  &rows[b], batch);
     double s[batch] = {};
     double m1[batch] = {};
     for (int q = 0; q <= 2 * h; ++q)
@@ -129,19 +146,14 @@ inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int
         s[b] += rows[q * batch + b];
         m1[b] += (q - h) * rows[q * batch + b];
       }
-    double* o0[batch];
-    double* o1[batch];
-    for (int b = 0; b < batch; ++b) {
+    double* o0[batch] = {};
+    double* o1[batch] = {};
+    for (int b = 0; b < k; ++b) {
       o0[b] = h0_row(r + b);
       o1[b] = h1_row(r + b);
+      o0[b][0] = s[b];
+      o1[b][0] = m1[b];
     }
-    const auto store = [&](int i) {
-      for (int b = 0; b < k; ++b) {
-        o0[b][i] = s[b];
-        o1[b][i] = m1[b];
-      }
-    };
-    store(0);
     const double hh = h;
     for (int i = 1; i < n_out; ++i) {
       const double* leaving = &rows[static_cast<std::size_t>(i - 1) * batch];
@@ -150,13 +162,12 @@ inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int
         s[b] += entering[b] - leaving[b];
         m1[b] += hh * leaving[b] + (hh + 1.0) * entering[b] - s[b];  // sum of j P(x + j), from x - 1
       }
-      store(i);
+      for (int b = 0; b < k; ++b) {
+        o0[b][i] = s[b];
+        o1[b][i] = m1[b];
+      }
     }
   };
-
-  std::vector<double> box(static_cast<std::size_t>(n_out), 0.0);     // sum of H0 over the window
-  std::vector<double> ramp(static_cast<std::size_t>(n_out), 0.0);    // sum of i H0(y + i): fy
-  std::vector<double> moment(static_cast<std::size_t>(n_out), 0.0);  // sum of H1(y + i): fx
   int computed = lo - h;  // next row without a horizontal result
   const auto ensure = [&](int r) {
     while (computed <= r) {
@@ -166,6 +177,11 @@ inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int
     }
   };
 
+  // Vertical pass. box = sum of H0 over the window, ramp = sum of i H0(y + i)
+  // (fy), moment = sum of H1(y + i) (fx).
+  std::vector<double> box(static_cast<std::size_t>(n_out), 0.0);
+  std::vector<double> ramp(static_cast<std::size_t>(n_out), 0.0);
+  std::vector<double> moment(static_cast<std::size_t>(n_out), 0.0);
   ensure(lo + h);
   for (int i = -h; i <= h; ++i) {
     const double* a = h0_row(lo + i);
@@ -176,35 +192,48 @@ inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int
       moment[x] += b[x];
     }
   }
+  const double hh = h;
   for (int y = lo; y <= y_hi; ++y) {
+    float* HAPTICFIELD_RESTRICT fx = &map.fx[map.index(lo, y)];
+    float* HAPTICFIELD_RESTRICT fy = &map.fy[map.index(lo, y)];
+    double* HAPTICFIELD_RESTRICT bx = box.data();
+    double* HAPTICFIELD_RESTRICT rp = ramp.data();
+    double* HAPTICFIELD_RESTRICT mo = moment.data();
     if (y > lo) {  // slide the window down: row y - 1 - h leaves, row y + h enters
       ensure(y + h);
-      const double* out0 = h0_row(y - 1 - h);
-      const double* in0 = h0_row(y + h);
-      const double* out1 = h1_row(y - 1 - h);
-      const double* in1 = h1_row(y + h);
+      const double* HAPTICFIELD_RESTRICT out0 = h0_row(y - 1 - h);
+      const double* HAPTICFIELD_RESTRICT in0 = h0_row(y + h);
+      const double* HAPTICFIELD_RESTRICT out1 = h1_row(y - 1 - h);
+      const double* HAPTICFIELD_RESTRICT in1 = h1_row(y + h);
       for (int x = 0; x < n_out; ++x) {
-        box[x] += in0[x] - out0[x];
-        ramp[x] += h * out0[x] + (h + 1) * in0[x] - box[x];
-        moment[x] += in1[x] - out1[x];
+        const double b = bx[x] + (in0[x] - out0[x]);
+        bx[x] = b;
+        rp[x] += hh * out0[x] + (hh + 1.0) * in0[x] - b;
+        mo[x] += in1[x] - out1[x];
       }
     }
-    float* fx = &map.fx[map.index(lo, y)];
-    float* fy = &map.fy[map.index(lo, y)];
     if (border == Border::fade) {
+      const double row_inside = std::min(y - lo, y_hi - y);
       for (int x = 0; x < n_out; ++x) {
-        const double g = scale * std::clamp(std::min(std::min(x, n_out - 1 - x), std::min(y - lo, y_hi - y)) / fade_px,
-                                            0.0, 1.0);
-        fx[x] = static_cast<float>(moment[x] * g);
-        fy[x] = static_cast<float>(ramp[x] * g);
+        const double inside = std::min(row_inside, static_cast<double>(std::min(x, n_out - 1 - x)));
+        const double g = scale * std::clamp(inside / fade_px, 0.0, 1.0);
+        fx[x] = static_cast<float>(mo[x] * g);
+        fy[x] = static_cast<float>(rp[x] * g);
       }
     } else {
       for (int x = 0; x < n_out; ++x) {
-        fx[x] = static_cast<float>(moment[x] * scale);
-        fy[x] = static_cast<float>(ramp[x] * scale);
+        fx[x] = static_cast<float>(mo[x] * scale);
+        fy[x] = static_cast<float>(rp[x] * scale);
       }
     }
   }
+}
+
+/// The Prewitt map in a new ForceMap; see the overload that writes into one.
+[[nodiscard]] inline ForceMap prewitt_force_map(const GrayImage& gray, int size, Border border,
+                                                double fade_px = default_fade_px) {
+  ForceMap map;
+  prewitt_force_map(gray, size, border, map, fade_px);
   return map;
 }
 
