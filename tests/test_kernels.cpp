@@ -300,6 +300,20 @@ TEST_CASE("the O(1) Prewitt map equals the per-pixel kernel map") {
   }
 }
 
+TEST_CASE("a reused force map holds no stale values") {
+  const GrayImage gray = test_picture(90, 70, 31);
+  ForceMap reused;
+  prewitt_force_map(test_picture(120, 100, 32), 5, Border::clamp, reused);  // larger, no zero border
+  for (Border border : {Border::suspend, Border::fade, Border::reflect}) {
+    prewitt_force_map(gray, 9, border, reused);
+    const ForceMap fresh = prewitt_force_map(gray, 9, border);
+    REQUIRE(reused.width == 90);
+    REQUIRE(reused.height == 70);
+    REQUIRE(reused.fx == fresh.fx);
+    REQUIRE(reused.fy == fresh.fy);
+  }
+}
+
 TEST_CASE("bad input: a clear error at setup, zero force at run time") {
   const GrayImage gray = test_picture(40, 30, 1);
   SECTION("mask size even or out of range") {
