@@ -151,16 +151,34 @@ Args parse(int argc, char** argv) {
 Camera make_camera(const Args& a, int width, int height) {
   if (!a.intrinsics.empty()) {
     Camera c = Camera::from_file(a.intrinsics);
-    if (c.width() > 0 && c.height() > 0 && (c.width() != width || c.height() != height))
+    if (c.width() > 0 && c.height() > 0 && (c.width() != width || c.height() != height)) {
+      const double sx = static_cast<double>(width) / c.width();
+      const double sy = static_cast<double>(height) / c.height();
+      if (std::abs(sx / sy - 1.0) < 0.01) {
+        std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
+                  << " px; K scaled by " << sx << " for the " << width << "x" << height << " px picture\n";
+        return c.scaled(sx, sy);
+      }
       std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
-                << " px, the picture is " << width << "x" << height << " px\n";
+                << " px, the picture is " << width << "x" << height << " px (cropped?); K used as is\n";
+    }
     return c;
   }
   const glm::dvec2 centre = a.centre ? *a.centre : Camera::image_centre(width, height);
   if (a.focal) return Camera::from_focal(*a.focal, centre);
+  // focal lengths from the faces' right angles, kept when plausible
+  // (0.3 to 10 times the picture's longer side)
+  const double longest = std::max(width, height);
   std::vector<double> focals;
-  for (const auto& f : a.faces)
-    if (auto focal = focal_from_rectangle(f, centre)) focals.push_back(*focal);
+  for (std::size_t i = 0; i < a.faces.size(); ++i) {
+    std::optional<double> focal;
+    try {
+      focal = focal_from_rectangle(a.faces[i], centre);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("face " + std::to_string(i + 1) + ": " + e.what());
+    }
+    if (focal && *focal > 0.3 * longest && *focal < 10.0 * longest) focals.push_back(*focal);
+  }
   if (!focals.empty()) {
     std::nth_element(focals.begin(), focals.begin() + static_cast<long>(focals.size() / 2), focals.end());
     const double f = focals[focals.size() / 2];

@@ -188,6 +188,21 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
   }
 }
 
+TEST_CASE("a camera scaled for a resized picture gives the same normals") {
+  const BoxScene scene;
+  const Camera half = scene.camera().scaled(0.5, 0.5);
+  CHECK(half.matrix()(0, 0) == 500.0);
+  CHECK(half.matrix()(0, 2) == Approx(255.5));  // centre of a 512 px wide picture
+  CHECK(half.matrix()(1, 2) == Approx(191.5));
+  const BoxView view = render_box(scene, 40.0, false);
+  for (std::size_t f = 0; f < 2; ++f) {
+    std::vector<glm::dvec2> corners;
+    for (auto c : view.corners[f]) corners.push_back((c + 0.5) * 0.5 - 0.5);
+    CHECK(angle_between_deg(estimate_rectangle_pose(half, corners).normal, view.normals[f]) < 1e-6);
+  }
+  CHECK_THROWS_WITH(scene.camera().scaled(0.0, 1.0), Catch::Contains("scale"));
+}
+
 TEST_CASE("a fronto-parallel square faces the camera") {
   const Camera camera = Camera::from_focal(800.0, {320.0, 240.0});
   // clockwise and counter-clockwise corner orders give the same normal

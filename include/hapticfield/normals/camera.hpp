@@ -148,6 +148,26 @@ class Camera {
     fs << "distortion_coefficients" << cv::Mat(distortion_.empty() ? std::vector<double>(5, 0.0) : distortion_);
   }
 
+  /// The same camera for the picture resized by (sx, sy): focal lengths and
+  /// skew scale, the principal point maps pixel centres
+  /// (c' = (c + 0.5) s - 0.5); distortion is unchanged (it acts on
+  /// normalised coordinates). The recorded image size scales too.
+  /// @throws std::invalid_argument for a non-finite or non-positive factor.
+  [[nodiscard]] Camera scaled(double sx, double sy) const {
+    if (!std::isfinite(sx) || !std::isfinite(sy) || sx <= 0.0 || sy <= 0.0)
+      throw std::invalid_argument("Camera::scaled: scale factors must be finite and positive");
+    cv::Matx33d k = K_;
+    k(0, 0) *= sx;
+    k(0, 1) *= sx;
+    k(0, 2) = (k(0, 2) + 0.5) * sx - 0.5;
+    k(1, 1) *= sy;
+    k(1, 2) = (k(1, 2) + 0.5) * sy - 0.5;
+    Camera c(k, distortion_);
+    c.width_ = static_cast<int>(std::lround(width_ * sx));
+    c.height_ = static_cast<int>(std::lround(height_ * sy));
+    return c;
+  }
+
   /// The camera matrix K [px].
   [[nodiscard]] const cv::Matx33d& matrix() const noexcept { return K_; }
   /// Distortion coefficients (empty when the lens is ideal).

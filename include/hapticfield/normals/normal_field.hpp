@@ -27,6 +27,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -156,8 +157,9 @@ class ShadingGrid {
   }
 
   /// Vertex normals from the faces: each vertex takes the area-weighted mean
-  /// of the face normals within one cell of it (a (2 spacing)^2 window),
-  /// renormalised; zero where no face is near. Setup cost O(pixels + vertices).
+  /// of the face normals of the pixels within one cell of it (the four cells
+  /// around it), renormalised; zero where no face is near. Setup cost
+  /// O(pixels), memory O(cells).
   [[nodiscard]] static ShadingGrid from_faces(const FaceLabels& labels, std::span<const glm::dvec3> face_normals,
                                               double spacing_px) {
     if (!std::isfinite(spacing_px) || spacing_px < 1.0)
@@ -166,33 +168,31 @@ class ShadingGrid {
     const int h = labels.height();
     const int cols = static_cast<int>(std::ceil((w - 1) / spacing_px)) + 1;
     const int rows = static_cast<int>(std::ceil((h - 1) / spacing_px)) + 1;
-    // 2D prefix sums of (n_x, n_y, n_z) over the labelled pixels
-    const std::size_t stride = static_cast<std::size_t>(w) + 1;
-    std::vector<glm::dvec3> sums(stride * (static_cast<std::size_t>(h) + 1), glm::dvec3{0.0});
-    const auto at = [&](int x, int y) -> glm::dvec3& {
-      return sums[static_cast<std::size_t>(y) * stride + static_cast<std::size_t>(x)];
-    };
+    // sum of the normals of the labelled pixels in each cell [c s, (c+1) s)
+    const std::size_t ucols = static_cast<std::size_t>(cols);
+    std::vector<glm::dvec3> cells(ucols * static_cast<std::size_t>(rows), glm::dvec3{0.0});
     const auto data = labels.data();
     for (int y = 0; y < h; ++y) {
-      glm::dvec3 row{0.0};
+      const std::size_t cy = static_cast<std::size_t>(std::min(static_cast<int>(y / spacing_px), rows - 1));
       for (int x = 0; x < w; ++x) {
         const int l = data[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)];
-        if (l >= 0) row += face_normals[static_cast<std::size_t>(l)];
-        at(x + 1, y + 1) = at(x + 1, y) + row;
+        if (l < 0) continue;
+        const std::size_t cx = static_cast<std::size_t>(std::min(static_cast<int>(x / spacing_px), cols - 1));
+        cells[cy * ucols + cx] += face_normals[static_cast<std::size_t>(l)];
       }
     }
-    std::vector<glm::dvec3> normals(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows), glm::dvec3{0.0});
+    std::vector<glm::dvec3> normals(cells.size(), glm::dvec3{0.0});
     for (int j = 0; j < rows; ++j)
       for (int i = 0; i < cols; ++i) {
-        const double cx = i * spacing_px;
-        const double cy = j * spacing_px;
-        const int x0 = std::clamp(static_cast<int>(std::ceil(cx - spacing_px)), 0, w);
-        const int x1 = std::clamp(static_cast<int>(std::floor(cx + spacing_px)) + 1, 0, w);
-        const int y0 = std::clamp(static_cast<int>(std::ceil(cy - spacing_px)), 0, h);
-        const int y1 = std::clamp(static_cast<int>(std::floor(cy + spacing_px)) + 1, 0, h);
-        const glm::dvec3 s = at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0);
-        const double len = glm::length(s);
-        if (len > 1e-9) normals[static_cast<std::size_t>(j) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(i)] = s / len;
+        glm::dvec3 sum{0.0};
+        for (int dj = -1; dj <= 0; ++dj)
+          for (int di = -1; di <= 0; ++di) {
+            const int ci = i + di;
+            const int cj = j + dj;
+            if (ci >= 0 && cj >= 0) sum += cells[static_cast<std::size_t>(cj) * ucols + static_cast<std::size_t>(ci)];
+          }
+        const double len = glm::length(sum);
+        if (len > 1e-9) normals[static_cast<std::size_t>(j) * ucols + static_cast<std::size_t>(i)] = sum / len;
       }
     return ShadingGrid(glm::dvec2{0.0}, spacing_px, cols, rows, std::move(normals));
   }
@@ -348,7 +348,7 @@ class NormalField {
   void update_alpha(double period) noexcept {
     period_ = period;
     // first-order low-pass, exact discretisation: alpha = 1 - exp(-2 pi fc dt)
-    alpha_ = 1.0 - std::exp(-2.0 * 3.14159265358979323846 * options_.velocity_cutoff_hz * period);
+    alpha_ = 1.0 - std::exp(-2.0 * std::numbers::pi * options_.velocity_cutoff_hz * period);
   }
 
   NormalFieldOptions options_;

@@ -46,6 +46,29 @@ run(EXPECT ok OUT out ERR err COMMAND "${PICTURE_NORMALS}" "${WORK_DIR}/box_45.p
 file(WRITE "${WORK_DIR}/normals_nofocal.txt" "${out}")
 run(EXPECT ok OUT out ERR err COMMAND "${BOX_DEMO}" --rotation 45 --check "${WORK_DIR}/normals_nofocal.txt")
 
+# K from a calibration file made at twice the picture's size: scaled to fit
+file(WRITE "${WORK_DIR}/calibration_2x.yml" "%YAML:1.0
+---
+image_width: 2048
+image_height: 1536
+camera_matrix: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 2000., 0., 1023.5, 0., 2000., 767.5, 0., 0., 1. ]
+distortion_coefficients: !!opencv-matrix
+   rows: 1
+   cols: 5
+   dt: d
+   data: [ 0., 0., 0., 0., 0. ]
+")
+file(STRINGS "${WORK_DIR}/box_45.args" args)
+list(FILTER args EXCLUDE REGEX "^1000$|^--focal$")
+run(EXPECT ok OUT out ERR err COMMAND "${PICTURE_NORMALS}" "${WORK_DIR}/box_45.png" ${args}
+    --intrinsics "${WORK_DIR}/calibration_2x.yml")
+file(WRITE "${WORK_DIR}/normals_intrinsics.txt" "${out}")
+run(EXPECT ok OUT out ERR err COMMAND "${BOX_DEMO}" --rotation 45 --check "${WORK_DIR}/normals_intrinsics.txt")
+
 # bad input: non-zero exit and one line on stderr
 foreach(bad IN ITEMS "--face;1,2 3,4" "--face;1,2 3,4 5,6 x,8" "--face;0,0 10,10 20,20 0,30" "--focal;-5;--face;0,0 10,0 10,10 0,10"
                      "--intrinsics;${WORK_DIR}/missing.yml;--face;0,0 10,0 10,10 0,10" "--face;0,0 10,0 10,10 0,10;--probes;x.csv")
