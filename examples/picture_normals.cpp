@@ -4,7 +4,7 @@
 //   picture_normals IMAGE --face "x1,y1 x2,y2 x3,y3 x4,y4" [--face ...]
 //       [--size W,H] [--intrinsics FILE.yml | --focal F [--center cx,cy]]
 //       [--overlay OUT.png] [--probes IN.csv --forces OUT.csv]
-//       [--gradient] [--shading CELL_PX] [--verbose]
+//       [--force-map OUT.png] [--gradient] [--shading CELL_PX] [--verbose]
 //
 // Prints one line per face, `normal: nx ny nz` (camera frame: x right,
 // y down, z forward; unit; toward the camera). Corners go around the face:
@@ -15,7 +15,9 @@
 // right angles (or guessed from a 60 degree field of view) and a note goes
 // to stderr. Probes: each line of IN.csv is x,y,vx,vy [px, px/s]; OUT.csv
 // gets x,y,fx,fy [N] in the image plane (fy positive downward), each probe
-// evaluated from a fresh field state. On bad input: one line on stderr,
+// evaluated from a fresh field state. --force-map draws, over a gray copy of
+// the picture, the force felt moving right at 100 mm/s: red where it
+// resists (climbing), green where it assists (descending). On bad input: one line on stderr,
 // exit status 1.
 #include <algorithm>
 #include <cmath>
@@ -48,6 +50,7 @@ struct Args {
   std::optional<double> focal;
   std::optional<glm::dvec2> centre;
   std::string overlay;
+  std::string force_map;
   std::string probes;
   std::string forces;
   bool gradient = false;
@@ -58,7 +61,7 @@ struct Args {
 constexpr const char* usage =
     "usage: picture_normals IMAGE --face \"x1,y1 x2,y2 x3,y3 x4,y4\" [--face ...] [--size W,H] "
     "[--intrinsics FILE.yml | --focal F [--center cx,cy]] [--overlay OUT.png] "
-    "[--probes IN.csv --forces OUT.csv] [--gradient] [--shading CELL_PX] [--verbose]";
+    "[--probes IN.csv --forces OUT.csv] [--force-map OUT.png] [--gradient] [--shading CELL_PX] [--verbose]";
 
 double parse_number(const std::string& text, const std::string& what) {
   std::size_t used = 0;
@@ -81,7 +84,15 @@ glm::dvec2 parse_pair(const std::string& text, const std::string& what) {
   return {parse_number(text.substr(0, comma), what), parse_number(text.substr(comma + 1), what)};
 }
 
-std::vector<glm::dvec2> parse_face(const std::string& text) {
+std::vector<glm::dvec2> parse_face(const std::string& raw) {
+  // tolerate "x, y" and ';' between corners
+  std::string text;
+  for (char c : raw) {
+    if (c == ';' || c == '\t') c = ' ';
+    if (c == ' ' && !text.empty() && text.back() == ',') continue;
+    if (c == ',' && !text.empty() && text.back() == ' ') text.pop_back();
+    text.push_back(c);
+  }
   std::istringstream in(text);
   std::vector<glm::dvec2> points;
   std::string token;
@@ -115,6 +126,8 @@ Args parse(int argc, char** argv) {
       a.centre = parse_pair(value(i), "--center");
     } else if (arg == "--overlay") {
       a.overlay = value(i);
+    } else if (arg == "--force-map") {
+      a.force_map = value(i);
     } else if (arg == "--probes") {
       a.probes = value(i);
     } else if (arg == "--forces") {
@@ -232,6 +245,25 @@ void draw_overlay(const std::string& path, const cv::Mat& image, const Camera& c
   if (!cv::imwrite(path, out)) throw std::invalid_argument("--overlay: cannot write '" + path + "'");
 }
 
+void draw_force_map(const std::string& path, const cv::Mat& image, const NormalField& field) {
+  cv::Mat gray;
+  cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  cv::Mat out;
+  cv::cvtColor(gray, out, cv::COLOR_GRAY2BGR);
+  const glm::dvec2 velocity{100.0 * field.mapping().px_per_mm(), 0.0};  // 100 mm/s to the right [px/s]
+  const double limit = field.options().max_force;
+  for (int y = 0; y < out.rows; ++y)
+    for (int x = 0; x < out.cols; ++x) {
+      const double fx = field.image_force({x, y}, velocity).x / limit;  // -1 resist .. +1 assist
+      if (fx == 0.0) continue;
+      cv::Vec3b& px = out.at<cv::Vec3b>(y, x);
+      const double a = std::min(1.0, std::abs(fx));
+      const cv::Vec3d tint = fx < 0.0 ? cv::Vec3d(40, 40, 230) : cv::Vec3d(40, 200, 40);
+      for (int c = 0; c < 3; ++c) px[c] = cv::saturate_cast<uchar>((1.0 - 0.8 * a) * px[c] + 0.8 * a * tint[c]);
+    }
+  if (!cv::imwrite(path, out)) throw std::invalid_argument("--force-map: cannot write '" + path + "'");
+}
+
 void evaluate_probes(const Args& a, NormalField& field) {
   std::ifstream in(a.probes);
   if (!in) throw std::invalid_argument("--probes: cannot read '" + a.probes + "'");
@@ -310,12 +342,13 @@ int run(int argc, char** argv) {
   }
   std::fflush(stdout);
   if (!a.overlay.empty()) draw_overlay(a.overlay, image, camera, a.faces, poses);
-  if (!a.probes.empty()) {
+  if (!a.probes.empty() || !a.force_map.empty()) {
     NormalFieldOptions options;
     if (a.gradient) options.mode = NormalForceMode::gradient;
     options.shading_cell_px = a.shading;
     NormalField field(image.cols, image.rows, faces, options);
-    evaluate_probes(a, field);
+    if (!a.probes.empty()) evaluate_probes(a, field);
+    if (!a.force_map.empty()) draw_force_map(a.force_map, image, field);
   }
   return 0;
 }
