@@ -29,8 +29,9 @@ std::vector<ImageFace> tiles(int n) {
     const double y0 = (k / per_row) * side;
     const double slant = (10.0 + k % 50) * 3.14159265358979 / 180.0;
     const double az = 0.7 * k;
-    faces.push_back({{{x0, y0}, {x0 + side, y0}, {x0 + side, y0 + side}, {x0, y0 + side}},
-                     {std::sin(slant) * std::cos(az), std::sin(slant) * std::sin(az), -std::cos(slant)}});
+    faces.push_back(
+        {{{x0, y0}, {x0 + side, y0}, {x0 + side, y0 + side}, {x0, y0 + side}},
+         {std::sin(slant) * std::cos(az), std::sin(slant) * std::sin(az), -std::cos(slant)}});
   }
   return faces;
 }
@@ -52,7 +53,8 @@ std::vector<Probe> trajectory(std::size_t n) {
     const double t = i * servo_period;
     Probe& p = probes[i];
     p.position = glm::dvec3{0.048 * std::sin(3.1 * t), 0.048 * std::sin(2.3 * t + 0.5), 0.0};
-    p.velocity = glm::dvec3{0.048 * 3.1 * std::cos(3.1 * t), 0.048 * 2.3 * std::cos(2.3 * t + 0.5), 0.0};
+    p.velocity =
+        glm::dvec3{0.048 * 3.1 * std::cos(3.1 * t), 0.048 * 2.3 * std::cos(2.3 * t + 0.5), 0.0};
     p.time = t;
   }
   return probes;
@@ -82,7 +84,8 @@ Result measure(Field& field, const std::vector<Probe>& probes) {
     }
   sink = sink + acc;
   std::sort(single.begin(), single.end());
-  const double mean = std::chrono::duration<double, std::nano>(t1 - t0).count() / (batches * double(probes.size()));
+  const double mean =
+      std::chrono::duration<double, std::nano>(t1 - t0).count() / (batches * double(probes.size()));
   return {mean, single[static_cast<std::size_t>(0.999 * (single.size() - 1))], single.back()};
 }
 
@@ -100,26 +103,30 @@ int main() {
   }
   std::sort(timer.begin(), timer.end());
 
-  std::printf("Normal field per-tick cost, 640 x 640 px picture (100 mm at 6.4 px/mm), %zu-tick sweep\n",
-              probes.size());
-  std::printf("timer overhead per single-tick measurement: median %.0f ns, worst %.0f ns\n\n", timer[timer.size() / 2],
-              timer.back());
-  std::printf("%-38s %8s %7s %9s %7s %9s %7s\n", "field", "mean ns", "x base", "p99.9 ns", "x base", "worst ns",
-              "x base");
+  std::printf(
+      "Normal field per-tick cost, 640 x 640 px picture (100 mm at 6.4 px/mm), %zu-tick sweep\n",
+      probes.size());
+  std::printf("timer overhead per single-tick measurement: median %.0f ns, worst %.0f ns\n\n",
+              timer[timer.size() / 2], timer.back());
+  std::printf("%-38s %8s %7s %9s %7s %9s %7s\n", "field", "mean ns", "x base", "p99.9 ns", "x base",
+              "worst ns", "x base");
   const auto row = [&](const std::string& name, const Result& r) {
-    std::printf("%-38s %8.1f %7.2f %9.0f %7.2f %9.0f %7.2f\n", name.c_str(), r.mean_ns, r.mean_ns / base.mean_ns,
-                r.p999_ns, r.p999_ns / base.p999_ns, r.worst_ns, r.worst_ns / base.worst_ns);
+    std::printf("%-38s %8.1f %7.2f %9.0f %7.2f %9.0f %7.2f\n", name.c_str(), r.mean_ns,
+                r.mean_ns / base.mean_ns, r.p999_ns, r.p999_ns / base.p999_ns, r.worst_ns,
+                r.worst_ns / base.worst_ns);
   };
   row("baseline: plane mapping only", base);
   for (int n : {1, 10, 1000}) {
     NormalField field(640, 640, tiles(n));
-    row("along motion, " + std::to_string(n) + " face" + (n > 1 ? "s" : ""), measure(field, probes));
+    row("along motion, " + std::to_string(n) + " face" + (n > 1 ? "s" : ""),
+        measure(field, probes));
   }
   for (int n : {1, 1000}) {
     NormalFieldOptions o;
     o.shading_cell_px = 8.0;
     NormalField field(640, 640, tiles(n), o);
-    row("along motion + shading, " + std::to_string(n) + (n > 1 ? " faces" : " face"), measure(field, probes));
+    row("along motion + shading, " + std::to_string(n) + (n > 1 ? " faces" : " face"),
+        measure(field, probes));
   }
   {
     NormalFieldOptions o;
@@ -131,7 +138,9 @@ int main() {
     AnyField erased = NormalField(640, 640, tiles(1000));
     row("along motion, 1000 faces, AnyField", measure(erased, probes));
   }
-  std::printf("\nsingle-tick figures include the timer; the worst case also includes preemption by the OS.\n");
+  std::printf(
+      "\nsingle-tick figures include the timer; the worst case also includes preemption by the "
+      "OS.\n");
   std::printf("budget: 1 kHz servo = 1000000 ns per tick; target <= 200 ns with 1000 faces\n");
   return 0;
 }

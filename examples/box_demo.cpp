@@ -66,7 +66,8 @@ Args parse(int argc, char** argv) {
       throw std::invalid_argument("unknown option '" + arg + "'");
     }
   }
-  if (!a.check.empty() && a.rotations.size() != 1) throw std::invalid_argument("--check needs --rotation");
+  if (!a.check.empty() && a.rotations.size() != 1)
+    throw std::invalid_argument("--check needs --rotation");
   return a;
 }
 
@@ -89,13 +90,16 @@ int check(const Args& a, const BoxScene& scene) {
     if (!(err <= 0.5) || std::abs(glm::length(n) - 1.0) > 1e-5) ++failures;
     ++f;
   }
-  if (f != 2) throw std::invalid_argument("--check: expected two normal lines, got " + std::to_string(f));
+  if (f != 2)
+    throw std::invalid_argument("--check: expected two normal lines, got " + std::to_string(f));
   return failures == 0 ? 0 : 1;
 }
 
 void write_files(const Args& a, const BoxScene& scene, const BoxView& view) {
-  const std::string base = a.out + "/box_" + std::to_string(static_cast<int>(std::lround(view.rotation_deg)));
-  if (!cv::imwrite(base + ".png", view.picture)) throw std::invalid_argument("cannot write " + base + ".png");
+  const std::string base =
+      a.out + "/box_" + std::to_string(static_cast<int>(std::lround(view.rotation_deg)));
+  if (!cv::imwrite(base + ".png", view.picture))
+    throw std::invalid_argument("cannot write " + base + ".png");
   std::ofstream args(base + ".args");
   for (const auto& face : view.corners) {
     args << "--face\n";
@@ -106,12 +110,16 @@ void write_files(const Args& a, const BoxScene& scene, const BoxView& view) {
     }
     args << "\n";
   }
-  args << "--size\n" << scene.edge_mm << "," << scene.edge_mm << "\n--focal\n" << scene.focal_px << "\n";
+  args << "--size\n"
+       << scene.edge_mm << "," << scene.edge_mm << "\n--focal\n"
+       << scene.focal_px << "\n";
   std::ofstream probes(base + "_probes.csv");
   probes << "x,y,vx,vy\n";
   for (const auto& face : view.corners) {
     const glm::dvec2 c = 0.25 * (face[0] + face[1] + face[2] + face[3]);
-    probes << c.x << "," << c.y << ",200,0\n" << c.x << "," << c.y << ",-200,0\n" << c.x << "," << c.y << ",0,200\n";
+    probes << c.x << "," << c.y << ",200,0\n"
+           << c.x << "," << c.y << ",-200,0\n"
+           << c.x << "," << c.y << ",0,200\n";
   }
 }
 
@@ -124,13 +132,16 @@ int run(int argc, char** argv) {
   std::mt19937 rng(a.seed);
   std::uniform_real_distribution<double> direction(0.0, 2.0 * std::numbers::pi);
 
-  std::printf("Synthetic box: %.0f mm edge, %d x %d px, f = %.0f px, %.0f mm away, %.0f deg above.\n", scene.edge_mm,
-              scene.width, scene.height, scene.focal_px, scene.distance_mm, scene.elevation_deg);
-  std::printf("Noise: each corner displaced by %.2f px in a random direction, %d trials (seed %u).\n\n", a.noise,
-              a.trials, a.seed);
+  std::printf(
+      "Synthetic box: %.0f mm edge, %d x %d px, f = %.0f px, %.0f mm away, %.0f deg above.\n",
+      scene.edge_mm, scene.width, scene.height, scene.focal_px, scene.distance_mm,
+      scene.elevation_deg);
+  std::printf(
+      "Noise: each corner displaced by %.2f px in a random direction, %d trials (seed %u).\n\n",
+      a.noise, a.trials, a.seed);
   std::printf("Accuracy: angle between estimated and true normal [deg]\n");
-  std::printf("%5s %-5s %-26s %9s %19s %19s %9s\n", "rot", "face", "true normal", "exact", "noisy mean / max",
-              "closed-form m / max", "rms [px]");
+  std::printf("%5s %-5s %-26s %9s %19s %19s %9s\n", "rot", "face", "true normal", "exact",
+              "noisy mean / max", "closed-form m / max", "rms [px]");
   struct Ratio {
     double rotation;
     int face;
@@ -171,16 +182,20 @@ int run(int argc, char** argv) {
       const double err = angle_between_deg(exact, truth);
       worst_exact = std::max(worst_exact, err);
       worst_noisy = std::max(worst_noisy, max);
-      std::printf("%5.0f %-5s (%7.4f %7.4f %7.4f) %9.2e %9.3f / %7.3f %9.3f / %7.3f %9.3f\n", rotation,
-                  f == 0 ? "front" : "side", truth.x, truth.y, truth.z, err, mean, max, cf_mean, cf_max, rms);
+      std::printf("%5.0f %-5s (%7.4f %7.4f %7.4f) %9.2e %9.3f / %7.3f %9.3f / %7.3f %9.3f\n",
+                  rotation, f == 0 ? "front" : "side", truth.x, truth.y, truth.z, err, mean, max,
+                  cf_mean, cf_max, rms);
       ratios.push_back({rotation, f, truth, exact, noisy});
     }
   }
-  std::printf("\nworst: %.2e deg from exact corners (bound 0.5), %.3f deg with %.2f px noise (bound 2)\n\n",
-              worst_exact, worst_noisy, a.noise);
-  std::printf("Ratios estimated / true normal component (the paper reports 0.99-1.03); '-' where |true| < 0.05\n");
-  std::printf("%5s %-5s %8s %8s %8s   %8s %8s %8s\n", "rot", "face", "x exact", "y exact", "z exact", "x noisy",
-              "y noisy", "z noisy");
+  std::printf(
+      "\nworst: %.2e deg from exact corners (bound 0.5), %.3f deg with %.2f px noise (bound 2)\n\n",
+      worst_exact, worst_noisy, a.noise);
+  std::printf(
+      "Ratios estimated / true normal component (the paper reports 0.99-1.03); '-' where |true| < "
+      "0.05\n");
+  std::printf("%5s %-5s %8s %8s %8s   %8s %8s %8s\n", "rot", "face", "x exact", "y exact",
+              "z exact", "x noisy", "y noisy", "z noisy");
   const auto ratio = [](double est, double truth) {
     char buf[16];
     if (std::abs(truth) < 0.05)

@@ -61,7 +61,8 @@ struct Args {
 constexpr const char* usage =
     "usage: picture_normals IMAGE --face \"x1,y1 x2,y2 x3,y3 x4,y4\" [--face ...] [--size W,H] "
     "[--intrinsics FILE.yml | --focal F [--center cx,cy]] [--overlay OUT.png] "
-    "[--probes IN.csv --forces OUT.csv] [--force-map OUT.png] [--gradient] [--shading CELL_PX] [--verbose]";
+    "[--probes IN.csv --forces OUT.csv] [--force-map OUT.png] [--gradient] [--shading CELL_PX] "
+    "[--verbose]";
 
 double parse_number(const std::string& text, const std::string& what) {
   std::size_t used = 0;
@@ -80,7 +81,8 @@ double parse_number(const std::string& text, const std::string& what) {
 
 glm::dvec2 parse_pair(const std::string& text, const std::string& what) {
   const auto comma = text.find(',');
-  if (comma == std::string::npos) throw std::invalid_argument(what + ": expected x,y, got '" + text + "'");
+  if (comma == std::string::npos)
+    throw std::invalid_argument(what + ": expected x,y, got '" + text + "'");
   return {parse_number(text.substr(0, comma), what), parse_number(text.substr(comma + 1), what)};
 }
 
@@ -121,7 +123,8 @@ Args parse(int argc, char** argv) {
       a.intrinsics = value(i);
     } else if (arg == "--focal") {
       a.focal = parse_number(value(i), "--focal");
-      if (*a.focal <= 0.0) throw std::invalid_argument("--focal must be a positive focal length [px]");
+      if (*a.focal <= 0.0)
+        throw std::invalid_argument("--focal must be a positive focal length [px]");
     } else if (arg == "--center" || arg == "--centre") {
       a.centre = parse_pair(value(i), "--center");
     } else if (arg == "--overlay") {
@@ -136,13 +139,15 @@ Args parse(int argc, char** argv) {
       a.gradient = true;
     } else if (arg == "--shading") {
       a.shading = parse_number(value(i), "--shading");
-      if (a.shading < 1.0) throw std::invalid_argument("--shading needs a grid spacing of at least 1 [px]");
+      if (a.shading < 1.0)
+        throw std::invalid_argument("--shading needs a grid spacing of at least 1 [px]");
     } else if (arg == "--verbose") {
       a.verbose = true;
     } else if (arg == "--help" || arg == "-h") {
       std::cout << usage << "\n";
       std::exit(0);
-    } else if (!arg.empty() && arg[0] == '-' && arg.size() > 1 && !std::isdigit(static_cast<unsigned char>(arg[1]))) {
+    } else if (!arg.empty() && arg[0] == '-' && arg.size() > 1 &&
+               !std::isdigit(static_cast<unsigned char>(arg[1]))) {
       throw std::invalid_argument("unknown option '" + arg + "'");
     } else if (a.image.empty()) {
       a.image = arg;
@@ -157,7 +162,8 @@ Args parse(int argc, char** argv) {
   if (!a.intrinsics.empty() && (a.focal || a.centre))
     throw std::invalid_argument("--intrinsics and --focal/--center are exclusive");
   if (a.centre && !a.focal) throw std::invalid_argument("--center needs --focal");
-  if (a.probes.empty() != a.forces.empty()) throw std::invalid_argument("--probes and --forces go together");
+  if (a.probes.empty() != a.forces.empty())
+    throw std::invalid_argument("--probes and --forces go together");
   return a;
 }
 
@@ -168,12 +174,14 @@ Camera make_camera(const Args& a, int width, int height) {
       const double sx = static_cast<double>(width) / c.width();
       const double sy = static_cast<double>(height) / c.height();
       if (std::abs(sx / sy - 1.0) < 0.01) {
-        std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
-                  << " px; K scaled by " << sx << " for the " << width << "x" << height << " px picture\n";
+        std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x"
+                  << c.height() << " px; K scaled by " << sx << " for the " << width << "x"
+                  << height << " px picture\n";
         return c.scaled(sx, sy);
       }
-      std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
-                << " px, the picture is " << width << "x" << height << " px (cropped?); K used as is\n";
+      std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x"
+                << c.height() << " px, the picture is " << width << "x" << height
+                << " px (cropped?); K used as is\n";
     }
     return c;
   }
@@ -193,56 +201,70 @@ Camera make_camera(const Args& a, int width, int height) {
     if (focal && *focal > 0.3 * longest && *focal < 10.0 * longest) focals.push_back(*focal);
   }
   if (!focals.empty()) {
-    std::nth_element(focals.begin(), focals.begin() + static_cast<long>(focals.size() / 2), focals.end());
+    std::nth_element(focals.begin(), focals.begin() + static_cast<long>(focals.size() / 2),
+                     focals.end());
     const double f = focals[focals.size() / 2];
-    std::cerr << "picture_normals: note: no --intrinsics or --focal; focal length estimated from the faces' "
+    std::cerr << "picture_normals: note: no --intrinsics or --focal; focal length estimated from "
+                 "the faces' "
                  "right angles: "
               << f << " px\n";
     return Camera::from_focal(f, centre);
   }
-  std::cerr << "picture_normals: note: no --intrinsics or --focal; focal length guessed from a 60 degree "
-               "horizontal field of view\n";
+  std::cerr
+      << "picture_normals: note: no --intrinsics or --focal; focal length guessed from a 60 degree "
+         "horizontal field of view\n";
   return Camera::from_field_of_view(60.0, width, height);
 }
 
 void draw_overlay(const std::string& path, const cv::Mat& image, const Camera& camera,
-                  const std::vector<std::vector<glm::dvec2>>& faces, const std::vector<FacePose>& poses) {
+                  const std::vector<std::vector<glm::dvec2>>& faces,
+                  const std::vector<FacePose>& poses) {
   cv::Mat out = image.clone();
-  const std::vector<cv::Scalar> tints{{60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}};
+  const std::vector<cv::Scalar> tints{
+      {60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}};
   cv::Mat tinted = out.clone();
   for (std::size_t f = 0; f < faces.size(); ++f) {
     std::vector<cv::Point> poly;
     for (auto p : faces[f]) poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
-    cv::fillPoly(tinted, std::vector<std::vector<cv::Point>>{poly}, tints[f % tints.size()], cv::LINE_AA, 4);
+    cv::fillPoly(tinted, std::vector<std::vector<cv::Point>>{poly}, tints[f % tints.size()],
+                 cv::LINE_AA, 4);
   }
   cv::addWeighted(out, 0.6, tinted, 0.4, 0.0, out);
   const int thick = std::max(2, image.cols / 400);
   for (std::size_t f = 0; f < faces.size(); ++f) {
     std::vector<cv::Point> poly;
     for (auto p : faces[f]) poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
-    cv::polylines(out, std::vector<std::vector<cv::Point>>{poly}, true, tints[f % tints.size()], thick, cv::LINE_AA, 4);
+    cv::polylines(out, std::vector<std::vector<cv::Point>>{poly}, true, tints[f % tints.size()],
+                  thick, cv::LINE_AA, 4);
     // the normal as a 3D arrow from the face centre, half the face's size long
     const FacePose& pose = poses[f];
     const double length = 0.5 * std::sqrt(pose.width * pose.height);
     const cv::Vec3d centre = pose.R * cv::Vec3d(pose.width / 2, pose.height / 2, 0.0) + pose.t;
     const cv::Vec3d tip = centre + length * cv::Vec3d(pose.normal.x, pose.normal.y, pose.normal.z);
     std::vector<cv::Point2d> projected;
-    cv::projectPoints(std::vector<cv::Point3d>{{centre[0], centre[1], centre[2]}, {tip[0], tip[1], tip[2]}},
-                      cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(camera.matrix()),
-                      camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), projected);
-    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(255, 255, 255), thick + 3, cv::LINE_AA, 0, 0.2);
-    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(20, 20, 20), thick, cv::LINE_AA, 0, 0.2);
+    cv::projectPoints(
+        std::vector<cv::Point3d>{{centre[0], centre[1], centre[2]}, {tip[0], tip[1], tip[2]}},
+        cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(camera.matrix()),
+        camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), projected);
+    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(255, 255, 255), thick + 3,
+                    cv::LINE_AA, 0, 0.2);
+    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(20, 20, 20), thick, cv::LINE_AA, 0,
+                    0.2);
     char label[96];
-    std::snprintf(label, sizeof label, "(%.2f, %.2f, %.2f)", pose.normal.x + 0.0, pose.normal.y + 0.0,
-                  pose.normal.z + 0.0);
+    std::snprintf(label, sizeof label, "(%.2f, %.2f, %.2f)", pose.normal.x + 0.0,
+                  pose.normal.y + 0.0, pose.normal.z + 0.0);
     const double scale = std::max(0.45, image.cols / 2000.0);
     int baseline = 0;
     const cv::Size text = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, scale, thick, &baseline);
-    const cv::Point at(cvRound(projected[0].x) - text.width / 2, cvRound(projected[0].y) + 2 * text.height + 8);
-    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), thick + 2, cv::LINE_AA);
-    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(20, 20, 20), thick, cv::LINE_AA);
+    const cv::Point at(cvRound(projected[0].x) - text.width / 2,
+                       cvRound(projected[0].y) + 2 * text.height + 8);
+    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255),
+                thick + 2, cv::LINE_AA);
+    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(20, 20, 20), thick,
+                cv::LINE_AA);
   }
-  if (!cv::imwrite(path, out)) throw std::invalid_argument("--overlay: cannot write '" + path + "'");
+  if (!cv::imwrite(path, out))
+    throw std::invalid_argument("--overlay: cannot write '" + path + "'");
 }
 
 void draw_force_map(const std::string& path, const cv::Mat& image, const NormalField& field) {
@@ -250,7 +272,8 @@ void draw_force_map(const std::string& path, const cv::Mat& image, const NormalF
   cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
   cv::Mat out;
   cv::cvtColor(gray, out, cv::COLOR_GRAY2BGR);
-  const glm::dvec2 velocity{100.0 * field.mapping().px_per_mm(), 0.0};  // 100 mm/s to the right [px/s]
+  const glm::dvec2 velocity{100.0 * field.mapping().px_per_mm(),
+                            0.0};  // 100 mm/s to the right [px/s]
   const double limit = field.options().max_force;
   for (int y = 0; y < out.rows; ++y)
     for (int x = 0; x < out.cols; ++x) {
@@ -259,9 +282,11 @@ void draw_force_map(const std::string& path, const cv::Mat& image, const NormalF
       cv::Vec3b& px = out.at<cv::Vec3b>(y, x);
       const double a = std::min(1.0, std::abs(fx));
       const cv::Vec3d tint = fx < 0.0 ? cv::Vec3d(40, 40, 230) : cv::Vec3d(40, 200, 40);
-      for (int c = 0; c < 3; ++c) px[c] = cv::saturate_cast<uchar>((1.0 - 0.8 * a) * px[c] + 0.8 * a * tint[c]);
+      for (int c = 0; c < 3; ++c)
+        px[c] = cv::saturate_cast<uchar>((1.0 - 0.8 * a) * px[c] + 0.8 * a * tint[c]);
     }
-  if (!cv::imwrite(path, out)) throw std::invalid_argument("--force-map: cannot write '" + path + "'");
+  if (!cv::imwrite(path, out))
+    throw std::invalid_argument("--force-map: cannot write '" + path + "'");
 }
 
 void evaluate_probes(const Args& a, NormalField& field) {
@@ -273,7 +298,9 @@ void evaluate_probes(const Args& a, NormalField& field) {
   while (std::getline(in, line)) {
     ++number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.find_first_not_of(" \t") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
+    if (line.find_first_not_of(" \t") == std::string::npos ||
+        line[line.find_first_not_of(" \t")] == '#')
+      continue;
     std::array<double, 4> v{};
     std::stringstream cells(line);
     std::string cell;
@@ -304,7 +331,8 @@ void evaluate_probes(const Args& a, NormalField& field) {
     const glm::dvec3 f = field.force(field.probe_at({r[0], r[1]}, {r[2], r[3]}));
     const glm::dvec2 fi = field.to_image_axes(f);
     char buf[160];
-    std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g,%.9g\n", r[0], r[1], fi.x + 0.0, fi.y + 0.0);  // + 0.0: no "-0"
+    std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g,%.9g\n", r[0], r[1], fi.x + 0.0,
+                  fi.y + 0.0);  // + 0.0: no "-0"
     out << buf;
   }
   if (!out) throw std::invalid_argument("--forces: cannot write '" + a.forces + "'");
@@ -313,7 +341,8 @@ void evaluate_probes(const Args& a, NormalField& field) {
 int run(int argc, char** argv) {
   const Args a = parse(argc, argv);
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(a.image, ec)) throw std::invalid_argument("cannot read image '" + a.image + "'");
+  if (!std::filesystem::is_regular_file(a.image, ec))
+    throw std::invalid_argument("cannot read image '" + a.image + "'");
   const cv::Mat image = cv::imread(a.image, cv::IMREAD_COLOR);
   if (image.empty()) throw std::invalid_argument("cannot read image '" + a.image + "'");
   const Camera camera = make_camera(a, image.cols, image.rows);
@@ -336,9 +365,9 @@ int run(int argc, char** argv) {
       std::fprintf(stderr,
                    "face %zu: reprojection rms %.3f px (closed form %.3f px), size %.4g x %.4g%s, "
                    "distance %.4g, |cos(r1,r2)| before orthogonalisation %.2e\n",
-                   f + 1, poses[f].rms_reprojection_px, poses[f].closed_form_rms_px, poses[f].width, poses[f].height,
-                   poses[f].aspect_recovered ? " (aspect recovered)" : " mm", cv::norm(poses[f].t),
-                   poses[f].orthogonality);
+                   f + 1, poses[f].rms_reprojection_px, poses[f].closed_form_rms_px, poses[f].width,
+                   poses[f].height, poses[f].aspect_recovered ? " (aspect recovered)" : " mm",
+                   cv::norm(poses[f].t), poses[f].orthogonality);
   }
   std::fflush(stdout);
   if (!a.overlay.empty()) draw_overlay(a.overlay, image, camera, a.faces, poses);
@@ -356,7 +385,8 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, below
+  cv::utils::logging::setLogLevel(
+      cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, below
   try {
     return run(argc, argv);
   } catch (const std::exception& e) {

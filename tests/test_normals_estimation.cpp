@@ -17,7 +17,9 @@ using namespace hapticfield;
 
 namespace {
 
-std::vector<glm::dvec2> square(double w, double h) { return {{0.0, 0.0}, {w, 0.0}, {w, h}, {0.0, h}}; }
+std::vector<glm::dvec2> square(double w, double h) {
+  return {{0.0, 0.0}, {w, 0.0}, {w, h}, {0.0, h}};
+}
 
 std::vector<glm::dvec2> corners_of(const BoxView& view, std::size_t face) {
   return {view.corners[face].begin(), view.corners[face].end()};
@@ -35,8 +37,8 @@ glm::dvec3 ippe_normal(const Camera& camera, const std::vector<glm::dvec2>& plan
   cv::Vec3d rvec;
   cv::Vec3d tvec;
   REQUIRE(cv::solvePnP(object, image, cv::Mat(camera.matrix()),
-                       camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), rvec, tvec, false,
-                       cv::SOLVEPNP_IPPE));
+                       camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), rvec,
+                       tvec, false, cv::SOLVEPNP_IPPE));
   cv::Matx33d R;
   cv::Rodrigues(rvec, R);
   glm::dvec3 n{R(0, 2), R(1, 2), R(2, 2)};
@@ -70,7 +72,8 @@ TEST_CASE("normalised DLT reproduces a known homography") {
     }
     const cv::Matx33d theirs(cv::getPerspectiveTransform(s, d));
     const cv::Matx33d a = ours * (1.0 / ours(2, 2));
-    for (int i = 0; i < 9; ++i) CHECK(a.val[i] == Approx(theirs.val[i] / theirs(2, 2)).epsilon(1e-4).margin(1e-7));
+    for (int i = 0; i < 9; ++i)
+      CHECK(a.val[i] == Approx(theirs.val[i] / theirs(2, 2)).epsilon(1e-4).margin(1e-7));
   }
   SECTION("twelve points: least squares maps every point") {
     std::vector<glm::dvec2> plane;
@@ -95,10 +98,12 @@ TEST_CASE("degenerate correspondences are rejected with a clear error") {
   CHECK_NOTHROW(estimate_plane_pose(camera, plane, good));
 
   const std::vector<glm::dvec2> three{good.begin(), good.begin() + 3};
-  CHECK_THROWS_WITH(estimate_plane_pose(camera, std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
-                    Catch::Contains("at least 4"));
-  CHECK_THROWS_WITH(homography_dlt(std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
-                    Catch::Contains("at least 4"));
+  CHECK_THROWS_WITH(
+      estimate_plane_pose(camera, std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
+      Catch::Contains("at least 4"));
+  CHECK_THROWS_WITH(
+      homography_dlt(std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
+      Catch::Contains("at least 4"));
   CHECK_THROWS_WITH(estimate_rectangle_pose(camera, three), Catch::Contains("exactly 4"));
 
   auto repeated = good;
@@ -111,7 +116,8 @@ TEST_CASE("degenerate correspondences are rejected with a clear error") {
   const std::vector<glm::dvec2> all_on_a_line{{0, 0}, {1, 1}, {2, 2}, {3, 3}, {4, 4}, {5, 5}};
   CHECK_THROWS_WITH(homography_dlt(all_on_a_line, all_on_a_line), Catch::Contains("collinear"));
   const std::vector<glm::dvec2> plane_collinear{{0, 0}, {50, 0}, {100, 0}, {0, 100}};
-  CHECK_THROWS_WITH(estimate_plane_pose(camera, plane_collinear, good), Catch::Contains("collinear"));
+  CHECK_THROWS_WITH(estimate_plane_pose(camera, plane_collinear, good),
+                    Catch::Contains("collinear"));
 
   auto nan = good;
   nan[3].y = std::numeric_limits<double>::quiet_NaN();
@@ -121,8 +127,10 @@ TEST_CASE("degenerate correspondences are rejected with a clear error") {
   inf[0].x = std::numeric_limits<double>::infinity();
   CHECK_THROWS_WITH(homography_dlt(plane, inf), Catch::Contains("finite"));
 
-  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{0.0, 100.0}), Catch::Contains("size"));
-  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{std::nan(""), 100.0}), Catch::Contains("size"));
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{0.0, 100.0}),
+                    Catch::Contains("size"));
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{std::nan(""), 100.0}),
+                    Catch::Contains("size"));
   CHECK_THROWS_WITH(estimate_plane_pose(camera, plane, std::vector<glm::dvec2>(5, {1.0, 2.0})),
                     Catch::Contains("differ"));
 }
@@ -132,8 +140,10 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
   CHECK_THROWS_WITH(Camera::from_focal(-500.0, {320, 240}), Catch::Contains("focal length"));
   CHECK_THROWS_WITH(Camera::from_focal(std::nan(""), {320, 240}), Catch::Contains("focal length"));
   CHECK_THROWS_WITH(Camera(800.0, -1.0, {320, 240}), Catch::Contains("focal length"));
-  CHECK_THROWS_WITH(Camera::from_focal(800.0, {std::nan(""), 240}), Catch::Contains("principal point"));
-  CHECK_THROWS_WITH(Camera(800.0, 800.0, {320, 240}, {0.1, 0.2, 0.3}), Catch::Contains("distortion"));
+  CHECK_THROWS_WITH(Camera::from_focal(800.0, {std::nan(""), 240}),
+                    Catch::Contains("principal point"));
+  CHECK_THROWS_WITH(Camera(800.0, 800.0, {320, 240}, {0.1, 0.2, 0.3}),
+                    Catch::Contains("distortion"));
 
   // 60 degrees across 640 px: f = 320 / tan(30 deg)
   const Camera fov = Camera::from_field_of_view(60.0, 640, 480);
@@ -142,7 +152,8 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
   CHECK_THROWS(Camera::from_field_of_view(180.0, 640, 480));
 
   SECTION("the checked-in calibration file (cv::calibrateCamera layout)") {
-    const Camera c = Camera::from_file(std::string(HAPTICFIELD_SOURCE_DIR) + "/tests/data/normals/calibration.yml");
+    const Camera c = Camera::from_file(std::string(HAPTICFIELD_SOURCE_DIR) +
+                                       "/tests/data/normals/calibration.yml");
     CHECK(c.matrix()(0, 0) == Approx(1000.0));
     CHECK(c.matrix()(1, 1) == Approx(1000.0));
     CHECK(c.matrix()(0, 2) == Approx(511.5));
@@ -158,7 +169,8 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
       {
         cv::FileStorage fs(path, cv::FileStorage::WRITE);
         fs << "camera_matrix" << cv::Mat(cv::Matx33d(812.5, 0, 330.25, 0, 808.0, 241.0, 0, 0, 1));
-        fs << "distortion_coefficients" << cv::Mat(std::vector<double>{0.05, -0.1, 0.001, 0.002, 0.0});
+        fs << "distortion_coefficients"
+           << cv::Mat(std::vector<double>{0.05, -0.1, 0.001, 0.002, 0.0});
       }
       const Camera c = Camera::from_file(path);
       CHECK(c.matrix()(0, 0) == 812.5);
@@ -226,19 +238,22 @@ TEST_CASE("box stimulus: exact corners give the true normals") {
     const BoxView view = render_box(scene, rotation, false);
     for (std::size_t f = 0; f < 2; ++f) {
       const auto corners = corners_of(view, f);
-      const FacePose pose = estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
+      const FacePose pose =
+          estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
       const double err = angle_between_deg(pose.normal, view.normals[f]);
       worst = std::max(worst, err);
       CHECK(err <= 0.5);
       CHECK(glm::length(pose.normal) == Approx(1.0));
       CHECK(pose.rms_reprojection_px < 1e-6);
       // the true box position: centre of the face at distance_mm
-      CHECK(cv::norm(pose.t) == Approx(cv::norm(cv::Vec3d(0, 0, scene.distance_mm) +
-                                                detail::box_rotation(rotation, scene.elevation_deg) *
-                                                    cv::Vec3d(f == 0 ? -100 : 100, -100, -100)))
-                                    .epsilon(1e-6));
+      CHECK(cv::norm(pose.t) ==
+            Approx(cv::norm(cv::Vec3d(0, 0, scene.distance_mm) +
+                            detail::box_rotation(rotation, scene.elevation_deg) *
+                                cv::Vec3d(f == 0 ? -100 : 100, -100, -100)))
+                .epsilon(1e-6));
       // independent oracle: OpenCV's IPPE planar pose
-      CHECK(angle_between_deg(pose.normal, ippe_normal(camera, square(scene.edge_mm, scene.edge_mm), corners)) < 1e-4);
+      CHECK(angle_between_deg(pose.normal, ippe_normal(camera, square(scene.edge_mm, scene.edge_mm),
+                                                       corners)) < 1e-4);
     }
   }
   CHECK(worst < 1e-6);
@@ -260,7 +275,8 @@ TEST_CASE("box stimulus: 1 px corner noise keeps the normal within 2 degrees") {
           const double a = angle(rng);
           c += glm::dvec2{std::cos(a), std::sin(a)};
         }
-        const FacePose pose = estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
+        const FacePose pose =
+            estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
         const double err = angle_between_deg(pose.normal, view.normals[f]);
         worst = std::max(worst, err);
         CHECK(err <= 2.0);
@@ -284,13 +300,15 @@ TEST_CASE("box stimulus: ratio table estimated / true components") {
     const BoxView view = render_box(scene, rotation, false);
     for (std::size_t f = 0; f < 2; ++f) {
       const glm::dvec3 truth = view.normals[f];
-      const glm::dvec3 exact = estimate_rectangle_pose(camera, corners_of(view, f), glm::dvec2{200.0, 200.0}).normal;
+      const glm::dvec3 exact =
+          estimate_rectangle_pose(camera, corners_of(view, f), glm::dvec2{200.0, 200.0}).normal;
       glm::dvec3 mean{0.0};
       constexpr int trials = 40;
       for (int k = 0; k < trials; ++k) {
         auto corners = corners_of(view, f);
         for (auto& c : corners) c += glm::dvec2{noise(rng), noise(rng)};
-        mean += estimate_rectangle_pose(camera, corners, glm::dvec2{200.0, 200.0}).normal / double(trials);
+        mean += estimate_rectangle_pose(camera, corners, glm::dvec2{200.0, 200.0}).normal /
+                double(trials);
       }
       for (int c = 0; c < 3; ++c) {
         if (std::abs(truth[c]) < 0.25) continue;  // ratios of small components are meaningless
@@ -333,7 +351,8 @@ TEST_CASE("rectangle of unknown aspect ratio: aspect recovered with K") {
     if (truth.z > 0.0) truth = -truth;
     CHECK(angle_between_deg(pose.normal, truth) < 1e-4);
     // a wrong K leaves the rectangle inconsistent: r1 . r2 != 0
-    const FacePose wrong = estimate_rectangle_pose(Camera::from_focal(500.0, Camera::image_centre(1024, 768)), corners);
+    const FacePose wrong = estimate_rectangle_pose(
+        Camera::from_focal(500.0, Camera::image_centre(1024, 768)), corners);
     CHECK(wrong.orthogonality > 10.0 * pose.orthogonality + 1e-3);
   }
 }
@@ -343,7 +362,8 @@ TEST_CASE("focal length from the orthogonality of a rectangle's sides") {
   for (double rotation : {20.0, 45.0, 70.0}) {
     const BoxView view = render_box(scene, rotation, false);
     for (std::size_t f = 0; f < 2; ++f) {
-      const auto focal = focal_from_rectangle(corners_of(view, f), Camera::image_centre(scene.width, scene.height));
+      const auto focal = focal_from_rectangle(corners_of(view, f),
+                                              Camera::image_centre(scene.width, scene.height));
       REQUIRE(focal.has_value());
       CHECK(*focal == Approx(scene.focal_px).epsilon(1e-6));
     }
@@ -367,15 +387,19 @@ TEST_CASE("lens distortion: the corners are undistorted first") {
     cam.emplace_back(q[0], q[1], q[2]);
   }
   std::vector<cv::Point2d> projected;
-  cv::projectPoints(cam, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(distorted.matrix()), cv::Mat(dist), projected);
+  cv::projectPoints(cam, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(distorted.matrix()),
+                    cv::Mat(dist), projected);
   std::vector<glm::dvec2> corners;
   for (auto p : projected) corners.push_back({p.x, p.y});
   const FacePose with = estimate_rectangle_pose(distorted, corners, glm::dvec2{200.0, 200.0});
-  const FacePose without = estimate_rectangle_pose(scene.camera(), corners, glm::dvec2{200.0, 200.0});
+  const FacePose without =
+      estimate_rectangle_pose(scene.camera(), corners, glm::dvec2{200.0, 200.0});
   CHECK(angle_between_deg(with.normal, view.normals[0]) < 0.01);
   CHECK(with.rms_reprojection_px < 0.01);
-  CHECK(angle_between_deg(without.normal, view.normals[0]) > 10.0 * angle_between_deg(with.normal, view.normals[0]));
-  CHECK(angle_between_deg(with.normal, ippe_normal(distorted, square(200.0, 200.0), corners)) < 0.01);
+  CHECK(angle_between_deg(without.normal, view.normals[0]) >
+        10.0 * angle_between_deg(with.normal, view.normals[0]));
+  CHECK(angle_between_deg(with.normal, ippe_normal(distorted, square(200.0, 200.0), corners)) <
+        0.01);
 }
 
 TEST_CASE("RANSAC rejects outliers among many noisy correspondences") {
@@ -415,7 +439,8 @@ TEST_CASE("RANSAC rejects outliers among many noisy correspondences") {
   HomographyOptions plain;
   plain.ransac = false;
   const FacePose naive = estimate_plane_pose(camera, plane, pixels, plain);
-  CHECK(angle_between_deg(naive.normal, view.normals[0]) > 2.0 * angle_between_deg(robust.normal, view.normals[0]));
+  CHECK(angle_between_deg(naive.normal, view.normals[0]) >
+        2.0 * angle_between_deg(robust.normal, view.normals[0]));
 }
 
 TEST_CASE("the renderer draws a textured picture") {

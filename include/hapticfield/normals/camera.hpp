@@ -7,11 +7,11 @@
 
 #include <cmath>
 #include <filesystem>
-#include <system_error>
 #include <numbers>
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -45,8 +45,7 @@ class Camera {
     if (!(K(0, 0) > 0.0) || !(K(1, 1) > 0.0))
       throw std::invalid_argument("Camera: focal length must be positive [px]");
     if (K(1, 0) != 0.0 || K(2, 0) != 0.0 || K(2, 1) != 0.0 || K(2, 2) != 1.0)
-      throw std::invalid_argument(
-          "Camera: camera matrix must be [fx s cx; 0 fy cy; 0 0 1]");
+      throw std::invalid_argument("Camera: camera matrix must be [fx s cx; 0 fy cy; 0 0 1]");
     const std::size_t n = distortion_.size();
     if (n != 0 && n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
       throw std::invalid_argument(
@@ -62,7 +61,8 @@ class Camera {
   /// Square pixels: fx = fy = focal [px], principal point centre [px].
   [[nodiscard]] static Camera from_focal(double focal, glm::dvec2 centre) {
     if (!std::isfinite(focal) || focal <= 0.0)
-      throw std::invalid_argument("Camera::from_focal: focal length must be finite and positive [px]");
+      throw std::invalid_argument(
+          "Camera::from_focal: focal length must be finite and positive [px]");
     if (!std::isfinite(centre.x) || !std::isfinite(centre.y))
       throw std::invalid_argument("Camera::from_focal: principal point must be finite [px]");
     return Camera(focal, focal, centre);
@@ -74,7 +74,8 @@ class Camera {
   [[nodiscard]] static Camera from_field_of_view(double horizontal_fov_deg, int width, int height) {
     if (width <= 0 || height <= 0)
       throw std::invalid_argument("Camera::from_field_of_view: image size must be positive [px]");
-    if (!std::isfinite(horizontal_fov_deg) || horizontal_fov_deg <= 0.0 || horizontal_fov_deg >= 180.0)
+    if (!std::isfinite(horizontal_fov_deg) || horizontal_fov_deg <= 0.0 ||
+        horizontal_fov_deg >= 180.0)
       throw std::invalid_argument(
           "Camera::from_field_of_view: horizontal field of view must be in (0, 180) [deg]");
     const double half = horizontal_fov_deg * std::numbers::pi / 360.0;
@@ -94,7 +95,8 @@ class Camera {
     cv::FileStorage fs;
     try {
       if (!fs.open(path, cv::FileStorage::READ))
-        throw std::invalid_argument("Camera::from_file: cannot open calibration file '" + path + "'");
+        throw std::invalid_argument("Camera::from_file: cannot open calibration file '" + path +
+                                    "'");
     } catch (const cv::Exception& e) {
       throw std::invalid_argument("Camera::from_file: cannot parse calibration file '" + path +
                                   "': " + e.what());
@@ -119,7 +121,8 @@ class Camera {
     if (k.empty())
       throw std::invalid_argument("Camera::from_file: no 'camera_matrix' node in '" + path + "'");
     if (k.rows != 3 || k.cols != 3 || k.channels() != 1)
-      throw std::invalid_argument("Camera::from_file: 'camera_matrix' in '" + path + "' must be 3x3");
+      throw std::invalid_argument("Camera::from_file: 'camera_matrix' in '" + path +
+                                  "' must be 3x3");
     cv::Mat k64;
     k.convertTo(k64, CV_64F);
     std::vector<double> dist;
@@ -140,12 +143,12 @@ class Camera {
   /// Writes K and the distortion in the layout from_file() reads.
   void save(const std::string& path) const {
     cv::FileStorage fs(path, cv::FileStorage::WRITE);
-    if (!fs.isOpened())
-      throw std::invalid_argument("Camera::save: cannot write '" + path + "'");
+    if (!fs.isOpened()) throw std::invalid_argument("Camera::save: cannot write '" + path + "'");
     if (width_ > 0) fs << "image_width" << width_;
     if (height_ > 0) fs << "image_height" << height_;
     fs << "camera_matrix" << cv::Mat(K_);
-    fs << "distortion_coefficients" << cv::Mat(distortion_.empty() ? std::vector<double>(5, 0.0) : distortion_);
+    fs << "distortion_coefficients"
+       << cv::Mat(distortion_.empty() ? std::vector<double>(5, 0.0) : distortion_);
   }
 
   /// The same camera for the picture resized by (sx, sy): focal lengths and

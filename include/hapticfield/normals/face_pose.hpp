@@ -27,21 +27,23 @@ namespace hapticfield {
 
 /// Pose of a planar face relative to the camera.
 struct FacePose {
-  cv::Matx33d R;                 ///< face plane axes -> camera frame (nearest rotation)
-  cv::Vec3d t;                   ///< face-plane origin in the camera frame [plane units]
-  glm::dvec3 normal{0.0};        ///< unit normal, camera frame, toward the camera (n . centre < 0)
-  cv::Matx33d H;                 ///< plane -> undistorted image homography
+  cv::Matx33d R;           ///< face plane axes -> camera frame (nearest rotation)
+  cv::Vec3d t;             ///< face-plane origin in the camera frame [plane units]
+  glm::dvec3 normal{0.0};  ///< unit normal, camera frame, toward the camera (n . centre < 0)
+  cv::Matx33d H;           ///< plane -> undistorted image homography
   double rms_reprojection_px = 0.0;  ///< RMS reprojection error of K [R|t] with distortion [px]
   double max_reprojection_px = 0.0;  ///< largest reprojection error [px]
-  double orthogonality = 0.0;    ///< |cos| of the angle between the columns of K^-1 H before orthogonalisation
-  double norm_ratio = 1.0;       ///< |K^-1 h1| / |K^-1 h2| (1 for a consistent K and size)
-  double width = 0.0;            ///< face width [plane units] (rectangles)
-  double height = 0.0;           ///< face height [plane units]; 1 when the aspect was recovered
-  bool aspect_recovered = false; ///< true when the size was unknown and W/H came from K
-  double closed_form_rms_px = 0.0;  ///< RMS reprojection error of the closed form before refinement [px]
+  double orthogonality =
+      0.0;  ///< |cos| of the angle between the columns of K^-1 H before orthogonalisation
+  double norm_ratio = 1.0;        ///< |K^-1 h1| / |K^-1 h2| (1 for a consistent K and size)
+  double width = 0.0;             ///< face width [plane units] (rectangles)
+  double height = 0.0;            ///< face height [plane units]; 1 when the aspect was recovered
+  bool aspect_recovered = false;  ///< true when the size was unknown and W/H came from K
+  double closed_form_rms_px =
+      0.0;  ///< RMS reprojection error of the closed form before refinement [px]
   glm::dvec3 closed_form_normal{0.0};  ///< normal of the closed form before refinement
-  bool refined = false;          ///< true when the Levenberg-Marquardt refinement was applied
-  std::vector<bool> inliers;     ///< per correspondence
+  bool refined = false;                ///< true when the Levenberg-Marquardt refinement was applied
+  std::vector<bool> inliers;           ///< per correspondence
 };
 
 /// How pose_from_homography() finishes the closed form.
@@ -144,8 +146,9 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
     cv::Mat t(pose.t);
     r = r.clone();
     t = t.clone();
-    cv::solvePnPRefineLM(object, image, K, dist, r, t,
-                         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-12));
+    cv::solvePnPRefineLM(
+        object, image, K, dist, r, t,
+        cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-12));
     const cv::Vec3d r2(r.ptr<double>());
     const cv::Vec3d t2(t.ptr<double>());
     double max2 = 0.0;
@@ -216,9 +219,11 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
                                                       std::optional<glm::dvec2> size = std::nullopt,
                                                       const PoseOptions& pose_options = {}) {
   if (corners.size() != 4)
-    throw std::invalid_argument("estimate_rectangle_pose: a rectangle needs exactly 4 corners, got " +
-                                std::to_string(corners.size()));
-  if (size && (!std::isfinite(size->x) || !std::isfinite(size->y) || size->x <= 0.0 || size->y <= 0.0))
+    throw std::invalid_argument(
+        "estimate_rectangle_pose: a rectangle needs exactly 4 corners, got " +
+        std::to_string(corners.size()));
+  if (size &&
+      (!std::isfinite(size->x) || !std::isfinite(size->y) || size->x <= 0.0 || size->y <= 0.0))
     throw std::invalid_argument("estimate_rectangle_pose: size must be finite and positive [mm]");
   double w = 1.0;
   double h = 1.0;

@@ -21,10 +21,10 @@ namespace hapticfield {
 
 /// How estimate_homography() treats more than four correspondences.
 struct HomographyOptions {
-  bool ransac = true;                  ///< RANSAC when more than 4 points are given
-  double ransac_threshold_px = 3.0;    ///< inlier threshold on the transfer error [px]
-  int ransac_iterations = 2000;        ///< RANSAC iteration limit
-  double ransac_confidence = 0.999;    ///< RANSAC confidence
+  bool ransac = true;                ///< RANSAC when more than 4 points are given
+  double ransac_threshold_px = 3.0;  ///< inlier threshold on the transfer error [px]
+  int ransac_iterations = 2000;      ///< RANSAC iteration limit
+  double ransac_confidence = 0.999;  ///< RANSAC confidence
 };
 
 /// A homography image ~ H [X Y 1]^T with the correspondences it explains.
@@ -50,8 +50,8 @@ inline double triangle_fatness(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) noexcep
   const glm::dvec2 ac = c - a;
   const glm::dvec2 bc = c - b;
   const double area2 = std::abs(ab.x * ac.y - ab.y * ac.x);
-  const double longest = std::max({ab.x * ab.x + ab.y * ab.y, ac.x * ac.x + ac.y * ac.y,
-                                   bc.x * bc.x + bc.y * bc.y});
+  const double longest =
+      std::max({ab.x * ab.x + ab.y * ab.y, ac.x * ac.x + ac.y * ac.y, bc.x * bc.x + bc.y * bc.y});
   return longest > 0.0 ? area2 / longest : 0.0;
 }
 
@@ -159,10 +159,18 @@ inline cv::Matx33d normalise_homography(cv::Matx33d H) noexcept {
     double* r0 = A.ptr<double>(2 * i);
     double* r1 = A.ptr<double>(2 * i + 1);
     // [0^T, -X^T, y X^T] and [X^T, 0^T, -x X^T] with X = (X, Y, 1)
-    r0[3] = -X.x; r0[4] = -X.y; r0[5] = -1.0;
-    r0[6] = x.y * X.x; r0[7] = x.y * X.y; r0[8] = x.y;
-    r1[0] = X.x; r1[1] = X.y; r1[2] = 1.0;
-    r1[6] = -x.x * X.x; r1[7] = -x.x * X.y; r1[8] = -x.x;
+    r0[3] = -X.x;
+    r0[4] = -X.y;
+    r0[5] = -1.0;
+    r0[6] = x.y * X.x;
+    r0[7] = x.y * X.y;
+    r0[8] = x.y;
+    r1[0] = X.x;
+    r1[1] = X.y;
+    r1[2] = 1.0;
+    r1[6] = -x.x * X.x;
+    r1[7] = -x.x * X.y;
+    r1[8] = -x.x;
   }
   cv::Mat w;
   cv::Mat u;
@@ -171,7 +179,8 @@ inline cv::Matx33d normalise_homography(cv::Matx33d H) noexcept {
   const double* h = vt.ptr<double>(8);
   const cv::Matx33d Hn(h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8]);
   const cv::Matx33d H = Ti.inv() * Hn * Tp;
-  if (!std::isfinite(cv::norm(H)) || std::abs(cv::determinant(detail::normalise_homography(H))) < 1e-300)
+  if (!std::isfinite(cv::norm(H)) ||
+      std::abs(cv::determinant(detail::normalise_homography(H))) < 1e-300)
     throw std::invalid_argument("homography_dlt: degenerate configuration (singular homography)");
   return detail::normalise_homography(H);
 }
