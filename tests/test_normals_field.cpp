@@ -91,8 +91,11 @@ TEST_CASE("force along the motion: climbing resists, descending assists, level i
 }
 
 TEST_CASE("signs agree with the 3D geometry of the box stimulus") {
-  // Independent oracle: cast rays through two image points on an estimated
-  // face; the motion climbs when the surface comes closer to the viewer.
+  // Independent oracle: cast rays through two image points onto the true
+  // face; the motion climbs when the surface comes closer to the viewer
+  // (its depth z decreases). On a plane, z seen through pixel (u, v) is
+  // d / (n . K^-1 (u, v, 1)), whose image gradient is along +(n_x, n_y) at
+  // every pixel, so the sign must hold everywhere on the face.
   const BoxScene scene;
   const Camera camera = scene.camera();
   const cv::Matx33d Kinv = camera.matrix().inv();
@@ -108,22 +111,31 @@ TEST_CASE("signs agree with the 3D geometry of the box stimulus") {
       faces.push_back({c, poses.back().normal});
     }
     NormalField field(scene.width, scene.height, faces);
+    const cv::Matx33d R = detail::box_rotation(rotation, scene.elevation_deg);
     for (std::size_t f = 0; f < 2; ++f) {
       const auto& c = view.corners[f];
       const glm::dvec2 centre = 0.25 * (c[0] + c[1] + c[2] + c[3]);
+      // the true plane: outward normal and face centre from the box pose
       const cv::Vec3d n(view.normals[f].x, view.normals[f].y, view.normals[f].z);
-      const cv::Vec3d on_plane = poses[f].R * cv::Vec3d(100.0, 100.0, 0.0) + poses[f].t;
-      const auto depth = [&](glm::dvec2 px) {  // distance along the ray to the face plane
+      const cv::Vec3d on_plane = R * (f == 0 ? cv::Vec3d(0, 0, -100) : cv::Vec3d(100, 0, 0)) +
+                                 cv::Vec3d(0, 0, scene.distance_mm);
+      const auto depth = [&](glm::dvec2 px) {  // z of the plane point seen at px [mm]
         const cv::Vec3d ray = Kinv * cv::Vec3d(px.x, px.y, 1.0);
-        return (n.dot(on_plane) / n.dot(ray)) * cv::norm(ray);
+        return n.dot(on_plane) / n.dot(ray);  // ray.z = 1
       };
-      for (int k = 0; k < 20; ++k) {
-        const double a = 2.0 * std::numbers::pi * unit(rng);
-        const glm::dvec2 m{std::cos(a), std::sin(a)};
-        const glm::dvec2 force = felt(field, centre, 300.0 * m);
-        const double climb = depth(centre) - depth(centre + 2.0 * m);  // > 0: coming closer
-        INFO("rotation " << rotation << " face " << f << " direction " << a);
-        if (std::abs(climb) > 1e-3) CHECK((glm::dot(force, m) < 0.0) == (climb > 0.0));
+      for (int corner = -1; corner < 4; ++corner) {
+        const glm::dvec2 p = corner < 0 ? centre : 0.5 * (centre + c[static_cast<std::size_t>(corner)]);
+        for (int k = 0; k < 24; ++k) {
+          const double a = 2.0 * std::numbers::pi * unit(rng);
+          const glm::dvec2 m{std::cos(a), std::sin(a)};
+          const glm::dvec2 force = felt(field, p, 300.0 * m);
+          const double climb = depth(p) - depth(p + 1e-3 * m);  // > 0: coming closer
+          INFO("rotation " << rotation << " face " << f << " corner " << corner << " angle " << a);
+          if (std::abs(climb) > 1e-9) CHECK((glm::dot(force, m) < 0.0) == (climb > 0.0));
+          // magnitude: 0.6 N |n . m_hat| with the true normal
+          CHECK(glm::length(force) ==
+                Approx(kim_kwon_max_force * std::abs(n[0] * m.x + n[1] * m.y)).margin(1e-9));
+        }
       }
     }
   }

@@ -253,9 +253,9 @@ class ShadingGrid {
 /// reuse. force() is O(1) in the number of faces, noexcept, allocation-free.
 ///
 /// @code
-///   std::vector<ImageFace> faces{{corners_px, estimate_rectangle_pose(camera,
-///   corners_px).normal}}; NormalField field(picture.cols, picture.rows, faces); glm::dvec3 f =
-///   field.force(probe);  // [N], device frame
+///   const FacePose pose = estimate_rectangle_pose(camera, corners_px);
+///   NormalField field(picture.cols, picture.rows, {{corners_px, pose.normal}});
+///   glm::dvec3 f = field.force(probe);  // [N], device frame
 /// @endcode
 class NormalField {
  public:
