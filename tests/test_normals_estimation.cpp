@@ -178,6 +178,12 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
       CHECK(c.matrix()(0, 2) == 330.25);
       CHECK(c.distortion().size() == 5);
       CHECK(c.distortion()[3] == 0.002);
+      // Camera::save writes what Camera::from_file reads
+      const std::string again = tmp_path(std::string("camera_saved") + ext);
+      c.save(again);
+      const Camera d = Camera::from_file(again);
+      CHECK(d.matrix() == c.matrix());
+      CHECK(d.distortion() == c.distortion());
     }
   }
   SECTION("bad calibration files") {
