@@ -124,7 +124,8 @@ TEST_CASE("signs agree with the 3D geometry of the box stimulus") {
         return n.dot(on_plane) / n.dot(ray);  // ray.z = 1
       };
       for (int corner = -1; corner < 4; ++corner) {
-        const glm::dvec2 p = corner < 0 ? centre : 0.5 * (centre + c[static_cast<std::size_t>(corner)]);
+        const glm::dvec2 p =
+            corner < 0 ? centre : 0.5 * (centre + c[static_cast<std::size_t>(corner)]);
         for (int k = 0; k < 24; ++k) {
           const double a = 2.0 * std::numbers::pi * unit(rng);
           const glm::dvec2 m{std::cos(a), std::sin(a)};
