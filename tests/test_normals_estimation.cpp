@@ -119,6 +119,14 @@ TEST_CASE("degenerate correspondences are rejected with a clear error") {
   CHECK_THROWS_WITH(estimate_plane_pose(camera, plane_collinear, good),
                     Catch::Contains("collinear"));
 
+  // corners not in order around the face: a crossed (bow-tie) quadrilateral
+  const std::vector<glm::dvec2> crossed{{100, 100}, {310, 300}, {300, 110}, {90, 290}};
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, crossed), Catch::Contains("in order"));
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, crossed, glm::dvec2{100.0, 100.0}),
+                    Catch::Contains("in order"));
+  const std::vector<glm::dvec2> dart{{100, 100}, {300, 110}, {150, 150}, {90, 290}};
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, dart), Catch::Contains("in order"));
+
   auto nan = good;
   nan[3].y = std::numeric_limits<double>::quiet_NaN();
   CHECK_THROWS_WITH(estimate_plane_pose(camera, plane, nan), Catch::Contains("finite"));

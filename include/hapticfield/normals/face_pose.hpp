@@ -213,7 +213,8 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 /// residual (FacePose::orthogonality) says how well K fits the picture (see
 /// focal_from_rectangle() to estimate f from it).
 /// @throws std::invalid_argument for a corner count other than 4, a
-///         non-finite or non-positive size, or degenerate corners.
+///         non-finite or non-positive size, or degenerate corners (repeated,
+///         collinear, non-finite, or not in order around a convex face).
 [[nodiscard]] inline FacePose estimate_rectangle_pose(const Camera& camera,
                                                       std::span<const glm::dvec2> corners,
                                                       std::optional<glm::dvec2> size = std::nullopt,
@@ -225,6 +226,25 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
   if (size &&
       (!std::isfinite(size->x) || !std::isfinite(size->y) || size->x <= 0.0 || size->y <= 0.0))
     throw std::invalid_argument("estimate_rectangle_pose: size must be finite and positive [mm]");
+  if (!detail::finite_points(corners))
+    throw std::invalid_argument("estimate_rectangle_pose: image points [px] must be finite");
+  detail::check_point_set(corners, "estimate_rectangle_pose", "image points [px]");
+  {
+    // A rectangle in front of the camera images as a convex quadrilateral
+    // with its corners in order: a crossing (bow-tie) or non-convex order
+    // means the corners were not given around the face.
+    const std::vector<glm::dvec2> ideal = camera.undistort(corners);
+    int positive = 0;
+    for (std::size_t i = 0; i < 4; ++i) {
+      const glm::dvec2 a = ideal[(i + 1) % 4] - ideal[i];
+      const glm::dvec2 b = ideal[(i + 2) % 4] - ideal[(i + 1) % 4];
+      if (a.x * b.y - a.y * b.x > 0.0) ++positive;
+    }
+    if (positive != 0 && positive != 4)
+      throw std::invalid_argument(
+          "estimate_rectangle_pose: the 4 corners must go around the face in order (they form a "
+          "crossed or non-convex quadrilateral)");
+  }
   double w = 1.0;
   double h = 1.0;
   bool recovered = false;

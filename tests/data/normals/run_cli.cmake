@@ -76,7 +76,7 @@ file(WRITE "${WORK_DIR}/normals_intrinsics.txt" "${out}")
 run(EXPECT ok OUT out ERR err COMMAND "${BOX_DEMO}" --rotation 45 --check "${WORK_DIR}/normals_intrinsics.txt")
 
 # bad input: non-zero exit and one line on stderr
-foreach(bad IN ITEMS "--face;1,2 3,4" "--face;1,2 3,4 5,6 x,8" "--face;0,0 10,10 20,20 0,30" "--focal;-5;--face;0,0 10,0 10,10 0,10"
+foreach(bad IN ITEMS "--face;1,2 3,4" "--face;0,0 10,10 10,0 0,10" "--face;1,2 3,4 5,6 x,8" "--face;0,0 10,10 20,20 0,30" "--focal;-5;--face;0,0 10,0 10,10 0,10"
                      "--intrinsics;${WORK_DIR}/missing.yml;--face;0,0 10,0 10,10 0,10" "--face;0,0 10,0 10,10 0,10;--probes;x.csv")
   run(EXPECT fail OUT out ERR err COMMAND "${PICTURE_NORMALS}" "${WORK_DIR}/box_45.png" ${bad})
   string(REGEX MATCHALL "\n" newlines "${err}")
