@@ -167,21 +167,23 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-Camera make_camera(const Args& a, int width, int height) {
+/// K for the picture; notes for the user are collected in `notes` and
+/// printed only once the faces are known to be valid (so a failure prints
+/// one line).
+Camera make_camera(const Args& a, int width, int height, std::ostringstream& notes) {
   if (!a.intrinsics.empty()) {
     Camera c = Camera::from_file(a.intrinsics);
     if (c.width() > 0 && c.height() > 0 && (c.width() != width || c.height() != height)) {
       const double sx = static_cast<double>(width) / c.width();
       const double sy = static_cast<double>(height) / c.height();
       if (std::abs(sx / sy - 1.0) < 0.01) {
-        std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x"
-                  << c.height() << " px; K scaled by " << sx << " for the " << width << "x"
-                  << height << " px picture\n";
+        notes << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
+              << " px; K scaled by " << sx << " for the " << width << "x" << height
+              << " px picture\n";
         return c.scaled(sx, sy);
       }
-      std::cerr << "picture_normals: note: calibration was made at " << c.width() << "x"
-                << c.height() << " px, the picture is " << width << "x" << height
-                << " px (cropped?); K used as is\n";
+      notes << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
+            << " px, the picture is " << width << "x" << height << " px (cropped?); K used as is\n";
     }
     return c;
   }
@@ -204,13 +206,13 @@ Camera make_camera(const Args& a, int width, int height) {
     std::nth_element(focals.begin(), focals.begin() + static_cast<long>(focals.size() / 2),
                      focals.end());
     const double f = focals[focals.size() / 2];
-    std::cerr << "picture_normals: note: no --intrinsics or --focal; focal length estimated from "
-                 "the faces' "
-                 "right angles: "
-              << f << " px\n";
+    notes << "picture_normals: note: no --intrinsics or --focal; focal length estimated from "
+             "the faces' "
+             "right angles: "
+          << f << " px\n";
     return Camera::from_focal(f, centre);
   }
-  std::cerr
+  notes
       << "picture_normals: note: no --intrinsics or --focal; focal length guessed from a 60 degree "
          "horizontal field of view\n";
   return Camera::from_field_of_view(60.0, width, height);
@@ -345,7 +347,8 @@ int run(int argc, char** argv) {
     throw std::invalid_argument("cannot read image '" + a.image + "'");
   const cv::Mat image = cv::imread(a.image, cv::IMREAD_COLOR);
   if (image.empty()) throw std::invalid_argument("cannot read image '" + a.image + "'");
-  const Camera camera = make_camera(a, image.cols, image.rows);
+  std::ostringstream notes;
+  const Camera camera = make_camera(a, image.cols, image.rows, notes);
   std::vector<FacePose> poses;
   std::vector<ImageFace> faces;
   for (std::size_t f = 0; f < a.faces.size(); ++f) {
@@ -379,6 +382,7 @@ int run(int argc, char** argv) {
     if (!a.probes.empty()) evaluate_probes(a, field);
     if (!a.force_map.empty()) draw_force_map(a.force_map, image, field);
   }
+  std::cerr << notes.str();  // only on success: a failure prints one line
   return 0;
 }
 
