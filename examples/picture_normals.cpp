@@ -1,0 +1,400 @@
+// picture_normals: estimate the normals of planar faces marked in a picture
+// (Kim & Kwon, World Haptics 2013) and evaluate the normal field's forces.
+//
+//   picture_normals IMAGE --face "x1,y1 x2,y2 x3,y3 x4,y4" [--face ...]
+//       [--size W,H] [--intrinsics FILE.yml | --focal F [--center cx,cy]]
+//       [--overlay OUT.png] [--probes IN.csv --forces OUT.csv]
+//       [--force-map OUT.png] [--gradient] [--shading CELL_PX] [--verbose]
+//
+// Prints one line per face, `normal: nx ny nz` (camera frame: x right,
+// y down, z forward; unit; toward the camera). Corners go around the face:
+// the first maps to (0, 0) on the face, then (W, 0), (W, H), (0, H). One
+// --size applies to every face; as many --size as --face pair up in order;
+// without a size the aspect ratio is recovered with K. Without
+// --intrinsics / --focal the focal length is estimated from the faces'
+// right angles (or guessed from a 60 degree field of view) and a note goes
+// to stderr. Probes: each line of IN.csv is x,y,vx,vy [px, px/s]; OUT.csv
+// gets x,y,fx,fy [N] in the image plane (fy positive downward), each probe
+// evaluated from a fresh field state. --force-map draws, over a gray copy of
+// the picture, the force felt moving right at 100 mm/s: red where it
+// resists (climbing), green where it assists (descending). On bad input: one line on stderr,
+// exit status 1.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <filesystem>
+
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "hapticfield/normals.hpp"
+
+using namespace hapticfield;
+
+namespace {
+
+struct Args {
+  std::string image;
+  std::vector<std::vector<glm::dvec2>> faces;
+  std::vector<glm::dvec2> sizes;
+  std::string intrinsics;
+  std::optional<double> focal;
+  std::optional<glm::dvec2> centre;
+  std::string overlay;
+  std::string force_map;
+  std::string probes;
+  std::string forces;
+  bool gradient = false;
+  double shading = 0.0;
+  bool verbose = false;
+};
+
+constexpr const char* usage =
+    "usage: picture_normals IMAGE --face \"x1,y1 x2,y2 x3,y3 x4,y4\" [--face ...] [--size W,H] "
+    "[--intrinsics FILE.yml | --focal F [--center cx,cy]] [--overlay OUT.png] "
+    "[--probes IN.csv --forces OUT.csv] [--force-map OUT.png] [--gradient] [--shading CELL_PX] "
+    "[--verbose]";
+
+double parse_number(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  // skip trailing spaces
+  while (used < text.size() && std::isspace(static_cast<unsigned char>(text[used]))) ++used;
+  if (text.empty() || used != text.size() || !std::isfinite(value))
+    throw std::invalid_argument(what + ": '" + text + "' is not a finite number");
+  return value;
+}
+
+glm::dvec2 parse_pair(const std::string& text, const std::string& what) {
+  const auto comma = text.find(',');
+  if (comma == std::string::npos)
+    throw std::invalid_argument(what + ": expected x,y, got '" + text + "'");
+  return {parse_number(text.substr(0, comma), what), parse_number(text.substr(comma + 1), what)};
+}
+
+std::vector<glm::dvec2> parse_face(const std::string& raw) {
+  // tolerate "x, y" and ';' between corners
+  std::string text;
+  for (char c : raw) {
+    if (c == ';' || c == '\t') c = ' ';
+    if (c == ' ' && !text.empty() && text.back() == ',') continue;
+    if (c == ',' && !text.empty() && text.back() == ' ') text.pop_back();
+    text.push_back(c);
+  }
+  std::istringstream in(text);
+  std::vector<glm::dvec2> points;
+  std::string token;
+  while (in >> token) points.push_back(parse_pair(token, "--face"));
+  if (points.size() != 4)
+    throw std::invalid_argument("--face expects 4 corners \"x1,y1 x2,y2 x3,y3 x4,y4\" [px], got " +
+                                std::to_string(points.size()) + " in '" + text + "'");
+  return points;
+}
+
+Args parse(int argc, char** argv) {
+  Args a;
+  const auto value = [&](int& i) -> std::string {
+    if (i + 1 >= argc) throw std::invalid_argument(std::string(argv[i]) + " needs a value");
+    return argv[++i];
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--face") {
+      a.faces.push_back(parse_face(value(i)));
+    } else if (arg == "--size") {
+      const glm::dvec2 s = parse_pair(value(i), "--size");
+      if (s.x <= 0.0 || s.y <= 0.0) throw std::invalid_argument("--size W,H must be positive [mm]");
+      a.sizes.push_back(s);
+    } else if (arg == "--intrinsics") {
+      a.intrinsics = value(i);
+    } else if (arg == "--focal") {
+      a.focal = parse_number(value(i), "--focal");
+      if (*a.focal <= 0.0)
+        throw std::invalid_argument("--focal must be a positive focal length [px]");
+    } else if (arg == "--center" || arg == "--centre") {
+      a.centre = parse_pair(value(i), "--center");
+    } else if (arg == "--overlay") {
+      a.overlay = value(i);
+    } else if (arg == "--force-map") {
+      a.force_map = value(i);
+    } else if (arg == "--probes") {
+      a.probes = value(i);
+    } else if (arg == "--forces") {
+      a.forces = value(i);
+    } else if (arg == "--gradient") {
+      a.gradient = true;
+    } else if (arg == "--shading") {
+      a.shading = parse_number(value(i), "--shading");
+      if (a.shading < 1.0)
+        throw std::invalid_argument("--shading needs a grid spacing of at least 1 [px]");
+    } else if (arg == "--verbose") {
+      a.verbose = true;
+    } else if (arg == "--help" || arg == "-h") {
+      std::cout << usage << "\n";
+      std::exit(0);
+    } else if (!arg.empty() && arg[0] == '-' && arg.size() > 1 &&
+               !std::isdigit(static_cast<unsigned char>(arg[1]))) {
+      throw std::invalid_argument("unknown option '" + arg + "'");
+    } else if (a.image.empty()) {
+      a.image = arg;
+    } else {
+      throw std::invalid_argument("unexpected argument '" + arg + "' (one IMAGE only)");
+    }
+  }
+  if (a.image.empty()) throw std::invalid_argument("no IMAGE given");
+  if (a.faces.empty()) throw std::invalid_argument("no --face given");
+  if (a.sizes.size() > 1 && a.sizes.size() != a.faces.size())
+    throw std::invalid_argument("give one --size for all faces or one per --face");
+  if (!a.intrinsics.empty() && (a.focal || a.centre))
+    throw std::invalid_argument("--intrinsics and --focal/--center are exclusive");
+  if (a.centre && !a.focal) throw std::invalid_argument("--center needs --focal");
+  if (a.probes.empty() != a.forces.empty())
+    throw std::invalid_argument("--probes and --forces go together");
+  return a;
+}
+
+/// K for the picture; notes for the user are collected in `notes` and
+/// printed only once the faces are known to be valid (so a failure prints
+/// one line).
+Camera make_camera(const Args& a, int width, int height, std::ostringstream& notes) {
+  if (!a.intrinsics.empty()) {
+    Camera c = Camera::from_file(a.intrinsics);
+    if (c.width() > 0 && c.height() > 0 && (c.width() != width || c.height() != height)) {
+      const double sx = static_cast<double>(width) / c.width();
+      const double sy = static_cast<double>(height) / c.height();
+      if (std::abs(sx / sy - 1.0) < 0.01) {
+        notes << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
+              << " px; K scaled by " << sx << " for the " << width << "x" << height
+              << " px picture\n";
+        return c.scaled(sx, sy);
+      }
+      notes << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
+            << " px, the picture is " << width << "x" << height << " px (cropped?); K used as is\n";
+    }
+    return c;
+  }
+  const glm::dvec2 centre = a.centre ? *a.centre : Camera::image_centre(width, height);
+  if (a.focal) return Camera::from_focal(*a.focal, centre);
+  // focal lengths from the faces' right angles, kept when plausible
+  // (0.3 to 10 times the picture's longer side)
+  const double longest = std::max(width, height);
+  std::vector<double> focals;
+  for (std::size_t i = 0; i < a.faces.size(); ++i) {
+    std::optional<double> focal;
+    try {
+      focal = focal_from_rectangle(a.faces[i], centre);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("face " + std::to_string(i + 1) + ": " + e.what());
+    }
+    if (focal && *focal > 0.3 * longest && *focal < 10.0 * longest) focals.push_back(*focal);
+  }
+  if (!focals.empty()) {
+    std::nth_element(focals.begin(), focals.begin() + static_cast<long>(focals.size() / 2),
+                     focals.end());
+    const double f = focals[focals.size() / 2];
+    notes << "picture_normals: note: no --intrinsics or --focal; focal length estimated from "
+             "the faces' "
+             "right angles: "
+          << f << " px\n";
+    return Camera::from_focal(f, centre);
+  }
+  notes
+      << "picture_normals: note: no --intrinsics or --focal; focal length guessed from a 60 degree "
+         "horizontal field of view\n";
+  return Camera::from_field_of_view(60.0, width, height);
+}
+
+void draw_overlay(const std::string& path, const cv::Mat& image, const Camera& camera,
+                  const std::vector<std::vector<glm::dvec2>>& faces,
+                  const std::vector<FacePose>& poses) {
+  cv::Mat out = image.clone();
+  const std::vector<cv::Scalar> tints{
+      {60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}};
+  cv::Mat tinted = out.clone();
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    std::vector<cv::Point> poly;
+    for (auto p : faces[f]) poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
+    cv::fillPoly(tinted, std::vector<std::vector<cv::Point>>{poly}, tints[f % tints.size()],
+                 cv::LINE_AA, 4);
+  }
+  cv::addWeighted(out, 0.6, tinted, 0.4, 0.0, out);
+  const int thick = std::max(2, image.cols / 400);
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    std::vector<cv::Point> poly;
+    for (auto p : faces[f]) poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
+    cv::polylines(out, std::vector<std::vector<cv::Point>>{poly}, true, tints[f % tints.size()],
+                  thick, cv::LINE_AA, 4);
+    // the normal as a 3D arrow from the face centre, half the face's size long
+    const FacePose& pose = poses[f];
+    const double length = 0.5 * std::sqrt(pose.width * pose.height);
+    const cv::Vec3d centre = pose.R * cv::Vec3d(pose.width / 2, pose.height / 2, 0.0) + pose.t;
+    const cv::Vec3d tip = centre + length * cv::Vec3d(pose.normal.x, pose.normal.y, pose.normal.z);
+    std::vector<cv::Point2d> projected;
+    cv::projectPoints(
+        std::vector<cv::Point3d>{{centre[0], centre[1], centre[2]}, {tip[0], tip[1], tip[2]}},
+        cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(camera.matrix()),
+        camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), projected);
+    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(255, 255, 255), thick + 3,
+                    cv::LINE_AA, 0, 0.2);
+    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(20, 20, 20), thick, cv::LINE_AA, 0,
+                    0.2);
+    char label[96];
+    std::snprintf(label, sizeof label, "(%.2f, %.2f, %.2f)", pose.normal.x + 0.0,
+                  pose.normal.y + 0.0, pose.normal.z + 0.0);
+    const double scale = std::max(0.45, image.cols / 2000.0);
+    int baseline = 0;
+    const cv::Size text = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, scale, thick, &baseline);
+    const cv::Point at(cvRound(projected[0].x) - text.width / 2,
+                       cvRound(projected[0].y) + 2 * text.height + 8);
+    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255),
+                thick + 2, cv::LINE_AA);
+    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(20, 20, 20), thick,
+                cv::LINE_AA);
+  }
+  if (!cv::imwrite(path, out))
+    throw std::invalid_argument("--overlay: cannot write '" + path + "'");
+}
+
+void draw_force_map(const std::string& path, const cv::Mat& image, const NormalField& field) {
+  cv::Mat gray;
+  cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  cv::Mat out;
+  cv::cvtColor(gray, out, cv::COLOR_GRAY2BGR);
+  const glm::dvec2 velocity{100.0 * field.mapping().px_per_mm(),
+                            0.0};  // 100 mm/s to the right [px/s]
+  const double limit = field.options().max_force;
+  for (int y = 0; y < out.rows; ++y)
+    for (int x = 0; x < out.cols; ++x) {
+      const double fx = field.image_force({x, y}, velocity).x / limit;  // -1 resist .. +1 assist
+      if (fx == 0.0) continue;
+      cv::Vec3b& px = out.at<cv::Vec3b>(y, x);
+      const double a = std::min(1.0, std::abs(fx));
+      const cv::Vec3d tint = fx < 0.0 ? cv::Vec3d(40, 40, 230) : cv::Vec3d(40, 200, 40);
+      for (int c = 0; c < 3; ++c)
+        px[c] = cv::saturate_cast<uchar>((1.0 - 0.8 * a) * px[c] + 0.8 * a * tint[c]);
+    }
+  if (!cv::imwrite(path, out))
+    throw std::invalid_argument("--force-map: cannot write '" + path + "'");
+}
+
+void evaluate_probes(const Args& a, NormalField& field) {
+  std::ifstream in(a.probes);
+  if (!in) throw std::invalid_argument("--probes: cannot read '" + a.probes + "'");
+  std::vector<std::array<double, 4>> rows;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos ||
+        line[line.find_first_not_of(" \t")] == '#')
+      continue;
+    std::array<double, 4> v{};
+    std::stringstream cells(line);
+    std::string cell;
+    int k = 0;
+    bool numeric = true;
+    while (std::getline(cells, cell, ',')) {
+      if (k >= 4) {
+        k = 5;
+        break;
+      }
+      try {
+        v[static_cast<std::size_t>(k)] = parse_number(cell, "--probes");
+      } catch (const std::invalid_argument&) {
+        numeric = false;
+      }
+      ++k;
+    }
+    if (!numeric && rows.empty() && number == 1) continue;  // a header line
+    if (!numeric || k != 4)
+      throw std::invalid_argument("--probes: line " + std::to_string(number) + " of '" + a.probes +
+                                  "' is not x,y,vx,vy");
+    rows.push_back(v);
+  }
+  std::ofstream out(a.forces);
+  if (!out) throw std::invalid_argument("--forces: cannot write '" + a.forces + "'");
+  for (const auto& r : rows) {
+    field.reset();  // each probe on its own: the filter starts from its velocity
+    const glm::dvec3 f = field.force(field.probe_at({r[0], r[1]}, {r[2], r[3]}));
+    const glm::dvec2 fi = field.to_image_axes(f);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g,%.9g\n", r[0], r[1], fi.x + 0.0,
+                  fi.y + 0.0);  // + 0.0: no "-0"
+    out << buf;
+  }
+  if (!out) throw std::invalid_argument("--forces: cannot write '" + a.forces + "'");
+}
+
+int run(int argc, char** argv) {
+  const Args a = parse(argc, argv);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(a.image, ec))
+    throw std::invalid_argument("cannot read image '" + a.image + "'");
+  const cv::Mat image = cv::imread(a.image, cv::IMREAD_COLOR);
+  if (image.empty()) throw std::invalid_argument("cannot read image '" + a.image + "'");
+  std::ostringstream notes;
+  const Camera camera = make_camera(a, image.cols, image.rows, notes);
+  std::vector<FacePose> poses;
+  std::vector<ImageFace> faces;
+  for (std::size_t f = 0; f < a.faces.size(); ++f) {
+    std::optional<glm::dvec2> size;
+    if (!a.sizes.empty()) size = a.sizes.size() == 1 ? a.sizes[0] : a.sizes[f];
+    try {
+      poses.push_back(estimate_rectangle_pose(camera, a.faces[f], size));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("face " + std::to_string(f + 1) + ": " + e.what());
+    }
+    faces.push_back({a.faces[f], poses.back().normal});
+  }
+  for (std::size_t f = 0; f < poses.size(); ++f) {
+    const glm::dvec3 n = poses[f].normal;
+    std::printf("normal: %.6f %.6f %.6f\n", n.x, n.y, n.z);
+    if (a.verbose)
+      std::fprintf(stderr,
+                   "face %zu: reprojection rms %.3f px (closed form %.3f px), size %.4g x %.4g%s, "
+                   "distance %.4g, |cos(r1,r2)| before orthogonalisation %.2e\n",
+                   f + 1, poses[f].rms_reprojection_px, poses[f].closed_form_rms_px, poses[f].width,
+                   poses[f].height, poses[f].aspect_recovered ? " (aspect recovered)" : " mm",
+                   cv::norm(poses[f].t), poses[f].orthogonality);
+  }
+  std::fflush(stdout);
+  if (!a.overlay.empty()) draw_overlay(a.overlay, image, camera, a.faces, poses);
+  if (!a.probes.empty() || !a.force_map.empty()) {
+    NormalFieldOptions options;
+    if (a.gradient) options.mode = NormalForceMode::gradient;
+    options.shading_cell_px = a.shading;
+    NormalField field(image.cols, image.rows, faces, options);
+    if (!a.probes.empty()) evaluate_probes(a, field);
+    if (!a.force_map.empty()) draw_force_map(a.force_map, image, field);
+  }
+  std::cerr << notes.str();  // only on success: a failure prints one line
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cv::utils::logging::setLogLevel(
+      cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, below
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "picture_normals: " << e.what() << "\n";
+    return 1;
+  }
+}
