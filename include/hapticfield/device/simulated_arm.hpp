@@ -122,7 +122,7 @@ struct Hand {
 /// desktop Phantom-class arm, not measurements.
 struct SimulatedArmConfig {
   KinematicsConfig kinematics{};
-  glm::dvec3 inertia{2.0e-4, 2.0e-4, 1.5e-4};  ///< effective joint inertia [kg m^2]
+  glm::dvec3 inertia{9.0e-4, 9.0e-4, 6.0e-4};  ///< effective joint inertia [kg m^2] (about 50 g at the handle)
   glm::dvec3 viscous{2.0e-4, 2.0e-4, 2.0e-4};  ///< viscous friction [N m s/rad]
   glm::dvec3 coulomb{2.0e-3, 2.0e-3, 2.0e-3};  ///< Coulomb friction [N m]
   double rate{1000.0};              ///< firmware tick and report rate [Hz]
@@ -132,7 +132,7 @@ struct SimulatedArmConfig {
   double torque_unit{1e-3};         ///< size of one torque unit on the wire [N m]
   double max_force{3.3};            ///< peak force reported in device info [N] (default)
   double continuous_force{0.88};    ///< continuous force reported in device info [N] (default)
-  glm::dvec3 initial_q{0.0, 0.35, 0.35};  ///< joint angles at power-up [rad]
+  glm::dvec3 initial_q{0.0, 0.0, 0.0};  ///< joint angles at power-up [rad] (the home pose)
   std::array<std::int32_t, 3> unhomed_offset{1234, -567, 89};  ///< encoder offset until homed [counts]
   Hand hand{};
 
