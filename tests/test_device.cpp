@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -431,4 +433,63 @@ TEST_CASE("simulated arm configuration rejects values that make no sense") {
   CHECK_THROWS_AS(SimulatedArm(c), std::invalid_argument);
   SimulatedArm arm;
   CHECK_THROWS_AS(SimulatedTransport(arm, TimeSource{}), std::invalid_argument);
+}
+
+// ------------------------------------------------------- record and replay
+
+TEST_CASE("a recorded session replays the same states at the same times") {
+  std::int64_t now = 0;
+  SimulatedArmConfig c;
+  c.hand.path = HandPath::circle({0.0, 0.0, 0.0}, 0.01, 0.05);
+  SimulatedArm arm(c);
+  SimulatedTransport link(arm, [&] { return now; });
+  RecordingTransport recorder(link, [&] { return now; }, 10000);
+  ForceArm device(recorder);
+  std::vector<DeviceState> original;
+  DeviceState s;
+  for (int i = 0; i < 300; ++i) {
+    now += 1'000'000;
+    if (device.read(s) == Status::ok) original.push_back(s);
+    device.write({0.0, 0.2, 0.0});
+  }
+  REQUIRE(original.size() > 250);
+  CHECK(recorder.dropped() == 0);
+  const std::string path = std::string(HAPTICFIELD_TEST_TMP) + "/session.hfrec";
+  std::filesystem::create_directories(HAPTICFIELD_TEST_TMP);
+  recorder.save(path);
+
+  std::int64_t replay_now = 5'000'000'000;  // any start time
+  ReplayTransport replay(path, [&] { return replay_now; });
+  ForceArm again(replay);  // device info comes from the recorded feature reply
+  CHECK_THAT(again.kinematics().config().l1, WithinAbs(0.133, 1e-9));
+  std::vector<DeviceState> replayed;
+  Status r = Status::ok;
+  for (int i = 0; i < 400 && r != Status::disconnected; ++i) {
+    replay_now += 1'000'000;
+    r = again.read(s);
+    if (r == Status::ok) replayed.push_back(s);
+  }
+  CHECK(r == Status::disconnected);  // the session ended
+  REQUIRE(replayed.size() == original.size());
+  for (std::size_t i = 0; i < original.size(); ++i) {
+    CHECK(replayed[i].sequence == original[i].sequence);
+    CHECK(replayed[i].position == original[i].position);
+  }
+}
+
+TEST_CASE("replay rejects files that are not recordings") {
+  const auto now = [] { return std::int64_t{0}; };
+  CHECK_THROWS_AS(ReplayTransport("/nonexistent/session.hfrec", now), std::runtime_error);
+  const std::string path = std::string(HAPTICFIELD_TEST_TMP) + "/garbage.hfrec";
+  std::filesystem::create_directories(HAPTICFIELD_TEST_TMP);
+  {
+    std::ofstream f(path, std::ios::binary);
+    f << "not a recording at all";
+  }
+  CHECK_THROWS_AS(ReplayTransport(path, now), std::runtime_error);
+  {
+    std::ofstream f(path, std::ios::binary);
+    f << "hapticfield-recording 1\n" << 'I' << "\x01\x02";  // truncated record
+  }
+  CHECK_THROWS_AS(ReplayTransport(path, now), std::runtime_error);
 }

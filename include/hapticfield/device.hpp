@@ -8,6 +8,7 @@
 #include "hapticfield/device/force_arm.hpp"
 #include "hapticfield/device/kinematics.hpp"
 #include "hapticfield/device/protocol.hpp"
+#include "hapticfield/device/recording.hpp"
 #include "hapticfield/device/simulated_arm.hpp"
 #include "hapticfield/device/simulated_transport.hpp"
 #include "hapticfield/device/state.hpp"

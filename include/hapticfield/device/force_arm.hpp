@@ -84,7 +84,8 @@ class ForceArm {
 
   /// Drains every queued input report and keeps the newest valid one.
   /// Returns ok when a newer state was decoded, no_data when none, and
-  /// disconnected when the transport is gone. state is untouched unless ok.
+  /// disconnected when the transport is gone (state still takes any report
+  /// that arrived before). state is untouched on no_data.
   Status read(DeviceState& state) noexcept {
     events_ = 0;
     bool fresh = false;
@@ -93,7 +94,11 @@ class ForceArm {
       std::size_t size = 0;
       const Status s = t_->read(buf_, size, 0);
       if (s == Status::no_data || s == Status::timeout) break;
-      if (s == Status::disconnected) return disconnected_ = true, Status::disconnected;
+      if (s == Status::disconnected) {  // keep what arrived before the end
+        disconnected_ = true;
+        if (fresh) update(newest, state);
+        return Status::disconnected;
+      }
       if (s != Status::ok) { events_ |= link_events::malformed; ++counters_.malformed; continue; }
       protocol::StateReport r;
       const Status d = protocol::decode(std::span<const std::uint8_t>(buf_.data(), size), r);
