@@ -46,6 +46,10 @@ class DurationHistogram {
     return max();
   }
   [[nodiscard]] std::int64_t max() const noexcept { return max_.load(std::memory_order_relaxed); }
+  /// Count in bin i ([i, i+1) us; the last bin holds everything longer).
+  [[nodiscard]] std::uint64_t bin(std::size_t i) const noexcept {
+    return i < bins ? counts_[i].load(std::memory_order_relaxed) : 0;
+  }
   [[nodiscard]] std::uint64_t count() const noexcept { return count_.load(std::memory_order_relaxed); }
   [[nodiscard]] double mean() const noexcept {
     const std::uint64_t n = count();
