@@ -17,6 +17,7 @@
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -125,8 +126,19 @@ class HidTransport final : public Transport {
     if (device_) hid_close(device_);
   }
 
-  Status read(std::span<std::uint8_t> buffer, std::size_t& size, int /*timeout_us*/) noexcept override {
+  /// Pops the oldest queued input report; with timeout_us > 0 spins (with
+  /// yields) up to that long for one, then returns Status::timeout.
+  Status read(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept override {
     if (input_.pop(buffer, size)) return Status::ok;
+    if (timeout_us > 0) {
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(timeout_us);
+      while (std::chrono::steady_clock::now() < deadline) {
+        if (input_.pop(buffer, size)) return Status::ok;
+        if (disconnected_.load(std::memory_order_acquire)) return Status::disconnected;
+        std::this_thread::yield();
+      }
+      return Status::timeout;
+    }
     return disconnected_.load(std::memory_order_acquire) ? Status::disconnected : Status::no_data;
   }
 
