@@ -184,7 +184,7 @@ TEST_CASE("safety chain: slew limit and soft start") {
   CHECK(ramp.process(in) == glm::dvec3{0.0});
 }
 
-TEST_CASE("safety chain: watchdog latches on stale state and missed deadlines") {
+TEST_CASE("safety chain: watchdog on missing state, stale state and missed deadlines") {
   SafetyConfig cfg;
   cfg.soft_start_enabled = false;
   SafetyChain chain(cfg, 3.3);
@@ -192,16 +192,21 @@ TEST_CASE("safety chain: watchdog latches on stale state and missed deadlines") 
   in.force = {0, 0.1, 0};
   in.time_since_armed = 1.0;
   CHECK(chain.process(in) != glm::dvec3{0.0});
-  in.ticks_without_state = 2;
+  in.ticks_without_state = 1;  // one late report: carry on
+  CHECK(chain.process(in) != glm::dvec3{0.0});
+  in.ticks_without_state = 2;  // two: zero, without latching
+  CHECK(chain.process(in) == glm::dvec3{0.0});
+  CHECK((chain.events() & safety_events::no_new_state) != 0);
+  CHECK(chain.latched() == 0);
+  in.ticks_without_state = 0;
+  CHECK(chain.process(in) != glm::dvec3{0.0});  // resumes (slew-limited from zero)
+  in.state_age = 0.011;  // older than 10 ms: zero and latch
   CHECK(chain.process(in) == glm::dvec3{0.0});
   CHECK((chain.latched() & safety_events::stale_state) != 0);
-  in.ticks_without_state = 0;
+  in.state_age = 0.0;
   CHECK(chain.process(in) == glm::dvec3{0.0});  // latched until cleared
   chain.clear();
   CHECK(chain.process(in) != glm::dvec3{0.0});
-  in.state_age = 0.004;  // older than 3 ms
-  CHECK(chain.process(in) == glm::dvec3{0.0});
-  chain.clear();
   in.state_age = qnan;  // an unknown age is stale too
   CHECK(chain.process(in) == glm::dvec3{0.0});
   chain.clear();
@@ -262,7 +267,7 @@ TEST_CASE("safety invariants hold over seeded random states, fields and garbage"
     in.force = {value(5.0), value(5.0), value(5.0)};
     in.velocity = {value(0.5), value(0.5), value(0.5)};
     in.period = 1e-3;
-    in.state_age = pick(rng) == 0 ? value(0.01) : 0.0;
+    in.state_age = pick(rng) == 0 ? value(0.02) : 0.0;
     in.ticks_without_state = pick(rng) == 0 ? 2 : 0;
     in.missed_in_a_row = pick(rng) == 0 ? 3 : 0;
     // Armed time only grows (the soft-start limit never shrinks) until a
@@ -284,7 +289,8 @@ TEST_CASE("safety invariants hold over seeded random states, fields and garbage"
     // when the chain says why.
     if (zeroing && glm::length(previous) > step) {
       ++zeroed;
-      if ((chain.events() & (safety_events::non_finite | safety_events::device_fault | safety_events::latching)) == 0)
+      if ((chain.events() & (safety_events::non_finite | safety_events::device_fault | safety_events::no_new_state |
+                             safety_events::latching)) == 0)
         ++violations;
     }
     previous = out;

@@ -185,7 +185,7 @@ class ServoLoop {
     in.tick = tick_;
     in.probe.position = state_.position;
     in.probe.velocity = state_.velocity;
-    in.probe.normal_force = glm::length(safety_.previous());
+    in.probe.normal_force = glm::length(safety_.previous());  // |F| commanded last tick [N]
     in.probe.time = static_cast<double>(now - start_) * 1e-9;
     in.probe.period = period_;
     now_ = now;
@@ -222,6 +222,8 @@ class ServoLoop {
   }
 
   [[nodiscard]] LoopSnapshot statistics() const noexcept { return stats_->snapshot(); }
+  /// Starts the statistics afresh (e.g. after a warm-up).
+  void reset_statistics() noexcept { stats_->reset(); }
   [[nodiscard]] const LoopStatistics& detailed_statistics() const noexcept { return *stats_; }
   [[nodiscard]] const SafetyChain& safety() const noexcept { return safety_; }
   [[nodiscard]] glm::dvec3 last_command() const noexcept { return command_; }

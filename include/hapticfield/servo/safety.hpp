@@ -6,7 +6,9 @@
 ///   3. magnitude clamp   |F| <= max_force, direction kept
 ///   4. soft start        linear ramp of the limit after arming
 ///   5. slew limit        |F(n) - F(n-1)| <= slew_rate * period
-///   6. watchdog          stale state or missed deadlines: zero and latch
+///   6. watchdog          K ticks without a new state: zero until one arrives;
+///                        state older than M or N missed deadlines in a
+///                        row: zero, disarm and latch
 /// A stage can be turned off only explicitly, and disabled_stages() names
 /// every stage that is off so the loop can say so.
 
@@ -33,6 +35,7 @@ inline constexpr std::uint32_t missed_deadlines = 1u << 5;  ///< watchdog: K ove
 inline constexpr std::uint32_t device_fault = 1u << 6;      ///< device reports a fault or is not armed: zero
 inline constexpr std::uint32_t disconnected = 1u << 7;      ///< device gone (latches)
 inline constexpr std::uint32_t callback_threw = 1u << 8;    ///< the user callback threw (latches)
+inline constexpr std::uint32_t no_new_state = 1u << 9;      ///< K ticks without a new state: zero until one arrives
 /// Events that latch the watchdog until SafetyChain::clear().
 inline constexpr std::uint32_t latching = stale_state | missed_deadlines | disconnected | callback_threw;
 }  // namespace safety_events
@@ -44,8 +47,8 @@ struct SafetyConfig {
   bool soft_start_enabled{true};
   double soft_start{0.25};        ///< ramp time of the force limit after arming [s]
   bool watchdog_enabled{true};
-  double max_state_age{3e-3};     ///< state older than this zeroes and disarms [s]
-  int max_ticks_without_state{2}; ///< this many ticks in a row without a new state zero and disarm
+  double max_state_age{10e-3};    ///< state older than this zeroes, disarms and latches [s]
+  int max_ticks_without_state{2}; ///< this many ticks in a row without a new state zero the force (until one arrives)
   int max_missed_deadlines{3};    ///< this many missed deadlines in a row zero and disarm
   bool passivity_enabled{false};  ///< Hannaford & Ryu passivity observer/controller
   double passivity_max_damping{50.0};  ///< cap on the controller's damping alpha [N s/m]
@@ -109,14 +112,14 @@ class SafetyChain {
     // 6. watchdog and device faults first: they override everything.
     if (in.disconnected) events_ |= safety_events::disconnected;
     if (c_.watchdog_enabled) {
-      if (!(in.state_age <= c_.max_state_age) || in.ticks_without_state >= c_.max_ticks_without_state)
-        events_ |= safety_events::stale_state;
+      if (!(in.state_age <= c_.max_state_age)) events_ |= safety_events::stale_state;
+      if (in.ticks_without_state >= c_.max_ticks_without_state) events_ |= safety_events::no_new_state;
       if (in.missed_in_a_row >= c_.max_missed_deadlines) events_ |= safety_events::missed_deadlines;
     }
     latched_ |= events_ & safety_events::latching;
     if (in.device_fault || in.time_since_armed < 0.0) events_ |= safety_events::device_fault;
     const glm::dvec3 v = is_finite(in.velocity) ? in.velocity : glm::dvec3{0.0};
-    if (latched_ || (events_ & safety_events::device_fault)) return zero(v, in.period);
+    if (latched_ || (events_ & (safety_events::device_fault | safety_events::no_new_state))) return zero(v, in.period);
     // 1. finite check
     if (!is_finite(f)) {
       events_ |= safety_events::non_finite;
