@@ -124,7 +124,15 @@ TEST_CASE("kinematics configuration rejects limits that make no sense") {
 
 TEST_CASE("CRC-16/CCITT-FALSE gives the published check value") {
   CHECK(protocol::crc16(bytes("123456789")) == 0x29B1);
+  CHECK(protocol::crc16_bitwise(bytes("123456789")) == 0x29B1);
   CHECK(protocol::crc16({}) == 0xFFFF);  // the initial value, nothing shifted in
+  std::mt19937 rng(5);
+  std::vector<std::uint8_t> data(300);
+  for (int trial = 0; trial < 200; ++trial) {
+    for (auto& b : data) b = static_cast<std::uint8_t>(rng());
+    const std::span<const std::uint8_t> part(data.data(), static_cast<std::size_t>(trial));
+    CHECK(protocol::crc16(part) == protocol::crc16_bitwise(part));
+  }
   static_assert(protocol::crc16(std::span<const std::uint8_t>{}) == 0xFFFF);
 }
 

@@ -35,9 +35,32 @@ inline constexpr std::size_t device_info_size = 50;
 inline constexpr std::size_t configuration_size = 8;
 inline constexpr std::size_t control_size = 4;
 
+namespace detail {
+/// Byte-wise lookup table of CRC-16/CCITT-FALSE (polynomial 0x1021), built
+/// at compile time.
+inline constexpr std::array<std::uint16_t, 256> crc16_table = [] {
+  std::array<std::uint16_t, 256> t{};
+  for (unsigned i = 0; i < 256; ++i) {
+    auto crc = static_cast<std::uint16_t>(i << 8);
+    for (int bit = 0; bit < 8; ++bit)
+      crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u) : static_cast<std::uint16_t>(crc << 1);
+    t[i] = crc;
+  }
+  return t;
+}();
+}  // namespace detail
+
 /// CRC-16/CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no
 /// reflection, no final xor; check value 0x29B1 for "123456789".
 [[nodiscard]] constexpr std::uint16_t crc16(std::span<const std::uint8_t> data) noexcept {
+  std::uint16_t crc = 0xFFFF;
+  for (const std::uint8_t byte : data)
+    crc = static_cast<std::uint16_t>((crc << 8) ^ detail::crc16_table[((crc >> 8) ^ byte) & 0xFFu]);
+  return crc;
+}
+
+/// The same CRC computed bit by bit (the reference the table is checked against).
+[[nodiscard]] constexpr std::uint16_t crc16_bitwise(std::span<const std::uint8_t> data) noexcept {
   std::uint16_t crc = 0xFFFF;
   for (const std::uint8_t byte : data) {
     crc = static_cast<std::uint16_t>(crc ^ (static_cast<std::uint16_t>(byte) << 8));
