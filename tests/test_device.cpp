@@ -502,3 +502,34 @@ TEST_CASE("replay rejects files that are not recordings") {
   }
   CHECK_THROWS_AS(ReplayTransport(path, now), std::runtime_error);
 }
+
+TEST_CASE("ForceArm rejects bad options and a device that does not describe itself") {
+  std::int64_t now = 0;
+  SimulatedArm arm(still_arm());
+  SimulatedTransport link(arm, [&] { return now; });
+  ForceArmOptions o;
+  o.velocity_cutoff = std::nan("");
+  CHECK_THROWS_AS(ForceArm(link, o), std::invalid_argument);
+  o = ForceArmOptions{};
+  o.query_device = false;  // else the device's own unit replaces it
+  o.torque_unit = 0.0;
+  CHECK_THROWS_AS(ForceArm(link, o), std::invalid_argument);
+  o = ForceArmOptions{};
+  o.query_device = false;
+  o.info.max_force = -3.0;
+  CHECK_THROWS_AS(ForceArm(link, o), std::invalid_argument);
+  // A recording without the device-info reply: the error names the report.
+  const std::string path = std::string(HAPTICFIELD_TEST_TMP) + "/no_info.hfrec";
+  std::filesystem::create_directories(HAPTICFIELD_TEST_TMP);
+  {
+    std::ofstream f(path, std::ios::binary);
+    f << "hapticfield-recording 1\n";
+  }
+  ReplayTransport empty(path, [] { return std::int64_t{0}; });
+  try {
+    ForceArm device(empty);
+    FAIL("built a ForceArm without device info");
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()).find("device-info feature report") != std::string::npos);
+  }
+}
