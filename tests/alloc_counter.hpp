@@ -2,6 +2,10 @@
 // Counts global operator new calls so tests can prove a servo path does not
 // allocate. Include from exactly one translation unit per test program (it
 // replaces the global allocation functions).
+//
+// ThreadSanitizer's runtime owns operator new and refuses a replacement, so
+// under TSan nothing is replaced, `allocations_counted` is false and tests
+// that count skip themselves; every other build (plain, ASan + UBSan) counts.
 #include <atomic>
 #include <cstddef>
 #include <cstdlib>
@@ -13,8 +17,22 @@
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 #endif
 
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define HAPTICFIELD_TEST_UNDER_TSAN 1
+#endif
+#endif
+#if defined(__SANITIZE_THREAD__)
+#define HAPTICFIELD_TEST_UNDER_TSAN 1
+#endif
+
 namespace hapticfield::test {
 inline std::atomic<long> allocation_count{0};
+#ifdef HAPTICFIELD_TEST_UNDER_TSAN
+inline constexpr bool allocations_counted = false;
+#else
+inline constexpr bool allocations_counted = true;
+#endif
 
 /// Number of operator new calls made while fn runs (on any thread).
 template <class Fn>
@@ -25,6 +43,7 @@ long count_allocations(Fn&& fn) {
 }
 }  // namespace hapticfield::test
 
+#ifndef HAPTICFIELD_TEST_UNDER_TSAN
 void* operator new(std::size_t size) {
   hapticfield::test::allocation_count.fetch_add(1, std::memory_order_relaxed);
   if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
@@ -42,3 +61,4 @@ void operator delete(void* p) noexcept { std::free(p); }
 void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+#endif  // HAPTICFIELD_TEST_UNDER_TSAN

@@ -160,6 +160,7 @@ TEST_CASE("force queries through AnyField and composition never allocate") {
 }
 
 TEST_CASE("the allocation counter itself sees allocations") {
+  if (!test::allocations_counted) return;  // ThreadSanitizer build: see alloc_counter.hpp
   const auto allocations = test::count_allocations([] {
     static int* volatile keep = nullptr;
     keep = new int(3);

@@ -5,3 +5,6 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/image.hpp"
 #include "hapticfield/kernels.hpp"
+#include "hapticfield/device.hpp"
+#include "hapticfield/servo.hpp"
+#include "hapticfield/normals.hpp"

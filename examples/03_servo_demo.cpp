@@ -1,0 +1,320 @@
+// servo_demo: runs a field against the simulated arm (or a real HID arm) in
+// the 1 kHz servo loop while a scripted hand raster-scans the picture; shows
+// the loop's rate and jitter live, writes a CSV trace and PNG plots.
+//
+//   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
+//              [--trace OUT.csv] [--plots DIR] [--device sim|hid[:VID:PID]]
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "hapticfield/core.hpp"
+#include "hapticfield/device.hpp"
+#include "hapticfield/kernels.hpp"
+#include "hapticfield/servo.hpp"
+#if HAPTICFIELD_EXAMPLE_HID
+#include "hapticfield/device/hid_transport.hpp"
+#endif
+
+using namespace hapticfield;
+
+namespace {
+
+struct Options {
+  std::string image{std::string(HAPTICFIELD_EXAMPLE_DATA) + "/coffee.png"};
+  std::string field{"tangible"};
+  double seconds{5.0};
+  double rate{1000.0};
+  std::string trace;
+  std::string plots;
+  std::string device{"sim"};
+};
+
+[[noreturn]] void usage(const std::string& error) {
+  std::fprintf(stderr,
+               "error: %s\nusage: servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]\n"
+               "                  [--trace OUT.csv] [--plots DIR] [--device sim|hid[:VID:PID]]\n",
+               error.c_str());
+  std::exit(2);
+}
+
+double number(const std::string& flag, const char* text) {
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(v)) usage(flag + " needs a number, got '" + text + "'");
+  return v;
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> const char* {
+      if (i + 1 >= argc) usage(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--field") o.field = value();
+    else if (a == "--seconds") o.seconds = number(a, value());
+    else if (a == "--rate") o.rate = number(a, value());
+    else if (a == "--trace") o.trace = value();
+    else if (a == "--plots") o.plots = value();
+    else if (a == "--device") o.device = value();
+    else if (a == "--help" || a == "-h") usage("help requested");
+    else if (!a.empty() && a[0] == '-') usage("unknown option " + a);
+    else o.image = a;
+  }
+  if (o.seconds <= 0.0 || o.seconds > 3600.0) usage("--seconds must be in (0, 3600]");
+  if (o.rate < min_servo_rate || o.rate > max_servo_rate) usage("--rate must be within [1, 10000] Hz");
+  return o;
+}
+
+// ---- simple fields defined here (the device and servo layers know none) ----
+
+/// A stiff virtual wall: the picture's plane z = 0, solid behind it (z < 0).
+struct PlaneWall {
+  double stiffness{1500.0};  // [N/m]
+  glm::dvec3 force(const Probe& p) const noexcept {
+    return p.position.z < 0.0 ? glm::dvec3{0.0, 0.0, -stiffness * p.position.z} : glm::dvec3{0.0};
+  }
+};
+
+/// A spring to the workspace centre with a little damping.
+struct CentreSpring {
+  double stiffness{40.0};  // [N/m]
+  double damping{0.5};     // [N s/m]
+  glm::dvec3 force(const Probe& p) const noexcept { return -stiffness * p.position - damping * p.velocity; }
+};
+
+/// The one place fields are chosen by name.
+AnyField make_field(const std::string& name, const cv::Mat& image, const PlaneMapping& mapping) {
+  if (name == "tangible") {
+    // The picture's forces (Prewitt 17 x 17, 1 N at a black/white edge) in
+    // its plane, on top of the wall that holds the hand on the plane.
+    TangibleOptions options;
+    options.border = Border::fade;
+    return AnyField(sum(PlaneWall{}, TangibleImageField(TangibleImage(to_gray(image), options), mapping, 1.0)));
+  }
+  if (name == "wall") return AnyField(PlaneWall{});
+  if (name == "spring") return AnyField(CentreSpring{});
+  if (name == "none") return AnyField(ZeroField{});
+  usage("unknown field '" + name + "' (choose tangible, wall, spring or none)");
+}
+
+// ---- trace and plots -------------------------------------------------------
+
+struct Row {
+  double t{0.0};
+  glm::dvec3 position{0.0};
+  glm::dvec3 force{0.0};  // commanded after the safety chain [N]
+  double period{0.0};
+};
+
+void write_trace(const std::string& path, const std::vector<Row>& rows) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write " + path);
+  f << "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,period_s\n";
+  for (const Row& r : rows)
+    f << r.t << ',' << r.position.x << ',' << r.position.y << ',' << r.position.z << ',' << r.force.x << ','
+      << r.force.y << ',' << r.force.z << ',' << r.period << '\n';
+}
+
+void plot_force(const std::string& path, const std::vector<Row>& rows, double limit) {
+  const int w = 1000, h = 420, m = 50;
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  const double t_end = rows.empty() ? 1.0 : std::max(rows.back().t, 1e-3);
+  const auto px = [&](double t, double f) {
+    return cv::Point(m + static_cast<int>((w - 2 * m) * t / t_end),
+                     h / 2 - static_cast<int>((h / 2 - m) * f / limit));
+  };
+  cv::line(img, px(0, 0), px(t_end, 0), cv::Scalar(180, 180, 180));
+  cv::line(img, px(0, limit), px(t_end, limit), cv::Scalar(200, 200, 255));
+  cv::line(img, px(0, -limit), px(t_end, -limit), cv::Scalar(200, 200, 255));
+  const cv::Scalar colours[4] = {{200, 0, 0}, {0, 150, 0}, {0, 0, 220}, {0, 0, 0}};
+  const std::size_t step = std::max<std::size_t>(1, rows.size() / 4000);
+  for (std::size_t i = step; i < rows.size(); i += step)
+    for (int c = 0; c < 4; ++c) {
+      const double a = c < 3 ? rows[i - step].force[c] : glm::length(rows[i - step].force);
+      const double b = c < 3 ? rows[i].force[c] : glm::length(rows[i].force);
+      cv::line(img, px(rows[i - step].t, a), px(rows[i].t, b), colours[c], 1, cv::LINE_AA);
+    }
+  cv::putText(img, "force [N] over time [s]: Fx blue, Fy green, Fz red, |F| black; limit +-" + std::to_string(limit),
+              {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
+  cv::putText(img, "0 s", {m, h - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
+  cv::putText(img, std::to_string(t_end).substr(0, 5) + " s", {w - m - 40, h - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
+  cv::imwrite(path, img);
+}
+
+void plot_periods(const std::string& path, const DurationHistogram& periods, double nominal) {
+  const int w = 1000, h = 420, m = 50;
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  // Window: nominal +-20 %, 1 us bins (the loop's own histogram); overflow at the edges.
+  const auto lo = static_cast<std::int64_t>(nominal * 0.8e9) / DurationHistogram::bin_ns;
+  const auto hi = static_cast<std::int64_t>(nominal * 1.2e9) / DurationHistogram::bin_ns;
+  std::vector<double> counts(static_cast<std::size_t>(hi - lo + 1), 0.0);
+  double peak = 1.0;
+  std::uint64_t below = 0, above = 0;
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(DurationHistogram::bins); ++i) {
+    const std::uint64_t c = periods.bin(static_cast<std::size_t>(i));
+    if (i < lo) below += c;
+    else if (i > hi) above += c;
+    else peak = std::max(peak, counts[static_cast<std::size_t>(i - lo)] = static_cast<double>(c));
+  }
+  const double bar = static_cast<double>(w - 2 * m) / static_cast<double>(counts.size());
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    const int top = h - m - static_cast<int>((h - 2 * m) * std::log1p(counts[i]) / std::log1p(peak));
+    cv::rectangle(img, cv::Point(m + static_cast<int>(i * bar), top), cv::Point(m + static_cast<int>((i + 1) * bar), h - m),
+                  cv::Scalar(160, 90, 20), cv::FILLED);
+  }
+  const int centre = m + (w - 2 * m) / 2;
+  cv::line(img, {centre, m}, {centre, h - m}, cv::Scalar(0, 0, 220));
+  cv::putText(img, "tick period histogram (log count), nominal " + std::to_string(nominal * 1e3).substr(0, 5) +
+                       " ms at the red line, window +-20 %; below " + std::to_string(below) + ", above " +
+                       std::to_string(above),
+              {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
+  cv::imwrite(path, img);
+}
+
+void print_status(const LoopSnapshot& s, double t) {
+  std::printf("\r t %6.2f s | rate %8.2f Hz | period p50 %6.3f p99 %6.3f max %6.3f ms | missed %4llu | peak %5.2f N | "
+              "safety %llu   ",
+              t, s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
+              static_cast<unsigned long long>(s.missed_deadlines), s.peak_force,
+              static_cast<unsigned long long>(s.safety_events));
+  std::fflush(stdout);
+}
+
+int run(const Options& o) {
+  const cv::Mat image = cv::imread(o.image, cv::IMREAD_COLOR);
+  if (image.empty()) throw std::runtime_error("cannot read image " + o.image);
+  const double workspace_mm = 80.0;  // the picture spans 80 mm of the device plane
+  const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, workspace_mm);
+  AnyField field = make_field(o.field, image, mapping);
+
+  SteadyClock clock;
+  const auto now = [&clock] { return clock.now(); };
+  const double width = image.cols / mapping.px_per_mm() * 1e-3, height = image.rows / mapping.px_per_mm() * 1e-3;
+
+  std::unique_ptr<SimulatedArm> arm;
+  std::unique_ptr<Transport> transport;
+  bool hardware = false;
+  if (o.device == "sim") {
+    SimulatedArmConfig c;
+    // The hand aims 8 mm behind the picture plane (its spring then presses
+    // with up to 300 N/m * 8 mm = 2.4 N) and raster-scans the picture.
+    c.hand.path = HandPath::raster({0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
+    arm = std::make_unique<SimulatedArm>(c);
+    transport = std::make_unique<SimulatedTransport>(*arm, now);
+  } else if (o.device.rfind("hid", 0) == 0) {
+#if HAPTICFIELD_EXAMPLE_HID
+    std::uint16_t vid = default_vendor_id, pid = default_product_id;
+    if (o.device.size() > 3) {
+      unsigned v = 0, p = 0;
+      if (std::sscanf(o.device.c_str(), "hid:%x:%x", &v, &p) != 2 || v > 0xFFFF || p > 0xFFFF)
+        usage("--device hid:VID:PID takes hexadecimal ids, e.g. hid:1209:0001");
+      vid = static_cast<std::uint16_t>(v);
+      pid = static_cast<std::uint16_t>(p);
+    }
+    transport = std::make_unique<HidTransport>(vid, pid);
+    hardware = true;
+#else
+    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
+#endif
+  } else {
+    usage("--device must be sim or hid[:VID:PID]");
+  }
+
+  ForceArm device(*transport);
+  LoopConfig config;
+  config.rate = o.rate;
+  ServoLoop<ForceArm, SteadyClock> loop(device, clock, config);
+
+  if (hardware) {
+    std::printf("WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
+                "Press Enter to start (Ctrl-C to abort)... ");
+    std::fflush(stdout);
+    std::string line;
+    std::getline(std::cin, line);
+  }
+
+  const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * o.rate));
+  std::vector<Row> rows;
+  rows.reserve(ticks + 8);  // the tick path only fills reserved rows
+  double previous_time = 0.0;
+  auto callback = [&](const TickInput& in) noexcept {
+    if (rows.size() < rows.capacity()) {
+      if (!rows.empty()) rows.back().force = loop.last_command();  // what the last tick commanded
+      rows.push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}, in.probe.time - previous_time});
+    }
+    previous_time = in.probe.time;
+    return field.force(in.probe);
+  };
+
+  std::atomic<bool> done{false};
+  std::exception_ptr failure;
+  StopReason reason = StopReason::requested;
+  std::thread servo([&] {
+    try {
+      reason = loop.run(callback, {.max_ticks = ticks});
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    done.store(true);
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!done.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    print_status(loop.statistics(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  servo.join();
+  print_status(loop.statistics(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  std::printf("\n");
+  if (failure) std::rethrow_exception(failure);
+  if (reason == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+
+  const LoopSnapshot s = loop.statistics();
+  std::printf("%llu ticks at %.3f Hz (nominal %.0f), period p50 %.4f / p99 %.4f / p99.9 %.4f / max %.4f ms, "
+              "missed deadlines %llu, wake latency p99 %.1f us, compute p99 %.1f us, peak force %.2f N\n",
+              static_cast<unsigned long long>(s.ticks), s.rate, o.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
+              s.period_p999 * 1e3, s.period_max * 1e3, static_cast<unsigned long long>(s.missed_deadlines),
+              s.wake_p99 * 1e6, s.compute_p99 * 1e6, s.peak_force);
+  const LinkCounters& link = device.counters();
+  std::printf("link: %llu reports, %llu dropped, %llu corrupt, %llu commands\n",
+              static_cast<unsigned long long>(link.reports), static_cast<unsigned long long>(link.dropped),
+              static_cast<unsigned long long>(link.corrupt), static_cast<unsigned long long>(link.commands));
+  if (!o.trace.empty()) {
+    write_trace(o.trace, rows);
+    std::printf("trace: %s (%zu rows)\n", o.trace.c_str(), rows.size());
+  }
+  if (!o.plots.empty()) {
+    std::filesystem::create_directories(o.plots);
+    plot_force(o.plots + "/force.png", rows, device.info().max_force);
+    plot_periods(o.plots + "/periods.png", loop.detailed_statistics().periods(), loop.period());
+    std::printf("plots: %s/force.png, %s/periods.png\n", o.plots.c_str(), o.plots.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(parse(argc, argv));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "\nservo_demo: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,16 @@
+#pragma once
+/// @file device.hpp
+/// The device layer without hidapi: Device concept, Phantom-class
+/// kinematics, the report protocol, transports (simulated, replay,
+/// recording) and the simulated arm. For real hardware include
+/// hapticfield/device/hid_transport.hpp and link hapticfield::hid.
+
+#include "hapticfield/device/force_arm.hpp"
+#include "hapticfield/device/kinematics.hpp"
+#include "hapticfield/device/protocol.hpp"
+#include "hapticfield/device/recording.hpp"
+#include "hapticfield/device/simulated_arm.hpp"
+#include "hapticfield/device/simulated_transport.hpp"
+#include "hapticfield/device/state.hpp"
+#include "hapticfield/device/status.hpp"
+#include "hapticfield/device/transport.hpp"

@@ -1,0 +1,310 @@
+#pragma once
+/// @file protocol.hpp
+/// The force-arm HID report protocol (docs/device-protocol.md): report ids,
+/// hand-written little-endian codecs and the CRC-16/CCITT-FALSE check.
+/// Decoders never read past the buffer and return a Status for short,
+/// unknown, bad-version and bad-CRC reports; encoders never allocate.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "hapticfield/device/status.hpp"
+
+namespace hapticfield::protocol {
+
+inline constexpr std::uint8_t version = 1;           ///< protocol version this code speaks
+inline constexpr std::uint16_t usage_page = 0xFF48;  ///< vendor-defined usage page
+inline constexpr std::uint16_t usage = 0x0001;       ///< usage in that page
+inline constexpr std::size_t max_report_size = 64;   ///< largest report [bytes]
+
+/// Report ids.
+enum class ReportId : std::uint8_t {
+  state = 0x01,          ///< input: streamed every device tick
+  command = 0x02,        ///< output: written by the host every servo tick
+  device_info = 0x10,    ///< feature (get): geometry, encoders, limits
+  configuration = 0x11,  ///< feature (get/set): watchdog period
+  control = 0x12,        ///< feature (set): arm, disarm, clear fault, home
+};
+
+/// Report sizes including the id byte and the trailing CRC [bytes].
+inline constexpr std::size_t state_size = 40;
+inline constexpr std::size_t command_size = 16;
+inline constexpr std::size_t device_info_size = 50;
+inline constexpr std::size_t configuration_size = 8;
+inline constexpr std::size_t control_size = 4;
+
+namespace detail {
+/// Byte-wise lookup table of CRC-16/CCITT-FALSE (polynomial 0x1021), built
+/// at compile time.
+inline constexpr std::array<std::uint16_t, 256> crc16_table = [] {
+  std::array<std::uint16_t, 256> t{};
+  for (unsigned i = 0; i < 256; ++i) {
+    auto crc = static_cast<std::uint16_t>(i << 8);
+    for (int bit = 0; bit < 8; ++bit)
+      crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u) : static_cast<std::uint16_t>(crc << 1);
+    t[i] = crc;
+  }
+  return t;
+}();
+}  // namespace detail
+
+/// CRC-16/CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no
+/// reflection, no final xor; check value 0x29B1 for "123456789".
+[[nodiscard]] constexpr std::uint16_t crc16(std::span<const std::uint8_t> data) noexcept {
+  std::uint16_t crc = 0xFFFF;
+  for (const std::uint8_t byte : data)
+    crc = static_cast<std::uint16_t>((crc << 8) ^ detail::crc16_table[((crc >> 8) ^ byte) & 0xFFu]);
+  return crc;
+}
+
+/// The same CRC computed bit by bit (the reference the table is checked against).
+[[nodiscard]] constexpr std::uint16_t crc16_bitwise(std::span<const std::uint8_t> data) noexcept {
+  std::uint16_t crc = 0xFFFF;
+  for (const std::uint8_t byte : data) {
+    crc = static_cast<std::uint16_t>(crc ^ (static_cast<std::uint16_t>(byte) << 8));
+    for (int bit = 0; bit < 8; ++bit)
+      crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u) : static_cast<std::uint16_t>(crc << 1);
+  }
+  return crc;
+}
+
+namespace detail {
+inline void put_u8(std::span<std::uint8_t> b, std::size_t at, std::uint8_t v) noexcept { b[at] = v; }
+inline void put_u16(std::span<std::uint8_t> b, std::size_t at, std::uint16_t v) noexcept {
+  b[at] = static_cast<std::uint8_t>(v & 0xFFu);
+  b[at + 1] = static_cast<std::uint8_t>(v >> 8);
+}
+inline void put_u32(std::span<std::uint8_t> b, std::size_t at, std::uint32_t v) noexcept {
+  for (std::size_t i = 0; i < 4; ++i) b[at + i] = static_cast<std::uint8_t>((v >> (8 * i)) & 0xFFu);
+}
+inline void put_i16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noexcept {
+  put_u16(b, at, static_cast<std::uint16_t>(v));
+}
+inline void put_i32(std::span<std::uint8_t> b, std::size_t at, std::int32_t v) noexcept {
+  put_u32(b, at, static_cast<std::uint32_t>(v));
+}
+[[nodiscard]] inline std::uint16_t get_u16(std::span<const std::uint8_t> b, std::size_t at) noexcept {
+  return static_cast<std::uint16_t>(b[at] | (b[at + 1] << 8));
+}
+[[nodiscard]] inline std::uint32_t get_u32(std::span<const std::uint8_t> b, std::size_t at) noexcept {
+  std::uint32_t v = 0;
+  for (std::size_t i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(b[at + i]) << (8 * i);
+  return v;
+}
+[[nodiscard]] inline std::int16_t get_i16(std::span<const std::uint8_t> b, std::size_t at) noexcept {
+  return static_cast<std::int16_t>(get_u16(b, at));
+}
+[[nodiscard]] inline std::int32_t get_i32(std::span<const std::uint8_t> b, std::size_t at) noexcept {
+  return static_cast<std::int32_t>(get_u32(b, at));
+}
+/// Writes the CRC of bytes [0, size-2) into the last two bytes.
+inline void seal(std::span<std::uint8_t> b, std::size_t size) noexcept {
+  put_u16(b, size - 2, crc16(b.first(size - 2)));
+}
+/// Common checks of every decoder: length, id, CRC, version (in that order).
+[[nodiscard]] inline Status check(std::span<const std::uint8_t> b, ReportId id, std::size_t size) noexcept {
+  if (b.empty()) return Status::short_report;
+  if (b[0] != static_cast<std::uint8_t>(id)) return Status::unknown_report;
+  if (b.size() < size) return Status::short_report;
+  if (get_u16(b, size - 2) != crc16(b.first(size - 2))) return Status::bad_crc;
+  if (b[1] != version) return Status::bad_version;
+  return Status::ok;
+}
+}  // namespace detail
+
+/// Input state report (id 0x01), streamed by the device every tick.
+struct StateReport {
+  std::uint16_t sequence{0};                ///< increments by one per report (wraps)
+  std::uint16_t command_echo{0};            ///< sequence of the last command applied
+  std::uint32_t timestamp_us{0};            ///< device clock [us] (wraps)
+  std::array<std::int32_t, 3> encoder{};    ///< joint encoder counts
+  std::array<std::int16_t, 3> gimbal{};     ///< gimbal values (device units)
+  std::uint16_t status{0};                  ///< status_bits
+  std::uint8_t buttons{0};                  ///< button bit mask
+  std::array<std::int16_t, 3> torque_mnm{}; ///< torques applied [mN m]
+};
+
+/// Output command report (id 0x02), written by the host every servo tick.
+struct CommandReport {
+  std::uint16_t sequence{0};                ///< increments by one per command (wraps)
+  std::uint8_t flags{0};                    ///< command_flags
+  std::array<std::int16_t, 3> torque_mnm{}; ///< joint torques requested [mN m]
+};
+
+/// Flags of the command report.
+namespace command_flags {
+inline constexpr std::uint8_t arm = 1u << 0;   ///< keep the motors enabled (arms when homed)
+inline constexpr std::uint8_t home = 1u << 1;  ///< start (or continue) homing
+}  // namespace command_flags
+
+/// Feature report device info (id 0x10).
+struct DeviceInfoReport {
+  std::array<std::uint32_t, 3> counts_per_rev{};  ///< encoder counts per joint turn
+  std::array<std::uint16_t, 3> max_torque_mnm{};  ///< joint torque saturation [mN m]
+  std::uint16_t torque_unit_unm{1000};            ///< size of one torque unit [uN m]
+  std::uint32_t l1_um{0};                         ///< upper arm [um]
+  std::uint32_t l2_um{0};                         ///< forearm [um]
+  std::array<std::int16_t, 3> q_min_mrad{};       ///< joint lower limits [mrad]
+  std::array<std::int16_t, 3> q_max_mrad{};       ///< joint upper limits [mrad]
+  std::uint16_t max_force_mn{0};                  ///< peak force [mN]
+  std::uint16_t continuous_force_mn{0};           ///< continuous force [mN]
+  std::uint16_t rate_hz{0};                       ///< state report rate [Hz]
+};
+
+/// Feature report configuration (id 0x11).
+struct ConfigurationReport {
+  std::uint16_t watchdog_us{0};  ///< firmware watchdog period [us]; 0 is rejected
+};
+
+/// Operations of the control feature report (id 0x12).
+enum class ControlOp : std::uint8_t { arm = 1, disarm = 2, clear_fault = 3, home = 4 };
+
+/// Serialises a state report into out (>= state_size bytes); returns the size or 0.
+inline std::size_t encode(const StateReport& r, std::span<std::uint8_t> out) noexcept {
+  using namespace detail;
+  if (out.size() < state_size) return 0;
+  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::state));
+  put_u8(out, 1, version);
+  put_u16(out, 2, r.sequence);
+  put_u16(out, 4, r.command_echo);
+  put_u32(out, 6, r.timestamp_us);
+  for (std::size_t i = 0; i < 3; ++i) put_i32(out, 10 + 4 * i, r.encoder[i]);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 22 + 2 * i, r.gimbal[i]);
+  put_u16(out, 28, r.status);
+  put_u8(out, 30, r.buttons);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 31 + 2 * i, r.torque_mnm[i]);
+  put_u8(out, 37, 0);
+  seal(out, state_size);
+  return state_size;
+}
+
+/// Parses a state report. Never reads outside in.
+[[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, StateReport& r) noexcept {
+  using namespace detail;
+  if (const Status s = check(in, ReportId::state, state_size); s != Status::ok) return s;
+  r.sequence = get_u16(in, 2);
+  r.command_echo = get_u16(in, 4);
+  r.timestamp_us = get_u32(in, 6);
+  for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = get_i32(in, 10 + 4 * i);
+  for (std::size_t i = 0; i < 3; ++i) r.gimbal[i] = get_i16(in, 22 + 2 * i);
+  r.status = get_u16(in, 28);
+  r.buttons = in[30];
+  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, 31 + 2 * i);
+  return Status::ok;
+}
+
+inline std::size_t encode(const CommandReport& r, std::span<std::uint8_t> out) noexcept {
+  using namespace detail;
+  if (out.size() < command_size) return 0;
+  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::command));
+  put_u8(out, 1, version);
+  put_u16(out, 2, r.sequence);
+  put_u8(out, 4, r.flags);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 5 + 2 * i, r.torque_mnm[i]);
+  for (std::size_t i = 11; i < 14; ++i) put_u8(out, i, 0);
+  seal(out, command_size);
+  return command_size;
+}
+
+[[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, CommandReport& r) noexcept {
+  using namespace detail;
+  if (const Status s = check(in, ReportId::command, command_size); s != Status::ok) return s;
+  r.sequence = get_u16(in, 2);
+  r.flags = in[4];
+  if ((r.flags & ~(command_flags::arm | command_flags::home)) != 0) return Status::bad_value;
+  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, 5 + 2 * i);
+  return Status::ok;
+}
+
+inline std::size_t encode(const DeviceInfoReport& r, std::span<std::uint8_t> out) noexcept {
+  using namespace detail;
+  if (out.size() < device_info_size) return 0;
+  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::device_info));
+  put_u8(out, 1, version);
+  for (std::size_t i = 0; i < 3; ++i) put_u32(out, 2 + 4 * i, r.counts_per_rev[i]);
+  for (std::size_t i = 0; i < 3; ++i) put_u16(out, 14 + 2 * i, r.max_torque_mnm[i]);
+  put_u32(out, 20, r.l1_um);
+  put_u32(out, 24, r.l2_um);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 28 + 2 * i, r.q_min_mrad[i]);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 34 + 2 * i, r.q_max_mrad[i]);
+  put_u16(out, 40, r.max_force_mn);
+  put_u16(out, 42, r.continuous_force_mn);
+  put_u16(out, 44, r.rate_hz);
+  put_u16(out, 46, r.torque_unit_unm);
+  seal(out, device_info_size);
+  return device_info_size;
+}
+
+[[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, DeviceInfoReport& r) noexcept {
+  using namespace detail;
+  if (const Status s = check(in, ReportId::device_info, device_info_size); s != Status::ok) return s;
+  for (std::size_t i = 0; i < 3; ++i) r.counts_per_rev[i] = get_u32(in, 2 + 4 * i);
+  for (std::size_t i = 0; i < 3; ++i) r.max_torque_mnm[i] = get_u16(in, 14 + 2 * i);
+  r.l1_um = get_u32(in, 20);
+  r.l2_um = get_u32(in, 24);
+  for (std::size_t i = 0; i < 3; ++i) r.q_min_mrad[i] = get_i16(in, 28 + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i) r.q_max_mrad[i] = get_i16(in, 34 + 2 * i);
+  r.max_force_mn = get_u16(in, 40);
+  r.continuous_force_mn = get_u16(in, 42);
+  r.rate_hz = get_u16(in, 44);
+  r.torque_unit_unm = get_u16(in, 46);
+  if (r.torque_unit_unm == 0 || r.rate_hz == 0) return Status::bad_value;
+  for (std::size_t i = 0; i < 3; ++i)
+    if (r.counts_per_rev[i] == 0 || r.counts_per_rev[i] > 0x7FFFFFFFu) return Status::bad_value;
+  return Status::ok;
+}
+
+inline std::size_t encode(const ConfigurationReport& r, std::span<std::uint8_t> out) noexcept {
+  using namespace detail;
+  if (out.size() < configuration_size) return 0;
+  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::configuration));
+  put_u8(out, 1, version);
+  put_u16(out, 2, r.watchdog_us);
+  put_u16(out, 4, 0);
+  seal(out, configuration_size);
+  return configuration_size;
+}
+
+[[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, ConfigurationReport& r) noexcept {
+  using namespace detail;
+  if (const Status s = check(in, ReportId::configuration, configuration_size); s != Status::ok) return s;
+  r.watchdog_us = get_u16(in, 2);
+  return r.watchdog_us == 0 ? Status::bad_value : Status::ok;
+}
+
+inline std::size_t encode(ControlOp op, std::span<std::uint8_t> out) noexcept {
+  using namespace detail;
+  if (out.size() < control_size) return 0;
+  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::control));
+  put_u8(out, 1, static_cast<std::uint8_t>(op));
+  seal(out, control_size);
+  return control_size;
+}
+
+/// The control report has no version byte: byte 1 is the operation.
+[[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, ControlOp& op) noexcept {
+  using namespace detail;
+  if (in.empty()) return Status::short_report;
+  if (in[0] != static_cast<std::uint8_t>(ReportId::control)) return Status::unknown_report;
+  if (in.size() < control_size) return Status::short_report;
+  if (get_u16(in, control_size - 2) != crc16(in.first(control_size - 2))) return Status::bad_crc;
+  if (in[1] < 1 || in[1] > 4) return Status::bad_value;
+  op = static_cast<ControlOp>(in[1]);
+  return Status::ok;
+}
+
+/// Size of the report whose id is the first byte, or 0 for an unknown id.
+[[nodiscard]] constexpr std::size_t report_size(std::uint8_t id) noexcept {
+  switch (static_cast<ReportId>(id)) {
+    case ReportId::state: return state_size;
+    case ReportId::command: return command_size;
+    case ReportId::device_info: return device_info_size;
+    case ReportId::configuration: return configuration_size;
+    case ReportId::control: return control_size;
+  }
+  return 0;
+}
+
+}  // namespace hapticfield::protocol

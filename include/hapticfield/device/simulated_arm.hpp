@@ -1,0 +1,365 @@
+#pragma once
+/// @file simulated_arm.hpp
+/// A deterministic Phantom-class arm with its firmware, on a virtual clock:
+/// joint dynamics (inertia, viscous and Coulomb friction, joint stops),
+/// encoder and torque quantisation and saturation, the firmware watchdog,
+/// homing before arming, and a scripted hand (a spring-damper pulling the
+/// handle along a line, a circle or a raster scan). It speaks the report
+/// protocol through SimulatedTransport (simulated_transport.hpp).
+
+#include <array>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <span>
+#include <stdexcept>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "hapticfield/device/kinematics.hpp"
+#include "hapticfield/device/protocol.hpp"
+#include "hapticfield/device/state.hpp"
+
+namespace hapticfield {
+
+/// Path the scripted hand follows (ping-pong along lines and rasters, loops
+/// on circles). Positions in the device frame [m].
+struct HandPath {
+  enum class Kind : std::uint8_t { hold, line, circle, raster };
+  Kind kind{Kind::hold};
+  glm::dvec3 a{0.0};             ///< hold point, line start, circle or raster centre [m]
+  glm::dvec3 b{0.0};             ///< line end [m]
+  glm::dvec3 u{1.0, 0.0, 0.0};   ///< circle / raster first axis (raster rows run along it)
+  glm::dvec3 v{0.0, -1.0, 0.0};  ///< circle / raster second axis (rows step along it)
+  double radius{0.02};           ///< circle radius [m]
+  double width{0.06};            ///< raster extent along u [m]
+  double height{0.06};           ///< raster extent along v [m]
+  int rows{8};                   ///< raster rows (2..32)
+  double speed{0.05};            ///< speed along the path [m/s]
+
+  [[nodiscard]] static HandPath hold(glm::dvec3 p) { HandPath h; h.a = p; return h; }
+  [[nodiscard]] static HandPath line(glm::dvec3 from, glm::dvec3 to, double speed) {
+    HandPath h; h.kind = Kind::line; h.a = from; h.b = to; h.speed = speed; return h;
+  }
+  [[nodiscard]] static HandPath circle(glm::dvec3 centre, double radius, double speed) {
+    HandPath h; h.kind = Kind::circle; h.a = centre; h.radius = radius; h.speed = speed; return h;
+  }
+  [[nodiscard]] static HandPath raster(glm::dvec3 centre, double width, double height, int rows, double speed) {
+    HandPath h; h.kind = Kind::raster; h.a = centre; h.width = width; h.height = height; h.rows = rows; h.speed = speed;
+    return h;
+  }
+
+  /// @throws std::invalid_argument naming the bad parameter.
+  void validate() const {
+    const auto finite = [](glm::dvec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); };
+    if (!finite(a) || !finite(b) || !finite(u) || !finite(v)) throw std::invalid_argument("HandPath: points must be finite [m]");
+    if (!std::isfinite(speed) || speed < 0.0) throw std::invalid_argument("HandPath: speed must be finite and >= 0 [m/s]");
+    if (kind == Kind::circle && (!std::isfinite(radius) || radius <= 0.0))
+      throw std::invalid_argument("HandPath: radius must be finite and > 0 [m]");
+    if (kind == Kind::raster) {
+      if (rows < 2 || rows > 32) throw std::invalid_argument("HandPath: rows must be 2..32");
+      if (!std::isfinite(width) || width <= 0.0 || !std::isfinite(height) || height <= 0.0)
+        throw std::invalid_argument("HandPath: raster width and height must be finite and > 0 [m]");
+    }
+  }
+
+  /// Target point at time t [s].
+  [[nodiscard]] glm::dvec3 at(double t) const noexcept {
+    const double s = speed * t;  // arc length travelled [m]
+    switch (kind) {
+      case Kind::hold: return a;
+      case Kind::line: {
+        const double length = glm::length(b - a);
+        if (length <= 0.0) return a;
+        return a + (b - a) * (ping_pong(s, length) / length);
+      }
+      case Kind::circle: {
+        const double angle = s / radius;
+        return a + radius * (std::cos(angle) * u + std::sin(angle) * v);
+      }
+      case Kind::raster: {
+        const double step = height / (rows - 1);
+        const double total = rows * width + (rows - 1) * step;
+        double d = ping_pong(s, total);
+        for (int row = 0; row < rows; ++row) {
+          const double y = -height / 2.0 + row * step;
+          const bool forward = row % 2 == 0;
+          if (d <= width) {
+            const double x = forward ? -width / 2.0 + d : width / 2.0 - d;
+            return a + x * u + y * v;
+          }
+          d -= width;
+          if (row + 1 < rows && d <= step) {
+            const double x = forward ? width / 2.0 : -width / 2.0;
+            return a + x * u + (y + d) * v;
+          }
+          d -= step;
+        }
+        return a + (rows % 2 ? width / 2.0 : -width / 2.0) * u + height / 2.0 * v;
+      }
+    }
+    return a;
+  }
+
+ private:
+  static double ping_pong(double s, double length) noexcept {
+    const double m = std::fmod(s, 2.0 * length);
+    return m <= length ? m : 2.0 * length - m;
+  }
+};
+
+/// The scripted hand: F_hand = k (target - p) + d (v_target - v).
+struct Hand {
+  bool holding{true};       ///< false: nobody holds the handle
+  double stiffness{300.0};  ///< [N/m]
+  double damping{3.0};      ///< [N s/m]
+  HandPath path{};
+};
+
+/// Parameters of the simulated arm. Figures are plausible defaults for a
+/// desktop Phantom-class arm, not measurements.
+struct SimulatedArmConfig {
+  KinematicsConfig kinematics{};
+  glm::dvec3 inertia{9.0e-4, 9.0e-4, 6.0e-4};  ///< effective joint inertia [kg m^2] (about 50 g at the handle)
+  glm::dvec3 viscous{2.0e-4, 2.0e-4, 2.0e-4};  ///< viscous friction [N m s/rad]
+  glm::dvec3 coulomb{2.0e-3, 2.0e-3, 2.0e-3};  ///< Coulomb friction [N m]
+  double rate{1000.0};              ///< firmware tick and report rate [Hz]
+  int substeps{8};                  ///< integration steps per firmware tick
+  double watchdog{0.02};            ///< firmware watchdog period [s]
+  int homing_ticks{50};             ///< firmware ticks homing takes
+  double torque_unit{1e-3};         ///< size of one torque unit on the wire [N m]
+  double max_force{3.3};            ///< peak force reported in device info [N] (default)
+  double continuous_force{0.88};    ///< continuous force reported in device info [N] (default)
+  glm::dvec3 initial_q{0.0, 0.0, 0.0};  ///< joint angles at power-up [rad] (the home pose)
+  std::array<std::int32_t, 3> unhomed_offset{1234, -567, 89};  ///< encoder offset until homed [counts]
+  Hand hand{};
+
+  /// @throws std::invalid_argument naming the first parameter that makes no sense.
+  void validate() const {
+    kinematics.validate();
+    hand.path.validate();
+    const auto pos = [](double v) { return std::isfinite(v) && v > 0.0; };
+    for (int i = 0; i < 3; ++i) {
+      if (!pos(inertia[i])) throw std::invalid_argument("SimulatedArmConfig: inertia must be finite and > 0 [kg m^2]");
+      if (!std::isfinite(viscous[i]) || viscous[i] < 0.0)
+        throw std::invalid_argument("SimulatedArmConfig: viscous must be finite and >= 0 [N m s/rad]");
+      if (!std::isfinite(coulomb[i]) || coulomb[i] < 0.0)
+        throw std::invalid_argument("SimulatedArmConfig: coulomb must be finite and >= 0 [N m]");
+    }
+    if (!pos(rate) || rate > 20000.0) throw std::invalid_argument("SimulatedArmConfig: rate must be in (0, 20000] [Hz]");
+    if (substeps < 1 || substeps > 100) throw std::invalid_argument("SimulatedArmConfig: substeps must be 1..100");
+    if (!pos(watchdog) || watchdog > 0.065) throw std::invalid_argument("SimulatedArmConfig: watchdog must be in (0, 0.065] [s]");
+    if (homing_ticks < 0) throw std::invalid_argument("SimulatedArmConfig: homing_ticks must be >= 0");
+    if (!pos(torque_unit)) throw std::invalid_argument("SimulatedArmConfig: torque_unit must be finite and > 0 [N m]");
+    if (!pos(max_force) || !pos(continuous_force) || continuous_force > max_force)
+      throw std::invalid_argument("SimulatedArmConfig: forces must be finite, > 0, continuous <= max [N]");
+    if (!pos(hand.stiffness) && hand.holding) throw std::invalid_argument("Hand: stiffness must be finite and > 0 [N/m]");
+    if (!std::isfinite(hand.damping) || hand.damping < 0.0) throw std::invalid_argument("Hand: damping must be finite and >= 0 [N s/m]");
+  }
+};
+
+/// The simulated arm and its firmware. tick() runs one firmware period.
+class SimulatedArm {
+ public:
+  /// @throws std::invalid_argument when the configuration makes no sense.
+  explicit SimulatedArm(SimulatedArmConfig config = {}) : c_(std::move(config)) {
+    c_.validate();
+    kin_ = PhantomKinematics(c_.kinematics);
+    q_ = c_.initial_q;
+    watchdog_ticks_ = static_cast<std::int64_t>(std::ceil(c_.watchdog * c_.rate - 1e-9));
+  }
+
+  /// Handles an output (command) report; invalid ones are counted and ignored.
+  void receive(std::span<const std::uint8_t> bytes) noexcept {
+    protocol::CommandReport cmd;
+    if (protocol::decode(bytes, cmd) != Status::ok) { ++rejected_; return; }
+    ++accepted_;
+    last_command_ = cmd;
+    last_valid_tick_ = tick_;
+    if ((cmd.flags & protocol::command_flags::home) && !homed_ && homing_left_ < 0) homing_left_ = c_.homing_ticks;
+    if (cmd.flags & protocol::command_flags::arm) {
+      if (homed_ && !(faults_ & status_bits::any_fault)) armed_ = true;
+    } else {
+      armed_ = false;
+    }
+    for (std::size_t i = 0; i < 3; ++i) command_torque_[static_cast<int>(i)] = cmd.torque_mnm[i] * c_.torque_unit;
+  }
+
+  /// Gets a feature report (device info or configuration); buffer[0] is the id.
+  Status get_feature(std::span<std::uint8_t> buffer, std::size_t& size) const noexcept {
+    if (buffer.empty()) return Status::short_report;
+    if (buffer[0] == static_cast<std::uint8_t>(protocol::ReportId::device_info)) {
+      protocol::DeviceInfoReport r;
+      for (std::size_t i = 0; i < 3; ++i) {
+        const int k = static_cast<int>(i);
+        r.counts_per_rev[i] = static_cast<std::uint32_t>(c_.kinematics.counts_per_rev[i]);
+        r.max_torque_mnm[i] = static_cast<std::uint16_t>(std::lround(c_.kinematics.max_torque[k] * 1e3));
+        r.q_min_mrad[i] = static_cast<std::int16_t>(std::lround(c_.kinematics.q_min[k] * 1e3));
+        r.q_max_mrad[i] = static_cast<std::int16_t>(std::lround(c_.kinematics.q_max[k] * 1e3));
+      }
+      r.torque_unit_unm = static_cast<std::uint16_t>(std::lround(c_.torque_unit * 1e6));
+      r.l1_um = static_cast<std::uint32_t>(std::lround(c_.kinematics.l1 * 1e6));
+      r.l2_um = static_cast<std::uint32_t>(std::lround(c_.kinematics.l2 * 1e6));
+      r.max_force_mn = static_cast<std::uint16_t>(std::lround(c_.max_force * 1e3));
+      r.continuous_force_mn = static_cast<std::uint16_t>(std::lround(c_.continuous_force * 1e3));
+      r.rate_hz = static_cast<std::uint16_t>(std::lround(c_.rate));
+      size = protocol::encode(r, buffer);
+      return size ? Status::ok : Status::short_report;
+    }
+    if (buffer[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
+      protocol::ConfigurationReport r;
+      r.watchdog_us = static_cast<std::uint16_t>(std::lround(static_cast<double>(watchdog_ticks_) / c_.rate * 1e6));
+      size = protocol::encode(r, buffer);
+      return size ? Status::ok : Status::short_report;
+    }
+    return Status::unknown_report;
+  }
+
+  /// Sends a feature report (configuration or control).
+  Status send_feature(std::span<const std::uint8_t> bytes) noexcept {
+    if (bytes.empty()) return Status::short_report;
+    if (bytes[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
+      protocol::ConfigurationReport r;
+      if (const Status s = protocol::decode(bytes, r); s != Status::ok) return s;
+      watchdog_ticks_ = std::max<std::int64_t>(1, std::llround(r.watchdog_us * 1e-6 * c_.rate));
+      return Status::ok;
+    }
+    protocol::ControlOp op;
+    if (const Status s = protocol::decode(bytes, op); s != Status::ok) return s;
+    switch (op) {
+      case protocol::ControlOp::arm:
+        if (!homed_) return Status::not_homed;
+        if (faults_ & status_bits::any_fault) return Status::fault;
+        armed_ = true;
+        last_valid_tick_ = tick_;
+        return Status::ok;
+      case protocol::ControlOp::disarm: armed_ = false; return Status::ok;
+      case protocol::ControlOp::clear_fault:
+        if (armed_) return Status::bad_value;  // only while disarmed
+        faults_ &= static_cast<std::uint16_t>(~(status_bits::watchdog_tripped | status_bits::over_current |
+                                                status_bits::over_temperature));
+        return Status::ok;
+      case protocol::ControlOp::home:
+        if (!homed_ && homing_left_ < 0) homing_left_ = c_.homing_ticks;
+        return Status::ok;
+    }
+    return Status::bad_value;
+  }
+
+  /// Runs one firmware period: watchdog, homing, torque output, dynamics.
+  void tick() noexcept {
+    ++tick_;
+    if (homing_left_ >= 0 && homing_left_-- == 0) homed_ = true;
+    if (armed_ && tick_ - last_valid_tick_ > watchdog_ticks_) {
+      armed_ = false;
+      faults_ |= status_bits::watchdog_tripped;
+    }
+    if (faults_ & status_bits::any_fault) armed_ = false;
+    glm::dvec3 tau{0.0};
+    if (armed_) {
+      for (int i = 0; i < 3; ++i) {
+        const double limit = c_.kinematics.max_torque[i];
+        tau[i] = std::round(std::clamp(command_torque_[i], -limit, limit) / c_.torque_unit) * c_.torque_unit;
+      }
+    }
+    applied_torque_ = tau;
+    const double h = 1.0 / (c_.rate * c_.substeps);
+    for (int k = 0; k < c_.substeps; ++k) step(h);
+  }
+
+  /// The state report for the current tick (sequence increments each call).
+  [[nodiscard]] protocol::StateReport report() noexcept {
+    protocol::StateReport r;
+    r.sequence = ++sequence_;
+    r.command_echo = last_command_.sequence;
+    r.timestamp_us = static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(time() * 1e6)) & 0xFFFFFFFFu);
+    r.encoder = kin_.counts(q_);
+    if (!homed_)
+      for (std::size_t i = 0; i < 3; ++i) r.encoder[i] += c_.unhomed_offset[i];
+    r.status = static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
+    r.buttons = buttons_;
+    for (std::size_t i = 0; i < 3; ++i)
+      r.torque_mnm[i] = static_cast<std::int16_t>(std::lround(applied_torque_[static_cast<int>(i)] / c_.torque_unit));
+    return r;
+  }
+
+  /// Latches a fault bit (over-current, over-temperature) or holds e-stop.
+  void inject_fault(std::uint16_t bits) noexcept { faults_ |= bits; }
+  void release_estop() noexcept { faults_ &= static_cast<std::uint16_t>(~status_bits::estop); }
+  void set_buttons(std::uint8_t b) noexcept { buttons_ = b; }
+  void set_hand(const Hand& hand) { hand.path.validate(); c_.hand = hand; }
+
+  [[nodiscard]] double time() const noexcept { return static_cast<double>(tick_) / c_.rate; }
+  [[nodiscard]] std::int64_t ticks() const noexcept { return tick_; }
+  [[nodiscard]] glm::dvec3 q() const noexcept { return q_; }
+  [[nodiscard]] glm::dvec3 qdot() const noexcept { return qd_; }
+  [[nodiscard]] glm::dvec3 position() const noexcept { return kin_.forward(q_); }
+  [[nodiscard]] glm::dvec3 velocity() const noexcept { return kin_.velocity(q_, qd_); }
+  [[nodiscard]] glm::dvec3 applied_torque() const noexcept { return applied_torque_; }
+  /// Force the scripted hand applies to the handle in the last substep [N].
+  [[nodiscard]] glm::dvec3 hand_force() const noexcept { return hand_force_; }
+  [[nodiscard]] double kinetic_energy() const noexcept {
+    return 0.5 * (c_.inertia.x * qd_.x * qd_.x + c_.inertia.y * qd_.y * qd_.y + c_.inertia.z * qd_.z * qd_.z);
+  }
+  [[nodiscard]] bool armed() const noexcept { return armed_; }
+  [[nodiscard]] bool homed() const noexcept { return homed_; }
+  [[nodiscard]] std::uint16_t faults() const noexcept { return faults_; }
+  [[nodiscard]] const protocol::CommandReport& last_command() const noexcept { return last_command_; }
+  [[nodiscard]] std::uint64_t commands_accepted() const noexcept { return accepted_; }
+  [[nodiscard]] std::uint64_t commands_rejected() const noexcept { return rejected_; }
+  [[nodiscard]] const SimulatedArmConfig& config() const noexcept { return c_; }
+  [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return kin_; }
+
+ private:
+  void step(double h) noexcept {
+    const glm::dvec3 p = kin_.forward(q_);
+    const glm::dvec3 v = kin_.velocity(q_, qd_);
+    glm::dvec3 tau_hand{0.0};
+    hand_force_ = glm::dvec3{0.0};
+    if (c_.hand.holding) {
+      const double t = time() + substep_ * h;
+      const glm::dvec3 target = c_.hand.path.at(t);
+      const glm::dvec3 target_v = (c_.hand.path.at(t + 1e-4) - target) / 1e-4;
+      hand_force_ = c_.hand.stiffness * (target - p) + c_.hand.damping * (target_v - v);
+      tau_hand = kin_.torques(q_, hand_force_);
+    }
+    substep_ = (substep_ + 1) % c_.substeps;
+    for (int i = 0; i < 3; ++i) {
+      const double drive = applied_torque_[i] + tau_hand[i] - c_.viscous[i] * qd_[i];
+      double qd = qd_[i] + h * drive / c_.inertia[i];
+      // Coulomb friction: opposes motion, sticks when it would reverse it.
+      const double dv = h * c_.coulomb[i] / c_.inertia[i];
+      if (qd > dv) qd -= dv; else if (qd < -dv) qd += dv; else qd = 0.0;
+      double q = q_[i] + h * qd;
+      if (q < c_.kinematics.q_min[i]) { q = c_.kinematics.q_min[i]; qd = std::fmax(qd, 0.0); }
+      if (q > c_.kinematics.q_max[i]) { q = c_.kinematics.q_max[i]; qd = std::fmin(qd, 0.0); }
+      q_[i] = q;
+      qd_[i] = qd;
+    }
+  }
+
+  SimulatedArmConfig c_;
+  PhantomKinematics kin_{};
+  glm::dvec3 q_{0.0};
+  glm::dvec3 qd_{0.0};
+  glm::dvec3 command_torque_{0.0};
+  glm::dvec3 applied_torque_{0.0};
+  glm::dvec3 hand_force_{0.0};
+  protocol::CommandReport last_command_{};
+  std::int64_t tick_{0};
+  std::int64_t last_valid_tick_{0};
+  std::int64_t watchdog_ticks_{20};
+  std::uint64_t accepted_{0};
+  std::uint64_t rejected_{0};
+  int homing_left_{-1};
+  int substep_{0};
+  std::uint16_t sequence_{0};
+  std::uint16_t faults_{0};
+  std::uint8_t buttons_{0};
+  bool homed_{false};
+  bool armed_{false};
+};
+
+}  // namespace hapticfield

@@ -1,0 +1,44 @@
+#pragma once
+/// @file transport.hpp
+/// The one seam between the protocol and the wire: read an input report
+/// (with a timeout), write an output report, get/send feature reports.
+/// Implementations: SimulatedTransport, ReplayTransport, RecordingTransport
+/// (a decorator) and HidTransport (hid_transport.hpp, the only code that
+/// includes hidapi.h).
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
+
+#include "hapticfield/device/status.hpp"
+
+namespace hapticfield {
+
+/// Monotonic time source for transports that need one (simulation, replay) [ns].
+using TimeSource = std::function<std::int64_t()>;
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  Transport() = default;
+  Transport(const Transport&) = delete;
+  Transport& operator=(const Transport&) = delete;
+
+  /// Reads the oldest queued input report into buffer (>= 64 bytes) and sets
+  /// size. Waits at most timeout_us [us] (0: do not wait). no_data when none
+  /// is queued, disconnected when the device is gone. Never allocates.
+  virtual Status read(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept = 0;
+
+  /// Queues one output report (the first byte is the report id); never waits
+  /// for a reply.
+  virtual Status write(std::span<const std::uint8_t> report) noexcept = 0;
+
+  /// Gets the feature report whose id is buffer[0]; sets size.
+  virtual Status get_feature(std::span<std::uint8_t> buffer, std::size_t& size) noexcept = 0;
+
+  /// Sends one feature report (the first byte is the report id).
+  virtual Status send_feature(std::span<const std::uint8_t> report) noexcept = 0;
+};
+
+}  // namespace hapticfield

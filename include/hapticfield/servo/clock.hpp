@@ -1,0 +1,65 @@
+#pragma once
+/// @file clock.hpp
+/// Clocks the servo loop runs on: SteadyClock (CLOCK_MONOTONIC, absolute
+/// sleeps) and VirtualClock (tests: time moves only when told, never sleeps).
+
+#include <atomic>
+#include <cerrno>
+#include <concepts>
+#include <cstdint>
+#include <ctime>
+
+namespace hapticfield {
+
+/// A monotonic clock in integer nanoseconds that can sleep until an
+/// absolute time.
+template <class C>
+concept ServoClock = requires(C& clock, std::int64_t t) {
+  { clock.now() } noexcept -> std::same_as<std::int64_t>;
+  { clock.sleep_until(t) } noexcept;
+};
+
+/// CLOCK_MONOTONIC with clock_nanosleep(TIMER_ABSTIME): sleeps to absolute
+/// deadlines, so per-tick latencies do not accumulate into drift.
+struct SteadyClock {
+  [[nodiscard]] std::int64_t now() const noexcept {
+    timespec ts{};
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  }
+  void sleep_until(std::int64_t t) const noexcept {
+    timespec ts{};
+    ts.tv_sec = static_cast<time_t>(t / 1'000'000'000);
+    ts.tv_nsec = static_cast<long>(t % 1'000'000'000);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+  }
+};
+
+/// Time that moves only when the loop sleeps or a test advances it [ns].
+/// sleep_until jumps to the deadline (plus an optional wake delay, to model
+/// scheduling latency); advance() models compute time. Thread-safe.
+class VirtualClock {
+ public:
+  explicit VirtualClock(std::int64_t start = 0) noexcept : t_(start) {}
+  [[nodiscard]] std::int64_t now() const noexcept { return t_.load(std::memory_order_acquire); }
+  void sleep_until(std::int64_t t) noexcept {
+    const std::int64_t target = t + wake_delay_.load(std::memory_order_relaxed);
+    std::int64_t cur = t_.load(std::memory_order_relaxed);
+    while (cur < target && !t_.compare_exchange_weak(cur, target, std::memory_order_acq_rel)) {
+    }
+  }
+  /// Moves time forward by dt [ns] (e.g. to model compute time in a field).
+  void advance(std::int64_t dt) noexcept { t_.fetch_add(dt, std::memory_order_acq_rel); }
+  /// Every sleep wakes this late [ns] (scheduling latency model).
+  void set_wake_delay(std::int64_t dt) noexcept { wake_delay_.store(dt, std::memory_order_relaxed); }
+
+ private:
+  std::atomic<std::int64_t> t_;
+  std::atomic<std::int64_t> wake_delay_{0};
+};
+
+static_assert(ServoClock<SteadyClock>);
+static_assert(ServoClock<VirtualClock>);
+
+}  // namespace hapticfield

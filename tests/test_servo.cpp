@@ -1,0 +1,685 @@
+// Tests of the servo layer: clocks, statistics, the safety chain (seeded
+// property tests), and the loop against the simulated arm on a virtual clock.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "hapticfield/core.hpp"
+#include "hapticfield/device.hpp"
+#include "hapticfield/servo.hpp"
+
+using namespace hapticfield;
+using Catch::Matchers::WithinAbs;
+
+namespace {
+
+constexpr double qnan = std::numeric_limits<double>::quiet_NaN();
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+/// Property-test size: HAPTICFIELD_PROPERTY_COUNT overrides (default 1e5).
+long property_count() {
+  if (const char* s = std::getenv("HAPTICFIELD_PROPERTY_COUNT")) return std::max(1L, std::atol(s));
+  return 100000;
+}
+/// Seed: Catch's --rng-seed when given, else 1.
+std::uint32_t property_seed() {
+  const unsigned s = Catch::getCurrentContext().getConfig()->rngSeed();
+  return s ? s : 1u;
+}
+
+/// A stiff virtual wall: the half-space y < wall_y pushes back along +y.
+struct Wall {
+  double wall_y{0.0};
+  double stiffness{2000.0};  // [N/m]
+  glm::dvec3 force(const Probe& p) const noexcept {
+    const double depth = wall_y - p.position.y;
+    return depth > 0.0 ? glm::dvec3{0.0, stiffness * depth, 0.0} : glm::dvec3{0.0};
+  }
+};
+
+struct Constant {
+  glm::dvec3 f{0.0};
+  glm::dvec3 force(const Probe&) const noexcept { return f; }
+};
+
+/// Simulated arm, link, ForceArm and loop on one virtual clock.
+struct Rig {
+  VirtualClock clock;
+  SimulatedArm arm;
+  SimulatedTransport link;
+  ForceArm device;
+  ServoLoop<ForceArm, VirtualClock> loop;
+  static LoopConfig quiet(LoopConfig c) {
+    c.realtime = RealTime::off;
+    return c;
+  }
+  explicit Rig(SimulatedArmConfig a = {}, LoopConfig c = {})
+      : arm(a), link(arm, [this] { return clock.now(); }), device(link), loop(device, clock, quiet(c)) {}
+};
+
+SimulatedArmConfig free_arm() {
+  SimulatedArmConfig c;
+  c.hand.holding = false;
+  return c;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------- clocks
+
+TEST_CASE("the virtual clock only moves when told") {
+  VirtualClock c(100);
+  CHECK(c.now() == 100);
+  c.sleep_until(50);  // in the past: no change
+  CHECK(c.now() == 100);
+  c.sleep_until(1000);
+  CHECK(c.now() == 1000);
+  c.advance(5);
+  CHECK(c.now() == 1005);
+  c.set_wake_delay(20);
+  c.sleep_until(2000);
+  CHECK(c.now() == 2020);
+}
+
+TEST_CASE("histogram percentiles agree with a sorted sample") {
+  DurationHistogram h;
+  std::mt19937 rng(3);
+  std::lognormal_distribution<double> d(13.8, 0.3);  // around 1 ms
+  std::vector<std::int64_t> v;
+  for (int i = 0; i < 20000; ++i) {
+    const auto ns = static_cast<std::int64_t>(d(rng));
+    v.push_back(ns);
+    h.record(ns);
+  }
+  std::sort(v.begin(), v.end());
+  for (const double p : {0.5, 0.9, 0.99, 0.999}) {
+    const std::int64_t exact = v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
+    CHECK(std::llabs(h.percentile(p) - exact) <= 1000);  // one 1 us bin
+  }
+  CHECK(h.max() == v.back());
+  CHECK(h.count() == v.size());
+  h.record(1'000'000'000);  // 1 s lands in the overflow bin, max stays exact
+  CHECK(h.max() == 1'000'000'000);
+}
+
+// ------------------------------------------------------------- safety chain
+
+TEST_CASE("safety chain: non-finite force gives zero and a fault event") {
+  SafetyConfig cfg;
+  cfg.soft_start_enabled = false;
+  cfg.slew_enabled = false;
+  SafetyChain chain(cfg, 3.3);
+  SafetyInput in;
+  in.time_since_armed = 1.0;
+  for (const glm::dvec3 f : {glm::dvec3{qnan, 0, 0}, glm::dvec3{0, inf, 0}, glm::dvec3{0, 0, -inf}}) {
+    in.force = f;
+    CHECK(chain.process(in) == glm::dvec3{0.0});
+    CHECK((chain.events() & safety_events::non_finite) != 0);
+  }
+  in.force = {1, 0, 0};
+  CHECK(chain.process(in) == glm::dvec3{1, 0, 0});  // not latched: the next finite force passes
+}
+
+TEST_CASE("safety chain: magnitude clamp keeps the direction") {
+  SafetyConfig cfg;
+  cfg.soft_start_enabled = false;
+  cfg.slew_enabled = false;
+  SafetyChain chain(cfg, 3.3);
+  SafetyInput in;
+  in.time_since_armed = 1.0;
+  in.force = {30.0, -40.0, 0.0};  // |F| = 50 N
+  const glm::dvec3 out = chain.process(in);
+  CHECK_THAT(glm::length(out), WithinAbs(3.3, 1e-12));
+  CHECK_THAT(out.x, WithinAbs(3.3 * 0.6, 1e-12));
+  CHECK_THAT(out.y, WithinAbs(-3.3 * 0.8, 1e-12));
+  in.force = {1e308, 1e308, -1e308};  // |F| overflows a naive length
+  CHECK_THAT(glm::length(chain.process(in)), WithinAbs(3.3, 1e-12));
+}
+
+TEST_CASE("safety chain: slew limit and soft start") {
+  SafetyConfig cfg;
+  cfg.slew_rate = 500.0;  // 0.5 N per 1 ms tick
+  cfg.soft_start = 0.1;
+  SafetyChain chain(cfg, 3.3);
+  SafetyInput in;
+  in.force = {0, 3.0, 0};
+  in.time_since_armed = 1.0;
+  double last = 0.0;
+  for (int i = 1; i <= 6; ++i) {
+    const double y = chain.process(in).y;
+    CHECK_THAT(y, WithinAbs(std::min(3.0, 0.5 * i), 1e-12));
+    last = y;
+  }
+  CHECK(last == 3.0);
+  SafetyChain ramp(cfg, 3.3);
+  in.force = {0, 3.3, 0};
+  in.time_since_armed = 0.05;  // half way through the ramp: limit 1.65 N
+  for (int i = 0; i < 10; ++i) (void)ramp.process(in);
+  CHECK_THAT(ramp.previous().y, WithinAbs(1.65, 1e-12));
+  in.time_since_armed = -1.0;  // not armed: zero
+  CHECK(ramp.process(in) == glm::dvec3{0.0});
+}
+
+TEST_CASE("safety chain: watchdog on missing state, stale state and missed deadlines") {
+  SafetyConfig cfg;
+  cfg.soft_start_enabled = false;
+  SafetyChain chain(cfg, 3.3);
+  SafetyInput in;
+  in.force = {0, 0.1, 0};
+  in.time_since_armed = 1.0;
+  CHECK(chain.process(in) != glm::dvec3{0.0});
+  in.ticks_without_state = 1;  // one late report: carry on
+  CHECK(chain.process(in) != glm::dvec3{0.0});
+  in.ticks_without_state = 2;  // two: zero, without latching
+  CHECK(chain.process(in) == glm::dvec3{0.0});
+  CHECK((chain.events() & safety_events::no_new_state) != 0);
+  CHECK(chain.latched() == 0);
+  in.ticks_without_state = 0;
+  CHECK(chain.process(in) != glm::dvec3{0.0});  // resumes (slew-limited from zero)
+  in.state_age = 0.011;  // older than 10 ms: zero and latch
+  CHECK(chain.process(in) == glm::dvec3{0.0});
+  CHECK((chain.latched() & safety_events::stale_state) != 0);
+  in.state_age = 0.0;
+  CHECK(chain.process(in) == glm::dvec3{0.0});  // latched until cleared
+  chain.clear();
+  CHECK(chain.process(in) != glm::dvec3{0.0});
+  in.state_age = qnan;  // an unknown age is stale too
+  CHECK(chain.process(in) == glm::dvec3{0.0});
+  chain.clear();
+  in.state_age = 0.0;
+  in.missed_in_a_row = 3;
+  CHECK(chain.process(in) == glm::dvec3{0.0});
+  CHECK((chain.latched() & safety_events::missed_deadlines) != 0);
+}
+
+TEST_CASE("safety configuration rejects limits that make no sense") {
+  const auto bad = [](auto mutate, double device_max = 3.3) {
+    SafetyConfig c;
+    mutate(c);
+    CHECK_THROWS_AS(SafetyChain(c, device_max), std::invalid_argument);
+  };
+  bad([](SafetyConfig& c) { c.max_force = -1; });
+  bad([](SafetyConfig& c) { c.max_force = qnan; });
+  bad([](SafetyConfig& c) { c.max_force = 10; });  // above the device
+  bad([](SafetyConfig& c) { c.slew_rate = 0; });
+  bad([](SafetyConfig& c) { c.slew_rate = inf; });
+  bad([](SafetyConfig& c) { c.soft_start = -0.1; });
+  bad([](SafetyConfig& c) { c.max_state_age = 0; });
+  bad([](SafetyConfig& c) { c.max_missed_deadlines = 0; });
+  bad([](SafetyConfig& c) { c.passivity_enabled = true; c.passivity_max_damping = qnan; });
+  bad([](SafetyConfig&) {}, 0.0);
+  bad([](SafetyConfig&) {}, qnan);
+  SafetyConfig off;
+  off.slew_enabled = false;
+  off.watchdog_enabled = false;
+  CHECK(off.disabled_stages() == "slew limit, watchdog");
+  CHECK(SafetyConfig{}.disabled_stages().empty());
+}
+
+TEST_CASE("safety invariants hold over seeded random states, fields and garbage") {
+  const long n = property_count();
+  std::mt19937_64 rng(property_seed());
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, 9);
+  const auto value = [&](double scale) {
+    switch (pick(rng)) {
+      case 0: return qnan;
+      case 1: return unit(rng) < 0 ? -inf : inf;
+      case 2: return unit(rng) * 1e300;  // huge
+      case 3: return unit(rng) * 1e-300;
+      default: return unit(rng) * scale;
+    }
+  };
+  SafetyConfig cfg;
+  cfg.passivity_enabled = true;
+  SafetyChain chain(cfg, 3.3);
+  const double step = cfg.slew_rate * 1e-3;
+  long violations = 0, zeroed = 0;
+  double armed_for = 0.0;
+  glm::dvec3 previous{0.0};
+  for (long i = 0; i < n; ++i) {
+    if (i % 1000 == 999) chain.clear();
+    SafetyInput in;
+    in.force = {value(5.0), value(5.0), value(5.0)};
+    in.velocity = {value(0.5), value(0.5), value(0.5)};
+    in.period = 1e-3;
+    in.state_age = pick(rng) == 0 ? value(0.02) : 0.0;
+    in.ticks_without_state = pick(rng) == 0 ? 2 : 0;
+    in.missed_in_a_row = pick(rng) == 0 ? 3 : 0;
+    // Armed time only grows (the soft-start limit never shrinks) until a
+    // random disarm.
+    armed_for = pick(rng) == 0 ? -1.0 : std::fmax(armed_for, 0.0) + 1e-3 * pick(rng);
+    in.time_since_armed = armed_for;
+    in.device_fault = pick(rng) == 0 && pick(rng) == 0;
+    const glm::dvec3 out = chain.process(in);
+    const bool finite = is_finite(out);
+    const double magnitude = glm::length(out);
+    const bool zeroing = out == glm::dvec3{0.0};
+    const bool slew_ok = glm::length(out - previous) <= step * (1.0 + 1e-12) || zeroing;
+    if (!finite || magnitude > 3.3 * (1.0 + 1e-12) || !slew_ok) {
+      ++violations;
+      UNSCOPED_INFO("violation at " << i << ": |out| " << magnitude << ", step " << glm::length(out - previous)
+                    << ", events " << chain.events());
+    }
+    // A zero after a fault is the only way to break the slew limit, and only
+    // when the chain says why.
+    if (zeroing && glm::length(previous) > step) {
+      ++zeroed;
+      if ((chain.events() & (safety_events::non_finite | safety_events::device_fault | safety_events::no_new_state |
+                             safety_events::latching)) == 0)
+        ++violations;
+    }
+    previous = out;
+  }
+  CHECK(violations == 0);
+  CHECK(zeroed > 0);  // the garbage did reach the zeroing branch
+  INFO("seed " << property_seed() << ", " << n << " states");
+}
+
+TEST_CASE("through the whole loop, a garbage field never reaches the arm") {
+  // Seeded random fields (NaN, Inf, 1e300, ordinary forces) driving the
+  // loop and the simulated arm: every command is finite, within the limit
+  // and slew-limited or zero, and the arm's torques stay within saturation.
+  Rig rig(SimulatedArmConfig{});
+  std::mt19937_64 rng(property_seed() + 17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, 19);
+  const auto garbage = [&] {
+    switch (pick(rng)) {
+      case 0: return qnan;
+      case 1: return inf;
+      case 2: return -1e300;
+      default: return unit(rng) * 6.0;
+    }
+  };
+  glm::dvec3 previous{0.0};
+  long bad = 0;
+  auto cb = [&](const TickInput&) {
+    const glm::dvec3 c = rig.loop.last_command();
+    const bool ok = is_finite(c) && glm::length(c) <= 3.3 * (1 + 1e-12) &&
+                    (glm::length(c - previous) <= 1000.0 * 1e-3 * (1 + 1e-9) || c == glm::dvec3{0.0});
+    const glm::dvec3 tau = rig.arm.applied_torque();
+    if (!ok || std::fabs(tau.x) > 0.45 || std::fabs(tau.y) > 0.45 || std::fabs(tau.z) > 0.45) ++bad;
+    previous = c;
+    return glm::dvec3{garbage(), garbage(), garbage()};
+  };
+  rig.loop.run(cb, {.max_ticks = static_cast<std::uint64_t>(std::max(2000L, property_count() / 5))});
+  CHECK(bad == 0);
+  CHECK(rig.loop.statistics().peak_force > 1.0);  // forces did get through
+}
+
+TEST_CASE("passivity controller keeps the observed energy non-negative") {
+  SafetyConfig cfg;
+  cfg.passivity_enabled = true;
+  cfg.soft_start_enabled = false;
+  cfg.slew_enabled = false;
+  SafetyChain chain(cfg, 3.3);
+  // An active element: force along the velocity (negative damping) injects
+  // energy; the observer must see it and the controller must cancel it.
+  SafetyInput in;
+  in.time_since_armed = 1.0;
+  int corrected = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const double t = i * 1e-3;
+    in.velocity = {0.05 * std::cos(10 * t), 0.0, 0.0};
+    in.force = 20.0 * in.velocity;  // -20 N s/m damping: active
+    (void)chain.process(in);
+    CHECK(chain.observed_energy() >= -1e-12);
+    if (chain.events() & safety_events::passivity) ++corrected;
+  }
+  CHECK(corrected > 500);
+  // A passive damper is left alone.
+  SafetyChain calm(cfg, 3.3);
+  in.velocity = {0.05, 0.0, 0.0};
+  in.force = -10.0 * in.velocity;
+  CHECK(calm.process(in) == in.force);
+  CHECK((calm.events() & safety_events::passivity) == 0);
+}
+
+// ---------------------------------------------------------------- the loop
+
+TEST_CASE("loop configuration rejects rates and priorities out of range") {
+  VirtualClock clock;
+  SimulatedArm arm(free_arm());
+  SimulatedTransport link(arm, [&] { return clock.now(); });
+  ForceArm device(link);
+  for (const double rate : {0.0, -1000.0, 0.5, 10001.0, qnan, inf}) {
+    LoopConfig c;
+    c.rate = rate;
+    CHECK_THROWS_AS((ServoLoop<ForceArm, VirtualClock>(device, clock, c)), std::invalid_argument);
+  }
+  LoopConfig c;
+  c.priority = 0;
+  CHECK_THROWS_AS((ServoLoop<ForceArm, VirtualClock>(device, clock, c)), std::invalid_argument);
+  c = LoopConfig{};
+  c.rate = 10000.0;
+  CHECK_NOTHROW(ServoLoop<ForceArm, VirtualClock>(device, clock, c));
+}
+
+TEST_CASE("the loop homes, arms, keeps its rate on the virtual clock and soft-starts") {
+  Rig rig(free_arm());
+  Constant field{{0.0, 1.0, 0.0}};
+  CHECK(rig.loop.run(field, {.max_ticks = 1000}) == StopReason::tick_limit);
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.ticks == 1000);
+  CHECK(s.missed_deadlines == 0);
+  CHECK_THAT(s.rate, WithinAbs(1000.0, 1e-9));
+  CHECK_THAT(s.period_p50, WithinAbs(1e-3, 0.5e-6));
+  CHECK_THAT(s.period_max, WithinAbs(1e-3, 1e-12));
+  CHECK(s.wake_max == 0.0);
+  CHECK(rig.arm.homed());
+  CHECK(s.peak_force <= 1.0 + 1e-12);
+  CHECK_THAT(s.peak_force, WithinAbs(1.0, 1e-12));  // soft start (0.25 s) finished within 1 s
+  CHECK_FALSE(rig.arm.armed());  // disarmed on exit
+  CHECK(rig.arm.last_command().torque_mnm == std::array<std::int16_t, 3>{0, 0, 0});
+}
+
+TEST_CASE("the loop runs at 10 kHz on the virtual clock") {
+  LoopConfig c;
+  c.rate = 10000.0;
+  Rig rig(free_arm(), c);
+  ZeroField zero;
+  rig.loop.run(zero, {.max_ticks = 2000});
+  CHECK_THAT(rig.loop.statistics().rate, WithinAbs(10000.0, 1e-6));
+  CHECK_THAT(rig.loop.statistics().period_max, WithinAbs(1e-4, 1e-12));
+}
+
+TEST_CASE("after an overrun the loop skips whole periods instead of bursting") {
+  Rig rig(free_arm());
+  std::uint64_t tick = 0;
+  std::vector<std::int64_t> wakes;
+  wakes.reserve(100);
+  auto slow_once = [&](const TickInput&) {
+    wakes.push_back(rig.clock.now());
+    if (++tick == 10) rig.clock.advance(2'500'000);  // 2.5 ms of work in one tick
+    return glm::dvec3{0.0};
+  };
+  rig.loop.run(slow_once, {.max_ticks = 20});
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.missed_deadlines == 2);  // deadlines at +1 and +2 ms passed: skipped
+  REQUIRE(wakes.size() == 20);
+  for (std::size_t i = 1; i < wakes.size(); ++i) {
+    const std::int64_t d = wakes[i] - wakes[i - 1];
+    CHECK(d % 1'000'000 == 0);    // every wake on the absolute grid
+    CHECK(d >= 1'000'000);        // never a burst of catch-up ticks
+  }
+  CHECK(wakes[10] - wakes[9] == 3'000'000);
+}
+
+TEST_CASE("K missed deadlines in a row zero the force and disarm") {
+  Rig rig(free_arm());
+  std::uint64_t tick = 0;
+  glm::dvec3 at_trip{1.0};
+  auto slow = [&](const TickInput& in) {
+    ++tick;
+    if (tick >= 400 && tick < 403) rig.clock.advance(1'200'000);  // three overruns
+    if (tick == 404) at_trip = rig.loop.last_command();
+    (void)in;
+    return glm::dvec3{0.0, 0.5, 0.0};
+  };
+  rig.loop.run(slow, {.max_ticks = 420});
+  CHECK((rig.loop.safety().latched() & safety_events::missed_deadlines) != 0);
+  CHECK(at_trip == glm::dvec3{0.0});
+}
+
+TEST_CASE("stall and unplug: force zero within 2 ticks, no stale command") {
+  for (const LinkFault fault : {LinkFault::stall, LinkFault::unplug}) {
+    Rig rig(free_arm());
+    const std::int64_t fault_tick = 500;
+    rig.link.inject(fault, fault_tick, 200);
+    std::vector<glm::dvec3> commands;
+    commands.reserve(1000);
+    std::int64_t first_missing = -1;
+    auto cb = [&](const TickInput& in) {
+      if (first_missing < 0 && in.read_status != Status::ok && rig.arm.ticks() >= fault_tick)
+        first_missing = static_cast<std::int64_t>(in.tick);
+      commands.push_back(rig.loop.last_command());
+      return glm::dvec3{0.0, 0.8, 0.0};
+    };
+    const StopReason r = rig.loop.run(cb, {.max_ticks = 800});
+    REQUIRE(first_missing > 0);
+    commands.push_back(rig.loop.last_command());
+    // The command computed on tick first_missing + 1 is already zero.
+    const auto k = static_cast<std::size_t>(first_missing);
+    CHECK(glm::length(commands[k - 1]) > 0.5);  // full force before the fault
+    CHECK(commands[k + 2] == glm::dvec3{0.0});
+    for (std::size_t i = k + 2; i < commands.size(); ++i) CHECK(commands[i] == glm::dvec3{0.0});
+    if (fault == LinkFault::unplug) {
+      CHECK(r == StopReason::disconnected);
+      CHECK((rig.loop.safety().latched() & safety_events::disconnected) != 0);
+    } else {
+      CHECK((rig.loop.safety().latched() & safety_events::stale_state) != 0);
+      // After the stall the arm gets fresh commands only, all zero force,
+      // with increasing sequence numbers.
+      CHECK(rig.arm.last_command().torque_mnm == std::array<std::int16_t, 3>{0, 0, 0});
+      CHECK(rig.arm.last_command().sequence == rig.device.last_command().sequence);
+    }
+  }
+}
+
+TEST_CASE("drop, duplicate, reorder and corrupt are reported and do not stop the force") {
+  Rig rig(free_arm());
+  rig.link.inject(LinkFault::drop, 400);
+  rig.link.inject(LinkFault::duplicate, 410);
+  rig.link.inject(LinkFault::reorder, 420);
+  rig.link.inject(LinkFault::corrupt, 430);
+  Constant field{{0.0, 0.5, 0.0}};
+  rig.loop.run(field, {.max_ticks = 600});
+  const LinkCounters& c = rig.device.counters();
+  // The held (reordered) and the corrupt report each leave a gap when the
+  // newer one is read first, so they count as drops too: 1 + 1 + 1.
+  CHECK(c.dropped == 3);
+  CHECK(c.duplicates == 1);
+  CHECK(c.reordered == 1);
+  CHECK(c.corrupt == 1);
+  CHECK(rig.loop.safety().latched() == 0);  // single glitches do not trip the watchdog
+}
+
+TEST_CASE("a device fault (e-stop) zeroes the force; after release it soft-starts again") {
+  Rig rig(free_arm());
+  std::vector<double> command;
+  command.reserve(1200);
+  auto cb = [&](const TickInput& in) {
+    if (in.tick == 500) rig.arm.inject_fault(status_bits::estop);
+    if (in.tick == 700) rig.arm.release_estop();
+    command.push_back(rig.loop.last_command().y);
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 1200});
+  CHECK_THAT(command[499], WithinAbs(0.6, 1e-12));
+  for (std::size_t i = 503; i < 700; ++i) CHECK(command[i] == 0.0);  // report latency: 1-2 ticks
+  // The soft start ramps the limit from 0 to 3.3 N over 0.25 s, so 0.6 N
+  // is reached about 45 ms after re-arming.
+  CHECK(command[720] > 0.0);
+  CHECK(command[720] < 0.45);
+  CHECK_THAT(command[1199], WithinAbs(0.6, 1e-12));
+}
+
+TEST_CASE("a throwing callback: zero force first, then ServoError with the last states") {
+  Rig rig(free_arm());
+  auto cb = [&](const TickInput& in) -> glm::dvec3 {
+    if (in.tick == 600) throw std::runtime_error("field failed");
+    return {0.0, 0.7, 0.0};
+  };
+  bool caught = false;
+  try {
+    rig.loop.run(cb);
+  } catch (const ServoError& e) {
+    caught = true;
+    CHECK(e.last_states().size() == ServoLoop<ForceArm, VirtualClock>::history_size);
+    CHECK(e.last_states().back().valid);
+    CHECK(std::string(e.what()).find("tick 600") != std::string::npos);
+    try {
+      std::rethrow_if_nested(e);
+      FAIL("no nested exception");
+    } catch (const std::runtime_error& inner) {
+      CHECK(std::string(inner.what()) == "field failed");
+    }
+  }
+  CHECK(caught);
+  CHECK(rig.loop.last_command() == glm::dvec3{0.0});
+  CHECK(rig.arm.last_command().torque_mnm == std::array<std::int16_t, 3>{0, 0, 0});
+  CHECK_FALSE(rig.arm.last_command().flags & protocol::command_flags::arm);
+}
+
+TEST_CASE("closed loop: the hand presses a stiff wall; stable, energy bounded with passivity on") {
+  for (const bool passivity : {false, true}) {
+    SimulatedArmConfig a;
+    // The hand starts at the home pose and presses 1 cm into a wall 5 mm
+    // below it, then comes back out, over and over.
+    a.hand.path = HandPath::line({0.0, 0.0, 0.0}, {0.0, -0.015, 0.0}, 0.02);
+    LoopConfig c;
+    c.safety.passivity_enabled = passivity;
+    c.safety.slew_rate = 1e5;
+    Rig rig(a, c);
+    Wall wall{-0.005, 3000.0};
+    double max_ke = 0.0, min_energy = 0.0, min_y = 0.0;
+    std::uint64_t n = 0;
+    auto cb = [&](const TickInput& in) {
+      max_ke = std::max(max_ke, rig.arm.kinetic_energy());
+      min_y = std::min(min_y, rig.arm.position().y);
+      min_energy = std::min(min_energy, rig.loop.safety().observed_energy());
+      ++n;
+      return wall.force(in.probe);
+    };
+    rig.loop.run(cb, {.max_ticks = 4000});
+    INFO("passivity " << passivity);
+    // Stable: the handle never sinks deeper than the static balance of the
+    // hand spring (300 N/m, at most 1 cm pull) against the wall (3000 N/m,
+    // saturating at 3.3 N) allows, and never flies off: kinetic energy stays
+    // at the level of the hand's own 2 cm/s motion (1/2 m v^2 ~ 1e-5 J).
+    CHECK(min_y > -0.005 - 0.0025);
+    CHECK(max_ke < 1e-4);  // [J]
+    CHECK(rig.loop.statistics().peak_force <= 3.3 + 1e-12);
+    CHECK(rig.loop.statistics().peak_force > 2.0);  // the wall was really pressed (balance ~2.7 N)
+    if (passivity) CHECK(min_energy >= -1e-9);
+  }
+}
+
+/// A wall that sees the handle 10 ticks late: delay makes it an active
+/// (energy-generating) environment, the case the passivity controller is for.
+struct DelayedWall {
+  double wall_y{-0.005};
+  double stiffness{3000.0};
+  std::array<double, 16> history{};
+  std::size_t n{0};
+  glm::dvec3 force(const Probe& p) noexcept {
+    history[n % history.size()] = p.position.y;
+    const double y = n >= 10 ? history[(n - 10) % history.size()] : p.position.y;
+    ++n;
+    const double depth = wall_y - y;
+    return depth > 0.0 ? glm::dvec3{0.0, stiffness * depth, 0.0} : glm::dvec3{0.0};
+  }
+};
+
+TEST_CASE("closed loop: a delayed wall oscillates; the passivity controller damps it") {
+  double mean_ke[2] = {0.0, 0.0}, min_energy = 0.0;
+  for (const bool passivity : {false, true}) {
+    SimulatedArmConfig a;
+    a.hand.path = HandPath::line({0.0, 0.0, 0.0}, {0.0, -0.015, 0.0}, 0.02);
+    LoopConfig c;
+    c.safety.passivity_enabled = passivity;
+    c.safety.slew_rate = 1e5;
+    Rig rig(a, c);
+    DelayedWall wall;
+    double sum = 0.0;
+    int n = 0;
+    auto cb = [&](const TickInput& in) {
+      if (in.probe.time > 0.5) {
+        sum += rig.arm.kinetic_energy();
+        ++n;
+        if (passivity) min_energy = std::min(min_energy, rig.loop.safety().observed_energy());
+      }
+      return wall.force(in.probe);
+    };
+    rig.loop.run(cb, {.max_ticks = 4000});
+    mean_ke[passivity ? 1 : 0] = sum / n;
+  }
+  INFO("mean kinetic energy without / with passivity control: " << mean_ke[0] << " / " << mean_ke[1] << " J");
+  CHECK(mean_ke[0] > 1e-3);              // without it the contact rattles
+  CHECK(mean_ke[1] < mean_ke[0] / 5.0);  // with it the energy is an order smaller
+  CHECK(min_energy > -1e-3);             // observed energy stays (nearly) non-negative; the damping cap bounds it
+}
+
+TEST_CASE("no heap allocation per tick") {
+  if (!test::allocations_counted) return;  // ThreadSanitizer build: see alloc_counter.hpp
+  Rig rig(free_arm());
+  Wall wall;
+  rig.loop.run(wall, {.max_ticks = 100});  // warm up
+  const long allocations = test::count_allocations([&] { rig.loop.run(wall, {.max_ticks = 2000}); });
+  CHECK(allocations == 0);
+  TickInput in;
+  const long manual = test::count_allocations([&] {
+    for (int i = 0; i < 500; ++i) {
+      rig.clock.advance(1'000'000);
+      rig.loop.read_once(in);
+      rig.loop.write_once(wall.force(in.probe));
+    }
+  });
+  CHECK(manual == 0);
+}
+
+TEST_CASE("read_once / write_once for users who own the thread") {
+  Rig rig(free_arm());
+  TickInput in;
+  for (int i = 0; i < 400; ++i) {
+    rig.clock.advance(1'000'000);
+    rig.loop.read_once(in);
+    rig.loop.write_once({0.0, 0.3, 0.0});
+  }
+  CHECK(in.state.armed());
+  CHECK(in.probe.position == in.state.position);
+  CHECK_THAT(in.probe.time, WithinAbs(0.399, 1e-9));
+  CHECK_THAT(rig.loop.last_command().y, WithinAbs(0.3, 1e-12));
+  rig.loop.write_once({qnan, 0.0, 0.0});
+  CHECK(rig.loop.last_command() == glm::dvec3{0.0});
+}
+
+TEST_CASE("statistics are readable from another thread while the loop runs") {
+  Rig rig(free_arm());
+  Wall wall;
+  std::thread servo([&] { rig.loop.run(wall); });
+  std::uint64_t seen = 0;
+  while (seen < 3000) {
+    const LoopSnapshot s = rig.loop.statistics();
+    CHECK(s.ticks >= seen);
+    seen = s.ticks;
+    std::this_thread::yield();
+  }
+  rig.loop.request_stop();
+  servo.join();
+  CHECK(rig.loop.statistics().ticks >= 3000);
+  CHECK(rig.loop.statistics().missed_deadlines == 0);
+}
+
+TEST_CASE("real-time enforce either is granted or refuses to start with a clear error") {
+  LoopConfig c;
+  c.realtime = RealTime::enforce;
+  c.priority = 10;
+  VirtualClock clock;
+  SimulatedArm arm(free_arm());
+  SimulatedTransport link(arm, [&] { return clock.now(); });
+  ForceArm device(link);
+  ServoLoop<ForceArm, VirtualClock> loop(device, clock, c);
+  ZeroField zero;
+  bool threw = false;
+  try {
+    loop.run(zero, {.max_ticks = 10});
+  } catch (const std::runtime_error& e) {
+    threw = true;
+    CHECK(std::string(e.what()).find("RealTime::enforce refused") != std::string::npos);
+    CHECK(loop.statistics().ticks == 0);  // refused before the first tick
+  }
+  CHECK(threw != loop.realtime_granted());
+}
