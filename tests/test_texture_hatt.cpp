@@ -30,6 +30,17 @@
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
 #endif
+
+// The counter replaces the throwing operator new with malloc; Catch2 also
+// allocates through the nothrow forms, which must then match free() too
+// (AddressSanitizer reports an alloc-dealloc mismatch otherwise).
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  hapticfield::test::allocation_count.fetch_add(1, std::memory_order_relaxed);
+  return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return operator new(size, tag); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
 
