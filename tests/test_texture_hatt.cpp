@@ -280,6 +280,30 @@ TEST_CASE("synthesised acceleration variance = model variance x sum of squared A
   CHECK_THAT(fsum2 / (n - 1000), WithinRel(0.05 * 0.05 * s.models[v].variance * sum_h2, 0.03));  // F = m a
 }
 
+TEST_CASE("ARMA model sets: variance = var x gain^2 x sum of squared ARMA impulse response, in m/s^2") {
+  const HattModelSet s = arma_set();  // accelerations in g in this file
+  const std::size_t v = 1;            // (400 mm/s, 0.2 N), gain 1.2
+  HattTexture<> tex(s, HattParams{0.05, glm::dvec3{0, 0, 1}, 3, 1, 1e-3, false});
+  const auto& a = s.models[v].ar_coeff;
+  const auto& b = s.models[v].ma_coeff;
+  REQUIRE(a.size() == 4);
+  REQUIRE(b.size() == 3);
+  const Arma<4, 2> reference({a[0], a[1], a[2], a[3]}, {b[0], b[1], b[2]});
+  double sum_h2 = 0;
+  for (double h : reference.impulse_response(5000)) sum_h2 += h * h;
+  const Probe p = stroke(s.speeds[v] / 1000.0, s.forces[v]);
+  const int n = 300'000;
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    (void)tex.force(p);
+    if (i < 1000) continue;
+    const double g = tex.acceleration() / 9.80665;  // back to the file's unit
+    sum += g, sum2 += g * g;
+  }
+  const double m = sum / (n - 1000);
+  CHECK_THAT(sum2 / (n - 1000) - m * m, WithinRel(s.models[v].variance * 1.2 * 1.2 * sum_h2, 0.03));
+}
+
 TEST_CASE("HaTT friction mu |Fc| opposes the tangential velocity; silent at rest") {
   const HattModelSet s = grid();
   HattTexture<> tex(s, HattParams{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});  // zero mass: friction only
