@@ -7,7 +7,8 @@
 // horizontal lines at 50 mm/s and writes
 //   false_texture.png  the picture tinted by texture region, with a legend and
 //                      the force along the middle stroke
-//   strokes.csv        position, region, texture force and friction per tick
+//   strokes.csv        position, region, false-texture force, brightness-
+//                      modulated friction and data-modulated texture per tick
 // to DIR (default out/false_texture). No device is driven.
 #include <cmath>
 #include <filesystem>
@@ -77,13 +78,18 @@ int main(int argc, char** argv) {
       }
     }
     FalseTexture false_texture(labels, std::move(textures));
-    // data visualisation: brightness (0..1) raises friction from mu = 0.1 to 0.6
-    DataModulated friction(Friction(FrictionParams{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}}),
-                           scalar_map_from_image(image, mapping), 0.1, 0.5);
+    // data visualisation: brightness (0..1) raises friction from mu = 0.1 to
+    // 0.6, and darkness raises the amplitude of a fine Gaussian texture
+    const ScalarMap brightness = scalar_map_from_image(image, mapping);
+    DataModulated friction(Friction(FrictionParams{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}}), brightness, 0.1, 0.5);
+    DataModulated data_texture(
+        TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 99, glm::dvec3{0.4e-3})),
+                     TextureParams{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
+        brightness, 1.0, -1.0);  // amplitude 1 - brightness
 
     fs::create_directories(out);
     std::ofstream csv(out / "strokes.csv");
-    csv << "stroke,x_mm,y_mm,region,ft_x_N,ft_y_N,ff_x_N\n";
+    csv << "stroke,x_mm,y_mm,region,ft_x_N,ft_y_N,ff_x_N,data_texture_x_N\n";
     const double rate = 1000.0, speed = 0.05;
     std::vector<double> middle_ft, middle_ff;
     std::vector<int> middle_region;
@@ -98,9 +104,10 @@ int main(int argc, char** argv) {
         p.time = i / rate;
         const glm::dvec3 ft = false_texture.force(p);
         const glm::dvec3 ff = friction.force(p);
+        const glm::dvec3 fd = data_texture.force(p);
         const int region = false_texture.region(p.position);
         csv << s << ',' << p.position.x * 1e3 << ',' << y * 1e3 << ',' << region << ',' << ft.x << ',' << ft.y << ','
-            << ff.x << '\n';
+            << ff.x << ',' << fd.x << '\n';
         if (s == 1) middle_ft.push_back(ft.x), middle_ff.push_back(ff.x), middle_region.push_back(region);
       }
     }

@@ -23,6 +23,9 @@
 #include "hapticfield/texture/noise.hpp"
 #include "hapticfield/texture/spectral.hpp"
 #include "hapticfield/texture/texture_field.hpp"
+#if HAPTICFIELD_TEST_IMAGE_MAPS
+#include "hapticfield/texture/image_maps.hpp"
+#endif
 
 using namespace hapticfield;
 using namespace hapticfield::texture;
@@ -610,3 +613,29 @@ TEST_CASE("false texturing: each label gets its own texture") {
   std::vector<AnyField> too_few(2);
   CHECK_THROWS_AS(FalseTexture(labels, std::move(too_few)), std::invalid_argument);
 }
+
+#if HAPTICFIELD_TEST_IMAGE_MAPS
+TEST_CASE("image maps: gray levels to data values and label bands") {
+  // 4 x 1 BGR image with gray levels 0, 64, 128, 255 (B = G = R)
+  cv::Mat img(1, 4, CV_8UC3);
+  const int levels[] = {0, 64, 128, 255};
+  for (int x = 0; x < 4; ++x) img.at<cv::Vec3b>(0, x) = cv::Vec3b(levels[x], levels[x], levels[x]);
+  const PlaneMapping mapping(1.0, glm::dvec2{0.0, 0.0});  // 1 px per mm, pixel 0 at the origin
+  const ScalarMap data = scalar_map_from_image(img, mapping);
+  CHECK_THAT(data.value(glm::dvec3{1e-3, 0, 0}), WithinAbs(64.0 / 255.0, 1e-6));
+  CHECK_THAT(data.value(glm::dvec3{3e-3, 0, 0}), WithinAbs(1.0, 1e-6));
+  const LabelMap bands = label_map_from_gray_levels(img, 4, mapping);  // label = gray * 4 / 256
+  CHECK(bands.label(glm::dvec3{0.0}) == 0);
+  CHECK(bands.label(glm::dvec3{1e-3, 0, 0}) == 1);
+  CHECK(bands.label(glm::dvec3{2e-3, 0, 0}) == 2);
+  CHECK(bands.label(glm::dvec3{3e-3, 0, 0}) == 3);
+  CHECK_THROWS_AS(label_map_from_gray_levels(img, 0, mapping), std::invalid_argument);
+  CHECK_THROWS_AS(scalar_map_from_image(cv::Mat(), mapping), std::invalid_argument);
+  CHECK_THROWS_AS(load_image(std::string(HAPTICFIELD_SOURCE_DIR) + "/no/such/image.png"), std::invalid_argument);
+  // the shipped photograph loads and covers its whole extent with labels
+  const cv::Mat coffee = load_image(std::string(HAPTICFIELD_SOURCE_DIR) + "/examples/data/coffee.png");
+  const LabelMap regions = label_map_from_gray_levels(coffee, 4, PlaneMapping::fit(coffee.cols, coffee.rows, 100.0));
+  CHECK(regions.width() == 600);
+  CHECK(regions.max_label() == 3);
+}
+#endif

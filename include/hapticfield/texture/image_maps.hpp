@@ -4,6 +4,7 @@
 /// texturing (needs hapticfield::image / OpenCV; not part of texture.hpp).
 
 #include <cstdint>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -57,6 +58,8 @@ inline cv::Mat to_gray8(const cv::Mat& image, const char* who) {
 /// Loads an image file (any format OpenCV reads) as 8-bit BGR.
 /// @throws std::invalid_argument when the file cannot be read.
 [[nodiscard]] inline cv::Mat load_image(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path))
+    throw std::invalid_argument("load_image: no such file '" + path + "'");
   cv::Mat m = cv::imread(path, cv::IMREAD_COLOR);
   if (m.empty()) throw std::invalid_argument("load_image: cannot read image '" + path + "'");
   return m;
