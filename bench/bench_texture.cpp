@@ -107,6 +107,12 @@ int main(int argc, char** argv) {
     rows.push_back({std::string("2D lattice, ") + label, measure([&](int i) { keep(l2(probe_at(i).position)); }, n)});
     rows.push_back({std::string("3D lattice, ") + label, measure([&](int i) { keep(l3(probe_at(i).position)); }, n)});
   }
+  const TabulatedNoise<GaussianNoise> table(gauss);
+  rows.push_back({"TabulatedNoise<Gaussian> (3 values)", measure([&](int i) { keep(table.sample(1, cell(i))); }, n)});
+  const NoiseLattice<TabulatedNoise<GaussianNoise>, 2> t2(table, 1, grain, Interpolation::cubic);
+  const NoiseLattice<TabulatedNoise<GaussianNoise>, 3> t3(table, 1, grain, Interpolation::cubic);
+  rows.push_back({"2D lattice, cubic, tabulated Gaussian", measure([&](int i) { keep(t2(probe_at(i).position)); }, n)});
+  rows.push_back({"3D lattice, cubic, tabulated Gaussian", measure([&](int i) { keep(t3(probe_at(i).position)); }, n)});
   const Fbm<GaussianNoise, 2> fbm(NoiseLattice<GaussianNoise, 2>(gauss, 1, grain * 4.0), 0.5, 4);
   rows.push_back({"fBm 2D linear, 4 octaves", measure([&](int i) { keep(fbm(probe_at(i).position)); }, n)});
   const FourierSynthesis fourier({{Waveform::sine, 0.3, 500.0, 0.0, glm::dvec3{1, 0, 0}},

@@ -221,6 +221,32 @@ TEST_CASE("Gaussian mixture: mean and variance of the mixture") {
   CHECK_THAT(double(low) / n_samples, WithinAbs(p_low, five_sigma(p_low * (1.0 - p_low))));
 }
 
+TEST_CASE("tabulated noise: a hashed table of samples of the wrapped noise, read uniformly") {
+  const GaussianNoise g(1.0);
+  const TabulatedNoise<GaussianNoise, 1024> t(g, 77);
+  REQUIRE(t.table().size() == 1024);
+  for (std::uint32_t i = 0; i < 1024; ++i) REQUIRE(t.table()[i] == g.sample(77, Cell{i, 0, 0}));
+  std::vector<int> hits(1024, 0);
+  int not_in_table = 0, not_repeatable = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const glm::dvec3 v = t.sample(5, cell(i));
+    not_repeatable += v != t.sample(5, cell(i));
+    // which entry was read (entries are distinct with probability ~1)
+    const auto it = std::find(t.table().begin(), t.table().end(), v);
+    if (it == t.table().end()) ++not_in_table;
+    else ++hits[static_cast<std::size_t>(it - t.table().begin())];
+  }
+  REQUIRE(not_in_table == 0);
+  REQUIRE(not_repeatable == 0);
+  // chi-square of 200000 reads over 1024 entries: 1023 dof, mean 1023, sd 45.2
+  double chi2 = 0;
+  const double expect = 200000.0 / 1024.0;
+  for (int h : hits) chi2 += (h - expect) * (h - expect) / expect;
+  CHECK_THAT(chi2, WithinAbs(1023.0, 5.0 * 45.2));
+  const NoiseLattice<TabulatedNoise<GaussianNoise, 1024>, 3> lat(t, 1, glm::dvec3{1e-3}, Interpolation::cubic);
+  REQUIRE(is_finite(lat(glm::dvec3{0.3e-3, 1.7e-3, -2.2e-3})));
+}
+
 // --- lattices -------------------------------------------------------------------
 
 TEST_CASE("lattices interpolate through the lattice samples") {

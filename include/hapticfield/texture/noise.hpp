@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -320,10 +321,39 @@ class GaussianMixtureNoise {
   std::vector<Part> parts_;
 };
 
+/// A faster stand-in for any noise: Size samples of it are drawn once at
+/// setup (entry i = noise.sample(table_seed, {i, 0, 0})), and a lattice point
+/// reads entry hash(seed, point) mod Size, a Perlin-style hashed table. The
+/// marginal distribution is the table's empirical one (Size draws of the
+/// original); neighbouring points stay independent, but only Size distinct
+/// vectors occur. One hash and one load per sample instead of the
+/// distribution's transcendental functions (see bench_texture). The table is
+/// shared, read-only, between copies.
+template <NoiseSource Noise, std::size_t Size = 4096>
+  requires(Size >= 16 && (Size & (Size - 1)) == 0)
+class TabulatedNoise {
+ public:
+  explicit TabulatedNoise(const Noise& noise, std::uint32_t table_seed = 0x5EEDu)
+      : table_(make_table(noise, table_seed)) {}
+  [[nodiscard]] glm::dvec3 sample(std::uint32_t seed, Cell c) const noexcept {
+    return (*table_)[hash(seed, c.x, c.y, c.z) & (Size - 1)];
+  }
+  [[nodiscard]] const std::vector<glm::dvec3>& table() const noexcept { return *table_; }
+
+ private:
+  static std::shared_ptr<const std::vector<glm::dvec3>> make_table(const Noise& noise, std::uint32_t table_seed) {
+    auto t = std::make_shared<std::vector<glm::dvec3>>(Size);
+    for (std::size_t i = 0; i < Size; ++i) (*t)[i] = noise.sample(table_seed, Cell{static_cast<std::uint32_t>(i), 0, 0});
+    return t;
+  }
+  std::shared_ptr<const std::vector<glm::dvec3>> table_;
+};
+
 static_assert(NoiseSource<UniformNoise>);
 static_assert(NoiseSource<GaussianNoise>);
 static_assert(NoiseSource<LaplacianNoise>);
 static_assert(NoiseSource<MultivariateGaussianNoise>);
 static_assert(NoiseSource<GaussianMixtureNoise>);
+static_assert(NoiseSource<TabulatedNoise<GaussianNoise>>);
 
 }  // namespace hapticfield::texture
