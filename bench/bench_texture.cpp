@@ -138,6 +138,7 @@ int main(int argc, char** argv) {
 
   // fields
   field_row("friction (Coulomb + viscous + drag)", Friction(FrictionParams{0.3, 2.0, 1.0, 2e-3, true, glm::dvec3{0, 0, 1}}));
+  field_row("stick-slip friction (spring anchor)", StickSlipFriction(StickSlipParams{}));
   field_row("full texture tick: noise + 3 x Butterworth<4> LP + friction",
             sum(TextureField(TemporalSource(gauss, 1), TextureParams{0.3, 1e-3, true, glm::dvec3{1.0}},
                              Butterworth<4>::low_pass(100.0, 1000.0)),

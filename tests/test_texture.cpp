@@ -568,6 +568,39 @@ TEST_CASE("friction scaled by |Fc| and restricted to the tangent plane") {
   REQUIRE(fr.force(moving({}, {std::numeric_limits<double>::quiet_NaN(), 0, 0})) == glm::dvec3{0.0});
 }
 
+TEST_CASE("stick-slip friction: spring while stuck, kinetic limit while sliding, quiet at rest") {
+  StickSlipFriction fr(StickSlipParams{2000.0, 0.5, 0.4, true, glm::dvec3{0, 0, 1}});
+  const auto at = [](double x, double fn = 1.0) { return moving(glm::dvec3{x, 0.0, 0.0}, glm::dvec3{0.0}, fn); };
+  REQUIRE(fr.force(at(0.0)) == glm::dvec3{0.0});
+  // stuck: 0.1 mm stretch -> 0.2 N back toward the anchor (below mu_s |Fc| = 0.5 N)
+  CHECK_THAT(fr.force(at(1e-4)).x, WithinAbs(-0.2, 1e-12));
+  CHECK_FALSE(fr.sliding());
+  CHECK(fr.force(at(0.0)) == glm::dvec3{0.0});
+  // slide: push 3 mm in 10 um steps; breakaway past 0.25 mm, then 0.4 N opposing +x
+  glm::dvec3 f{0.0};
+  for (int i = 1; i <= 300; ++i) f = fr.force(at(i * 1e-5));
+  CHECK(fr.sliding());
+  CHECK_THAT(f.x, WithinAbs(-0.4, 1e-12));
+  CHECK_THAT(fr.anchor().x, WithinAbs(3e-3 - 0.4 / 2000.0, 1e-12));
+  // jitter of +-1 um at the end: the force moves by at most k * 2 um, never flips to +0.4 N
+  double lo = 1, hi = -1;
+  for (int i = 0; i < 100; ++i) {
+    const double x = 3e-3 + (i % 2 ? 1e-6 : -1e-6);
+    const double fx = fr.force(at(x)).x;
+    lo = std::min(lo, fx), hi = std::max(hi, fx);
+  }
+  CHECK(hi - lo <= 2000.0 * 2e-6 + 1e-12);
+  CHECK(hi < 0.0);
+  // reversing: stuck again, then slides the other way with +0.4 N
+  for (int i = 1; i <= 300; ++i) f = fr.force(at(3e-3 - i * 1e-5));
+  CHECK_THAT(f.x, WithinAbs(0.4, 1e-12));
+  // no normal force: no friction
+  CHECK_THAT(glm::length(fr.force(at(0.0, 0.0))), WithinAbs(0.0, 1e-15));
+  CHECK_THROWS_AS(StickSlipFriction(StickSlipParams{2000.0, 0.3, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
+  CHECK_THROWS_AS(StickSlipFriction(StickSlipParams{0.0, 0.5, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
+  CHECK(fr.force(moving(glm::dvec3{std::numeric_limits<double>::quiet_NaN()})) == glm::dvec3{0.0});
+}
+
 TEST_CASE("F = Fc + Ft + Ff composes through sum()") {
   struct Wall {  // penalty wall at z = 0, k = 500 N/m
     glm::dvec3 force(const Probe& p) const noexcept {
