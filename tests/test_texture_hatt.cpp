@@ -66,15 +66,18 @@ Probe stroke(double speed_m_s, double normal_force) {
 // a minimal valid document with one placeholder to corrupt
 std::string minimal(const std::string& mu = "<mu>0.2</mu>", const std::string& var = "<var>0.1</var>",
                     const std::string& tri = "<tri><value>1</value><value>2</value><value>3</value></tri>",
-                    const std::string& lsf = "<ARlsf><value>0.5</value><value>1.5</value></ARlsf>") {
+                    const std::string& lsf = "<ARlsf><value>0.5</value><value>1.5</value></ARlsf>",
+                    bool reversed = false) {
   std::string s = "<?xml version=\"1.0\"?>\n<modelSet>" + mu +
                   "<numMod>3</numMod><numTri>1</numTri>"
                   "<speedList><value>10</value><value>100</value><value>50</value></speedList>"
                   "<forceList><value>0.5</value><value>0.5</value><value>2</value></forceList>" +
                   tri + "<numARCoeff>2</numARCoeff><numMACoeff>0</numMACoeff>";
   const char* at[3][2] = {{"10", "0.5"}, {"100", "0.5"}, {"50", "2"}};
-  for (auto& v : at)
+  for (int i = 0; i < 3; ++i) {
+    const auto& v = at[reversed ? 2 - i : i];
     s += "<model>" + lsf + var + "<speedMod>" + v[0] + "</speedMod><forceMod>" + v[1] + "</forceMod></model>";
+  }
   return s + "</modelSet>";
 }
 
@@ -154,6 +157,15 @@ TEST_CASE("a modelSet file is parsed with its units, lists, triangles and models
 
 TEST_CASE("malformed or incomplete modelSet documents throw a clear error") {
   REQUIRE_NOTHROW(parse_hatt_model_set(minimal()));
+  {  // models listed in another order than the vertex lists are matched by value
+    const HattModelSet r = parse_hatt_model_set(minimal("<mu>0.2</mu>", "<var>0.1</var>",
+        "<tri><value>1</value><value>2</value><value>3</value></tri>",
+        "<ARlsf><value>0.5</value><value>1.5</value></ARlsf>", true));
+    for (std::size_t v = 0; v < 3; ++v) {
+      CHECK(r.models[v].speed == r.speeds[v]);
+      CHECK(r.models[v].force == r.forces[v]);
+    }
+  }
   const auto fails_with = [](const std::string& doc, const std::string& needle) {
     try {
       (void)parse_hatt_model_set(doc, "bad.xml");

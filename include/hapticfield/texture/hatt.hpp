@@ -381,7 +381,8 @@ inline void hatt_check_lsf(const std::vector<double>& lsf, std::string_view sour
     }
     parsed.push_back(std::move(h));
   }
-  // order the models like the vertex lists (match by speed and force)
+  // order the models like the vertex lists: match <speedMod>/<forceMod> to
+  // the list values (relative 1e-6), else keep the file's order
   set.models.resize(num_mod);
   std::vector<bool> used(num_mod, false);
   for (std::size_t v = 0; v < num_mod; ++v) {
@@ -392,7 +393,8 @@ inline void hatt_check_lsf(const std::vector<double>& lsf, std::string_view sour
           std::fabs(parsed[j].force - set.forces[v]) <= 1e-6 * (1.0 + std::fabs(set.forces[v])))
         found = j;
     }
-    if (found == num_mod) hatt_fail(source, cat("no <model> at vertex ", std::to_string(v + 1), " (speed, force) of the lists"));
+    if (found == num_mod && !used[v]) found = v;  // no value match: the file's order (the toolkit writes both in the same order)
+    if (found == num_mod) hatt_fail(source, cat("no <model> for vertex ", std::to_string(v + 1), " of the lists"));
     used[found] = true;
     set.models[v] = parsed[found];
   }
