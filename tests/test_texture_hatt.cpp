@@ -14,6 +14,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <iostream>
 #include <limits>
 #include <numbers>
@@ -207,6 +209,37 @@ TEST_CASE("malformed or incomplete modelSet documents throw a clear error") {
   fails_with(wrong_count, "numMod");
   CHECK_THROWS_AS(load_hatt_model_set(data_dir / "no such file.xml"), std::invalid_argument);
   CHECK_THROWS_AS(hatt_model_files(data_dir / "no such dir"), std::invalid_argument);
+}
+
+TEST_CASE("every truncation of a model file is a clear error, never a crash") {
+  std::ifstream in(data_dir / "Models_Synthetic ARMA.xml", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  REQUIRE(text.size() > 1000);
+  REQUIRE_NOTHROW(parse_hatt_model_set(text));
+  int thrown = 0;
+  const std::size_t end = text.find_last_not_of(" \n\r\t") + 1;  // trailing whitespace may be cut harmlessly
+  for (std::size_t n = 0; n < end; ++n) {
+    try {
+      (void)parse_hatt_model_set(std::string_view(text).substr(0, n));
+    } catch (const std::invalid_argument&) {
+      ++thrown;
+    }
+  }
+  CHECK(thrown == static_cast<int>(end));
+  // corrupting any one byte either still parses or gives std::invalid_argument
+  int other = 0;
+  for (std::size_t i = 0; i < text.size(); ++i)
+    for (char c : {'<', '>', '&'}) {
+      std::string bad = text;
+      bad[i] = c;
+      try {
+        (void)parse_hatt_model_set(bad);
+      } catch (const std::invalid_argument&) {
+      } catch (...) {
+        ++other;
+      }
+    }
+  CHECK(other == 0);
 }
 
 // --- interpolation ----------------------------------------------------------------------
