@@ -312,13 +312,15 @@ TEST_CASE("synthesised acceleration variance = model variance x sum of squared A
   const Probe p = stroke(s.speeds[v] / 1000.0, s.forces[v]);
   const int n = 300'000;
   double sum = 0, sum2 = 0, fsum2 = 0;
+  int lateral = 0;
   for (int i = 0; i < n; ++i) {
     const glm::dvec3 f = tex.force(p);
     const double a = tex.acceleration();
     if (i < 1000) continue;
     sum += a, sum2 += a * a, fsum2 += f.z * f.z;
-    REQUIRE(f.x == 0.0);  // vibration along the normal only (no friction here)
+    lateral += f.x != 0.0 || f.y != 0.0;  // vibration along the normal only (no friction here)
   }
+  CHECK(lateral == 0);
   const double m = sum / (n - 1000);
   const double var = sum2 / (n - 1000) - m * m;
   CHECK_THAT(var, WithinRel(s.models[v].variance * sum_h2, 0.03));
