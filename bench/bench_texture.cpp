@@ -153,9 +153,9 @@ int main(int argc, char** argv) {
   field_row("flow texture (3D cubic lattice)",
             FlowTexture(NoiseLattice<GaussianNoise, 3>(gauss, 1, grain, Interpolation::cubic), FlowParams{}));
 
-  // HaTT: a synthetic order-6 set with 5 models and 4 triangles (real HaTT
-  // models are order ~20-40 with ~50-100 triangles: the update grows as
-  // O(p^2 + triangles); measure them with texture_gallery --hatt)
+  // HaTT: a synthetic AR(20) set with 3 models and 1 triangle (real HaTT
+  // sets have more triangles; locating grows linearly with their number and
+  // the LSF -> AR conversion as p^2; measure real files with texture_gallery --hatt)
   const HattModelSet set = parse_hatt_model_set(R"(<modelSet><mu>0.3</mu><numMod>3</numMod><numTri>1</numTri>
     <speedList><value>20</value><value>400</value><value>200</value></speedList>
     <forceList><value>0.2</value><value>0.2</value><value>4</value></forceList>
