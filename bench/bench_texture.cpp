@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -171,6 +172,33 @@ int main(int argc, char** argv) {
   field_row("HaTT AR(20) tick, update every 10 ticks", every_10);
   rows.push_back({"HaTT update(): locate + LSF interp + lsf_to_ar(20)",
                   measure([&](int i) { every_tick.update(50.0 + (i % 300), 0.5 + 0.01 * (i % 300)); keep(every_tick.variance()); }, n)});
+
+  // a set the size of the larger real ones: 8 x 8 (speed, force) grid, 98
+  // triangles, AR(40); the point moves across the grid so locating scans
+  HattModelSet big;
+  big.mu = 0.3;
+  big.ar_order = 40;
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i) {
+      big.speeds.push_back(20.0 + 380.0 * i / 7.0);
+      big.forces.push_back(0.2 + 3.8 * j / 7.0);
+      HattModel m;
+      m.speed = big.speeds.back();
+      m.force = big.forces.back();
+      m.variance = 0.1 + 0.01 * (i + j);
+      for (int k = 0; k < 40; ++k) m.ar_lsf.push_back(std::numbers::pi * (k + 0.5 + 0.3 * std::sin(i + 2.0 * j + k)) / 41.0);
+      big.models.push_back(m);
+    }
+  for (int j = 0; j < 7; ++j)
+    for (int i = 0; i < 7; ++i) {
+      const int v = j * 8 + i;
+      big.triangles.push_back({v, v + 1, v + 9});
+      big.triangles.push_back({v, v + 9, v + 8});
+    }
+  HattTexture<40> big_tex(big, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});
+  rows.push_back({"HaTT update(), 64 models, 98 triangles, AR(40)",
+                  measure([&](int i) { big_tex.update(20.0 + (i % 380), 0.2 + 0.0095 * (i % 400)); keep(big_tex.variance()); }, n)});
+  field_row("HaTT AR(40) tick, 98 triangles, update every tick", big_tex);
 
   const Stats& base = rows.front().s;
   std::printf("Texture benchmark: %d samples per row; ratios against the baseline row.\n\n", n);

@@ -269,6 +269,20 @@ TEST_CASE("barycentric weights equal 1 at a vertex and reproduce the point insid
     CHECK_THAT(ws, WithinAbs(sp, 1e-9));
     CHECK_THAT(wf, WithinAbs(f, 1e-12));
   }
+  // a hint (the previous triangle) changes the search order, not the answer
+  for (int i = 0; i < 200; ++i) {
+    const double sp = 40.0 + 1.37 * i, f = 0.4 + 0.0137 * i;
+    const Barycentric plain = tri.locate(sp, f);
+    for (std::size_t hint = 0; hint < 6; ++hint) {
+      const Barycentric hinted = tri.locate(sp, f, hint);
+      REQUIRE(hinted.inside == plain.inside);
+      for (int k = 0; k < 3; ++k)
+        for (int m = 0; m < 3; ++m)
+          if (hinted.vertex[static_cast<std::size_t>(k)] == plain.vertex[static_cast<std::size_t>(m)] &&
+              plain.weight[static_cast<std::size_t>(m)] > 1e-9)
+            REQUIRE_THAT(hinted.weight[static_cast<std::size_t>(k)], WithinAbs(plain.weight[static_cast<std::size_t>(m)], 1e-9));
+    }
+  }
   const Barycentric out = tri.locate(900.0, 10.0);  // beyond the largest speed and force
   CHECK_FALSE(out.inside);
   CHECK_THAT(out.weight[0] + out.weight[1] + out.weight[2], WithinAbs(1.0, 1e-12));

@@ -433,6 +433,7 @@ struct Barycentric {
   std::array<int, 3> vertex{0, 0, 0};       ///< model indices
   std::array<double, 3> weight{1.0, 0.0, 0.0};  ///< >= 0, sum 1
   bool inside{true};                        ///< false: projected from outside the hull
+  std::size_t triangle{0};                  ///< index of the triangle used
 };
 
 /// Point location in the (speed, force) Delaunay triangulation.
@@ -464,19 +465,25 @@ class HattTriangulation {
   /// Locates (speed, force); outside the hull the weights of the nearest
   /// triangle (largest smallest weight) are clipped to >= 0 and
   /// renormalised. With no triangle (fewer than 3 models) the first model.
-  [[nodiscard]] Barycentric locate(double speed, double force) const noexcept {
+  /// `hint`: a triangle to try first (the previous answer: strokes move
+  /// slowly through the triangulation).
+  [[nodiscard]] Barycentric locate(double speed, double force, std::size_t hint = 0) const noexcept {
     Barycentric out;
     if (tris_.empty()) return out;
     double best = -std::numeric_limits<double>::infinity();
     std::size_t best_i = 0;
     std::array<double, 3> best_w{1.0, 0.0, 0.0};
-    for (std::size_t i = 0; i < tris_.size(); ++i) {
+    const std::size_t n = tris_.size();
+    const std::size_t first = hint < n ? hint : 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = k == 0 ? first : (k <= first ? k - 1 : k);  // hint, then the others in order
       const auto w = weights(tris_[i], speed, force);
       const double m = std::min(w[0], std::min(w[1], w[2]));
       if (m > best) best = m, best_i = i, best_w = w;
       if (m >= -1e-12) break;
     }
     out.vertex = tris_[best_i].v;
+    out.triangle = best_i;
     out.inside = best >= -1e-12;
     double total = 0.0;
     for (double& w : best_w) total += (w = std::max(w, 0.0));
@@ -590,7 +597,7 @@ class HattTexture {
   /// noexcept and allocation-free; called from force() every update_every
   /// ticks, or by the user from another place in the loop.
   void update(double speed_file_units, double force) noexcept {
-    where_ = tri_.locate(speed_file_units, force);
+    where_ = tri_.locate(speed_file_units, force, where_.triangle);
     std::array<double, MaxOrder> lsf{};
     cur_variance_ = 0.0;
     cur_gain_ = 0.0;
