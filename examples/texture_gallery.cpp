@@ -244,7 +244,7 @@ int main(int argc, char** argv) {
     if (!hatt_dir.empty()) {
       for (const auto& file : hatt_model_files(hatt_dir)) {
         const HattModelSet set = load_hatt_model_set(file);
-        HattTexture<64> tex(set, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, false});
+        HattTexture<128> tex(set, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, false});
         // run at the model's own sample rate (HaTT: 10 kHz)
         Trace t = stroke("hatt " + set.name, std::string(set.ma_order > 0 ? "HaTT ARMA" : "HaTT AR") + " model at 50 mm/s, 1 N, " + std::to_string(int(set.sample_rate)) + " Hz",
                          tex, set.sample_rate);
