@@ -8,3 +8,4 @@
 #include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
 #include "hapticfield/normals.hpp"
+#include "hapticfield/texture.hpp"

@@ -1,0 +1,167 @@
+// false_texture IMAGE [--out DIR] [--levels N]
+//
+// False texturing and data visualisation (Fritz & Barner 1996): the picture's
+// gray levels are cut into N bands (default 4) and each band gets its own
+// texture; separately, the brightness modulates friction. The program fits
+// the picture into a 100 x 100 mm workspace, strokes it along three
+// horizontal lines at 50 mm/s and writes
+//   false_texture.png  the picture tinted by texture region, with a legend and
+//                      the force along the middle stroke
+//   strokes.csv        position, region, false-texture force, brightness-
+//                      modulated friction and data-modulated texture per tick
+// to DIR (default out/false_texture). No device is driven.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "hapticfield/core.hpp"
+#include "hapticfield/texture.hpp"
+#include "hapticfield/texture/image_maps.hpp"
+
+using namespace hapticfield;
+using namespace hapticfield::texture;
+namespace fs = std::filesystem;
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << "usage: false_texture IMAGE [--out DIR] [--levels N]\n";
+    return 2;
+  }
+  const std::string image_path = argv[1];
+  fs::path out = "out/false_texture";
+  int levels = 4;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--out" && i + 1 < argc) out = argv[++i];
+    else if (a == "--levels" && i + 1 < argc) levels = std::stoi(argv[++i]);
+    else {
+      std::cerr << "usage: false_texture IMAGE [--out DIR] [--levels N]\n";
+      return 2;
+    }
+  }
+  try {
+    if (levels < 2 || levels > 8) throw std::invalid_argument("--levels must be in 2..8");
+    const cv::Mat image = load_image(image_path);
+    const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, 100.0);
+    const LabelMap labels = label_map_from_gray_levels(image, levels, mapping);
+
+    // one texture per gray band, darkest first: rough to smooth
+    std::vector<AnyField> textures;
+    std::vector<std::string> names;
+    for (int l = 0; l < levels; ++l) {
+      const double t = levels == 1 ? 0.0 : double(l) / (levels - 1);  // 0 dark .. 1 bright
+      const TextureParams params{0.6 * (1.0 - t) + 0.05, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}};
+      if (l == levels - 1) {
+        textures.emplace_back();  // brightest: smooth
+        names.push_back("smooth");
+      } else if (l % 2 == 0) {
+        const double grain = 0.5e-3 + 1.5e-3 * (1.0 - t);  // coarser where darker
+        textures.emplace_back(TextureField(
+            SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), static_cast<std::uint32_t>(l + 1),
+                                                         glm::dvec3{grain}, Interpolation::cubic)),
+            params));
+        names.push_back("Gaussian lattice " + std::to_string(grain * 1e3).substr(0, 4) + " mm");
+      } else {
+        const double period = 0.5e-3 + 1.5e-3 * (1.0 - t);
+        textures.emplace_back(TextureField(
+            SpatialSource(FourierSynthesis({{Waveform::square, 1.0, 1.0 / period, 0.0, glm::dvec3{1, 0, 0}}},
+                                           glm::dvec3{1, 0, 0})),
+            params));
+        names.push_back("square grating " + std::to_string(period * 1e3).substr(0, 4) + " mm");
+      }
+    }
+    FalseTexture false_texture(labels, std::move(textures));
+    // data visualisation: brightness (0..1) raises friction from mu = 0.1 to
+    // 0.6, and darkness raises the amplitude of a fine Gaussian texture
+    const ScalarMap brightness = scalar_map_from_image(image, mapping);
+    DataModulated friction(Friction(FrictionParams{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}}), brightness, 0.1, 0.5);
+    DataModulated data_texture(
+        TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 99, glm::dvec3{0.4e-3})),
+                     TextureParams{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
+        brightness, 1.0, -1.0);  // amplitude 1 - brightness
+
+    fs::create_directories(out);
+    std::ofstream csv(out / "strokes.csv");
+    csv << "stroke,x_mm,y_mm,region,ft_x_N,ft_y_N,ff_x_N,data_texture_x_N\n";
+    const double rate = 1000.0, speed = 0.05;
+    std::vector<double> middle_ft, middle_ff;
+    std::vector<int> middle_region;
+    for (int s = 0; s < 3; ++s) {
+      const double y = (-25.0 + 25.0 * s) * 1e-3;
+      false_texture.reset();
+      for (int i = 0; i * speed / rate < 0.1; ++i) {
+        Probe p;
+        p.position = glm::dvec3{-0.05 + i * speed / rate, y, 0.0};
+        p.velocity = glm::dvec3{speed, 0.0, 0.0};
+        p.normal_force = 1.0;
+        p.time = i / rate;
+        const glm::dvec3 ft = false_texture.force(p);
+        const glm::dvec3 ff = friction.force(p);
+        const glm::dvec3 fd = data_texture.force(p);
+        const int region = false_texture.region(p.position);
+        csv << s << ',' << p.position.x * 1e3 << ',' << y * 1e3 << ',' << region << ',' << ft.x << ',' << ft.y << ','
+            << ff.x << ',' << fd.x << '\n';
+        if (s == 1) middle_ft.push_back(ft.x), middle_ff.push_back(ff.x), middle_region.push_back(region);
+      }
+    }
+
+    // picture: gray image tinted by region, legend, middle-stroke trace
+    const cv::Scalar palette[] = {{40, 40, 220}, {40, 180, 40}, {220, 120, 30}, {200, 200, 200},
+                                  {200, 40, 200}, {30, 200, 220}, {120, 80, 20}, {90, 90, 90}};
+    cv::Mat gray;
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+    cv::Mat tinted(image.rows, image.cols, CV_8UC3);
+    for (int y = 0; y < image.rows; ++y)
+      for (int x = 0; x < image.cols; ++x) {
+        const int l = gray.at<std::uint8_t>(y, x) * levels / 256;
+        const cv::Scalar c = palette[l];
+        const double g = gray.at<std::uint8_t>(y, x) / 255.0;
+        tinted.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<std::uint8_t>(0.5 * c[0] + 0.5 * 255 * g),
+                                               cv::saturate_cast<std::uint8_t>(0.5 * c[1] + 0.5 * 255 * g),
+                                               cv::saturate_cast<std::uint8_t>(0.5 * c[2] + 0.5 * 255 * g));
+      }
+    const int legend_h = 22 * levels + 10, plot_h = 160;
+    cv::Mat canvas(image.rows + legend_h + plot_h, image.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+    tinted.copyTo(canvas(cv::Rect(0, 0, image.cols, image.rows)));
+    for (int s = 0; s < 3; ++s) {  // the strokes
+      const glm::dvec2 a = mapping.to_image(glm::dvec3{-0.05, (-25.0 + 25.0 * s) * 1e-3, 0.0});
+      const glm::dvec2 b = mapping.to_image(glm::dvec3{0.05, (-25.0 + 25.0 * s) * 1e-3, 0.0});
+      cv::line(canvas, cv::Point(int(a.x), int(a.y)), cv::Point(int(b.x), int(b.y)), cv::Scalar(0, 0, 0), s == 1 ? 2 : 1);
+    }
+    for (int l = 0; l < levels; ++l) {
+      const int y = image.rows + 8 + 22 * l;
+      cv::rectangle(canvas, cv::Rect(8, y, 16, 16), palette[l], cv::FILLED);
+      const std::string text = "gray " + std::to_string(l * 256 / levels) + ".." + std::to_string((l + 1) * 256 / levels - 1) +
+                               ": " + names[static_cast<std::size_t>(l)];
+      cv::putText(canvas, text, {32, y + 13}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    }
+    const int top = image.rows + legend_h;
+    cv::putText(canvas, "middle stroke: texture Fx (black), friction Fx (red), region (colour bar)", {8, top + 14},
+                cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    const int n = static_cast<int>(middle_ft.size());
+    double peak = 1e-9;
+    for (int i = 0; i < n; ++i) peak = std::max({peak, std::fabs(middle_ft[static_cast<std::size_t>(i)]), std::fabs(middle_ff[static_cast<std::size_t>(i)])});
+    const int mid = top + 90;
+    for (int i = 0; i + 1 < n; ++i) {
+      const int x0 = i * (image.cols - 1) / n, x1 = (i + 1) * (image.cols - 1) / n;
+      const auto yv = [&](double v) { return mid - static_cast<int>(v / peak * 60.0); };
+      cv::line(canvas, {x0, yv(middle_ft[static_cast<std::size_t>(i)])}, {x1, yv(middle_ft[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+      cv::line(canvas, {x0, yv(middle_ff[static_cast<std::size_t>(i)])}, {x1, yv(middle_ff[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 220), 1, cv::LINE_AA);
+      const int r = middle_region[static_cast<std::size_t>(i)];
+      if (r >= 0) cv::line(canvas, {x0, top + 22}, {x1, top + 22}, palette[r], 5);
+    }
+    cv::imwrite((out / "false_texture.png").string(), canvas);
+    std::cout << "wrote " << (out / "false_texture.png").string() << " and " << (out / "strokes.csv").string() << '\n';
+  } catch (const std::exception& e) {
+    std::cerr << "false_texture: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}
