@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <exception>
+#include <thread>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -87,41 +89,16 @@ inline void zero_outside(ForceMap& map, int x0, int x1, int y0, int y1) {
 
 }  // namespace detail
 
-/// The Prewitt map of a gray picture in O(1) per pixel whatever the mask
-/// size, written into `map` (its buffers are reused when already large
-/// enough). Along each border-extended row, running sums give the row's box
-/// sum H0 and first moment H1 under the mask, four rows at a time so their
-/// dependency chains run side by side; down the columns, running sums of H1
-/// give fx and a running ramp over H0 gives fy, vectorised across the row.
-/// Rows live in a small ring buffer, so memory traffic stays near one read
-/// of the picture and one write of the map. Equals force_map() of
-/// TangibleImage{prewitt, size, border} to float rounding.
-/// @throws std::invalid_argument as TangibleImage.
-inline void prewitt_force_map(const GrayImage& gray, int size, Border border, ForceMap& map,
-                              double fade_px = default_fade_px) {
-  validate_mask_size(MaskKind::prewitt, size);
-  validate_image_for_mask(gray, size);
-  if (!std::isfinite(fade_px) || fade_px <= 0.0)
-    throw std::invalid_argument("prewitt_force_map: fade width must be finite and positive [px]");
-  const int h = size / 2;
-  const int width = gray.width();
+namespace detail {
+
+/// Output rows y_first .. y_last of the Prewitt map; the output region is
+/// [lo, x_hi] x [lo, y_hi]. See prewitt_force_map().
+inline void prewitt_band(const GrayImage& gray, int h, Border border, double fade_px, double scale, int lo, int x_hi,
+                         int y_hi, int y_first, int y_last, ForceMap& map) {
   const int height = gray.height();
-  const double scale = 1.0 / Mask<>::prewitt(size).step_response();
-
-  map.width = width;
-  map.height = height;
-  map.fx.resize(static_cast<std::size_t>(width) * height);
-  map.fy.resize(map.fx.size());
-
-  // Output pixels [lo, x_hi] x [lo, y_hi]; they read rows and columns h beyond.
-  const bool full_mask = needs_full_mask(border);
-  const int lo = full_mask ? h : 0;
-  const int x_hi = full_mask ? width - 1 - h : width - 1;
-  const int y_hi = full_mask ? height - 1 - h : height - 1;
-  if (full_mask) detail::zero_outside(map, lo, x_hi, lo, y_hi);
   const int n_out = x_hi - lo + 1;
   const int n_in = n_out + 2 * h;
-  const int r_last = y_hi + h;
+  const int r_last = y_last + h;
 
   // Ring of horizontal results: rows y - h - 1 .. y + h + 3 are alive at once.
   constexpr int batch = 4;
@@ -168,7 +145,7 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
       }
     }
   };
-  int computed = lo - h;  // next row without a horizontal result
+  int computed = y_first - h;  // next row without a horizontal result
   const auto ensure = [&](int r) {
     while (computed <= r) {
       const int k = std::min(batch, r_last - computed + 1);
@@ -182,10 +159,10 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
   std::vector<double> box(static_cast<std::size_t>(n_out), 0.0);
   std::vector<double> ramp(static_cast<std::size_t>(n_out), 0.0);
   std::vector<double> moment(static_cast<std::size_t>(n_out), 0.0);
-  ensure(lo + h);
+  ensure(y_first + h);
   for (int i = -h; i <= h; ++i) {
-    const double* a = h0_row(lo + i);
-    const double* b = h1_row(lo + i);
+    const double* a = h0_row(y_first + i);
+    const double* b = h1_row(y_first + i);
     for (int x = 0; x < n_out; ++x) {
       box[x] += a[x];
       ramp[x] += i * a[x];
@@ -193,13 +170,13 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
     }
   }
   const double hh = h;
-  for (int y = lo; y <= y_hi; ++y) {
+  for (int y = y_first; y <= y_last; ++y) {
     float* HAPTICFIELD_RESTRICT fx = &map.fx[map.index(lo, y)];
     float* HAPTICFIELD_RESTRICT fy = &map.fy[map.index(lo, y)];
     double* HAPTICFIELD_RESTRICT bx = box.data();
     double* HAPTICFIELD_RESTRICT rp = ramp.data();
     double* HAPTICFIELD_RESTRICT mo = moment.data();
-    if (y > lo) {  // slide the window down: row y - 1 - h leaves, row y + h enters
+    if (y > y_first) {  // slide the window down: row y - 1 - h leaves, row y + h enters
       ensure(y + h);
       const double* HAPTICFIELD_RESTRICT out0 = h0_row(y - 1 - h);
       const double* HAPTICFIELD_RESTRICT in0 = h0_row(y + h);
@@ -229,11 +206,71 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
   }
 }
 
+}  // namespace detail
+
+/// The Prewitt map of a gray picture in O(1) per pixel whatever the mask
+/// size, written into `map` (its buffers are reused when already large
+/// enough). Along each border-extended row, running sums give the row's box
+/// sum H0 and first moment H1 under the mask, four rows at a time so their
+/// dependency chains run side by side; down the columns, running sums of H1
+/// give fx and a running ramp over H0 gives fy, vectorised across the row.
+/// Rows live in a small ring buffer, so memory traffic stays near one read
+/// of the picture and one write of the map. `threads` > 1 splits the rows
+/// into bands computed in parallel (setup work, never a servo tick). Equals
+/// force_map() of TangibleImage{prewitt, size, border} to float rounding.
+/// @throws std::invalid_argument as TangibleImage, or for threads < 1.
+inline void prewitt_force_map(const GrayImage& gray, int size, Border border, ForceMap& map,
+                              double fade_px = default_fade_px, int threads = 1) {
+  validate_mask_size(MaskKind::prewitt, size);
+  validate_image_for_mask(gray, size);
+  if (!std::isfinite(fade_px) || fade_px <= 0.0)
+    throw std::invalid_argument("prewitt_force_map: fade width must be finite and positive [px]");
+  if (threads < 1) throw std::invalid_argument("prewitt_force_map: threads must be at least 1");
+  const int h = size / 2;
+  const int width = gray.width();
+  const int height = gray.height();
+  const double scale = 1.0 / Mask<>::prewitt(size).step_response();
+
+  map.width = width;
+  map.height = height;
+  map.fx.resize(static_cast<std::size_t>(width) * height);
+  map.fy.resize(map.fx.size());
+
+  // Output pixels [lo, x_hi] x [lo, y_hi]; they read rows and columns h beyond.
+  const bool full_mask = needs_full_mask(border);
+  const int lo = full_mask ? h : 0;
+  const int x_hi = full_mask ? width - 1 - h : width - 1;
+  const int y_hi = full_mask ? height - 1 - h : height - 1;
+  if (full_mask) detail::zero_outside(map, lo, x_hi, lo, y_hi);
+
+  constexpr int min_band_rows = 64;
+  const int rows = y_hi - lo + 1;
+  const int bands = std::max(1, std::min(threads, rows / min_band_rows));
+  std::vector<std::thread> workers;
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(bands));
+  for (int band = bands - 1; band >= 0; --band) {
+    const int first = lo + static_cast<int>(static_cast<long>(rows) * band / bands);
+    const int last = lo + static_cast<int>(static_cast<long>(rows) * (band + 1) / bands) - 1;
+    auto work = [&, band, first, last] {
+      try {
+        detail::prewitt_band(gray, h, border, fade_px, scale, lo, x_hi, y_hi, first, last, map);
+      } catch (...) {
+        errors[static_cast<std::size_t>(band)] = std::current_exception();
+      }
+    };
+    if (band == 0) work();
+    else workers.emplace_back(work);
+  }
+  for (std::thread& w : workers) w.join();
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
 /// The Prewitt map in a new ForceMap; see the overload that writes into one.
 [[nodiscard]] inline ForceMap prewitt_force_map(const GrayImage& gray, int size, Border border,
-                                                double fade_px = default_fade_px) {
+                                                double fade_px = default_fade_px, int threads = 1) {
   ForceMap map;
-  prewitt_force_map(gray, size, border, map, fade_px);
+  prewitt_force_map(gray, size, border, map, fade_px, threads);
   return map;
 }
 
