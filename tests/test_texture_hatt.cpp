@@ -345,6 +345,33 @@ TEST_CASE("ARMA model sets: variance = var x gain^2 x sum of squared ARMA impuls
   CHECK_THAT(sum2 / (n - 1000) - m * m, WithinRel(s.models[v].variance * 1.2 * 1.2 * sum_h2, 0.03));
 }
 
+TEST_CASE("a 10 kHz model in a 1 kHz loop runs at its own rate: ten AR steps per tick") {
+  HattModelSet s = grid();
+  s.sample_rate = 10000.0;  // as the toolkit's models
+  const std::size_t v = 3;
+  HattParams one_step{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false};
+  one_step.match_sample_rate = false;
+  HattParams matched = one_step;
+  matched.match_sample_rate = true;
+  HattTexture<> reference(s, one_step);  // one step per call: the model's own 10 kHz sequence
+  HattTexture<> tex(s, matched);
+  Probe p = stroke(s.speeds[v] / 1000.0, s.forces[v]);
+  p.period = 1e-3;
+  CHECK(tex.steps_per_tick(1e-3) == 10);
+  CHECK(tex.steps_per_tick(1e-4) == 1);
+  CHECK(tex.steps_per_tick(std::numeric_limits<double>::quiet_NaN()) == 1);
+  CHECK(tex.steps_per_tick(1.0) == max_hatt_steps_per_tick);
+  std::vector<double> sequence;
+  for (int i = 0; i < 10 * 200; ++i) {
+    (void)reference.force(p);
+    sequence.push_back(reference.acceleration());
+  }
+  for (int k = 0; k < 200; ++k) {
+    (void)tex.force(p);
+    REQUIRE(tex.acceleration() == sequence[static_cast<std::size_t>(10 * k + 9)]);  // the newest of the ten
+  }
+}
+
 TEST_CASE("HaTT friction mu |Fc| opposes the tangential velocity; silent at rest") {
   const HattModelSet s = grid();
   HattTexture<> tex(s, HattParams{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});  // zero mass: friction only

@@ -520,12 +520,23 @@ struct HattParams {
   int update_every{1};                    ///< ticks between coefficient updates (>= 1)
   double velocity_threshold{1e-3};        ///< silent below this tangential speed [m/s]
   bool friction{true};                    ///< add mu |Fc| Coulomb friction
+  /// Run the model at its own sample rate: round(sample rate x tick period)
+  /// AR steps per tick (at most max_hatt_steps_per_tick), output the newest,
+  /// so a 10 kHz model in a 1 kHz loop keeps its spectrum below the loop's
+  /// Nyquist frequency instead of being compressed ten times. false: one
+  /// step per tick.
+  bool match_sample_rate{true};
 };
 
+/// Most AR steps one tick runs when matching the model's sample rate.
+inline constexpr int max_hatt_steps_per_tick = 256;
+
 /// A HaTT model set as a HapticField. MaxOrder bounds the AR and MA orders
-/// (storage is fixed at construction; force() never allocates). One AR step
-/// per tick: the model's sample rate should equal the servo rate (HaTT
-/// models are identified at 10 kHz).
+/// (storage is fixed at construction; force() never allocates). The model
+/// runs at its own sample rate (HaTT models are identified at 10 kHz): each
+/// tick advances it by the tick's period and renders the newest sample, so
+/// content above the loop's Nyquist frequency folds down, as any sampled
+/// display of the signal would.
 template <std::size_t MaxOrder = 32>
 class HattTexture {
  public:
@@ -533,7 +544,8 @@ class HattTexture {
   ///         effective mass, normal or update period, or an invalid set.
   HattTexture(const HattModelSet& set, const HattParams& params)
       : tri_(set.speeds, set.forces, set.triangles), p_(params), p_order_(set.ar_order), q_order_(set.ma_order),
-        mu_(set.mu), speed_to_file_(set.speed_to_file), accel_to_si_(set.acceleration_to_si) {
+        mu_(set.mu), speed_to_file_(set.speed_to_file), accel_to_si_(set.acceleration_to_si),
+        sample_rate_(set.sample_rate) {
     if (set.ar_order < 1 || set.ar_order > MaxOrder || set.ma_order > MaxOrder)
       throw std::invalid_argument("HattTexture: AR/MA order above MaxOrder");
     if (!std::isfinite(params.effective_mass) || params.effective_mass < 0.0)
@@ -566,22 +578,21 @@ class HattTexture {
       since_update_ = 0;
       update(speed * speed_to_file_, fn);
     }
-    const double x = std::sqrt(cur_variance_) * gaussian(p_.seed, Cell{tick_++, 0, 0});
-    double y = x;
-    if (q_order_ > 0) {
-      y = ma_[0] * x;
-      for (std::size_t k = 1; k <= q_order_; ++k) y += ma_[k] * x_hist_[k - 1];
-      y *= cur_gain_;
-      for (std::size_t k = q_order_; k-- > 1;) x_hist_[k] = x_hist_[k - 1];
-      x_hist_[0] = x;
-    }
-    for (std::size_t k = 1; k <= p_order_; ++k) y -= ar_[k] * y_hist_[k - 1];
-    for (std::size_t k = p_order_; k-- > 1;) y_hist_[k] = y_hist_[k - 1];
-    y_hist_[0] = y;
+    const int steps = steps_per_tick(probe.period);
+    double y = 0.0;
+    for (int i = 0; i < steps; ++i) y = step();
     acceleration_ = y * accel_to_si_;
     glm::dvec3 f = p_.effective_mass * acceleration_ * n;
     if (p_.friction) f -= (mu_ * fn / speed) * vt;
     return is_finite(f) ? f : glm::dvec3{0.0};
+  }
+
+  /// AR steps one tick of `period` [s] runs (see HattParams::match_sample_rate).
+  [[nodiscard]] int steps_per_tick(double period) const noexcept {
+    if (!p_.match_sample_rate) return 1;
+    const double steps = std::round(sample_rate_ * period);
+    if (!std::isfinite(steps) || steps < 1.0) return 1;
+    return steps > max_hatt_steps_per_tick ? max_hatt_steps_per_tick : static_cast<int>(steps);
   }
 
   void reset() noexcept {
@@ -630,6 +641,23 @@ class HattTexture {
   [[nodiscard]] double acceleration() const noexcept { return acceleration_; }
 
  private:
+  /// One AR / ARMA step at the model's sample rate: returns y [file units].
+  double step() noexcept {
+    const double x = std::sqrt(cur_variance_) * gaussian(p_.seed, Cell{tick_++, 0, 0});
+    double y = x;
+    if (q_order_ > 0) {
+      y = ma_[0] * x;
+      for (std::size_t k = 1; k <= q_order_; ++k) y += ma_[k] * x_hist_[k - 1];
+      y *= cur_gain_;
+      for (std::size_t k = q_order_; k-- > 1;) x_hist_[k] = x_hist_[k - 1];
+      x_hist_[0] = x;
+    }
+    for (std::size_t k = 1; k <= p_order_; ++k) y -= ar_[k] * y_hist_[k - 1];
+    for (std::size_t k = p_order_; k-- > 1;) y_hist_[k] = y_hist_[k - 1];
+    y_hist_[0] = y;
+    return y;
+  }
+
   HattTriangulation tri_;
   HattParams p_;
   std::size_t p_order_;
@@ -637,6 +665,7 @@ class HattTexture {
   double mu_;
   double speed_to_file_;
   double accel_to_si_;
+  double sample_rate_;  ///< [Hz]
   std::vector<double> ar_lsf_;    // models x p
   std::vector<double> ma_lsf_;    // models x q
   std::vector<double> variance_;
