@@ -91,6 +91,37 @@ inline void zero_outside(ForceMap& map, int x0, int x1, int y0, int y1) {
 
 namespace detail {
 
+/// One step down the columns: row `in` enters the window, row `out` leaves.
+/// box = sum of H0, ramp = sum of i H0(y + i) (fy), moment = sum of H1
+/// (fx); with fx, fy given, also writes the row scaled by `scale`. A function
+/// of its own so the compiler sees the restrict-qualified parameters and
+/// vectorises the loop.
+inline void slide_columns(double* HAPTICFIELD_RESTRICT box, double* HAPTICFIELD_RESTRICT ramp,
+                          double* HAPTICFIELD_RESTRICT moment, const double* HAPTICFIELD_RESTRICT in0,
+                          const double* HAPTICFIELD_RESTRICT out0, const double* HAPTICFIELD_RESTRICT in1,
+                          const double* HAPTICFIELD_RESTRICT out1, int n, double h, float* HAPTICFIELD_RESTRICT fx,
+                          float* HAPTICFIELD_RESTRICT fy, double scale) noexcept {
+  if (fx == nullptr) {
+    for (int x = 0; x < n; ++x) {
+      const double b = box[x] + (in0[x] - out0[x]);
+      box[x] = b;
+      ramp[x] += h * out0[x] + (h + 1.0) * in0[x] - b;
+      moment[x] += in1[x] - out1[x];
+    }
+    return;
+  }
+  for (int x = 0; x < n; ++x) {
+    const double b = box[x] + (in0[x] - out0[x]);
+    const double r = ramp[x] + (h * out0[x] + (h + 1.0) * in0[x] - b);
+    const double m = moment[x] + (in1[x] - out1[x]);
+    box[x] = b;
+    ramp[x] = r;
+    moment[x] = m;
+    fx[x] = static_cast<float>(m * scale);
+    fy[x] = static_cast<float>(r * scale);
+  }
+}
+
 /// Output rows y_first .. y_last of the Prewitt map; the output region is
 /// [lo, x_hi] x [lo, y_hi]. See prewitt_force_map().
 inline void prewitt_band(const GrayImage& gray, int h, Border border, double fade_px, double scale, int lo, int x_hi,
@@ -171,25 +202,19 @@ inline void prewitt_band(const GrayImage& gray, int h, Border border, double fad
   }
   const double hh = h;
   for (int y = y_first; y <= y_last; ++y) {
-    float* HAPTICFIELD_RESTRICT fx = &map.fx[map.index(lo, y)];
-    float* HAPTICFIELD_RESTRICT fy = &map.fy[map.index(lo, y)];
-    double* HAPTICFIELD_RESTRICT bx = box.data();
-    double* HAPTICFIELD_RESTRICT rp = ramp.data();
-    double* HAPTICFIELD_RESTRICT mo = moment.data();
+    float* fx = &map.fx[map.index(lo, y)];
+    float* fy = &map.fy[map.index(lo, y)];
+    double* bx = box.data();
+    double* rp = ramp.data();
+    double* mo = moment.data();
+    const bool fade = border == Border::fade;
     if (y > y_first) {  // slide the window down: row y - 1 - h leaves, row y + h enters
       ensure(y + h);
-      const double* HAPTICFIELD_RESTRICT out0 = h0_row(y - 1 - h);
-      const double* HAPTICFIELD_RESTRICT in0 = h0_row(y + h);
-      const double* HAPTICFIELD_RESTRICT out1 = h1_row(y - 1 - h);
-      const double* HAPTICFIELD_RESTRICT in1 = h1_row(y + h);
-      for (int x = 0; x < n_out; ++x) {
-        const double b = bx[x] + (in0[x] - out0[x]);
-        bx[x] = b;
-        rp[x] += hh * out0[x] + (hh + 1.0) * in0[x] - b;
-        mo[x] += in1[x] - out1[x];
-      }
+      slide_columns(bx, rp, mo, h0_row(y + h), h0_row(y - 1 - h), h1_row(y + h), h1_row(y - 1 - h), n_out, hh,
+                    fade ? nullptr : fx, fade ? nullptr : fy, scale);
+      if (!fade) continue;  // the row is written
     }
-    if (border == Border::fade) {
+    if (fade) {
       const double row_inside = std::min(y - lo, y_hi - y);
       for (int x = 0; x < n_out; ++x) {
         const double inside = std::min(row_inside, static_cast<double>(std::min(x, n_out - 1 - x)));
