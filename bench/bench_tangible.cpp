@@ -90,10 +90,11 @@ double clock_cost() {
   return samples[samples.size() / 2];
 }
 
-/// Runs every contender once per round, rounds times, so that load from
-/// elsewhere on the machine falls on all of them alike.
+/// Runs every contender once to warm up, then once per round, rounds times,
+/// so that load from elsewhere on the machine falls on all of them alike.
 std::vector<Stats> time_rounds(int rounds, const std::vector<std::function<void()>>& contenders) {
   std::vector<std::vector<double>> samples(contenders.size());
+  for (const auto& contender : contenders) contender();  // warm-up: first-touch page faults, caches
   for (int round = 0; round < rounds; ++round)
     for (std::size_t i = 0; i < contenders.size(); ++i) {
       const auto t0 = Clock::now();
