@@ -17,6 +17,7 @@
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture/data_texture.hpp"
+#include "hapticfield/texture/fft.hpp"
 #include "hapticfield/texture/friction.hpp"
 #include "hapticfield/texture/lattice.hpp"
 #include "hapticfield/texture/local_sphere.hpp"
@@ -347,30 +348,22 @@ TEST_CASE("local circle: motion along the surface normal draws no sample") {
 
 // --- fBm spectrum -------------------------------------------------------------------
 
-namespace {
-void fft(std::vector<std::complex<double>>& a) {
-  const std::size_t n = a.size();
-  for (std::size_t i = 1, j = 0; i < n; ++i) {
-    std::size_t bit = n >> 1;
-    for (; j & bit; bit >>= 1) j ^= bit;
-    j ^= bit;
-    if (i < j) std::swap(a[i], a[j]);
+TEST_CASE("fft equals the DFT computed term by term") {
+  std::vector<std::complex<double>> x(64);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = {std::sin(0.37 * double(i * i)), std::cos(1.3 * double(i))};
+  std::vector<std::complex<double>> fast = x;
+  fft(fast);
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    std::complex<double> direct{0.0, 0.0};
+    for (std::size_t n = 0; n < x.size(); ++n)
+      direct += x[n] * std::polar(1.0, -2.0 * std::numbers::pi * double(k * n) / double(x.size()));
+    REQUIRE(std::abs(fast[k] - direct) <= 1e-9);
   }
-  for (std::size_t len = 2; len <= n; len <<= 1) {
-    const std::complex<double> w = std::polar(1.0, -2.0 * std::numbers::pi / double(len));
-    for (std::size_t i = 0; i < n; i += len) {
-      std::complex<double> wn{1.0, 0.0};
-      for (std::size_t k = 0; k < len / 2; ++k) {
-        const auto u = a[i + k];
-        const auto v = a[i + k + len / 2] * wn;
-        a[i + k] = u + v;
-        a[i + k + len / 2] = u - v;
-        wn *= w;
-      }
-    }
-  }
+  std::vector<std::complex<double>> bad(48);
+  CHECK_THROWS_AS(fft(bad), std::invalid_argument);
 }
 
+namespace {
 // least-squares slope of log10 PSD vs log10 f over [f_lo, f_hi], with the
 // Welch-averaged periodogram binned in equal log-frequency bins.
 double fbm_slope(double h, int octaves) {
