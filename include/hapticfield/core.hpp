@@ -4,6 +4,7 @@
 
 #include "hapticfield/core/any_field.hpp"
 #include "hapticfield/core/compose.hpp"
+#include "hapticfield/core/error.hpp"
 #include "hapticfield/core/field.hpp"
 #include "hapticfield/core/live_field.hpp"
 #include "hapticfield/core/plane_mapping.hpp"

@@ -29,6 +29,7 @@
 #include <thread>
 #include <vector>
 
+#include "hapticfield/core/error.hpp"
 #include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/spsc_ring.hpp"
 #include "hapticfield/device/transport.hpp"
@@ -43,9 +44,9 @@ inline constexpr std::uint16_t default_product_id = 0x0001;
 inline constexpr const char* udev_rule_name = "udev/70-hapticfield.rules";
 
 /// No device matched, or it could not be opened.
-class DeviceError : public std::runtime_error {
+class DeviceError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 /// One HID device hidapi can see.

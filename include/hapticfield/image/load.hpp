@@ -9,24 +9,26 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "hapticfield/core/error.hpp"
 #include "hapticfield/image/grayscale.hpp"
 
 namespace hapticfield {
 
-/// Error raised when a picture cannot be used.
-class ImageError : public std::runtime_error {
+/// A picture file cannot be used (missing, unreadable, not decodable).
+class ImageError : public FileError {
  public:
-  using std::runtime_error::runtime_error;
+  using FileError::FileError;
 };
 
 /// Loads a picture unchanged (keeps 16-bit depth and alpha).
 /// @throws ImageError when the file is missing, is not a regular file, cannot
 ///         be decoded, or decodes to an empty image.
 [[nodiscard]] inline cv::Mat load_image(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw ImageError("cannot open '" + path + "': no such file");
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw ImageError("cannot open '" + path + "': not a regular file");
+  try {
+    check_file(path, std::uintmax_t{1} << 34);
+  } catch (const FileError& e) {
+    throw ImageError(e.what());
+  }
   cv::Mat image;
   try {
     image = cv::imread(path, cv::IMREAD_UNCHANGED);

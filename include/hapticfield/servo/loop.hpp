@@ -28,6 +28,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/core/error.hpp"
 #include "hapticfield/core/field.hpp"
 #include "hapticfield/core/probe.hpp"
 #include "hapticfield/device/state.hpp"
@@ -83,10 +84,10 @@ struct RunLimits {
 /// Thrown by run() after a callback threw: the arm has already been sent
 /// zero force and disarmed. The callback's exception is nested
 /// (std::rethrow_if_nested).
-class ServoError : public std::runtime_error {
+class ServoError : public Error {
  public:
   ServoError(const std::string& what, std::vector<DeviceState> last_states)
-      : std::runtime_error(what), last_states_(std::move(last_states)) {}
+      : Error(what), last_states_(std::move(last_states)) {}
   /// The last device states before the failure, oldest first.
   [[nodiscard]] const std::vector<DeviceState>& last_states() const noexcept { return last_states_; }
 
