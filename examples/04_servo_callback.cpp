@@ -28,8 +28,8 @@ int main() {
   std::printf("run(callback): %llu ticks at %.2f Hz, p99 period %.4f ms, peak %.2f N\n",
               static_cast<unsigned long long>(s.ticks), s.rate, s.period_p99 * 1e3, s.peak_force);
 
-  // 2. Own the thread: sleep to absolute deadlines yourself.
-  loop.clear_fault();
+  // 2. Own the thread: sleep to absolute deadlines yourself. The first
+  //    read_once() arms again and the force ramps up through the soft start.
   TickInput in;
   std::int64_t deadline = clock.now();
   for (int i = 0; i < 1000; ++i) {

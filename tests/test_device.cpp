@@ -2,6 +2,7 @@
 // arm and transport with fault injection, ForceArm.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -397,6 +398,51 @@ TEST_CASE("injected link faults are detected and reported") {
   CHECK(no_data >= 3);  // the stall (and the drop and held report) left ticks without news
   CHECK(last == Status::disconnected);
   CHECK(rig.device.write({0, 0, 0}) == Status::disconnected);
+}
+
+TEST_CASE("ForceArm resynchronises after a device restart or a long loss within a few reports") {
+  SECTION("restart: the sequence falls back to 1") {
+    SimRig rig(still_arm());
+    rig.link.inject(LinkFault::reboot, 100);
+    DeviceState s;
+    std::vector<Status> reads;
+    for (int i = 0; i < 110; ++i) reads.push_back(rig.step({0, 0, 0}, s));
+    // Before the fix every report of the new stream counted as reordered
+    // (behind the last sequence) for up to 65535 reports.
+    const auto first = std::find(reads.begin(), reads.end(), Status::resync);
+    REQUIRE(first != reads.end());
+    CHECK(first - reads.begin() == 99);
+    CHECK(reads[100] == Status::resync);
+    CHECK(reads[101] == Status::ok);  // the third consistent report is taken
+    CHECK(rig.device.counters().resyncs == 1);
+    CHECK(s.sequence == 3 + 8);
+    CHECK_FALSE(s.homed());  // the new stream's state: unhomed after the restart
+    CHECK(s.velocity == glm::dvec3{0.0});
+  }
+  SECTION("a long loss: the sequence jumps ahead by more than max_sequence_gap") {
+    SimRig rig(still_arm());
+    rig.link.inject(LinkFault::drop, 50, 1500);  // 1.5 s of reports lost, the device counts on
+    DeviceState s;
+    int resync = 0, ok_after = 0;
+    for (int i = 0; i < 1560; ++i) {
+      const Status r = rig.step({0, 0, 0}, s);
+      if (i >= 1549) {
+        resync += r == Status::resync;
+        ok_after += r == Status::ok;
+      }
+    }
+    CHECK(resync == 2);
+    CHECK(ok_after >= 8);
+    CHECK(rig.device.counters().resyncs == 1);
+  }
+  SECTION("one stale report is not a new stream") {
+    SimRig rig(still_arm());
+    rig.link.inject(LinkFault::reorder, 30);
+    DeviceState s;
+    for (int i = 0; i < 60; ++i) CHECK(rig.step({0, 0, 0}, s) != Status::resync);
+    CHECK(rig.device.counters().reordered == 1);
+    CHECK(rig.device.counters().resyncs == 0);
+  }
 }
 
 TEST_CASE("the scripted hand follows its paths") {

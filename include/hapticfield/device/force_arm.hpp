@@ -28,6 +28,8 @@ inline constexpr std::uint32_t reordered = 1u << 2;   ///< older sequence after 
 inline constexpr std::uint32_t corrupt = 1u << 3;     ///< bad CRC
 inline constexpr std::uint32_t malformed = 1u << 4;   ///< short, unknown id or bad version
 inline constexpr std::uint32_t device_fault = 1u << 5;  ///< a fault bit is set
+inline constexpr std::uint32_t jumped = 1u << 6;      ///< a report far off the sequence: held back
+inline constexpr std::uint32_t resynced = 1u << 7;    ///< a new, consistent stream was taken up
 }  // namespace link_events
 
 /// Running counts of link events since construction.
@@ -40,6 +42,7 @@ struct LinkCounters {
   std::uint64_t malformed{0};
   std::uint64_t commands{0};    ///< command reports written
   std::uint64_t write_errors{0};
+  std::uint64_t resyncs{0};     ///< times a new stream was taken up (device restart, long loss)
 };
 
 struct ForceArmOptions {
@@ -50,6 +53,12 @@ struct ForceArmOptions {
   DeviceInfo info{};
   double velocity_cutoff{100.0};  ///< first-order low-pass on the velocity estimate [Hz]
   double torque_unit{1e-3};       ///< size of one torque unit on the wire [N m]
+  /// A report more than this many sequence numbers ahead of the last one,
+  /// or any behind it, starts a resynchronisation [reports].
+  int max_sequence_gap{1000};
+  /// Consecutive reports of a new stream needed to take it up (a device
+  /// restart, a long loss); meanwhile read() returns Status::resync [reports].
+  int resync_reports{3};
 };
 
 class ForceArm {
@@ -72,6 +81,10 @@ class ForceArm {
       throw std::invalid_argument("ForceArmOptions: velocity_cutoff must be finite and > 0 [Hz]");
     if (!std::isfinite(o_.torque_unit) || o_.torque_unit <= 0.0)
       throw std::invalid_argument("ForceArmOptions: torque_unit must be finite and > 0 [N m]");
+    if (o_.max_sequence_gap < 1 || o_.max_sequence_gap > 30000)
+      throw std::invalid_argument("ForceArmOptions: max_sequence_gap must be within 1..30000 [reports]");
+    if (o_.resync_reports < 1 || o_.resync_reports > 100)
+      throw std::invalid_argument("ForceArmOptions: resync_reports must be within 1..100 [reports]");
     o_.info.validate();
     kin_ = PhantomKinematics(o_.kinematics);
   }
@@ -83,12 +96,15 @@ class ForceArm {
   [[nodiscard]] std::uint32_t last_events() const noexcept { return events_; }
 
   /// Drains every queued input report and keeps the newest valid one.
-  /// Returns ok when a newer state was decoded, no_data when none, and
-  /// disconnected when the transport is gone (state still takes any report
-  /// that arrived before). state is untouched on no_data.
+  /// Returns ok when a newer state was decoded, no_data when none, resync
+  /// while a jump in the sequence (a device restart, a long loss) waits for
+  /// resync_reports consistent reports, and disconnected when the transport
+  /// is gone (state still takes any report that arrived before). state is
+  /// untouched unless ok or disconnected.
   Status read(DeviceState& state) noexcept {
     events_ = 0;
     bool fresh = false;
+    bool held = false;
     protocol::StateReport newest{};
     for (int i = 0; i < 256; ++i) {
       std::size_t size = 0;
@@ -109,13 +125,32 @@ class ForceArm {
       const auto diff = static_cast<std::int16_t>(static_cast<std::uint16_t>(r.sequence - reference));
       if (have_last_ || fresh) {
         if (diff == 0) { events_ |= link_events::duplicate; ++counters_.duplicates; continue; }
-        if (diff < 0) { events_ |= link_events::reordered; ++counters_.reordered; continue; }
+        if (diff < 0 || diff > o_.max_sequence_gap) {
+          // One stale report (reordering) or the start of a new stream: hold
+          // it until resync_reports consecutive reports confirm a new stream.
+          if (diff < 0) { events_ |= link_events::reordered; ++counters_.reordered; }
+          events_ |= link_events::jumped;
+          if (!(candidate_count_ > 0 && r.sequence == candidate_next_)) candidate_count_ = 0;
+          ++candidate_count_;
+          candidate_next_ = static_cast<std::uint16_t>(r.sequence + 1);
+          if (candidate_count_ < o_.resync_reports) { held = true; continue; }
+          events_ |= link_events::resynced;
+          ++counters_.resyncs;
+          candidate_count_ = 0;
+          have_last_ = false;  // a new stream: no velocity across the jump
+          newest = r;
+          fresh = true;
+          held = false;
+          continue;
+        }
         if (diff > 1) { events_ |= link_events::dropped; counters_.dropped += static_cast<std::uint64_t>(diff - 1); }
       }
+      candidate_count_ = 0;
+      held = false;
       newest = r;
       fresh = true;
     }
-    if (!fresh) return Status::no_data;
+    if (!fresh) return held ? Status::resync : Status::no_data;
     update(newest, state);
     return Status::ok;
   }
@@ -252,6 +287,8 @@ class ForceArm {
   std::uint32_t events_{0};
   std::uint32_t last_timestamp_us_{0};
   std::uint16_t last_sequence_{0};
+  std::uint16_t candidate_next_{0};  ///< sequence a confirming report of a new stream must carry
+  int candidate_count_{0};           ///< consecutive reports of a possible new stream seen
   std::uint16_t command_sequence_{0};
   std::uint16_t flags_{0};
   bool have_last_{false};

@@ -274,7 +274,8 @@ class SimulatedArm {
     protocol::StateReport r;
     r.sequence = ++sequence_;
     r.command_echo = last_command_.sequence;
-    r.timestamp_us = static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(time() * 1e6)) & 0xFFFFFFFFu);
+    const double since_boot = static_cast<double>(tick_ - boot_tick_) / c_.rate;  // [s]
+    r.timestamp_us = static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(since_boot * 1e6)) & 0xFFFFFFFFu);
     r.encoder = kin_.counts(q_);
     if (!homed_)
       for (std::size_t i = 0; i < 3; ++i) r.encoder[i] += c_.unhomed_offset[i];
@@ -284,6 +285,22 @@ class SimulatedArm {
       r.torque_mnm[i] = static_cast<std::int16_t>(std::lround(applied_torque_[static_cast<int>(i)] / c_.torque_unit));
     return r;
   }
+
+  /// The firmware restarts (a brown-out, a reset button): sequence numbers
+  /// and the timestamp start again from zero, the arm is unhomed and
+  /// disarmed, latched faults are gone; the mechanics keep moving.
+  void reboot() noexcept {
+    sequence_ = 0;
+    boot_tick_ = tick_;
+    homed_ = false;
+    homing_left_ = -1;
+    armed_ = false;
+    faults_ &= status_bits::estop;
+    last_command_ = {};
+    last_valid_tick_ = tick_;
+    ++boots_;
+  }
+  [[nodiscard]] int boots() const noexcept { return boots_; }
 
   /// Latches a fault bit (over-current, over-temperature) or holds e-stop.
   void inject_fault(std::uint16_t bits) noexcept { faults_ |= bits; }
@@ -356,6 +373,8 @@ class SimulatedArm {
   int homing_left_{-1};
   int substep_{0};
   std::uint16_t sequence_{0};
+  std::int64_t boot_tick_{0};
+  int boots_{0};
   std::uint16_t faults_{0};
   std::uint8_t buttons_{0};
   bool homed_{false};

@@ -26,6 +26,7 @@ enum class LinkFault : std::uint8_t {
   corrupt,    ///< one byte of the state report is flipped (bad CRC)
   stall,      ///< for `ticks` ticks no report passes either way
   unplug,     ///< from that tick on every call returns disconnected
+  reboot,     ///< the firmware restarts at that tick (sequence and timestamp from zero, unhomed)
 };
 
 class SimulatedTransport final : public Transport {
@@ -58,6 +59,7 @@ class SimulatedTransport final : public Transport {
     while (start_ns_ + (arm_->ticks()) * period_ns_ <= now) {
       arm_->tick();
       const std::int64_t k = arm_->ticks();
+      if (starts(LinkFault::reboot, k)) arm_->reboot();
       if (active(LinkFault::unplug, k)) unplugged_ = true;
       if (unplugged_ || active(LinkFault::stall, k)) { stalled_ = !unplugged_; continue; }
       stalled_ = false;
@@ -128,6 +130,12 @@ class SimulatedTransport final : public Transport {
       if (s.fault != f) continue;
       if (f == LinkFault::unplug ? k >= s.tick : (k >= s.tick && k < s.tick + s.ticks)) return true;
     }
+    return false;
+  }
+
+  [[nodiscard]] bool starts(LinkFault f, std::int64_t k) const noexcept {
+    for (std::size_t i = 0; i < fault_count_; ++i)
+      if (faults_[i].fault == f && faults_[i].tick == k) return true;
     return false;
   }
 

@@ -22,6 +22,7 @@ enum class Status : std::uint8_t {
   fault,            ///< the device reports a latched fault
   overflow,         ///< a buffer or queue was full
   unsupported,      ///< the transport does not implement the call
+  resync,           ///< the report stream jumped (device restart, long loss): held back until consistent
 };
 
 /// Short human-readable name of a status.
@@ -40,6 +41,7 @@ enum class Status : std::uint8_t {
     case Status::fault: return "device fault";
     case Status::overflow: return "overflow";
     case Status::unsupported: return "unsupported";
+    case Status::resync: return "resynchronising";
   }
   return "?";
 }

@@ -48,6 +48,8 @@ enum class RealTime : std::uint8_t {
 /// Loop limits: rates from 1 Hz to 10 kHz.
 inline constexpr double min_servo_rate = 1.0;      ///< [Hz]
 inline constexpr double max_servo_rate = 10000.0;  ///< [Hz]
+/// RunLimits::max_ticks for a run that ends only on request or disconnect.
+inline constexpr std::uint64_t no_tick_limit = UINT64_MAX;
 
 struct LoopConfig {
   double rate{1000.0};                   ///< servo rate [Hz], 1..10000
@@ -57,12 +59,19 @@ struct LoopConfig {
   bool auto_home{true};                  ///< request homing when the device is not homed
   bool auto_arm{true};                   ///< request arming at start (the device arms once homed)
   bool disarm_on_exit{true};             ///< disarm when run() returns
+  /// After a stale-state or missed-deadline latch, clear it and re-arm (with
+  /// the soft start) once new states have arrived on time for this long [s];
+  /// 0: never (clear_fault() only). Disconnects and throwing callbacks never
+  /// recover by themselves.
+  double recover_after{0.0};
 
   /// @throws std::invalid_argument naming the bad parameter.
   void validate() const {
     if (!std::isfinite(rate) || rate < min_servo_rate || rate > max_servo_rate)
       throw std::invalid_argument("LoopConfig: rate must be within [1, 10000] [Hz]");
     if (priority < 1 || priority > 99) throw std::invalid_argument("LoopConfig: priority must be within 1..99");
+    if (!std::isfinite(recover_after) || recover_after < 0.0 || recover_after > 3600.0)
+      throw std::invalid_argument("LoopConfig: recover_after must be within [0, 3600] [s] (0: never)");
   }
 };
 
@@ -78,12 +87,17 @@ struct TickInput {
 enum class StopReason : std::uint8_t { requested, tick_limit, disconnected };
 
 struct RunLimits {
-  std::uint64_t max_ticks{0};  ///< 0: no limit
+  std::uint64_t max_ticks{no_tick_limit};  ///< ticks before run() returns, >= 1; no_tick_limit: none
+
+  /// @throws std::invalid_argument for max_ticks == 0.
+  void validate() const {
+    if (max_ticks == 0) throw std::invalid_argument("RunLimits: max_ticks must be >= 1 (no_tick_limit: run until stopped)");
+  }
 };
 
-/// Thrown by run() after a callback threw: the arm has already been sent
-/// zero force and disarmed. The callback's exception is nested
-/// (std::rethrow_if_nested).
+/// Thrown by run() after a callback threw (the arm has already been sent
+/// zero force and disarmed; the callback's exception is nested, see
+/// std::rethrow_if_nested), and by run() at the start when it cannot arm.
 class ServoError : public Error {
  public:
   ServoError(const std::string& what, std::vector<DeviceState> last_states)
@@ -144,8 +158,12 @@ class ServoLoop {
   }
 
   /// Runs a field until request_stop(), the tick limit or a disconnect.
-  /// Blocks the calling thread. @throws std::runtime_error when
-  /// RealTime::enforce is not granted.
+  /// Blocks the calling thread. Every run starts the same way: zero force
+  /// from the safety chain's point of view, homing and arming as configured,
+  /// and the soft start from the moment the device reports armed.
+  /// @throws std::invalid_argument for max_ticks == 0; ServoError when a
+  ///         latched safety fault forbids arming (clear_fault() first);
+  ///         std::runtime_error when RealTime::enforce is not granted.
   template <HapticField F>
   StopReason run(F& field, RunLimits limits = {}) {
     auto compute = [&field](const TickInput& in) noexcept { return glm::dvec3(field.force(in.probe)); };
@@ -161,14 +179,17 @@ class ServoLoop {
     return run_impl(callback, limits);
   }
 
-  /// Asks run() to return after the current tick (any thread).
-  void request_stop() noexcept { stop_.store(true, std::memory_order_relaxed); }
+  /// Asks run() to return after the current tick (any thread). A request
+  /// made before run() starts ends that run before its first tick: the
+  /// request is consumed by the run it stops.
+  void request_stop() noexcept { stop_.store(true, std::memory_order_release); }
 
   /// For users who own the thread: reads the newest state and fills in.
   /// Call once per tick, then write_once().
   Status read_once(TickInput& in) noexcept {
     const std::int64_t now = clock_->now();
     if (!started_) begin(now);
+    if (clear_requested_.exchange(false, std::memory_order_acq_rel)) clear_now();
     const Status s = device_->read(state_);
     if (s == Status::ok) {
       last_state_time_ = now;
@@ -179,14 +200,17 @@ class ServoLoop {
       if (!state_.armed()) armed_since_ = -1;
     } else {
       ++ticks_without_state_;
+      fresh_since_ = -1;
     }
+    if (s == Status::ok && fresh_since_ < 0) fresh_since_ = now;
     if (s == Status::disconnected) disconnected_ = true;
+    resync_ = s == Status::resync;
     in.state = state_;
     in.read_status = s;
     in.tick = tick_;
+    in.probe = Probe{};  // contact (normal force, surface normal) is the fields' business
     in.probe.position = state_.position;
     in.probe.velocity = state_.velocity;
-    in.probe.normal_force = glm::length(safety_.previous());  // |F| commanded last tick [N]
     in.probe.time = static_cast<double>(now - start_) * 1e-9;
     in.probe.period = period_;
     now_ = now;
@@ -205,9 +229,14 @@ class ServoLoop {
     si.time_since_armed = (armed_since_ >= 0 && state_.armed()) ? static_cast<double>(now_ - armed_since_) * 1e-9 : -1.0;
     si.device_fault = state_.faulted();
     si.disconnected = disconnected_;
+    si.link_resync = resync_;
     const std::uint32_t before = safety_.latched();
     const glm::dvec3 out = safety_.process(si);
-    if (safety_.latched() && !before) device_->set_armed(false);  // the watchdog disarms
+    if (safety_.latched() && !before) {  // the watchdog disarms, and says so
+      device_->set_armed(false);
+      stats_->add_latch(safety_.latched());
+    }
+    maybe_recover();
     if (safety_.events() & ~(safety_events::device_fault)) stats_->add_safety_event();
     stats_->record_force(glm::length(out));
     command_ = out;
@@ -215,12 +244,12 @@ class ServoLoop {
     return device_->write(out);
   }
 
-  /// Clears a latched safety fault and re-requests arming (soft start again).
-  void clear_fault() noexcept {
-    safety_.clear();
-    missed_in_a_row_ = 0;
-    if (c_.auto_arm) device_->set_armed(true);
-  }
+  /// Clears a latched safety fault and re-requests arming; the force ramps
+  /// up through the soft start again. Safe from any thread: the loop applies
+  /// it at the start of its next tick, or at the start of the next run(),
+  /// which also clears the device's own latched faults (a firmware
+  /// watchdog trip) when the device has clear_fault().
+  void clear_fault() noexcept { clear_requested_.store(true, std::memory_order_release); }
 
   [[nodiscard]] LoopSnapshot statistics() const noexcept { return stats_->snapshot(); }
   /// Starts the statistics afresh (e.g. after a warm-up).
@@ -235,12 +264,43 @@ class ServoLoop {
   [[nodiscard]] bool realtime_granted() const noexcept { return realtime_granted_; }
 
  private:
+  /// The known state every run starts from: the device was last sent zero
+  /// (or nothing), so the safety chain starts from zero; no state is fresh
+  /// yet; the soft start counts from the first state that reports armed.
   void begin(std::int64_t now) noexcept {
     started_ = true;
     start_ = now;
     last_state_time_ = now;
+    fresh_since_ = -1;
+    armed_since_ = -1;
+    ticks_without_state_ = 0;
+    missed_in_a_row_ = 0;
+    disconnected_ = false;
+    resync_ = false;
+    state_.valid = false;
+    command_ = glm::dvec3{0.0};
+    safety_.restart();
     if (c_.auto_home) device_->request_home();
     if (c_.auto_arm) device_->set_armed(true);
+  }
+
+  void clear_now() noexcept {
+    safety_.clear();
+    missed_in_a_row_ = 0;
+    armed_since_ = -1;  // soft start again from the next armed state
+    if (c_.auto_arm) device_->set_armed(true);
+  }
+
+  /// LoopConfig::recover_after: a stale-state or missed-deadline latch is
+  /// cleared once states have arrived on every tick, on time, for that long.
+  void maybe_recover() noexcept {
+    constexpr std::uint32_t recoverable = safety_events::stale_state | safety_events::missed_deadlines;
+    const std::uint32_t latched = safety_.latched();
+    if (c_.recover_after <= 0.0 || !latched || (latched & ~recoverable) || fresh_since_ < 0 || missed_in_a_row_ > 0)
+      return;
+    if (static_cast<double>(now_ - fresh_since_) * 1e-9 < c_.recover_after) return;
+    clear_now();
+    stats_->add_recovery();
   }
 
   std::vector<DeviceState> last_states() const {
@@ -284,23 +344,36 @@ class ServoLoop {
       device_->write(glm::dvec3{0.0});
     }
     command_ = glm::dvec3{0.0};
+    safety_.restart();  // what the device now has
+    started_ = false;   // read_once() after a run starts afresh (homing, arming, soft start)
   }
 
   template <class Compute>
   StopReason run_impl(Compute& compute, RunLimits limits) {
+    limits.validate();
+    if (clear_requested_.exchange(false, std::memory_order_acq_rel)) {
+      clear_now();
+      // Between runs (not in a tick) a device's own latched fault can be
+      // cleared too; it accepts that only while disarmed, as it is now.
+      if constexpr (requires(D& d) { d.clear_fault(); }) device_->clear_fault();
+    }
+    if (const std::uint32_t latched = safety_.latched())
+      throw ServoError("ServoLoop: cannot arm: the safety chain latched (" + safety_events::names(latched) +
+                           ") in an earlier run; remove the cause and call clear_fault() first",
+                       last_states());
     apply_realtime();
     struct Restore {
       ServoLoop* self;
       ~Restore() { self->restore_realtime(); }
     } restore{this};
-    stop_.store(false, std::memory_order_relaxed);
     std::int64_t deadline = clock_->now();
     std::int64_t previous_wake = deadline;
+    begin(deadline);
     const std::uint64_t first_tick = tick_;
     TickInput in;
     for (;;) {
-      if (stop_.load(std::memory_order_relaxed)) { safe_stop(); return StopReason::requested; }
-      if (limits.max_ticks && tick_ - first_tick >= limits.max_ticks) { safe_stop(); return StopReason::tick_limit; }
+      if (stop_.exchange(false, std::memory_order_acq_rel)) { safe_stop(); return StopReason::requested; }
+      if (tick_ - first_tick >= limits.max_ticks) { safe_stop(); return StopReason::tick_limit; }
       clock_->sleep_until(deadline);
       const std::int64_t wake = clock_->now();
       read_once(in);
@@ -312,6 +385,7 @@ class ServoLoop {
           f = compute(in);
         } catch (...) {
           safety_.latch(safety_events::callback_threw);
+          stats_->add_latch(safety_.latched());
           safe_stop();
           std::throw_with_nested(ServoError("ServoLoop: the callback threw at tick " + std::to_string(in.tick) +
                                                 "; zero force commanded and the arm disarmed",
@@ -327,7 +401,9 @@ class ServoLoop {
         const std::int64_t skipped = (end - deadline) / period_ns_ + 1;
         deadline += skipped * period_ns_;
         stats_->add_missed(static_cast<std::uint64_t>(skipped));
-        missed_in_a_row_ += static_cast<int>(skipped);
+        stats_->add_overrun();
+        ++missed_in_a_row_;  // one late tick is one event, however many periods it skipped
+        fresh_since_ = -1;
       } else {
         missed_in_a_row_ = 0;
       }
@@ -351,11 +427,14 @@ class ServoLoop {
   std::int64_t last_state_time_{0};
   std::int64_t armed_since_{-1};
   std::uint64_t tick_{0};
+  std::int64_t fresh_since_{-1};  ///< start of the current run of on-time ticks with new states [ns]; -1: none
   int ticks_without_state_{0};
   int missed_in_a_row_{0};
   std::atomic<bool> stop_{false};
+  std::atomic<bool> clear_requested_{false};
   bool started_{false};
   bool disconnected_{false};
+  bool resync_{false};
   bool locked_{false};
   bool realtime_granted_{false};
 };

@@ -36,8 +36,26 @@ inline constexpr std::uint32_t device_fault = 1u << 6;      ///< device reports 
 inline constexpr std::uint32_t disconnected = 1u << 7;      ///< device gone (latches)
 inline constexpr std::uint32_t callback_threw = 1u << 8;    ///< the user callback threw (latches)
 inline constexpr std::uint32_t no_new_state = 1u << 9;      ///< K ticks without a new state: zero until one arrives
+inline constexpr std::uint32_t bad_period = 1u << 10;       ///< period NaN, Inf or outside [1e-4, 1] s: zero (the slew limit needs it)
+inline constexpr std::uint32_t energy_overflow = 1u << 11;  ///< passivity energy went non-finite: zero, observer reset
+inline constexpr std::uint32_t link_resync = 1u << 12;      ///< the device's report stream jumped: zero until it is consistent
 /// Events that latch the watchdog until SafetyChain::clear().
 inline constexpr std::uint32_t latching = stale_state | missed_deadlines | disconnected | callback_threw;
+/// Events that zero the force for this tick without latching.
+inline constexpr std::uint32_t zeroing = non_finite | device_fault | no_new_state | bad_period | energy_overflow |
+                                          link_resync;
+
+/// Comma-separated names of the bits set in events ("" for none).
+[[nodiscard]] inline std::string names(std::uint32_t events) {
+  static constexpr const char* table[] = {"non-finite force", "clamped", "slew limited", "passivity",
+                                          "stale state", "missed deadlines", "device fault or not armed",
+                                          "disconnected", "callback threw", "no new state", "bad period",
+                                          "passivity energy overflow", "link resynchronising"};
+  std::string s;
+  for (std::uint32_t i = 0; i < sizeof table / sizeof table[0]; ++i)
+    if (events & (1u << i)) s += (s.empty() ? "" : ", ") + std::string(table[i]);
+  return s;
+}
 }  // namespace safety_events
 
 struct SafetyConfig {
@@ -49,7 +67,7 @@ struct SafetyConfig {
   bool watchdog_enabled{true};
   double max_state_age{10e-3};    ///< state older than this zeroes, disarms and latches [s]
   int max_ticks_without_state{2}; ///< this many ticks in a row without a new state zero the force (until one arrives)
-  int max_missed_deadlines{3};    ///< this many missed deadlines in a row zero and disarm
+  int max_missed_deadlines{3};    ///< this many overrunning ticks in a row zero and disarm (a late wake is one, however many periods it skipped)
   bool passivity_enabled{false};  ///< Hannaford & Ryu passivity observer/controller
   double passivity_max_damping{50.0};  ///< cap on the controller's damping alpha [N s/m]
 
@@ -89,14 +107,20 @@ struct SafetyInput {
   double period{1e-3};           ///< nominal tick period [s]
   double state_age{0.0};         ///< now - arrival of the newest state [s]
   int ticks_without_state{0};    ///< ticks in a row with no new state
-  int missed_in_a_row{0};        ///< missed deadlines in a row
+  int missed_in_a_row{0};        ///< overrunning ticks in a row (one per late tick)
   double time_since_armed{-1.0}; ///< [s]; negative while the device is not armed
   bool device_fault{false};      ///< the device reports a fault bit
   bool disconnected{false};      ///< the transport reports the device gone
+  bool link_resync{false};       ///< the report stream jumped and is not yet consistent
 };
 
 class SafetyChain {
  public:
+  /// Periods the chain accepts: the servo loop's 10 kHz to 1 Hz [s]. Any
+  /// other period (NaN, Inf, zero, negative, absurd) zeroes the force.
+  static constexpr double min_period = 1e-4;
+  static constexpr double max_period = 1.0;
+
   /// @throws std::invalid_argument via SafetyConfig::validate.
   SafetyChain(const SafetyConfig& config, double device_max_force) : c_(config) {
     c_.validate(device_max_force);
@@ -117,9 +141,12 @@ class SafetyChain {
       if (in.missed_in_a_row >= c_.max_missed_deadlines) events_ |= safety_events::missed_deadlines;
     }
     latched_ |= events_ & safety_events::latching;
-    if (in.device_fault || in.time_since_armed < 0.0) events_ |= safety_events::device_fault;
+    if (in.device_fault || !(in.time_since_armed >= 0.0)) events_ |= safety_events::device_fault;
+    if (in.link_resync) events_ |= safety_events::link_resync;
+    // Without a usable period there is no slew limit and no energy: zero.
+    if (!(in.period >= min_period && in.period <= max_period)) events_ |= safety_events::bad_period;
     const glm::dvec3 v = is_finite(in.velocity) ? in.velocity : glm::dvec3{0.0};
-    if (latched_ || (events_ & (safety_events::device_fault | safety_events::no_new_state))) return zero(v, in.period);
+    if (latched_ || (events_ & safety_events::zeroing)) return zero(v, in.period);
     // 1. finite check
     if (!is_finite(f)) {
       events_ |= safety_events::non_finite;
@@ -133,6 +160,11 @@ class SafetyChain {
     if (c_.passivity_enabled) {
       const double vv = glm::dot(v, v);
       const double predicted = energy_ - glm::dot(f, v) * in.period;
+      if (!std::isfinite(predicted) || !std::isfinite(vv)) {  // extreme velocity: the observer cannot judge
+        events_ |= safety_events::energy_overflow;
+        energy_ = 0.0;
+        return zero(v, in.period);
+      }
       if (predicted < 0.0 && vv > 1e-12) {
         const double alpha = std::fmin(-predicted / (in.period * vv), c_.passivity_max_damping);
         f -= alpha * v;
@@ -166,7 +198,11 @@ class SafetyChain {
   /// Latches a fault from outside (a throwing callback).
   void latch(std::uint32_t bits) noexcept { latched_ |= bits; }
   /// Clears the latch; the next force starts from zero.
-  void clear() noexcept { latched_ = 0; previous_ = glm::dvec3{0.0}; energy_ = 0.0; }
+  void clear() noexcept { latched_ = 0; restart(); }
+  /// Starts again from what the device really has after a stop: zero force
+  /// commanded (the slew limit ramps from zero), observer energy zero. The
+  /// latch is kept.
+  void restart() noexcept { previous_ = glm::dvec3{0.0}; energy_ = 0.0; }
   /// Observed energy into the virtual environment [J] (passivity observer).
   [[nodiscard]] double observed_energy() const noexcept { return energy_; }
   [[nodiscard]] double limit() const noexcept { return limit_; }
@@ -176,7 +212,10 @@ class SafetyChain {
  private:
   glm::dvec3 zero(const glm::dvec3& v, double period) noexcept { return commit(glm::dvec3{0.0}, v, period); }
   glm::dvec3 commit(const glm::dvec3& out, const glm::dvec3& v, double period) noexcept {
-    if (c_.passivity_enabled && std::isfinite(period)) energy_ -= glm::dot(out, v) * period;
+    if (c_.passivity_enabled && std::isfinite(period)) {
+      energy_ -= glm::dot(out, v) * period;
+      if (!std::isfinite(energy_)) energy_ = 0.0;  // never leave the observer disabled
+    }
     previous_ = out;
     return out;
   }

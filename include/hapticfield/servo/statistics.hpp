@@ -73,7 +73,11 @@ class DurationHistogram {
 struct LoopSnapshot {
   std::uint64_t ticks{0};            ///< ticks run
   std::uint64_t missed_deadlines{0}; ///< periods skipped after overruns
+  std::uint64_t overruns{0};         ///< ticks that ended after their deadline (a late wake is one)
   std::uint64_t safety_events{0};    ///< ticks on which the safety chain intervened
+  std::uint64_t latches{0};          ///< times the watchdog latched (zero force, disarmed)
+  std::uint32_t last_latch{0};       ///< safety_events bits of the most recent latch (0: none yet)
+  std::uint64_t recoveries{0};       ///< latches cleared by LoopConfig::recover_after
   double rate{0.0};                  ///< achieved rate [Hz] = (ticks - 1) / (last - first wake)
   double period_p50{0.0}, period_p99{0.0}, period_p999{0.0}, period_max{0.0};  ///< [s]
   double period_mean{0.0};           ///< [s]
@@ -94,6 +98,12 @@ class LoopStatistics {
     ticks_.fetch_add(1, std::memory_order_relaxed);
   }
   void add_missed(std::uint64_t n) noexcept { missed_.fetch_add(n, std::memory_order_relaxed); }
+  void add_overrun() noexcept { overruns_.fetch_add(1, std::memory_order_relaxed); }
+  void add_latch(std::uint32_t bits) noexcept {
+    last_latch_.store(bits, std::memory_order_relaxed);
+    latches_.fetch_add(1, std::memory_order_relaxed);
+  }
+  void add_recovery() noexcept { recoveries_.fetch_add(1, std::memory_order_relaxed); }
   void add_safety_event() noexcept { safety_.fetch_add(1, std::memory_order_relaxed); }
   void record_force(double magnitude) noexcept {
     double m = peak_force_.load(std::memory_order_relaxed);
@@ -107,6 +117,10 @@ class LoopStatistics {
     s.ticks = ticks_.load(std::memory_order_relaxed);
     s.missed_deadlines = missed_.load(std::memory_order_relaxed);
     s.safety_events = safety_.load(std::memory_order_relaxed);
+    s.overruns = overruns_.load(std::memory_order_relaxed);
+    s.latches = latches_.load(std::memory_order_relaxed);
+    s.last_latch = last_latch_.load(std::memory_order_relaxed);
+    s.recoveries = recoveries_.load(std::memory_order_relaxed);
     const std::int64_t span = last_wake_.load(std::memory_order_relaxed) - first_wake_.load(std::memory_order_relaxed);
     s.rate = (s.ticks > 1 && span > 0) ? static_cast<double>(s.ticks - 1) / (static_cast<double>(span) * ns) : 0.0;
     s.period_p50 = period_.percentile(0.5) * ns;
@@ -136,6 +150,10 @@ class LoopStatistics {
     ticks_.store(0, std::memory_order_relaxed);
     missed_.store(0, std::memory_order_relaxed);
     safety_.store(0, std::memory_order_relaxed);
+    overruns_.store(0, std::memory_order_relaxed);
+    latches_.store(0, std::memory_order_relaxed);
+    last_latch_.store(0, std::memory_order_relaxed);
+    recoveries_.store(0, std::memory_order_relaxed);
     peak_force_.store(0.0, std::memory_order_relaxed);
   }
 
@@ -146,6 +164,10 @@ class LoopStatistics {
   std::atomic<std::uint64_t> ticks_{0};
   std::atomic<std::uint64_t> missed_{0};
   std::atomic<std::uint64_t> safety_{0};
+  std::atomic<std::uint64_t> overruns_{0};
+  std::atomic<std::uint64_t> latches_{0};
+  std::atomic<std::uint32_t> last_latch_{0};
+  std::atomic<std::uint64_t> recoveries_{0};
   std::atomic<std::int64_t> first_wake_{0};
   std::atomic<std::int64_t> last_wake_{0};
   std::atomic<double> peak_force_{0.0};
