@@ -188,12 +188,14 @@ void plot_periods(const std::string& path, const DurationHistogram& periods, dou
   cv::imwrite(path, img);
 }
 
-void print_status(const LoopSnapshot& s, double t) {
-  std::printf("\r t %6.2f s | rate %8.2f Hz | period p50 %6.3f p99 %6.3f max %6.3f ms | missed %4llu | peak %5.2f N | "
-              "safety %llu   ",
+/// One status line, rewritten in place; a latch is shown with its reason
+/// for as long as it holds.
+void print_status(const LoopSnapshot& s, std::uint32_t latched, double t) {
+  std::printf("\r t %6.2f s | rate %8.2f Hz | period p50 %6.3f p99 %6.3f max %6.3f ms | late %3llu | peak %5.2f N | "
+              "latches %llu%s%s   ",
               t, s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
-              static_cast<unsigned long long>(s.missed_deadlines), s.peak_force,
-              static_cast<unsigned long long>(s.safety_events));
+              static_cast<unsigned long long>(s.overruns), s.peak_force, static_cast<unsigned long long>(s.latches),
+              latched ? " | ZERO FORCE: " : "", latched ? safety_events::names(latched).c_str() : "");
   std::fflush(stdout);
 }
 
@@ -240,6 +242,9 @@ int run(const Options& o) {
   ForceArm device(*transport);
   LoopConfig config;
   config.rate = o.rate;
+  // A stall of the machine (a late wake, a stale state) latches zero force;
+  // the demo re-arms through the soft start once states are fresh for 0.5 s.
+  config.recover_after = 0.5;
   ServoLoop<ForceArm, SteadyClock> loop(device, clock, config);
 
   if (hardware) {
@@ -275,22 +280,41 @@ int run(const Options& o) {
     done.store(true);
   });
   const auto t0 = std::chrono::steady_clock::now();
+  std::uint64_t latches_shown = 0;
+  const auto elapsed = [&t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   while (!done.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    print_status(loop.statistics(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    const LoopSnapshot s = loop.statistics();
+    if (s.latches > latches_shown) {  // every latch gets a line of its own
+      latches_shown = s.latches;
+      std::printf("\n t %6.2f s: the safety chain latched (%s): zero force, disarmed; re-arming once states are "
+                  "fresh for %.1f s\n",
+                  elapsed(), safety_events::names(s.last_latch).c_str(), config.recover_after);
+    }
+    print_status(s, loop.safety().latched(), elapsed());
   }
   servo.join();
-  print_status(loop.statistics(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  print_status(loop.statistics(), loop.safety().latched(), elapsed());
   std::printf("\n");
   if (failure) std::rethrow_exception(failure);
   if (reason == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
 
   const LoopSnapshot s = loop.statistics();
   std::printf("%llu ticks at %.3f Hz (nominal %.0f), period p50 %.4f / p99 %.4f / p99.9 %.4f / max %.4f ms, "
-              "missed deadlines %llu, wake latency p99 %.1f us, compute p99 %.1f us, peak force %.2f N\n",
+              "late ticks %llu (%llu periods skipped), wake latency p99 %.1f us, compute p99 %.1f us, peak force "
+              "%.2f N\n",
               static_cast<unsigned long long>(s.ticks), s.rate, o.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
-              s.period_p999 * 1e3, s.period_max * 1e3, static_cast<unsigned long long>(s.missed_deadlines),
-              s.wake_p99 * 1e6, s.compute_p99 * 1e6, s.peak_force);
+              s.period_p999 * 1e3, s.period_max * 1e3, static_cast<unsigned long long>(s.overruns),
+              static_cast<unsigned long long>(s.missed_deadlines), s.wake_p99 * 1e6, s.compute_p99 * 1e6,
+              s.peak_force);
+  if (s.latches == 0) {
+    std::printf("safety: no latch\n");
+  } else {
+    std::printf("safety: %llu latch(es), the last for %s; %llu recovered through the soft start%s\n",
+                static_cast<unsigned long long>(s.latches), safety_events::names(s.last_latch).c_str(),
+                static_cast<unsigned long long>(s.recoveries),
+                loop.safety().latched() ? "; still latched at the end" : "");
+  }
   const LinkCounters& link = device.counters();
   std::printf("link: %llu reports, %llu dropped, %llu corrupt, %llu commands\n",
               static_cast<unsigned long long>(link.reports), static_cast<unsigned long long>(link.dropped),
