@@ -35,6 +35,51 @@ inline constexpr std::size_t device_info_size = 50;
 inline constexpr std::size_t configuration_size = 8;
 inline constexpr std::size_t control_size = 4;
 
+/// Byte offsets of every field, named once for encoders and decoders alike
+/// (docs/device-protocol.md has the same tables). Byte 0 is the report id,
+/// byte 1 the protocol version (the control report: the operation), the
+/// last two bytes the CRC.
+namespace offset {
+inline constexpr std::size_t id = 0;
+inline constexpr std::size_t version = 1;
+namespace state {
+inline constexpr std::size_t sequence = 2;      ///< u16
+inline constexpr std::size_t command_echo = 4;  ///< u16
+inline constexpr std::size_t timestamp = 6;     ///< u32 [us]
+inline constexpr std::size_t encoder = 10;      ///< 3 x i32
+inline constexpr std::size_t gimbal = 22;       ///< 3 x i16
+inline constexpr std::size_t status = 28;       ///< u16
+inline constexpr std::size_t buttons = 30;      ///< u8
+inline constexpr std::size_t torque = 31;       ///< 3 x i16 [mN m]
+inline constexpr std::size_t reserved = 37;     ///< u8, zero
+}  // namespace state
+namespace command {
+inline constexpr std::size_t sequence = 2;   ///< u16
+inline constexpr std::size_t flags = 4;      ///< u8
+inline constexpr std::size_t torque = 5;     ///< 3 x i16 [mN m]
+inline constexpr std::size_t reserved = 11;  ///< 3 x u8, zero
+}  // namespace command
+namespace device_info {
+inline constexpr std::size_t counts_per_rev = 2;     ///< 3 x u32
+inline constexpr std::size_t max_torque = 14;        ///< 3 x u16 [mN m]
+inline constexpr std::size_t l1 = 20;                ///< u32 [um]
+inline constexpr std::size_t l2 = 24;                ///< u32 [um]
+inline constexpr std::size_t q_min = 28;             ///< 3 x i16 [mrad]
+inline constexpr std::size_t q_max = 34;             ///< 3 x i16 [mrad]
+inline constexpr std::size_t max_force = 40;         ///< u16 [mN]
+inline constexpr std::size_t continuous_force = 42;  ///< u16 [mN]
+inline constexpr std::size_t rate = 44;              ///< u16 [Hz]
+inline constexpr std::size_t torque_unit = 46;       ///< u16 [uN m]
+}  // namespace device_info
+namespace configuration {
+inline constexpr std::size_t watchdog = 2;  ///< u16 [us]
+inline constexpr std::size_t reserved = 4;  ///< u16, zero
+}  // namespace configuration
+namespace control {
+inline constexpr std::size_t operation = 1;  ///< u8 ControlOp
+}  // namespace control
+}  // namespace offset
+
 namespace detail {
 /// Byte-wise lookup table of CRC-16/CCITT-FALSE (polynomial 0x1021), built
 /// at compile time.
@@ -106,10 +151,10 @@ inline void seal(std::span<std::uint8_t> b, std::size_t size) noexcept {
 /// Common checks of every decoder: length, id, CRC, version (in that order).
 [[nodiscard]] inline Status check(std::span<const std::uint8_t> b, ReportId id, std::size_t size) noexcept {
   if (b.empty()) return Status::short_report;
-  if (b[0] != static_cast<std::uint8_t>(id)) return Status::unknown_report;
+  if (b[offset::id] != static_cast<std::uint8_t>(id)) return Status::unknown_report;
   if (b.size() < size) return Status::short_report;
   if (get_u16(b, size - 2) != crc16(b.first(size - 2))) return Status::bad_crc;
-  if (b[1] != version) return Status::bad_version;
+  if (b[offset::version] != version) return Status::bad_version;
   return Status::ok;
 }
 }  // namespace detail
@@ -164,18 +209,19 @@ enum class ControlOp : std::uint8_t { arm = 1, disarm = 2, clear_fault = 3, home
 /// Serialises a state report into out (>= state_size bytes); returns the size or 0.
 inline std::size_t encode(const StateReport& r, std::span<std::uint8_t> out) noexcept {
   using namespace detail;
+  namespace at = offset::state;
   if (out.size() < state_size) return 0;
-  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::state));
-  put_u8(out, 1, version);
-  put_u16(out, 2, r.sequence);
-  put_u16(out, 4, r.command_echo);
-  put_u32(out, 6, r.timestamp_us);
-  for (std::size_t i = 0; i < 3; ++i) put_i32(out, 10 + 4 * i, r.encoder[i]);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 22 + 2 * i, r.gimbal[i]);
-  put_u16(out, 28, r.status);
-  put_u8(out, 30, r.buttons);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 31 + 2 * i, r.torque_mnm[i]);
-  put_u8(out, 37, 0);
+  put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::state));
+  put_u8(out, offset::version, version);
+  put_u16(out, at::sequence, r.sequence);
+  put_u16(out, at::command_echo, r.command_echo);
+  put_u32(out, at::timestamp, r.timestamp_us);
+  for (std::size_t i = 0; i < 3; ++i) put_i32(out, at::encoder + 4 * i, r.encoder[i]);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::gimbal + 2 * i, r.gimbal[i]);
+  put_u16(out, at::status, r.status);
+  put_u8(out, at::buttons, r.buttons);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::torque + 2 * i, r.torque_mnm[i]);
+  put_u8(out, at::reserved, 0);
   seal(out, state_size);
   return state_size;
 }
@@ -183,73 +229,78 @@ inline std::size_t encode(const StateReport& r, std::span<std::uint8_t> out) noe
 /// Parses a state report. Never reads outside in.
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, StateReport& r) noexcept {
   using namespace detail;
+  namespace at = offset::state;
   if (const Status s = check(in, ReportId::state, state_size); s != Status::ok) return s;
-  r.sequence = get_u16(in, 2);
-  r.command_echo = get_u16(in, 4);
-  r.timestamp_us = get_u32(in, 6);
-  for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = get_i32(in, 10 + 4 * i);
-  for (std::size_t i = 0; i < 3; ++i) r.gimbal[i] = get_i16(in, 22 + 2 * i);
-  r.status = get_u16(in, 28);
-  r.buttons = in[30];
-  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, 31 + 2 * i);
+  r.sequence = get_u16(in, at::sequence);
+  r.command_echo = get_u16(in, at::command_echo);
+  r.timestamp_us = get_u32(in, at::timestamp);
+  for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = get_i32(in, at::encoder + 4 * i);
+  for (std::size_t i = 0; i < 3; ++i) r.gimbal[i] = get_i16(in, at::gimbal + 2 * i);
+  r.status = get_u16(in, at::status);
+  r.buttons = in[at::buttons];
+  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
   return Status::ok;
 }
 
 inline std::size_t encode(const CommandReport& r, std::span<std::uint8_t> out) noexcept {
   using namespace detail;
+  namespace at = offset::command;
   if (out.size() < command_size) return 0;
-  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::command));
-  put_u8(out, 1, version);
-  put_u16(out, 2, r.sequence);
-  put_u8(out, 4, r.flags);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 5 + 2 * i, r.torque_mnm[i]);
-  for (std::size_t i = 11; i < 14; ++i) put_u8(out, i, 0);
+  put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::command));
+  put_u8(out, offset::version, version);
+  put_u16(out, at::sequence, r.sequence);
+  put_u8(out, at::flags, r.flags);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::torque + 2 * i, r.torque_mnm[i]);
+  for (std::size_t i = at::reserved; i < command_size - 2; ++i) put_u8(out, i, 0);
   seal(out, command_size);
   return command_size;
 }
 
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, CommandReport& r) noexcept {
   using namespace detail;
+  namespace at = offset::command;
   if (const Status s = check(in, ReportId::command, command_size); s != Status::ok) return s;
-  r.sequence = get_u16(in, 2);
-  r.flags = in[4];
+  r.sequence = get_u16(in, at::sequence);
+  r.flags = in[at::flags];
   if ((r.flags & ~(command_flags::arm | command_flags::home)) != 0) return Status::bad_value;
-  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, 5 + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
   return Status::ok;
 }
 
 inline std::size_t encode(const DeviceInfoReport& r, std::span<std::uint8_t> out) noexcept {
   using namespace detail;
+  namespace at = offset::device_info;
   if (out.size() < device_info_size) return 0;
-  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::device_info));
-  put_u8(out, 1, version);
-  for (std::size_t i = 0; i < 3; ++i) put_u32(out, 2 + 4 * i, r.counts_per_rev[i]);
-  for (std::size_t i = 0; i < 3; ++i) put_u16(out, 14 + 2 * i, r.max_torque_mnm[i]);
-  put_u32(out, 20, r.l1_um);
-  put_u32(out, 24, r.l2_um);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 28 + 2 * i, r.q_min_mrad[i]);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, 34 + 2 * i, r.q_max_mrad[i]);
-  put_u16(out, 40, r.max_force_mn);
-  put_u16(out, 42, r.continuous_force_mn);
-  put_u16(out, 44, r.rate_hz);
-  put_u16(out, 46, r.torque_unit_unm);
+  put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::device_info));
+  put_u8(out, offset::version, version);
+  for (std::size_t i = 0; i < 3; ++i) put_u32(out, at::counts_per_rev + 4 * i, r.counts_per_rev[i]);
+  for (std::size_t i = 0; i < 3; ++i) put_u16(out, at::max_torque + 2 * i, r.max_torque_mnm[i]);
+  put_u32(out, at::l1, r.l1_um);
+  put_u32(out, at::l2, r.l2_um);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::q_min + 2 * i, r.q_min_mrad[i]);
+  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::q_max + 2 * i, r.q_max_mrad[i]);
+  put_u16(out, at::max_force, r.max_force_mn);
+  put_u16(out, at::continuous_force, r.continuous_force_mn);
+  put_u16(out, at::rate, r.rate_hz);
+  put_u16(out, at::torque_unit, r.torque_unit_unm);
   seal(out, device_info_size);
   return device_info_size;
 }
 
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, DeviceInfoReport& r) noexcept {
   using namespace detail;
+  namespace at = offset::device_info;
   if (const Status s = check(in, ReportId::device_info, device_info_size); s != Status::ok) return s;
-  for (std::size_t i = 0; i < 3; ++i) r.counts_per_rev[i] = get_u32(in, 2 + 4 * i);
-  for (std::size_t i = 0; i < 3; ++i) r.max_torque_mnm[i] = get_u16(in, 14 + 2 * i);
-  r.l1_um = get_u32(in, 20);
-  r.l2_um = get_u32(in, 24);
-  for (std::size_t i = 0; i < 3; ++i) r.q_min_mrad[i] = get_i16(in, 28 + 2 * i);
-  for (std::size_t i = 0; i < 3; ++i) r.q_max_mrad[i] = get_i16(in, 34 + 2 * i);
-  r.max_force_mn = get_u16(in, 40);
-  r.continuous_force_mn = get_u16(in, 42);
-  r.rate_hz = get_u16(in, 44);
-  r.torque_unit_unm = get_u16(in, 46);
+  for (std::size_t i = 0; i < 3; ++i) r.counts_per_rev[i] = get_u32(in, at::counts_per_rev + 4 * i);
+  for (std::size_t i = 0; i < 3; ++i) r.max_torque_mnm[i] = get_u16(in, at::max_torque + 2 * i);
+  r.l1_um = get_u32(in, at::l1);
+  r.l2_um = get_u32(in, at::l2);
+  for (std::size_t i = 0; i < 3; ++i) r.q_min_mrad[i] = get_i16(in, at::q_min + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i) r.q_max_mrad[i] = get_i16(in, at::q_max + 2 * i);
+  r.max_force_mn = get_u16(in, at::max_force);
+  r.continuous_force_mn = get_u16(in, at::continuous_force);
+  r.rate_hz = get_u16(in, at::rate);
+  r.torque_unit_unm = get_u16(in, at::torque_unit);
   if (r.torque_unit_unm == 0 || r.rate_hz == 0) return Status::bad_value;
   for (std::size_t i = 0; i < 3; ++i)
     if (r.counts_per_rev[i] == 0 || r.counts_per_rev[i] > 0x7FFFFFFFu) return Status::bad_value;
@@ -259,10 +310,10 @@ inline std::size_t encode(const DeviceInfoReport& r, std::span<std::uint8_t> out
 inline std::size_t encode(const ConfigurationReport& r, std::span<std::uint8_t> out) noexcept {
   using namespace detail;
   if (out.size() < configuration_size) return 0;
-  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::configuration));
-  put_u8(out, 1, version);
-  put_u16(out, 2, r.watchdog_us);
-  put_u16(out, 4, 0);
+  put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::configuration));
+  put_u8(out, offset::version, version);
+  put_u16(out, offset::configuration::watchdog, r.watchdog_us);
+  put_u16(out, offset::configuration::reserved, 0);
   seal(out, configuration_size);
   return configuration_size;
 }
@@ -270,15 +321,15 @@ inline std::size_t encode(const ConfigurationReport& r, std::span<std::uint8_t> 
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, ConfigurationReport& r) noexcept {
   using namespace detail;
   if (const Status s = check(in, ReportId::configuration, configuration_size); s != Status::ok) return s;
-  r.watchdog_us = get_u16(in, 2);
+  r.watchdog_us = get_u16(in, offset::configuration::watchdog);
   return r.watchdog_us == 0 ? Status::bad_value : Status::ok;
 }
 
 inline std::size_t encode(ControlOp op, std::span<std::uint8_t> out) noexcept {
   using namespace detail;
   if (out.size() < control_size) return 0;
-  put_u8(out, 0, static_cast<std::uint8_t>(ReportId::control));
-  put_u8(out, 1, static_cast<std::uint8_t>(op));
+  put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::control));
+  put_u8(out, offset::control::operation, static_cast<std::uint8_t>(op));
   seal(out, control_size);
   return control_size;
 }
@@ -287,11 +338,12 @@ inline std::size_t encode(ControlOp op, std::span<std::uint8_t> out) noexcept {
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, ControlOp& op) noexcept {
   using namespace detail;
   if (in.empty()) return Status::short_report;
-  if (in[0] != static_cast<std::uint8_t>(ReportId::control)) return Status::unknown_report;
+  if (in[offset::id] != static_cast<std::uint8_t>(ReportId::control)) return Status::unknown_report;
   if (in.size() < control_size) return Status::short_report;
   if (get_u16(in, control_size - 2) != crc16(in.first(control_size - 2))) return Status::bad_crc;
-  if (in[1] < 1 || in[1] > 4) return Status::bad_value;
-  op = static_cast<ControlOp>(in[1]);
+  const std::uint8_t operation = in[offset::control::operation];
+  if (operation < 1 || operation > 4) return Status::bad_value;
+  op = static_cast<ControlOp>(operation);
   return Status::ok;
 }
 

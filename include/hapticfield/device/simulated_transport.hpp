@@ -66,7 +66,7 @@ class SimulatedTransport final : public Transport {
       Slot slot;
       slot.size = protocol::encode(arm_->report(), slot.bytes);
       if (active(LinkFault::drop, k)) continue;
-      if (active(LinkFault::corrupt, k)) slot.bytes[10] ^= 0x5A;
+      if (active(LinkFault::corrupt, k)) slot.bytes[protocol::offset::state::encoder] ^= 0x5A;
       if (active(LinkFault::reorder, k)) { held_ = slot; holding_ = true; continue; }
       push(slot);
       if (active(LinkFault::duplicate, k)) push(slot);
