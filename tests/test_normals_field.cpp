@@ -172,6 +172,14 @@ TEST_CASE("speed threshold, velocity low-pass and reset") {
   CHECK(field.filtered_velocity() == glm::dvec2{0.0});
 }
 
+TEST_CASE("by default the field adds no second low-pass to the device's filtered velocity") {
+  NormalField field(640, 640, {{rect(-1, -1, 641, 641), tilted(30.0, 0.0)}});
+  const glm::dvec2 p{320.0, 320.0};
+  (void)field.force(field.probe_at(p, {-200.0, 0.0}));
+  (void)field.force(field.probe_at(p, {200.0, 0.0}));
+  CHECK(field.filtered_velocity().x == Approx(200.0));  // the step passes on the same tick: no added lag
+}
+
 TEST_CASE("non-finite probes give zero force and leave the state alone") {
   NormalField field(640, 640, {{rect(-1, -1, 641, 641), tilted(30.0, 0.0)}});
   const glm::dvec2 p{320.0, 320.0};
@@ -377,7 +385,7 @@ TEST_CASE("bad field setup is rejected with a clear error") {
   o.speed_threshold = -1.0;
   CHECK_THROWS_WITH(NormalField(640, 640, {}, o), Catch::Contains("speed_threshold"));
   o = {};
-  o.velocity_cutoff_hz = 0.0;
+  o.velocity_cutoff_hz = -1.0;
   CHECK_THROWS_WITH(NormalField(640, 640, {}, o), Catch::Contains("velocity_cutoff_hz"));
   o = {};
   o.shading_cell_px = std::nan("");

@@ -68,7 +68,10 @@ struct NormalFieldOptions {
   NormalForceMode mode = NormalForceMode::along_motion;
   double max_force = kim_kwon_max_force;  ///< force bound F_max [N]
   double speed_threshold = 0.005;    ///< below this filtered HIP speed no direction, no force [m/s]
-  double velocity_cutoff_hz = 25.0;  ///< first-order low-pass on the HIP velocity [Hz]
+  /// Extra first-order low-pass on the HIP velocity [Hz]; 0 (default): none.
+  /// ForceArm already low-passes the velocity (100 Hz), and two filters in
+  /// a row add their lags; set it for velocity sources that are not filtered.
+  double velocity_cutoff_hz = 0.0;
   double shading_cell_px = 0.0;      ///< force-shading grid spacing [px]; 0 = flat faces
 };
 
@@ -278,9 +281,9 @@ class NormalField {
     if (!std::isfinite(options.speed_threshold) || options.speed_threshold < 0.0)
       throw std::invalid_argument(
           "NormalField: speed_threshold must be finite and non-negative [m/s]");
-    if (!std::isfinite(options.velocity_cutoff_hz) || options.velocity_cutoff_hz <= 0.0)
+    if (!std::isfinite(options.velocity_cutoff_hz) || options.velocity_cutoff_hz < 0.0)
       throw std::invalid_argument(
-          "NormalField: velocity_cutoff_hz must be finite and positive [Hz]");
+          "NormalField: velocity_cutoff_hz must be finite and >= 0 (0: no filter) [Hz]");
     if (!std::isfinite(options.shading_cell_px) || options.shading_cell_px < 0.0)
       throw std::invalid_argument(
           "NormalField: shading_cell_px must be finite and non-negative [px]");
@@ -374,8 +377,11 @@ class NormalField {
  private:
   void update_alpha(double period) noexcept {
     period_ = period;
-    // first-order low-pass, exact discretisation: alpha = 1 - exp(-2 pi fc dt)
-    alpha_ = 1.0 - std::exp(-2.0 * std::numbers::pi * options_.velocity_cutoff_hz * period);
+    // first-order low-pass, exact discretisation: alpha = 1 - exp(-2 pi fc dt);
+    // no cutoff: alpha = 1, the velocity passes unchanged
+    alpha_ = options_.velocity_cutoff_hz > 0.0
+                 ? 1.0 - std::exp(-2.0 * std::numbers::pi * options_.velocity_cutoff_hz * period)
+                 : 1.0;
   }
 
   NormalFieldOptions options_;
