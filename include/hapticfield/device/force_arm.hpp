@@ -65,31 +65,31 @@ class ForceArm {
  public:
   /// @throws std::invalid_argument for bad options, std::runtime_error when
   ///         the device-info feature report cannot be read or is invalid.
-  explicit ForceArm(Transport& transport, ForceArmOptions options = {}) : t_(&transport), o_(std::move(options)) {
-    if (o_.query_device) {
+  explicit ForceArm(Transport& transport, ForceArmOptions options = {}) : transport_(&transport), config_(std::move(options)) {
+    if (config_.query_device) {
       std::array<std::uint8_t, protocol::max_report_size> buf{};
       buf[0] = static_cast<std::uint8_t>(protocol::ReportId::device_info);
       std::size_t size = 0;
       protocol::DeviceInfoReport r;
-      Status s = t_->get_feature(buf, size);
+      Status s = transport_->get_feature(buf, size);
       if (s == Status::ok) s = protocol::decode(std::span<const std::uint8_t>(buf.data(), size), r);
       if (s != Status::ok)
         throw std::runtime_error("ForceArm: reading the device-info feature report failed: " + std::string(to_string(s)));
       apply(r);
     }
-    if (!std::isfinite(o_.velocity_cutoff) || o_.velocity_cutoff <= 0.0)
+    if (!std::isfinite(config_.velocity_cutoff) || config_.velocity_cutoff <= 0.0)
       throw std::invalid_argument("ForceArmOptions: velocity_cutoff must be finite and > 0 [Hz]");
-    if (!std::isfinite(o_.torque_unit) || o_.torque_unit <= 0.0)
+    if (!std::isfinite(config_.torque_unit) || config_.torque_unit <= 0.0)
       throw std::invalid_argument("ForceArmOptions: torque_unit must be finite and > 0 [N m]");
-    if (o_.max_sequence_gap < 1 || o_.max_sequence_gap > 30000)
+    if (config_.max_sequence_gap < 1 || config_.max_sequence_gap > 30000)
       throw std::invalid_argument("ForceArmOptions: max_sequence_gap must be within 1..30000 [reports]");
-    if (o_.resync_reports < 1 || o_.resync_reports > 100)
+    if (config_.resync_reports < 1 || config_.resync_reports > 100)
       throw std::invalid_argument("ForceArmOptions: resync_reports must be within 1..100 [reports]");
-    o_.info.validate();
-    kin_ = PhantomKinematics(o_.kinematics);
+    config_.info.validate();
+    kin_ = PhantomKinematics(config_.kinematics);
   }
 
-  [[nodiscard]] const DeviceInfo& info() const noexcept { return o_.info; }
+  [[nodiscard]] const DeviceInfo& info() const noexcept { return config_.info; }
   [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return kin_; }
   [[nodiscard]] const LinkCounters& counters() const noexcept { return counters_; }
   /// link_events bits of the last read().
@@ -108,7 +108,7 @@ class ForceArm {
     protocol::StateReport newest{};
     for (int i = 0; i < 256; ++i) {
       std::size_t size = 0;
-      const Status s = t_->read(buf_, size, 0);
+      const Status s = transport_->read(buf_, size, 0);
       if (s == Status::no_data || s == Status::timeout) break;
       if (s == Status::disconnected) {  // keep what arrived before the end
         disconnected_ = true;
@@ -125,7 +125,7 @@ class ForceArm {
       const auto diff = static_cast<std::int16_t>(static_cast<std::uint16_t>(r.sequence - reference));
       if (have_last_ || fresh) {
         if (diff == 0) { events_ |= link_events::duplicate; ++counters_.duplicates; continue; }
-        if (diff < 0 || diff > o_.max_sequence_gap) {
+        if (diff < 0 || diff > config_.max_sequence_gap) {
           // One stale report (reordering) or the start of a new stream: hold
           // it until resync_reports consecutive reports confirm a new stream.
           if (diff < 0) { events_ |= link_events::reordered; ++counters_.reordered; }
@@ -133,7 +133,7 @@ class ForceArm {
           if (!(candidate_count_ > 0 && r.sequence == candidate_next_)) candidate_count_ = 0;
           ++candidate_count_;
           candidate_next_ = static_cast<std::uint16_t>(r.sequence + 1);
-          if (candidate_count_ < o_.resync_reports) { held = true; continue; }
+          if (candidate_count_ < config_.resync_reports) { held = true; continue; }
           events_ |= link_events::resynced;
           ++counters_.resyncs;
           candidate_count_ = 0;
@@ -164,16 +164,16 @@ class ForceArm {
     c.flags = static_cast<std::uint8_t>((armed_request_ ? protocol::command_flags::arm : 0) |
                                         (home_request_ ? protocol::command_flags::home : 0));
     const bool ok = have_last_ && std::isfinite(force.x) && std::isfinite(force.y) && std::isfinite(force.z);
-    const glm::dvec3 tau = ok ? kin_.torques(q_, force) : glm::dvec3{0.0};
+    const glm::dvec3 tau = ok ? kin_.torques(angles_, force) : glm::dvec3{0.0};
     for (int i = 0; i < 3; ++i) {
-      const double limit = o_.kinematics.max_torque[i];
+      const double limit = config_.kinematics.max_torque[i];
       const double clamped = std::fmax(-limit, std::fmin(limit, std::isfinite(tau[i]) ? tau[i] : 0.0));
-      const double units = std::fmax(-32767.0, std::fmin(32767.0, std::round(clamped / o_.torque_unit)));
+      const double units = std::fmax(-32767.0, std::fmin(32767.0, std::round(clamped / config_.torque_unit)));
       c.torque_mnm[static_cast<std::size_t>(i)] = static_cast<std::int16_t>(units);
     }
     last_command_ = c;
     const std::size_t n = protocol::encode(c, out_);
-    const Status s = t_->write(std::span<const std::uint8_t>(out_.data(), n));
+    const Status s = transport_->write(std::span<const std::uint8_t>(out_.data(), n));
     if (s == Status::ok) ++counters_.commands; else ++counters_.write_errors;
     if (s == Status::disconnected) disconnected_ = true;
     return s;
@@ -202,36 +202,36 @@ class ForceArm {
     r.watchdog_us = static_cast<std::uint16_t>(std::lround(period * 1e6));
     std::array<std::uint8_t, protocol::configuration_size> b{};
     const std::size_t n = protocol::encode(r, b);
-    return t_->send_feature(std::span<const std::uint8_t>(b.data(), n));
+    return transport_->send_feature(std::span<const std::uint8_t>(b.data(), n));
   }
 
   /// Sends a control feature report (arm, disarm, clear fault, home).
   Status control(protocol::ControlOp op) noexcept {
     std::array<std::uint8_t, protocol::control_size> b{};
     const std::size_t n = protocol::encode(op, b);
-    return t_->send_feature(std::span<const std::uint8_t>(b.data(), n));
+    return transport_->send_feature(std::span<const std::uint8_t>(b.data(), n));
   }
 
   /// The last command written (for tracing and tests).
   [[nodiscard]] const protocol::CommandReport& last_command() const noexcept { return last_command_; }
   [[nodiscard]] bool disconnected() const noexcept { return disconnected_; }
-  [[nodiscard]] Transport& transport() noexcept { return *t_; }
+  [[nodiscard]] Transport& transport() noexcept { return *transport_; }
 
  private:
   void apply(const protocol::DeviceInfoReport& r) {
     for (std::size_t i = 0; i < 3; ++i) {
-      o_.kinematics.counts_per_rev[i] = static_cast<std::int32_t>(r.counts_per_rev[i]);
+      config_.kinematics.counts_per_rev[i] = static_cast<std::int32_t>(r.counts_per_rev[i]);
       const int k = static_cast<int>(i);
-      o_.kinematics.max_torque[k] = r.max_torque_mnm[i] * 1e-3;  // always mN m
-      o_.kinematics.q_min[k] = r.q_min_mrad[i] * 1e-3;
-      o_.kinematics.q_max[k] = r.q_max_mrad[i] * 1e-3;
+      config_.kinematics.max_torque[k] = r.max_torque_mnm[i] * 1e-3;  // always mN m
+      config_.kinematics.q_min[k] = r.q_min_mrad[i] * 1e-3;
+      config_.kinematics.q_max[k] = r.q_max_mrad[i] * 1e-3;
     }
-    o_.kinematics.l1 = r.l1_um * 1e-6;
-    o_.kinematics.l2 = r.l2_um * 1e-6;
-    o_.info.max_force = r.max_force_mn * 1e-3;
-    o_.info.continuous_force = r.continuous_force_mn * 1e-3;
-    o_.info.nominal_rate = r.rate_hz;
-    o_.torque_unit = r.torque_unit_unm * 1e-6;
+    config_.kinematics.l1 = r.l1_um * 1e-6;
+    config_.kinematics.l2 = r.l2_um * 1e-6;
+    config_.info.max_force = r.max_force_mn * 1e-3;
+    config_.info.continuous_force = r.continuous_force_mn * 1e-3;
+    config_.info.nominal_rate = r.rate_hz;
+    config_.torque_unit = r.torque_unit_unm * 1e-6;
   }
 
   void update(const protocol::StateReport& r, DeviceState& s) noexcept {
@@ -243,14 +243,14 @@ class ForceArm {
       const std::uint32_t dt_us = r.timestamp_us - last_timestamp_us_;  // wraps correctly
       const double dt = dt_us * 1e-6;
       if (dt > 0.0 && dt < 0.1) {
-        const double alpha = 1.0 - std::exp(-2.0 * std::numbers::pi * o_.velocity_cutoff * dt);
-        v_ += alpha * ((p - p_) / dt - v_);
+        const double alpha = 1.0 - std::exp(-2.0 * std::numbers::pi * config_.velocity_cutoff * dt);
+        velocity_ += alpha * ((p - position_) / dt - velocity_);
       } else {
-        v_ = glm::dvec3{0.0};
+        velocity_ = glm::dvec3{0.0};
       }
-      v = v_;
+      v = velocity_;
     } else {
-      v_ = v = glm::dvec3{0.0};
+      velocity_ = v = glm::dvec3{0.0};
     }
     s.device_time = t;
     s.position = p;
@@ -258,7 +258,7 @@ class ForceArm {
     s.joint_angles = q;
     s.encoder = r.encoder;
     s.gimbal = r.gimbal;
-    for (int i = 0; i < 3; ++i) s.applied_torque[i] = r.torque_mnm[static_cast<std::size_t>(i)] * o_.torque_unit;
+    for (int i = 0; i < 3; ++i) s.applied_torque[i] = r.torque_mnm[static_cast<std::size_t>(i)] * config_.torque_unit;
     s.sequence = r.sequence;
     s.command_echo = r.command_echo;
     s.flags = r.status;
@@ -267,23 +267,23 @@ class ForceArm {
     if (s.faulted()) events_ |= link_events::device_fault;
     if (s.homed()) home_request_ = false;
     flags_ = r.status;
-    q_ = q;
-    p_ = p;
+    angles_ = q;
+    position_ = p;
     last_sequence_ = r.sequence;
     last_timestamp_us_ = r.timestamp_us;
     have_last_ = true;
   }
 
-  Transport* t_;
-  ForceArmOptions o_;
+  Transport* transport_;
+  ForceArmOptions config_;
   PhantomKinematics kin_{};
   LinkCounters counters_{};
   std::array<std::uint8_t, protocol::max_report_size> buf_{};
   std::array<std::uint8_t, protocol::max_report_size> out_{};
   protocol::CommandReport last_command_{};
-  glm::dvec3 q_{0.0};
-  glm::dvec3 p_{0.0};
-  glm::dvec3 v_{0.0};
+  glm::dvec3 angles_{0.0};
+  glm::dvec3 position_{0.0};
+  glm::dvec3 velocity_{0.0};
   std::uint32_t events_{0};
   std::uint32_t last_timestamp_us_{0};
   std::uint16_t last_sequence_{0};

@@ -57,15 +57,15 @@ class PhantomKinematics {
  public:
   PhantomKinematics() = default;
   /// @throws std::invalid_argument when the configuration makes no sense.
-  explicit PhantomKinematics(const KinematicsConfig& config) : c_(config) { c_.validate(); }
+  explicit PhantomKinematics(const KinematicsConfig& config) : config_(config) { config_.validate(); }
 
-  [[nodiscard]] const KinematicsConfig& config() const noexcept { return c_; }
+  [[nodiscard]] const KinematicsConfig& config() const noexcept { return config_; }
 
   /// Handle position p(q) [m].
   [[nodiscard]] glm::dvec3 forward(const glm::dvec3& q) const noexcept {
-    const double r = c_.l1 * std::cos(q[1]) + c_.l2 * std::sin(q[2]);
-    const double h = c_.l1 * std::sin(q[1]) - c_.l2 * std::cos(q[2]);
-    return {r * std::sin(q[0]), h + c_.l2, r * std::cos(q[0]) - c_.l1};
+    const double r = config_.l1 * std::cos(q[1]) + config_.l2 * std::sin(q[2]);
+    const double h = config_.l1 * std::sin(q[1]) - config_.l2 * std::cos(q[2]);
+    return {r * std::sin(q[0]), h + config_.l2, r * std::cos(q[0]) - config_.l1};
   }
 
   /// Jacobian J = dp/dq [m/rad]; column j is dp/dq_j.
@@ -73,11 +73,11 @@ class PhantomKinematics {
     const double s1 = std::sin(q[0]), c1 = std::cos(q[0]);
     const double s2 = std::sin(q[1]), c2 = std::cos(q[1]);
     const double s3 = std::sin(q[2]), c3 = std::cos(q[2]);
-    const double r = c_.l1 * c2 + c_.l2 * s3;
+    const double r = config_.l1 * c2 + config_.l2 * s3;
     glm::dmat3 j{0.0};
     j[0] = glm::dvec3{r * c1, 0.0, -r * s1};
-    j[1] = glm::dvec3{-c_.l1 * s2 * s1, c_.l1 * c2, -c_.l1 * s2 * c1};
-    j[2] = glm::dvec3{c_.l2 * c3 * s1, c_.l2 * s3, c_.l2 * c3 * c1};
+    j[1] = glm::dvec3{-config_.l1 * s2 * s1, config_.l1 * c2, -config_.l1 * s2 * c1};
+    j[2] = glm::dvec3{config_.l2 * c3 * s1, config_.l2 * s3, config_.l2 * c3 * c1};
     return j;
   }
 
@@ -96,7 +96,7 @@ class PhantomKinematics {
   [[nodiscard]] glm::dvec3 angles(const std::array<std::int32_t, 3>& counts) const noexcept {
     glm::dvec3 q{0.0};
     for (std::size_t i = 0; i < 3; ++i)
-      q[static_cast<int>(i)] = 2.0 * std::numbers::pi * counts[i] / c_.counts_per_rev[i];
+      q[static_cast<int>(i)] = 2.0 * std::numbers::pi * counts[i] / config_.counts_per_rev[i];
     return q;
   }
 
@@ -104,7 +104,7 @@ class PhantomKinematics {
   [[nodiscard]] std::array<std::int32_t, 3> counts(const glm::dvec3& q) const noexcept {
     std::array<std::int32_t, 3> n{};
     for (std::size_t i = 0; i < 3; ++i) {
-      const double c = std::floor(q[static_cast<int>(i)] * c_.counts_per_rev[i] / (2.0 * std::numbers::pi));
+      const double c = std::floor(q[static_cast<int>(i)] * config_.counts_per_rev[i] / (2.0 * std::numbers::pi));
       n[i] = static_cast<std::int32_t>(std::fmax(-2.0e9, std::fmin(2.0e9, std::isfinite(c) ? c : 0.0)));
     }
     return n;
@@ -112,7 +112,7 @@ class PhantomKinematics {
 
  private:
   static double dot(const glm::dvec3& a, const glm::dvec3& b) noexcept { return a.x * b.x + a.y * b.y + a.z * b.z; }
-  KinematicsConfig c_{};
+  KinematicsConfig config_{};
 };
 
 }  // namespace hapticfield

@@ -164,11 +164,11 @@ struct SimulatedArmConfig {
 class SimulatedArm {
  public:
   /// @throws std::invalid_argument when the configuration makes no sense.
-  explicit SimulatedArm(SimulatedArmConfig config = {}) : c_(std::move(config)) {
-    c_.validate();
-    kin_ = PhantomKinematics(c_.kinematics);
-    q_ = c_.initial_q;
-    watchdog_ticks_ = static_cast<std::int64_t>(std::ceil(c_.watchdog * c_.rate - 1e-9));
+  explicit SimulatedArm(SimulatedArmConfig config = {}) : config_(std::move(config)) {
+    config_.validate();
+    kin_ = PhantomKinematics(config_.kinematics);
+    q_ = config_.initial_q;
+    watchdog_ticks_ = static_cast<std::int64_t>(std::ceil(config_.watchdog * config_.rate - 1e-9));
   }
 
   /// Handles an output (command) report; invalid ones are counted and ignored.
@@ -178,13 +178,13 @@ class SimulatedArm {
     ++accepted_;
     last_command_ = cmd;
     last_valid_tick_ = tick_;
-    if ((cmd.flags & protocol::command_flags::home) && !homed_ && homing_left_ < 0) homing_left_ = c_.homing_ticks;
+    if ((cmd.flags & protocol::command_flags::home) && !homed_ && homing_left_ < 0) homing_left_ = config_.homing_ticks;
     if (cmd.flags & protocol::command_flags::arm) {
       if (homed_ && !(faults_ & status_bits::any_fault)) armed_ = true;
     } else {
       armed_ = false;
     }
-    for (std::size_t i = 0; i < 3; ++i) command_torque_[static_cast<int>(i)] = cmd.torque_mnm[i] * c_.torque_unit;
+    for (std::size_t i = 0; i < 3; ++i) command_torque_[static_cast<int>(i)] = cmd.torque_mnm[i] * config_.torque_unit;
   }
 
   /// Gets a feature report (device info or configuration); buffer[0] is the id.
@@ -194,23 +194,23 @@ class SimulatedArm {
       protocol::DeviceInfoReport r;
       for (std::size_t i = 0; i < 3; ++i) {
         const int k = static_cast<int>(i);
-        r.counts_per_rev[i] = static_cast<std::uint32_t>(c_.kinematics.counts_per_rev[i]);
-        r.max_torque_mnm[i] = static_cast<std::uint16_t>(std::lround(c_.kinematics.max_torque[k] * 1e3));
-        r.q_min_mrad[i] = static_cast<std::int16_t>(std::lround(c_.kinematics.q_min[k] * 1e3));
-        r.q_max_mrad[i] = static_cast<std::int16_t>(std::lround(c_.kinematics.q_max[k] * 1e3));
+        r.counts_per_rev[i] = static_cast<std::uint32_t>(config_.kinematics.counts_per_rev[i]);
+        r.max_torque_mnm[i] = static_cast<std::uint16_t>(std::lround(config_.kinematics.max_torque[k] * 1e3));
+        r.q_min_mrad[i] = static_cast<std::int16_t>(std::lround(config_.kinematics.q_min[k] * 1e3));
+        r.q_max_mrad[i] = static_cast<std::int16_t>(std::lround(config_.kinematics.q_max[k] * 1e3));
       }
-      r.torque_unit_unm = static_cast<std::uint16_t>(std::lround(c_.torque_unit * 1e6));
-      r.l1_um = static_cast<std::uint32_t>(std::lround(c_.kinematics.l1 * 1e6));
-      r.l2_um = static_cast<std::uint32_t>(std::lround(c_.kinematics.l2 * 1e6));
-      r.max_force_mn = static_cast<std::uint16_t>(std::lround(c_.max_force * 1e3));
-      r.continuous_force_mn = static_cast<std::uint16_t>(std::lround(c_.continuous_force * 1e3));
-      r.rate_hz = static_cast<std::uint16_t>(std::lround(c_.rate));
+      r.torque_unit_unm = static_cast<std::uint16_t>(std::lround(config_.torque_unit * 1e6));
+      r.l1_um = static_cast<std::uint32_t>(std::lround(config_.kinematics.l1 * 1e6));
+      r.l2_um = static_cast<std::uint32_t>(std::lround(config_.kinematics.l2 * 1e6));
+      r.max_force_mn = static_cast<std::uint16_t>(std::lround(config_.max_force * 1e3));
+      r.continuous_force_mn = static_cast<std::uint16_t>(std::lround(config_.continuous_force * 1e3));
+      r.rate_hz = static_cast<std::uint16_t>(std::lround(config_.rate));
       size = protocol::encode(r, buffer);
       return size ? Status::ok : Status::short_report;
     }
     if (buffer[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
       protocol::ConfigurationReport r;
-      r.watchdog_us = static_cast<std::uint16_t>(std::lround(static_cast<double>(watchdog_ticks_) / c_.rate * 1e6));
+      r.watchdog_us = static_cast<std::uint16_t>(std::lround(static_cast<double>(watchdog_ticks_) / config_.rate * 1e6));
       size = protocol::encode(r, buffer);
       return size ? Status::ok : Status::short_report;
     }
@@ -223,7 +223,7 @@ class SimulatedArm {
     if (bytes[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
       protocol::ConfigurationReport r;
       if (const Status s = protocol::decode(bytes, r); s != Status::ok) return s;
-      watchdog_ticks_ = std::max<std::int64_t>(1, std::llround(r.watchdog_us * 1e-6 * c_.rate));
+      watchdog_ticks_ = std::max<std::int64_t>(1, std::llround(r.watchdog_us * 1e-6 * config_.rate));
       return Status::ok;
     }
     protocol::ControlOp op;
@@ -242,7 +242,7 @@ class SimulatedArm {
                                                 status_bits::over_temperature));
         return Status::ok;
       case protocol::ControlOp::home:
-        if (!homed_ && homing_left_ < 0) homing_left_ = c_.homing_ticks;
+        if (!homed_ && homing_left_ < 0) homing_left_ = config_.homing_ticks;
         return Status::ok;
     }
     return Status::bad_value;
@@ -260,13 +260,13 @@ class SimulatedArm {
     glm::dvec3 tau{0.0};
     if (armed_) {
       for (int i = 0; i < 3; ++i) {
-        const double limit = c_.kinematics.max_torque[i];
-        tau[i] = std::round(std::clamp(command_torque_[i], -limit, limit) / c_.torque_unit) * c_.torque_unit;
+        const double limit = config_.kinematics.max_torque[i];
+        tau[i] = std::round(std::clamp(command_torque_[i], -limit, limit) / config_.torque_unit) * config_.torque_unit;
       }
     }
     applied_torque_ = tau;
-    const double h = 1.0 / (c_.rate * c_.substeps);
-    for (int k = 0; k < c_.substeps; ++k) step(h);
+    const double h = 1.0 / (config_.rate * config_.substeps);
+    for (int k = 0; k < config_.substeps; ++k) step(h);
   }
 
   /// The state report for the current tick (sequence increments each call).
@@ -274,15 +274,15 @@ class SimulatedArm {
     protocol::StateReport r;
     r.sequence = ++sequence_;
     r.command_echo = last_command_.sequence;
-    const double since_boot = static_cast<double>(tick_ - boot_tick_) / c_.rate;  // [s]
+    const double since_boot = static_cast<double>(tick_ - boot_tick_) / config_.rate;  // [s]
     r.timestamp_us = static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(since_boot * 1e6)) & 0xFFFFFFFFu);
     r.encoder = kin_.counts(q_);
     if (!homed_)
-      for (std::size_t i = 0; i < 3; ++i) r.encoder[i] += c_.unhomed_offset[i];
+      for (std::size_t i = 0; i < 3; ++i) r.encoder[i] += config_.unhomed_offset[i];
     r.status = static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
     r.buttons = buttons_;
     for (std::size_t i = 0; i < 3; ++i)
-      r.torque_mnm[i] = static_cast<std::int16_t>(std::lround(applied_torque_[static_cast<int>(i)] / c_.torque_unit));
+      r.torque_mnm[i] = static_cast<std::int16_t>(std::lround(applied_torque_[static_cast<int>(i)] / config_.torque_unit));
     return r;
   }
 
@@ -306,9 +306,9 @@ class SimulatedArm {
   void inject_fault(std::uint16_t bits) noexcept { faults_ |= bits; }
   void release_estop() noexcept { faults_ &= static_cast<std::uint16_t>(~status_bits::estop); }
   void set_buttons(std::uint8_t b) noexcept { buttons_ = b; }
-  void set_hand(const Hand& hand) { hand.path.validate(); c_.hand = hand; }
+  void set_hand(const Hand& hand) { hand.path.validate(); config_.hand = hand; }
 
-  [[nodiscard]] double time() const noexcept { return static_cast<double>(tick_) / c_.rate; }
+  [[nodiscard]] double time() const noexcept { return static_cast<double>(tick_) / config_.rate; }
   [[nodiscard]] std::int64_t ticks() const noexcept { return tick_; }
   [[nodiscard]] glm::dvec3 q() const noexcept { return q_; }
   [[nodiscard]] glm::dvec3 qdot() const noexcept { return qd_; }
@@ -318,7 +318,7 @@ class SimulatedArm {
   /// Force the scripted hand applies to the handle in the last substep [N].
   [[nodiscard]] glm::dvec3 hand_force() const noexcept { return hand_force_; }
   [[nodiscard]] double kinetic_energy() const noexcept {
-    return 0.5 * (c_.inertia.x * qd_.x * qd_.x + c_.inertia.y * qd_.y * qd_.y + c_.inertia.z * qd_.z * qd_.z);
+    return 0.5 * (config_.inertia.x * qd_.x * qd_.x + config_.inertia.y * qd_.y * qd_.y + config_.inertia.z * qd_.z * qd_.z);
   }
   [[nodiscard]] bool armed() const noexcept { return armed_; }
   [[nodiscard]] bool homed() const noexcept { return homed_; }
@@ -326,7 +326,7 @@ class SimulatedArm {
   [[nodiscard]] const protocol::CommandReport& last_command() const noexcept { return last_command_; }
   [[nodiscard]] std::uint64_t commands_accepted() const noexcept { return accepted_; }
   [[nodiscard]] std::uint64_t commands_rejected() const noexcept { return rejected_; }
-  [[nodiscard]] const SimulatedArmConfig& config() const noexcept { return c_; }
+  [[nodiscard]] const SimulatedArmConfig& config() const noexcept { return config_; }
   [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return kin_; }
 
  private:
@@ -335,29 +335,29 @@ class SimulatedArm {
     const glm::dvec3 v = kin_.velocity(q_, qd_);
     glm::dvec3 tau_hand{0.0};
     hand_force_ = glm::dvec3{0.0};
-    if (c_.hand.holding) {
+    if (config_.hand.holding) {
       const double t = time() + substep_ * h;
-      const glm::dvec3 target = c_.hand.path.at(t);
-      const glm::dvec3 target_v = (c_.hand.path.at(t + 1e-4) - target) / 1e-4;
-      hand_force_ = c_.hand.stiffness * (target - p) + c_.hand.damping * (target_v - v);
+      const glm::dvec3 target = config_.hand.path.at(t);
+      const glm::dvec3 target_v = (config_.hand.path.at(t + 1e-4) - target) / 1e-4;
+      hand_force_ = config_.hand.stiffness * (target - p) + config_.hand.damping * (target_v - v);
       tau_hand = kin_.torques(q_, hand_force_);
     }
-    substep_ = (substep_ + 1) % c_.substeps;
+    substep_ = (substep_ + 1) % config_.substeps;
     for (int i = 0; i < 3; ++i) {
-      const double drive = applied_torque_[i] + tau_hand[i] - c_.viscous[i] * qd_[i];
-      double qd = qd_[i] + h * drive / c_.inertia[i];
+      const double drive = applied_torque_[i] + tau_hand[i] - config_.viscous[i] * qd_[i];
+      double qd = qd_[i] + h * drive / config_.inertia[i];
       // Coulomb friction: opposes motion, sticks when it would reverse it.
-      const double dv = h * c_.coulomb[i] / c_.inertia[i];
+      const double dv = h * config_.coulomb[i] / config_.inertia[i];
       if (qd > dv) qd -= dv; else if (qd < -dv) qd += dv; else qd = 0.0;
       double q = q_[i] + h * qd;
-      if (q < c_.kinematics.q_min[i]) { q = c_.kinematics.q_min[i]; qd = std::fmax(qd, 0.0); }
-      if (q > c_.kinematics.q_max[i]) { q = c_.kinematics.q_max[i]; qd = std::fmin(qd, 0.0); }
+      if (q < config_.kinematics.q_min[i]) { q = config_.kinematics.q_min[i]; qd = std::fmax(qd, 0.0); }
+      if (q > config_.kinematics.q_max[i]) { q = config_.kinematics.q_max[i]; qd = std::fmin(qd, 0.0); }
       q_[i] = q;
       qd_[i] = qd;
     }
   }
 
-  SimulatedArmConfig c_;
+  SimulatedArmConfig config_;
   PhantomKinematics kin_{};
   glm::dvec3 q_{0.0};
   glm::dvec3 qd_{0.0};

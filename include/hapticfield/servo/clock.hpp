@@ -41,21 +41,21 @@ struct SteadyClock {
 /// scheduling latency); advance() models compute time. Thread-safe.
 class VirtualClock {
  public:
-  explicit VirtualClock(std::int64_t start = 0) noexcept : t_(start) {}
-  [[nodiscard]] std::int64_t now() const noexcept { return t_.load(std::memory_order_acquire); }
+  explicit VirtualClock(std::int64_t start = 0) noexcept : now_ns_(start) {}
+  [[nodiscard]] std::int64_t now() const noexcept { return now_ns_.load(std::memory_order_acquire); }
   void sleep_until(std::int64_t t) noexcept {
     const std::int64_t target = t + wake_delay_.load(std::memory_order_relaxed);
-    std::int64_t cur = t_.load(std::memory_order_relaxed);
-    while (cur < target && !t_.compare_exchange_weak(cur, target, std::memory_order_acq_rel)) {
+    std::int64_t cur = now_ns_.load(std::memory_order_relaxed);
+    while (cur < target && !now_ns_.compare_exchange_weak(cur, target, std::memory_order_acq_rel)) {
     }
   }
   /// Moves time forward by dt [ns] (e.g. to model compute time in a field).
-  void advance(std::int64_t dt) noexcept { t_.fetch_add(dt, std::memory_order_acq_rel); }
+  void advance(std::int64_t dt) noexcept { now_ns_.fetch_add(dt, std::memory_order_acq_rel); }
   /// Every sleep wakes this late [ns] (scheduling latency model).
   void set_wake_delay(std::int64_t dt) noexcept { wake_delay_.store(dt, std::memory_order_relaxed); }
 
  private:
-  std::atomic<std::int64_t> t_;
+  std::atomic<std::int64_t> now_ns_;
   std::atomic<std::int64_t> wake_delay_{0};
 };
 

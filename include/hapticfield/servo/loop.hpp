@@ -149,11 +149,11 @@ class ServoLoop {
 
   /// @throws std::invalid_argument for a bad rate, priority or safety setting.
   ServoLoop(D& device, C& clock, LoopConfig config = {})
-      : device_(&device), clock_(&clock), c_(config), safety_((c_.validate(), c_.safety), device.info().max_force),
+      : device_(&device), clock_(&clock), config_(config), safety_((config_.validate(), config_.safety), device.info().max_force),
         stats_(std::make_unique<LoopStatistics>()) {
-    period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / c_.rate));
+    period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / config_.rate));
     period_ = static_cast<double>(period_ns_) * 1e-9;
-    const std::string off = c_.safety.disabled_stages();
+    const std::string off = config_.safety.disabled_stages();
     if (!off.empty()) std::fprintf(stderr, "hapticfield: safety stages disabled by configuration: %s\n", off.c_str());
   }
 
@@ -195,7 +195,7 @@ class ServoLoop {
       last_state_time_ = now;
       ticks_without_state_ = 0;
       history_[history_next_++ % history_size] = state_;
-      if (!state_.homed() && c_.auto_home) device_->request_home();
+      if (!state_.homed() && config_.auto_home) device_->request_home();
       if (state_.armed() && armed_since_ < 0) armed_since_ = now;
       if (!state_.armed()) armed_since_ = -1;
     } else {
@@ -259,7 +259,7 @@ class ServoLoop {
   [[nodiscard]] glm::dvec3 last_command() const noexcept { return command_; }
   [[nodiscard]] const DeviceState& state() const noexcept { return state_; }
   [[nodiscard]] double period() const noexcept { return period_; }
-  [[nodiscard]] const LoopConfig& config() const noexcept { return c_; }
+  [[nodiscard]] const LoopConfig& config() const noexcept { return config_; }
   /// True when the last real-time request was fully granted.
   [[nodiscard]] bool realtime_granted() const noexcept { return realtime_granted_; }
 
@@ -280,15 +280,15 @@ class ServoLoop {
     state_.valid = false;
     command_ = glm::dvec3{0.0};
     safety_.restart();
-    if (c_.auto_home) device_->request_home();
-    if (c_.auto_arm) device_->set_armed(true);
+    if (config_.auto_home) device_->request_home();
+    if (config_.auto_arm) device_->set_armed(true);
   }
 
   void clear_now() noexcept {
     safety_.clear();
     missed_in_a_row_ = 0;
     armed_since_ = -1;  // soft start again from the next armed state
-    if (c_.auto_arm) device_->set_armed(true);
+    if (config_.auto_arm) device_->set_armed(true);
   }
 
   /// LoopConfig::recover_after: a stale-state or missed-deadline latch is
@@ -296,9 +296,9 @@ class ServoLoop {
   void maybe_recover() noexcept {
     constexpr std::uint32_t recoverable = safety_events::stale_state | safety_events::missed_deadlines;
     const std::uint32_t latched = safety_.latched();
-    if (c_.recover_after <= 0.0 || !latched || (latched & ~recoverable) || fresh_since_ < 0 || missed_in_a_row_ > 0)
+    if (config_.recover_after <= 0.0 || !latched || (latched & ~recoverable) || fresh_since_ < 0 || missed_in_a_row_ > 0)
       return;
-    if (static_cast<double>(now_ - fresh_since_) * 1e-9 < c_.recover_after) return;
+    if (static_cast<double>(now_ - fresh_since_) * 1e-9 < config_.recover_after) return;
     clear_now();
     stats_->add_recovery();
   }
@@ -312,14 +312,14 @@ class ServoLoop {
 
   void apply_realtime() {
     realtime_granted_ = false;
-    if (c_.realtime == RealTime::off) return;
-    const std::string refused = detail::request_realtime(c_.priority, locked_);
+    if (config_.realtime == RealTime::off) return;
+    const std::string refused = detail::request_realtime(config_.priority, locked_);
     realtime_granted_ = refused.empty();
     if (refused.empty()) return;
     const std::string advice =
         "grant the user real-time limits (e.g. '@realtime - rtprio 95' and '- memlock unlimited' in "
         "/etc/security/limits.d/) or CAP_SYS_NICE and CAP_IPC_LOCK";
-    if (c_.realtime == RealTime::enforce) {
+    if (config_.realtime == RealTime::enforce) {
       restore_realtime();
       throw std::runtime_error("ServoLoop: RealTime::enforce refused: " + refused + "; " + advice);
     }
@@ -329,7 +329,7 @@ class ServoLoop {
   }
 
   void restore_realtime() noexcept {
-    if (c_.realtime == RealTime::off) return;
+    if (config_.realtime == RealTime::off) return;
     sched_param sp{};
     sp.sched_priority = 0;
     pthread_setschedparam(pthread_self(), SCHED_OTHER, &sp);
@@ -339,7 +339,7 @@ class ServoLoop {
 
   void safe_stop() noexcept {
     device_->write(glm::dvec3{0.0});
-    if (c_.disarm_on_exit) {
+    if (config_.disarm_on_exit) {
       device_->set_armed(false);
       device_->write(glm::dvec3{0.0});
     }
@@ -413,7 +413,7 @@ class ServoLoop {
 
   D* device_;
   C* clock_;
-  LoopConfig c_;
+  LoopConfig config_;
   SafetyChain safety_;
   std::unique_ptr<LoopStatistics> stats_;
   std::int64_t period_ns_{1'000'000};

@@ -122,9 +122,9 @@ class SafetyChain {
   static constexpr double max_period = 1.0;
 
   /// @throws std::invalid_argument via SafetyConfig::validate.
-  SafetyChain(const SafetyConfig& config, double device_max_force) : c_(config) {
-    c_.validate(device_max_force);
-    limit_ = c_.max_force > 0.0 ? c_.max_force : device_max_force;
+  SafetyChain(const SafetyConfig& config, double device_max_force) : config_(config) {
+    config_.validate(device_max_force);
+    limit_ = config_.max_force > 0.0 ? config_.max_force : device_max_force;
   }
 
   /// One tick: the force to command [N]. Never non-finite, |F| <= limit,
@@ -135,10 +135,10 @@ class SafetyChain {
     glm::dvec3 f = in.force;
     // 6. watchdog and device faults first: they override everything.
     if (in.disconnected) events_ |= safety_events::disconnected;
-    if (c_.watchdog_enabled) {
-      if (!(in.state_age <= c_.max_state_age)) events_ |= safety_events::stale_state;
-      if (in.ticks_without_state >= c_.max_ticks_without_state) events_ |= safety_events::no_new_state;
-      if (in.missed_in_a_row >= c_.max_missed_deadlines) events_ |= safety_events::missed_deadlines;
+    if (config_.watchdog_enabled) {
+      if (!(in.state_age <= config_.max_state_age)) events_ |= safety_events::stale_state;
+      if (in.ticks_without_state >= config_.max_ticks_without_state) events_ |= safety_events::no_new_state;
+      if (in.missed_in_a_row >= config_.max_missed_deadlines) events_ |= safety_events::missed_deadlines;
     }
     latched_ |= events_ & safety_events::latching;
     if (in.device_fault || !(in.time_since_armed >= 0.0)) events_ |= safety_events::device_fault;
@@ -157,7 +157,7 @@ class SafetyChain {
     //    impedance-causality element): observed energy flowing into the
     //    virtual environment E(n) = sum -F.v dt; when it would go negative,
     //    add damping alpha = -E / (dt |v|^2) so that it does not.
-    if (c_.passivity_enabled) {
+    if (config_.passivity_enabled) {
       const double vv = glm::dot(v, v);
       const double predicted = energy_ - glm::dot(f, v) * in.period;
       if (!std::isfinite(predicted) || !std::isfinite(vv)) {  // extreme velocity: the observer cannot judge
@@ -166,21 +166,21 @@ class SafetyChain {
         return zero(v, in.period);
       }
       if (predicted < 0.0 && vv > 1e-12) {
-        const double alpha = std::fmin(-predicted / (in.period * vv), c_.passivity_max_damping);
+        const double alpha = std::fmin(-predicted / (in.period * vv), config_.passivity_max_damping);
         f -= alpha * v;
         events_ |= safety_events::passivity;
       }
     }
     // 3. clamp, 4. soft start: one limit.
     double limit = limit_;
-    if (c_.soft_start_enabled && in.time_since_armed < c_.soft_start)
-      limit *= std::fmax(0.0, in.time_since_armed) / c_.soft_start;
+    if (config_.soft_start_enabled && in.time_since_armed < config_.soft_start)
+      limit *= std::fmax(0.0, in.time_since_armed) / config_.soft_start;
     glm::dvec3 out = clamp_magnitude(f, limit);
     if (out != f) events_ |= safety_events::clamped;
     // 5. slew limit (inside a ball around the previous command, so the
     //    result stays inside the clamp ball: both balls are convex).
-    if (c_.slew_enabled) {
-      const double step = c_.slew_rate * in.period;
+    if (config_.slew_enabled) {
+      const double step = config_.slew_rate * in.period;
       const glm::dvec3 delta = out - previous_;
       if (glm::dot(delta, delta) > step * step) {
         out = previous_ + clamp_magnitude(delta, step);
@@ -206,13 +206,13 @@ class SafetyChain {
   /// Observed energy into the virtual environment [J] (passivity observer).
   [[nodiscard]] double observed_energy() const noexcept { return energy_; }
   [[nodiscard]] double limit() const noexcept { return limit_; }
-  [[nodiscard]] const SafetyConfig& config() const noexcept { return c_; }
+  [[nodiscard]] const SafetyConfig& config() const noexcept { return config_; }
   [[nodiscard]] glm::dvec3 previous() const noexcept { return previous_; }
 
  private:
   glm::dvec3 zero(const glm::dvec3& v, double period) noexcept { return commit(glm::dvec3{0.0}, v, period); }
   glm::dvec3 commit(const glm::dvec3& out, const glm::dvec3& v, double period) noexcept {
-    if (c_.passivity_enabled && std::isfinite(period)) {
+    if (config_.passivity_enabled && std::isfinite(period)) {
       energy_ -= glm::dot(out, v) * period;
       if (!std::isfinite(energy_)) energy_ = 0.0;  // never leave the observer disabled
     }
@@ -220,7 +220,7 @@ class SafetyChain {
     return out;
   }
 
-  SafetyConfig c_;
+  SafetyConfig config_;
   double limit_{1.0};
   glm::dvec3 previous_{0.0};
   double energy_{0.0};

@@ -47,7 +47,7 @@ class Biquad {
   Biquad() = default;
   /// @throws std::invalid_argument for non-finite coefficients or poles on or
   ///         outside the unit circle (|a2| < 1 and |a1| < 1 + a2 is required).
-  explicit Biquad(const BiquadCoefficients& c) : c_(c) {
+  explicit Biquad(const BiquadCoefficients& c) : coefficients_(c) {
     const double v[] = {c.b0, c.b1, c.b2, c.a1, c.a2};
     for (double x : v)
       if (!std::isfinite(x)) throw std::invalid_argument("Biquad: coefficients must be finite");
@@ -56,9 +56,9 @@ class Biquad {
   }
 
   [[nodiscard]] double process(double x) noexcept {
-    const double y = c_.b0 * x + s1_;
-    s1_ = c_.b1 * x - c_.a1 * y + s2_;
-    s2_ = c_.b2 * x - c_.a2 * y;
+    const double y = coefficients_.b0 * x + s1_;
+    s1_ = coefficients_.b1 * x - coefficients_.a1 * y + s2_;
+    s2_ = coefficients_.b2 * x - coefficients_.a2 * y;
     return y;
   }
   void reset() noexcept { s1_ = s2_ = 0.0; }
@@ -66,12 +66,12 @@ class Biquad {
   /// Complex frequency response at f [Hz] for sample rate fs [Hz].
   [[nodiscard]] std::complex<double> response(double f, double fs) const noexcept {
     const std::complex<double> z1 = std::polar(1.0, -2.0 * std::numbers::pi * f / fs);  // z^-1
-    return (c_.b0 + z1 * (c_.b1 + z1 * c_.b2)) / (1.0 + z1 * (c_.a1 + z1 * c_.a2));
+    return (coefficients_.b0 + z1 * (coefficients_.b1 + z1 * coefficients_.b2)) / (1.0 + z1 * (coefficients_.a1 + z1 * coefficients_.a2));
   }
-  [[nodiscard]] const BiquadCoefficients& coefficients() const noexcept { return c_; }
+  [[nodiscard]] const BiquadCoefficients& coefficients() const noexcept { return coefficients_; }
 
  private:
-  BiquadCoefficients c_{};
+  BiquadCoefficients coefficients_{};
   double s1_{0.0};
   double s2_{0.0};
 };
