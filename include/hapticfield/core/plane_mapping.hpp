@@ -19,7 +19,6 @@ namespace hapticfield {
 /// Kim & Kwon (World Haptics 2013): the device's 100 x 100 mm plane is shown
 /// on screen at 6.4 px/mm.
 inline constexpr double kim_kwon_px_per_mm = 6.4;        // [px/mm]
-inline constexpr double kim_kwon_workspace_mm = 100.0;   // [mm]
 
 class PlaneMapping {
  public:

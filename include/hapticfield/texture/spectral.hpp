@@ -164,11 +164,6 @@ class ModulatedTexture {
   Add n_;
 };
 
-/// A generator that is zero everywhere (for unused terms).
-struct ZeroGenerator {
-  [[nodiscard]] glm::dvec3 operator()(const glm::dvec3&) const noexcept { return glm::dvec3{0.0}; }
-};
-
 static_assert(SpatialGenerator<FourierSynthesis>);
 static_assert(SpatialGenerator<Fbm<GaussianNoise>>);
 
