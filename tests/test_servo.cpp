@@ -937,3 +937,134 @@ TEST_CASE("safety chain: an extreme velocity cannot disable the passivity observ
   CHECK(std::isfinite(chain.observed_energy()));
   CHECK(chain.observed_energy() >= -1e-12);
 }
+
+// ------------------------------------------------------- pacing: early, late
+
+TEST_CASE("an early wake-up sleeps again: no short period and no double-length one after it") {
+  Rig rig(free_arm());
+  std::vector<std::int64_t> wakes;
+  wakes.reserve(100);
+  auto cb = [&](const TickInput& in) {
+    wakes.push_back(rig.clock.now());
+    if (in.tick == 20) rig.clock.shift_next_wake(-400'000);  // the next sleep returns 0.4 ms early
+    return glm::dvec3{0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 40});
+  REQUIRE(wakes.size() == 40);
+  for (std::size_t i = 1; i < wakes.size(); ++i) CHECK(wakes[i] - wakes[i - 1] == 1'000'000);
+  CHECK(rig.loop.statistics().overruns == 0);
+}
+
+TEST_CASE("a late wake-up is followed by the next deadline on the grid, not a burst") {
+  Rig rig(free_arm());
+  std::vector<std::int64_t> wakes;
+  wakes.reserve(100);
+  auto cb = [&](const TickInput& in) {
+    wakes.push_back(rig.clock.now());
+    if (in.tick == 20) rig.clock.shift_next_wake(2'600'000);  // the next wake is 2.6 ms late
+    return glm::dvec3{0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 40});
+  REQUIRE(wakes.size() == 40);
+  CHECK(wakes[21] - wakes[20] == 3'600'000);  // woke late, inside the period of deadline +3 ms
+  CHECK(wakes[22] - wakes[21] == 400'000);    // the next deadline on the grid: +4 ms (not at once, not +1 ms later)
+  for (std::size_t i = 23; i < wakes.size(); ++i) CHECK(wakes[i] - wakes[i - 1] == 1'000'000);
+  CHECK(rig.loop.statistics().wake_max == Approx(2.6e-3).margin(1e-12));
+  CHECK(rig.loop.statistics().latches == 0);
+}
+
+// ----------------------------------------------------------- two arms, one loop
+
+namespace {
+/// Two simulated arms with their links on one virtual clock.
+struct TwoArms {
+  VirtualClock clock;
+  SimulatedArm arm_a, arm_b;
+  SimulatedTransport link_a, link_b;
+  ForceArm device_a, device_b;
+  MultiArmLoop<ForceArm, 2, VirtualClock> loop;
+  explicit TwoArms(ArmFaultPolicy policy = ArmFaultPolicy::isolate)
+      : arm_a(free_arm()), arm_b(free_arm()), link_a(arm_a, [this] { return clock.now(); }),
+        link_b(arm_b, [this] { return clock.now(); }, 0.25), device_a(link_a), device_b(link_b),
+        loop({&device_a, &device_b}, clock, Rig::quiet({}), policy) {}
+};
+}  // namespace
+
+TEST_CASE("two arms on one deadline: each its own field, soft start and statistics") {
+  TwoArms rig;
+  Constant push_a{{0.0, 0.8, 0.0}}, push_b{{0.5, 0.0, 0.0}};
+  CHECK(rig.loop.run({.max_ticks = 1000}, push_a, push_b) == StopReason::tick_limit);
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.ticks == 1000);
+  CHECK_THAT(s.rate, WithinAbs(1000.0, 1e-9));
+  CHECK(s.overruns == 0);
+  CHECK_THAT(rig.loop.arm(0).statistics().peak_force, WithinAbs(0.8, 1e-12));
+  CHECK_THAT(rig.loop.arm(1).statistics().peak_force, WithinAbs(0.5, 1e-12));
+  CHECK(rig.arm_a.homed());
+  CHECK(rig.arm_b.homed());
+  CHECK(rig.arm_a.last_command().torque_mnm == std::array<std::int16_t, 3>{0, 0, 0});
+  CHECK(rig.arm_b.last_command().torque_mnm == std::array<std::int16_t, 3>{0, 0, 0});
+}
+
+TEST_CASE("two arms: a fault on one zeroes that arm only (isolate) or both (stop_all)") {
+  for (const ArmFaultPolicy policy : {ArmFaultPolicy::isolate, ArmFaultPolicy::stop_all}) {
+    INFO("policy " << static_cast<int>(policy));
+    TwoArms rig(policy);
+    rig.link_b.inject(LinkFault::stall, 500, 30);  // arm b's link stalls for 30 ms: stale state latches b
+    Constant push_a{{0.0, 0.8, 0.0}}, push_b{{0.0, 0.8, 0.0}};
+    rig.loop.run({.max_ticks = 900}, push_a, push_b);
+    CHECK((rig.loop.arm(1).safety().latched() & safety_events::stale_state) != 0);
+    if (policy == ArmFaultPolicy::isolate) {
+      CHECK(rig.loop.arm(0).safety().latched() == 0);
+      CHECK(rig.loop.arm(0).statistics().latches == 0);
+    } else {
+      CHECK(rig.loop.arm(0).safety().latched() == safety_events::other_arm);
+      CHECK(rig.loop.arm(0).statistics().latches == 1);
+    }
+    CHECK(rig.loop.arm(1).statistics().latches == 1);
+  }
+}
+
+TEST_CASE("two arms: forces while a fault holds, tick by tick") {
+  TwoArms rig(ArmFaultPolicy::isolate);
+  rig.link_b.inject(LinkFault::unplug, 600);
+  std::vector<glm::dvec3> a, b;
+  a.reserve(1000);
+  b.reserve(1000);
+  struct Recorder {
+    const ServoLoop<ForceArm, VirtualClock>* loop;
+    std::vector<glm::dvec3>* log;
+    glm::dvec3 push;
+    glm::dvec3 force(const Probe&) const noexcept {
+      if (log->size() < log->capacity()) log->push_back(loop->last_command());
+      return push;
+    }
+  };
+  Recorder ra{&rig.loop.arm(0), &a, {0.0, 0.8, 0.0}}, rb{&rig.loop.arm(1), &b, {0.0, 0.8, 0.0}};
+  CHECK(rig.loop.run({.max_ticks = 900}, ra, rb) == StopReason::tick_limit);  // isolate: a carries on alone
+  REQUIRE(a.size() == 900);
+  REQUIRE(b.size() == 900);
+  CHECK_THAT(a.back().y, WithinAbs(0.8, 1e-12));
+  for (std::size_t i = 603; i < b.size(); ++i) CHECK(b[i] == glm::dvec3{0.0});
+  CHECK((rig.loop.arm(1).safety().latched() & safety_events::disconnected) != 0);
+}
+
+TEST_CASE("two arms: a run refuses to start over a latched arm; the README's stop pattern works") {
+  TwoArms rig;
+  rig.link_b.inject(LinkFault::stall, 100, 30);
+  Constant push{{0.0, 0.5, 0.0}};
+  rig.loop.run({.max_ticks = 300}, push, push);
+  CHECK_THROWS_AS(rig.loop.run({.max_ticks = 10}, push, push), ServoError);
+  rig.loop.clear_fault(1);
+  rig.loop.request_stop();
+  CHECK(rig.loop.run({}, push, push) == StopReason::requested);
+  CHECK(rig.loop.statistics().ticks == 300);  // the stopped run ran no tick
+}
+
+TEST_CASE("two arms: no heap allocation per tick") {
+  TwoArms rig;
+  Wall wall;
+  rig.loop.run({.max_ticks = 100}, wall, wall);  // warm up
+  const long allocations = test::count_allocations([&] { rig.loop.run({.max_ticks = 2000}, wall, wall); });
+  CHECK(allocations == 0);
+}

@@ -44,7 +44,8 @@ class VirtualClock {
   explicit VirtualClock(std::int64_t start = 0) noexcept : now_ns_(start) {}
   [[nodiscard]] std::int64_t now() const noexcept { return now_ns_.load(std::memory_order_acquire); }
   void sleep_until(std::int64_t t) noexcept {
-    const std::int64_t target = t + wake_delay_.load(std::memory_order_relaxed);
+    const std::int64_t once = once_.exchange(0, std::memory_order_relaxed);
+    const std::int64_t target = t + wake_delay_.load(std::memory_order_relaxed) + once;
     std::int64_t cur = now_ns_.load(std::memory_order_relaxed);
     while (cur < target && !now_ns_.compare_exchange_weak(cur, target, std::memory_order_acq_rel)) {
     }
@@ -53,10 +54,14 @@ class VirtualClock {
   void advance(std::int64_t dt) noexcept { now_ns_.fetch_add(dt, std::memory_order_acq_rel); }
   /// Every sleep wakes this late [ns] (scheduling latency model).
   void set_wake_delay(std::int64_t dt) noexcept { wake_delay_.store(dt, std::memory_order_relaxed); }
+  /// The next sleep only wakes dt [ns] late (dt > 0: a scheduling stall) or
+  /// early (dt < 0: a spurious early return, before the deadline).
+  void shift_next_wake(std::int64_t dt) noexcept { once_.store(dt, std::memory_order_relaxed); }
 
  private:
   std::atomic<std::int64_t> now_ns_;
   std::atomic<std::int64_t> wake_delay_{0};
+  std::atomic<std::int64_t> once_{0};
 };
 
 static_assert(ServoClock<SteadyClock>);

@@ -33,6 +33,7 @@
 #include "hapticfield/core/probe.hpp"
 #include "hapticfield/device/state.hpp"
 #include "hapticfield/servo/clock.hpp"
+#include "hapticfield/servo/pacer.hpp"
 #include "hapticfield/servo/safety.hpp"
 #include "hapticfield/servo/statistics.hpp"
 
@@ -142,8 +143,14 @@ inline std::atomic<bool>& realtime_warned() {
 ///   ServoLoop loop(device, clock);
 ///   loop.run(my_field, {.max_ticks = 1000});
 /// @endcode
+template <Device D, std::size_t N, ServoClock C>
+class MultiArmLoop;
+
 template <Device D, ServoClock C = SteadyClock>
 class ServoLoop {
+  template <Device, std::size_t, ServoClock>
+  friend class MultiArmLoop;
+
  public:
   static constexpr std::size_t history_size = 8;  ///< states kept for ServoError
 
@@ -348,9 +355,10 @@ class ServoLoop {
     started_ = false;   // read_once() after a run starts afresh (homing, arming, soft start)
   }
 
-  template <class Compute>
-  StopReason run_impl(Compute& compute, RunLimits limits) {
-    limits.validate();
+  /// What every run does before its first tick: a pending clear_fault()
+  /// (with the device's own fault), the latch check, then begin().
+  /// @throws ServoError when a latched fault forbids arming.
+  void prepare_run(std::int64_t now) {
     if (clear_requested_.exchange(false, std::memory_order_acq_rel)) {
       clear_now();
       // Between runs (not in a tick) a device's own latched fault can be
@@ -361,21 +369,49 @@ class ServoLoop {
       throw ServoError("ServoLoop: cannot arm: the safety chain latched (" + safety_events::names(latched) +
                            ") in an earlier run; remove the cause and call clear_fault() first",
                        last_states());
+    begin(now);
+  }
+
+  /// The watchdog's view of how the tick ended: late (one event, whatever
+  /// it skipped) or on time.
+  void note_deadline(bool overran) noexcept {
+    if (overran) {
+      ++missed_in_a_row_;
+      fresh_since_ = -1;
+    } else {
+      missed_in_a_row_ = 0;
+    }
+  }
+
+  /// Latches a fault from outside the chain (another arm, a throwing
+  /// callback): zero force, disarm, counted.
+  void latch_fault(std::uint32_t bits) noexcept {
+    const std::uint32_t before = safety_.latched();
+    safety_.latch(bits);
+    if (!before) {
+      device_->set_armed(false);
+      stats_->add_latch(safety_.latched());
+    }
+  }
+
+  template <class Compute>
+  StopReason run_impl(Compute& compute, RunLimits limits) {
+    limits.validate();
+    prepare_run(clock_->now());
     apply_realtime();
     struct Restore {
       ServoLoop* self;
       ~Restore() { self->restore_realtime(); }
     } restore{this};
-    std::int64_t deadline = clock_->now();
-    std::int64_t previous_wake = deadline;
-    begin(deadline);
+    Pacer pacer(period_ns_);
+    pacer.start(clock_->now());
     const std::uint64_t first_tick = tick_;
     TickInput in;
     for (;;) {
       if (stop_.exchange(false, std::memory_order_acq_rel)) { safe_stop(); return StopReason::requested; }
       if (tick_ - first_tick >= limits.max_ticks) { safe_stop(); return StopReason::tick_limit; }
-      clock_->sleep_until(deadline);
-      const std::int64_t wake = clock_->now();
+      const std::int64_t deadline = pacer.deadline();
+      const std::int64_t wake = pacer.wait(*clock_);
       read_once(in);
       glm::dvec3 f{0.0};
       if constexpr (std::is_nothrow_invocable_v<Compute&, const TickInput&>) {
@@ -384,8 +420,7 @@ class ServoLoop {
         try {
           f = compute(in);
         } catch (...) {
-          safety_.latch(safety_events::callback_threw);
-          stats_->add_latch(safety_.latched());
+          latch_fault(safety_events::callback_threw);
           safe_stop();
           std::throw_with_nested(ServoError("ServoLoop: the callback threw at tick " + std::to_string(in.tick) +
                                                 "; zero force commanded and the arm disarmed",
@@ -394,19 +429,13 @@ class ServoLoop {
       }
       write_once(f);
       const std::int64_t end = clock_->now();
-      stats_->record(wake, wake - previous_wake, wake - deadline, end - wake);
-      previous_wake = wake;
-      deadline += period_ns_;
-      if (end > deadline) {  // overran: skip whole periods instead of bursting
-        const std::int64_t skipped = (end - deadline) / period_ns_ + 1;
-        deadline += skipped * period_ns_;
+      stats_->record(wake, pacer.period_observed(), wake - deadline, end - wake);
+      const std::int64_t skipped = pacer.finish(end);  // overran: whole periods skipped, no burst
+      if (skipped > 0) {
         stats_->add_missed(static_cast<std::uint64_t>(skipped));
         stats_->add_overrun();
-        ++missed_in_a_row_;  // one late tick is one event, however many periods it skipped
-        fresh_since_ = -1;
-      } else {
-        missed_in_a_row_ = 0;
       }
+      note_deadline(skipped > 0);
       if (disconnected_) { safe_stop(); return StopReason::disconnected; }
     }
   }

@@ -39,8 +39,9 @@ inline constexpr std::uint32_t no_new_state = 1u << 9;      ///< K ticks without
 inline constexpr std::uint32_t bad_period = 1u << 10;       ///< period NaN, Inf or outside [1e-4, 1] s: zero (the slew limit needs it)
 inline constexpr std::uint32_t energy_overflow = 1u << 11;  ///< passivity energy went non-finite: zero, observer reset
 inline constexpr std::uint32_t link_resync = 1u << 12;      ///< the device's report stream jumped: zero until it is consistent
+inline constexpr std::uint32_t other_arm = 1u << 13;        ///< another arm of a MultiArmLoop latched (ArmFaultPolicy::stop_all)
 /// Events that latch the watchdog until SafetyChain::clear().
-inline constexpr std::uint32_t latching = stale_state | missed_deadlines | disconnected | callback_threw;
+inline constexpr std::uint32_t latching = stale_state | missed_deadlines | disconnected | callback_threw | other_arm;
 /// Events that zero the force for this tick without latching.
 inline constexpr std::uint32_t zeroing = non_finite | device_fault | no_new_state | bad_period | energy_overflow |
                                           link_resync;
@@ -50,7 +51,8 @@ inline constexpr std::uint32_t zeroing = non_finite | device_fault | no_new_stat
   static constexpr const char* table[] = {"non-finite force", "clamped", "slew limited", "passivity",
                                           "stale state", "missed deadlines", "device fault or not armed",
                                           "disconnected", "callback threw", "no new state", "bad period",
-                                          "passivity energy overflow", "link resynchronising"};
+                                          "passivity energy overflow", "link resynchronising",
+                                          "another arm latched"};
   std::string s;
   for (std::uint32_t i = 0; i < sizeof table / sizeof table[0]; ++i)
     if (events & (1u << i)) s += (s.empty() ? "" : ", ") + std::string(table[i]);
