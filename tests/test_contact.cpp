@@ -292,6 +292,19 @@ TEST_CASE("a texture with axes {1, 1, 0} acts only in the tangent plane; {0, 0, 
   CHECK(f == lateral.last_contact().force);
 }
 
+TEST_CASE("inside a contact the local circle works in the touched surface's tangent plane") {
+  const glm::dvec3 n = glm::normalize(glm::dvec3{1.0, 0.0, 1.0});
+  const SurfaceFrame frame = surface_frame(n);
+  // configured for a +z surface; the tilted plane's normal must win
+  auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, n, 1000.0, 0.0}),
+                       TextureField(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 4, 1e-3, glm::dvec3{0, 0, 1}),
+                                    TextureParams{1.0, 0.0, false, glm::dvec3{1.0}}));
+  for (int i = 1; i <= 50; ++i) (void)field.force(probe_at(-i * 1e-4 * n, -0.01 * n));  // 5 mm straight in
+  CHECK(field.part<0>().source().samples_drawn() == 2);  // the first pair only
+  for (int i = 1; i <= 50; ++i) (void)field.force(probe_at(-5e-3 * n + i * 1e-4 * frame.tangent1, 0.01 * frame.tangent1));
+  CHECK(field.part<0>().source().samples_drawn() >= 6);  // 5 mm along the surface: a sample per mm
+}
+
 // --- bad input in a tick, allocation ------------------------------------------------------------
 
 TEST_CASE("non-finite probe data give zero force") {
