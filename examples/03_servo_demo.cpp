@@ -84,14 +84,6 @@ Options parse(int argc, char** argv) {
 
 // ---- simple fields defined here (the device and servo layers know none) ----
 
-/// A stiff virtual wall: the picture's plane z = 0, solid behind it (z < 0).
-struct PlaneWall {
-  double stiffness{1500.0};  // [N/m]
-  glm::dvec3 force(const Probe& p) const noexcept {
-    return p.position.z < 0.0 ? glm::dvec3{0.0, 0.0, -stiffness * p.position.z} : glm::dvec3{0.0};
-  }
-};
-
 /// A spring to the workspace centre with a little damping.
 struct CentreSpring {
   double stiffness{40.0};  // [N/m]
@@ -101,14 +93,17 @@ struct CentreSpring {
 
 /// The one place fields are chosen by name.
 AnyField make_field(const std::string& name, const cv::Mat& image, const PlaneMapping& mapping) {
+  // A stiff virtual wall: the picture's plane z = 0, solid behind it (z < 0).
+  const PlaneConstraint wall(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});  // [m], [N/m]
   if (name == "tangible") {
-    // The picture's forces (Prewitt 17 x 17, 1 N at a black/white edge) in
-    // its plane, on top of the wall that holds the hand on the plane.
+    // The wall holds the hand on the plane (Fc); while it touches the plane
+    // the hand feels the picture's forces (Prewitt 17 x 17, 1 N at a
+    // black/white edge) on top: F = Fc + picture.
     TangibleOptions options;
     options.border = Border::fade;
-    return AnyField(sum(PlaneWall{}, TangibleImageField(TangibleImage(to_gray(image), options), mapping, 1.0)));
+    return AnyField(contact(wall, TangibleImageField(TangibleImage(to_gray(image), options), mapping, 1.0)));
   }
-  if (name == "wall") return AnyField(PlaneWall{});
+  if (name == "wall") return AnyField(wall);
   if (name == "spring") return AnyField(CentreSpring{});
   if (name == "none") return AnyField(ZeroField{});
   usage("unknown field '" + name + "' (choose tangible, wall, spring or none)");

@@ -1,7 +1,8 @@
 // texture_gallery [--out DIR] [--hatt DIR]
 //
 // Strokes every texture kind of the library along a straight line at a fixed
-// speed (50 mm/s, 1 N normal force, 1 kHz servo rate, 2 s) and writes, per
+// speed (50 mm/s, 1 kHz servo rate, 2 s) on the plane z = 0 pressed with
+// 1 N, F = Fc + texture through contact() (flow: in free space), and writes, per
 // kind, the force trace and its power spectrum as a PNG plot and CSV files,
 // plus gallery.png with all the plots. With --hatt DIR, also every HaTT
 // modelSet file in DIR (the toolkit's XML/ folder). No device is driven.
@@ -33,7 +34,8 @@ namespace {
 constexpr double rate = 1000.0;     // servo rate [Hz]
 constexpr double speed = 0.05;      // stroke speed [m/s]
 constexpr double duration = 2.0;    // [s]
-constexpr double normal_force = 1.0;  // [N]
+constexpr double normal_force = 1.0;  // |Fc| [N]
+constexpr double stiffness = 1000.0;  // of the stroked plane [N/m]
 
 struct Trace {
   std::string name;
@@ -42,18 +44,17 @@ struct Trace {
   int axis{0};                    // component plotted
 };
 
-// one stroke along +x at constant speed
+// one stroke along +x at constant speed, pressed normal_force / stiffness into z = 0
 template <class Field>
-Trace stroke(const std::string& name, const std::string& description, Field&& field, double rate_hz = rate) {
+Trace stroke_field(const std::string& name, const std::string& description, Field& field, double rate_hz) {
   Trace t{name, description, {}, 0};
   const int n = static_cast<int>(duration * rate_hz);
   for (int i = 0; i < n; ++i) {
     Probe p;
     p.time = i / rate_hz;
     p.period = 1.0 / rate_hz;
-    p.position = glm::dvec3{-0.05 + speed * p.time, 0.002, 0.0};
+    p.position = glm::dvec3{-0.05 + speed * p.time, 0.002, -normal_force / stiffness};
     p.velocity = glm::dvec3{speed, 0.0, 0.0};
-    p.normal_force = normal_force;
     t.force.push_back(field.force(p));
   }
   double best = -1;
@@ -65,6 +66,21 @@ Trace stroke(const std::string& name, const std::string& description, Field&& fi
     if (v > best) best = v, t.axis = k;
   }
   return t;
+}
+
+// a texture or friction on the plane: F = Fc + part, the part seeing |Fc| = 1 N
+// and the plane's normal +z of each tick
+template <class Field>
+Trace stroke(const std::string& name, const std::string& description, Field&& part, double rate_hz = rate) {
+  auto on_plane = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, stiffness, 0.0}),
+                          std::forward<Field>(part));
+  return stroke_field(name, description, on_plane, rate_hz);
+}
+
+// a field felt in free space (flow), on the same path
+template <class Field>
+Trace stroke_free(const std::string& name, const std::string& description, Field&& field, double rate_hz = rate) {
+  return stroke_field(name, description, field, rate_hz);
 }
 
 // Welch power spectral density [N^2/Hz], Hann window, 256-sample segments, 50 % overlap
@@ -211,7 +227,7 @@ int main(int argc, char** argv) {
                      Arma<2, 1>({-2.0 * 0.95 * std::cos(2 * std::numbers::pi * 80.0 / rate), 0.95 * 0.95}, {1.0, 0.5}))));
     traces.push_back(stroke("friction", "Coulomb mu = 0.3 (smoothed) + viscous 2 N s/m, opposing +x",
         Friction(FrictionParams{0.3, 2.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
-    traces.push_back(stroke("flow", "3D vector lattice 2 mm, mean shift 0.2 N in -x, drag 1 N s/m",
+    traces.push_back(stroke_free("flow", "3D vector lattice 2 mm, mean shift 0.2 N in -x, drag 1 N s/m",
         FlowTexture(NoiseLattice<GaussianNoise, 3>(GaussianNoise(0.2), 14, grain * 2.0, Interpolation::cubic),
                     FlowParams{glm::dvec3{-0.2, 0, 0}, 1.0, 1.0})));
 

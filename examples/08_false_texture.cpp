@@ -77,15 +77,20 @@ int main(int argc, char** argv) {
         names.push_back("square grating " + std::to_string(period * 1e3).substr(0, 4) + " mm");
       }
     }
-    FalseTexture false_texture(labels, std::move(textures));
+    // the picture lies on the plane z = 0 (1000 N/m): each field is
+    // F = Fc + part, the part seeing |Fc| and the plane's normal of the tick
+    const PlaneConstraint picture(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0});
+    auto false_texture = contact(picture, FalseTexture(labels, std::move(textures)));
     // data visualisation: brightness (0..1) raises friction from mu = 0.1 to
     // 0.6, and darkness raises the amplitude of a fine Gaussian texture
     const ScalarMap brightness = scalar_map_from_image(image, mapping);
-    DataModulated friction(Friction(FrictionParams{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}}), brightness, 0.1, 0.5);
-    DataModulated data_texture(
-        TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 99, glm::dvec3{0.4e-3})),
-                     TextureParams{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
-        brightness, 1.0, -1.0);  // amplitude 1 - brightness
+    auto friction = contact(picture, DataModulated(Friction(FrictionParams{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0.0}}),
+                                                   brightness, 0.1, 0.5));
+    auto data_texture = contact(
+        picture,
+        DataModulated(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 99, glm::dvec3{0.4e-3})),
+                                   TextureParams{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
+                      brightness, 1.0, -1.0));  // amplitude 1 - brightness
 
     fs::create_directories(out);
     std::ofstream csv(out / "strokes.csv");
@@ -98,14 +103,13 @@ int main(int argc, char** argv) {
       false_texture.reset();
       for (int i = 0; i * speed / rate < 0.1; ++i) {
         Probe p;
-        p.position = glm::dvec3{-0.05 + i * speed / rate, y, 0.0};
+        p.position = glm::dvec3{-0.05 + i * speed / rate, y, -1e-3};  // pressed 1 mm: |Fc| = 1 N
         p.velocity = glm::dvec3{speed, 0.0, 0.0};
-        p.normal_force = 1.0;
         p.time = i / rate;
         const glm::dvec3 ft = false_texture.force(p);
         const glm::dvec3 ff = friction.force(p);
         const glm::dvec3 fd = data_texture.force(p);
-        const int region = false_texture.region(p.position);
+        const int region = false_texture.part<0>().region(p.position);
         csv << s << ',' << p.position.x * 1e3 << ',' << y * 1e3 << ',' << region << ',' << ft.x << ',' << ft.y << ','
             << ff.x << ',' << fd.x << '\n';
         if (s == 1) middle_ft.push_back(ft.x), middle_ff.push_back(ff.x), middle_region.push_back(region);

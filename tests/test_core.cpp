@@ -51,6 +51,7 @@ TEST_CASE("Probe members start at zero with the nominal period") {
   CHECK(p.position == glm::dvec3{0.0});
   CHECK(p.velocity == glm::dvec3{0.0});
   CHECK(p.normal_force == 0.0);
+  CHECK(p.surface_normal == glm::dvec3{0.0});  // no surface until a contact sets one
   CHECK(p.time == 0.0);
   CHECK(p.period == servo_period);
 }

@@ -11,6 +11,11 @@
 /// does not flip sign every tick while the hand is nearly still (no chatter).
 /// With scale_with_normal_force, c is a friction coefficient mu and the
 /// Coulomb force is mu |Fc| (Probe::normal_force).
+///
+/// Friction acts in the tangent plane of the surface being touched: the
+/// probe's surface_normal when it has one (a ContactField sets it, with |Fc|
+/// of the same tick), otherwise the configured surface_normal (zero: in 3D,
+/// for friction in free space).
 
 #include <cmath>
 #include <stdexcept>
@@ -19,6 +24,7 @@
 #include <glm/vec3.hpp>
 
 #include "hapticfield/core/probe.hpp"
+#include "hapticfield/core/surface_frame.hpp"
 #include "hapticfield/core/vector_math.hpp"
 
 namespace hapticfield::texture {
@@ -29,7 +35,7 @@ struct FrictionParams {
   double drag{0.0};             ///< d [N s^2/m^2]
   double smoothing_speed{2e-3}; ///< u0 [m/s]: width of the smoothed stick region
   bool scale_with_normal_force{false};  ///< Coulomb force = c |Fc|
-  glm::dvec3 surface_normal{0.0};       ///< unit normal: friction acts in the tangent plane; zero: 3D
+  glm::dvec3 surface_normal{0.0};       ///< unit normal used when the probe has none: tangent-plane friction; zero: 3D
 };
 
 class Friction {
@@ -49,9 +55,10 @@ class Friction {
   }
 
   [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept {
-    if (!is_finite(probe.velocity) || !std::isfinite(probe.normal_force)) return glm::dvec3{0.0};
-    glm::dvec3 v = probe.velocity;
-    v -= glm::dot(v, p_.surface_normal) * p_.surface_normal;
+    if (!is_finite(probe.velocity) || !std::isfinite(probe.normal_force) || !is_finite(probe.surface_normal))
+      return glm::dvec3{0.0};
+    const glm::dvec3 n = surface_normal_of(probe, p_.surface_normal);
+    const glm::dvec3 v = probe.velocity - glm::dot(probe.velocity, n) * n;  // tangential velocity [m/s]
     const double speed = glm::length(v);
     if (speed == 0.0) return glm::dvec3{0.0};
     const double c = p_.scale_with_normal_force ? p_.coulomb * std::fabs(probe.normal_force) : p_.coulomb;
@@ -74,7 +81,7 @@ struct StickSlipParams {
   double static_coefficient{0.5};     ///< breakaway: mu_s [-] (x |Fc|) or force [N]
   double kinetic_coefficient{0.4};    ///< sliding: mu_k [-] (x |Fc|) or force [N], <= static
   bool scale_with_normal_force{true}; ///< limits proportional to |Fc|
-  glm::dvec3 surface_normal{0.0, 0.0, 1.0};  ///< unit: tangent-plane friction; zero: 3D
+  glm::dvec3 surface_normal{0.0, 0.0, 1.0};  ///< unit normal used when the probe has none; zero: 3D
 };
 
 /// Stick-slip Coulomb friction with a virtual anchor (the friction-cone /
@@ -85,7 +92,8 @@ struct StickSlipParams {
 /// is dragged behind the HIP so the force stays at the kinetic limit,
 /// opposing the motion. The force is a continuous function of position, so
 /// a hand at rest or jittering feels a stiff, quiet stick instead of a
-/// Coulomb force flipping sign each tick.
+/// Coulomb force flipping sign each tick. Like Friction, it works in the
+/// tangent plane of the probe's surface normal when the probe has one.
 class StickSlipFriction {
  public:
   /// @throws std::invalid_argument for a non-positive stiffness, negative
@@ -103,7 +111,8 @@ class StickSlipFriction {
   }
 
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
-    if (!is_finite(probe.position) || !std::isfinite(probe.normal_force)) return glm::dvec3{0.0};
+    if (!is_finite(probe.position) || !std::isfinite(probe.normal_force) || !is_finite(probe.surface_normal))
+      return glm::dvec3{0.0};
     if (!started_) {
       started_ = true;
       anchor_ = probe.position;
@@ -111,7 +120,8 @@ class StickSlipFriction {
       return glm::dvec3{0.0};
     }
     glm::dvec3 d = probe.position - anchor_;
-    d -= glm::dot(d, p_.surface_normal) * p_.surface_normal;  // tangent plane
+    const glm::dvec3 n = surface_normal_of(probe, p_.surface_normal);
+    d -= glm::dot(d, n) * n;  // tangent plane of the touched surface
     const double fn = p_.scale_with_normal_force ? std::fabs(probe.normal_force) : 1.0;
     const double static_limit = p_.static_coefficient * fn;
     const double kinetic_limit = p_.kinetic_coefficient * fn;

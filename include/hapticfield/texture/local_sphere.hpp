@@ -5,7 +5,9 @@
 /// the point where the last sample was drawn; in between, the texture value
 /// moves from the previous sample to the new one in proportion to the
 /// distance travelled (so the output is continuous). With a surface normal,
-/// displacements are projected on the tangent plane (the local circle).
+/// displacements are projected on the tangent plane (the local circle): the
+/// probe's surface normal when it has one (inside a ContactField), otherwise
+/// the configured one.
 
 #include <cmath>
 #include <cstdint>
@@ -16,6 +18,7 @@
 #include <glm/vec3.hpp>
 
 #include "hapticfield/core/probe.hpp"
+#include "hapticfield/core/surface_frame.hpp"
 #include "hapticfield/core/vector_math.hpp"
 #include "hapticfield/texture/noise.hpp"
 
@@ -39,7 +42,25 @@ class LocalSphere {
   }
 
   /// Texture value at the HIP position [m] (advances the state).
-  [[nodiscard]] glm::dvec3 sample(const glm::dvec3& position) noexcept {
+  [[nodiscard]] glm::dvec3 sample(const glm::dvec3& position) noexcept { return advance(position, normal_); }
+
+  /// Same, from a Probe (TextureSource interface): in the tangent plane of
+  /// the probe's surface normal when it has one.
+  [[nodiscard]] glm::dvec3 sample(const Probe& probe) noexcept {
+    if (!is_finite(probe.surface_normal)) return glm::dvec3{0.0};
+    return advance(probe.position, surface_normal_of(probe, normal_));
+  }
+
+  void reset() noexcept {
+    started_ = false;
+    count_ = 0;
+  }
+
+  /// Number of samples drawn since reset.
+  [[nodiscard]] std::uint32_t samples_drawn() const noexcept { return count_; }
+
+ private:
+  glm::dvec3 advance(const glm::dvec3& position, const glm::dvec3& normal) noexcept {
     if (!is_finite(position)) return glm::dvec3{0.0};
     if (!started_) {
       started_ = true;
@@ -49,7 +70,7 @@ class LocalSphere {
       count_ = 2;
     }
     glm::dvec3 d = position - centre_;
-    d -= glm::dot(d, normal_) * normal_;  // tangent plane (no-op for the sphere)
+    d -= glm::dot(d, normal) * normal;  // tangent plane (no-op for the sphere)
     double distance = glm::length(d);
     if (distance >= radius_) {
       // Left the ball: the value has reached the new sample; it becomes the
@@ -63,18 +84,6 @@ class LocalSphere {
     return from_ + (distance / radius_) * (to_ - from_);
   }
 
-  /// Same, from a Probe (TextureSource interface).
-  [[nodiscard]] glm::dvec3 sample(const Probe& probe) noexcept { return sample(probe.position); }
-
-  void reset() noexcept {
-    started_ = false;
-    count_ = 0;
-  }
-
-  /// Number of samples drawn since reset.
-  [[nodiscard]] std::uint32_t samples_drawn() const noexcept { return count_; }
-
- private:
   Noise noise_;
   std::uint32_t seed_;
   double radius_;

@@ -4,10 +4,12 @@
 /// a texture source (spatial, distance-driven, temporal or local-sphere)
 /// followed by an optional per-component filter, silenced below a velocity
 /// threshold and optionally scaled by the constraint force |Fc|. Compose
-/// with a contact field and Friction through the core's sum():
+/// with a constraint and Friction through the core's contact(), which gives
+/// the parts |Fc| and the surface normal of this tick (F = Fc + Ft + Ff):
 ///
-///   auto field = sum(contact, TextureField(SpatialSource(lattice), {...}),
-///                    FrictionField(Friction({...})));
+///   auto field = contact(PlaneConstraint({...}),
+///                        TextureField(SpatialSource(lattice), {...}),
+///                        Friction({...}));
 ///
 /// Also the flow texture (a vector field in free space with a mean shift and
 /// viscous drag).
@@ -23,6 +25,7 @@
 
 #include "hapticfield/core/field.hpp"
 #include "hapticfield/core/probe.hpp"
+#include "hapticfield/core/surface_frame.hpp"
 #include "hapticfield/core/vector_math.hpp"
 #include "hapticfield/texture/friction.hpp"
 #include "hapticfield/texture/lattice.hpp"
@@ -132,12 +135,19 @@ struct TextureParams {
   double gain{1.0};                  ///< force per texture unit [N] (or [N/N] when scaled by |Fc|)
   double velocity_threshold{1e-3};   ///< below this speed the texture is silent [m/s]
   bool scale_with_normal_force{false};  ///< Ft proportional to |Fc| (Probe::normal_force)
-  glm::dvec3 axes{1.0, 1.0, 1.0};       ///< per-axis weights (e.g. {1,1,0} for lateral only)
+  glm::dvec3 axes{1.0, 1.0, 1.0};       ///< weights along (t1, t2, n) of the surface frame ({1,1,0}: tangential only)
 };
 
-/// Ft = gain (|Fc| if scaled) axes * filter(source(probe)), zero below the
-/// velocity threshold (the source and filter do not advance while silent)
-/// and for non-finite probe data.
+/// Ft = gain (|Fc| if scaled) R (axes * filter(source(probe))), zero below
+/// the velocity threshold (the source and filter do not advance while
+/// silent) and for non-finite probe data.
+///
+/// R maps the texture's components to the surface frame (t1, t2, n) of the
+/// probe's surface normal (core/surface_frame.hpp), so axes {1, 1, 0} keep
+/// the texture in the tangent plane of a tilted plane too, and the
+/// threshold applies to the tangential speed. A probe without a surface
+/// normal uses the device frame (x, y, z), which is also the surface frame
+/// of a surface with normal +z.
 template <TextureSource Source, ScalarFilter Filter = NoFilter>
 class TextureField {
  public:
@@ -152,13 +162,19 @@ class TextureField {
   }
 
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
-    if (!is_finite(probe.position) || !is_finite(probe.velocity) || !std::isfinite(probe.normal_force))
+    if (!is_finite(probe.position) || !is_finite(probe.velocity) || !std::isfinite(probe.normal_force) ||
+        !is_finite(probe.surface_normal))
       return glm::dvec3{0.0};
-    if (glm::length(probe.velocity) < p_.velocity_threshold) return glm::dvec3{0.0};
+    const glm::dvec3 n = surface_normal_of(probe, glm::dvec3{0.0});
+    const bool on_surface = n != glm::dvec3{0.0};
+    const SurfaceFrame frame = on_surface ? surface_frame(n) : SurfaceFrame{};
+    const glm::dvec3 v = on_surface ? frame.tangential(probe.velocity) : probe.velocity;  // [m/s]
+    if (glm::length(v) < p_.velocity_threshold) return glm::dvec3{0.0};
     const glm::dvec3 raw = source_.sample(probe);
     const glm::dvec3 shaped = filter_.process(raw);
     const double scale = p_.scale_with_normal_force ? p_.gain * std::fabs(probe.normal_force) : p_.gain;
-    const glm::dvec3 f = scale * (p_.axes * shaped);
+    const glm::dvec3 weighted = p_.axes * shaped;
+    const glm::dvec3 f = scale * (on_surface ? frame.to_device(weighted) : weighted);
     return is_finite(f) ? f : glm::dvec3{0.0};
   }
 
@@ -195,7 +211,9 @@ struct FlowParams {
 
 /// Flow texture (Fritz & Barner 1996, section 7): F = m + gain L(p) - b v,
 /// with L a 3D vector-noise lattice (turbulence), m a mean shift that makes
-/// the texture "active" (it pushes the hand) and b viscous drag.
+/// the texture "active" (it pushes the hand) and b viscous drag. A flow is
+/// felt in free space, in the device frame: add it with sum(), outside any
+/// contact(), and it ignores the probe's contact data.
 template <SpatialGenerator Lattice>
 class FlowTexture {
  public:

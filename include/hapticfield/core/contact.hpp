@@ -1,0 +1,102 @@
+#pragma once
+/// @file contact.hpp
+/// Contact composition F = Fc + Ft + Ff (Fritz & Barner, "Stochastic models
+/// for haptic texture", SPIE 2901, 1996), computed in one order each tick:
+///
+///   1. the constraint (a plane, a sphere, any Constraint) gives the contact
+///      of this tick: touching or not, depth, unit surface normal n, Fc;
+///   2. the parts (textures, friction, data-modulated fields) get a copy of
+///      the probe with normal_force = |Fc| and surface_normal = n of this
+///      tick, whatever the incoming probe carried;
+///   3. the result is Fc + the sum of the parts. Not touching: zero, and the
+///      parts are not called (no contact, no texture, no friction).
+///
+/// So a force-scaled texture or friction, or a HaTT model chosen by normal
+/// force, sees the constraint force alone, never its own output.
+
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <tuple>
+#include <type_traits>
+#include <utility>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "hapticfield/core/field.hpp"
+#include "hapticfield/core/probe.hpp"
+#include "hapticfield/core/vector_math.hpp"
+
+namespace hapticfield {
+
+/// What a constraint reports about the HIP this tick.
+struct Contact {
+  bool touching{false};     ///< the HIP is inside the surface (depth > 0)
+  double depth{0.0};        ///< penetration depth [m], >= 0
+  glm::dvec3 normal{0.0};   ///< unit surface normal toward the user; zero when not touching
+  glm::dvec3 force{0.0};    ///< constraint force Fc [N]; zero when not touching
+};
+
+/// A constraint: a surface that reports the contact of the HIP with it.
+/// `contact()` is on the servo path: noexcept, no allocation; a non-finite
+/// probe gives a Contact that is not touching.
+template <class C>
+concept Constraint = requires(const C& constraint, const Probe& probe) {
+  { constraint.contact(probe) } noexcept -> std::same_as<Contact>;
+};
+
+/// Fc + parts, in that order (see the file comment). Itself a HapticField,
+/// and a ResettableField: reset() forwards to the parts that have state.
+template <Constraint C, HapticField... Parts>
+class ContactField {
+ public:
+  explicit ContactField(C constraint, Parts... parts)
+      : constraint_(std::move(constraint)), parts_(std::move(parts)...) {}
+
+  /// F = Fc + sum of parts(probe with |Fc| and n of this tick) [N]; zero for
+  /// a non-finite probe or a non-finite result.
+  [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
+    if (!is_finite(probe.position) || !is_finite(probe.velocity)) {
+      last_ = Contact{};
+      return glm::dvec3{0.0};
+    }
+    last_ = constraint_.contact(probe);
+    if (!last_.touching) return glm::dvec3{0.0};
+    Probe on = probe;
+    on.normal_force = glm::length(last_.force);
+    on.surface_normal = last_.normal;
+    const glm::dvec3 f = std::apply(
+        [&on, this](auto&... part) { return (last_.force + ... + glm::dvec3(part.force(on))); }, parts_);
+    return is_finite(f) ? f : glm::dvec3{0.0};
+  }
+
+  void reset() noexcept {
+    std::apply([](auto&... part) { (reset_if_stateful(part), ...); }, parts_);
+    last_ = Contact{};
+  }
+
+  /// The contact found by the last force() call.
+  [[nodiscard]] const Contact& last_contact() const noexcept { return last_; }
+  [[nodiscard]] const C& constraint() const noexcept { return constraint_; }
+  /// The i-th part.
+  template <std::size_t I>
+  [[nodiscard]] auto& part() noexcept {
+    return std::get<I>(parts_);
+  }
+
+ private:
+  C constraint_;
+  std::tuple<Parts...> parts_;
+  Contact last_{};
+};
+
+/// contact(constraint, texture, friction, ...): the field Fc + Ft + Ff.
+template <Constraint C, HapticField... Parts>
+[[nodiscard]] ContactField<std::remove_cvref_t<C>, std::remove_cvref_t<Parts>...> contact(C&& constraint,
+                                                                                        Parts&&... parts) {
+  return ContactField<std::remove_cvref_t<C>, std::remove_cvref_t<Parts>...>(std::forward<C>(constraint),
+                                                                            std::forward<Parts>(parts)...);
+}
+
+}  // namespace hapticfield
