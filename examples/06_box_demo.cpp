@@ -86,7 +86,13 @@ Args parse(cli::Parser& p) {
 
 int check(const Args& a, const BoxScene& scene) {
   const BoxView view = render_box(scene, a.rotations[0], false);
-  std::istringstream in(read_file(a.check, std::uintmax_t{1} << 20));
+  std::string text;
+  try {
+    text = read_file(a.check, std::uintmax_t{1} << 20);
+  } catch (const FileError& e) {
+    throw FileError(std::string("--check: ") + e.what());
+  }
+  std::istringstream in(text);
   std::string line;
   std::size_t f = 0;
   int failures = 0;
