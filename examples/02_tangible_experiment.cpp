@@ -11,19 +11,23 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <random>
 #include <string>
 
+#include "common/cli.hpp"
+
 namespace hf = hapticfield;
 
-int main(int argc, char** argv) {
-  int n = 2048;
-  if (argc == 3 && std::string(argv[1]) == "--size") n = std::atoi(argv[2]);
-  if (n < 256 || n > 8192) {
-    std::fprintf(stderr, "tangible_experiment: --size must be 256 to 8192 px\n");
-    return 2;
-  }
+namespace {
+
+constexpr const char* usage =
+    "usage: tangible_experiment [--size N]\n"
+    "Prints the tangible-images paper's section 5 experiments as tables.\n"
+    "  --size N     side of the uniform-noise picture [px], 256..8192 (default 2048)\n"
+    "  -h, --help   this text\n"
+    "Exit status: 0 done, 2 usage error.\n";
+
+int run(int n) {
   std::mt19937 rng(2008);
   std::uniform_real_distribution<double> level(0.0, 255.0);
   hf::GrayImage noise(n, n);
@@ -60,4 +64,18 @@ int main(int argc, char** argv) {
     std::printf("| %.1f | %.6f |\n", c, image.at(32.0, 32.0).x);
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return hf::cli::main("tangible_experiment", usage, argc, argv, [](hf::cli::Parser& p) {
+    int n = 2048;
+    while (p.next()) {
+      if (p.is("--size")) n = static_cast<int>(p.integer(256, 8192));
+      else p.unknown();
+    }
+    p.finish();
+    return run(n);
+  });
 }

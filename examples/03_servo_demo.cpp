@@ -3,7 +3,8 @@
 // the loop's rate and jitter live, writes a CSV trace and PNG plots.
 //
 //   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
-//              [--trace OUT.csv] [--plots DIR] [--device sim|hid[:VID:PID]]
+//              [--realtime off|best_effort|enforce] [--trace OUT.csv] [--plots DIR]
+//              [--device sim|hid[:VID:PID]]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -19,8 +20,11 @@
 #include <thread>
 #include <vector>
 
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "common/cli.hpp"
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -39,46 +43,84 @@ struct Options {
   std::string field{"tangible"};
   double seconds{5.0};
   double rate{1000.0};
+  RealTime realtime{RealTime::best_effort};
   std::string trace;
   std::string plots;
   std::string device{"sim"};
 };
 
-[[noreturn]] void usage(const std::string& error) {
-  std::fprintf(stderr,
-               "error: %s\nusage: servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]\n"
-               "                  [--trace OUT.csv] [--plots DIR] [--device sim|hid[:VID:PID]]\n",
-               error.c_str());
-  std::exit(2);
+constexpr const char* usage_text =
+    "usage: servo_demo [IMAGE] [options]\n"
+    "Runs a field in the servo loop on the simulated arm (or a real HID arm) while a\n"
+    "scripted hand raster-scans the picture; shows the loop's rate and jitter live.\n"
+    "  IMAGE                 picture felt by --field tangible (default examples/data/coffee.png)\n"
+    "  --field F             tangible (default), wall, spring or none\n"
+    "  --seconds S           run time [s], in (0, 3600] and at least one tick (default 5)\n"
+    "  --rate HZ             servo rate [Hz], in [1, 10000] (default 1000)\n"
+    "  --realtime R          off, best_effort (default: ask for SCHED_FIFO, warn if refused)\n"
+    "                        or enforce (refuse to start without real-time scheduling)\n"
+    "  --trace OUT.csv       write t, position [m], force [N] and period [s] per tick\n"
+    "  --plots DIR           write force.png and periods.png into DIR (created if needed)\n"
+    "  --device D            sim (default), hid, or hid:VID:PID (hexadecimal ids)\n"
+    "  -h, --help            this text\n"
+    "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
+
+/// A usage error found while setting up (an unknown field or device).
+[[noreturn]] void usage(const std::string& error) { throw cli::UsageError(error); }
+
+/// "sim", "hid" or "hid:VID:PID" with 1 to 4 hexadecimal digits per id.
+bool valid_device(const std::string& d) {
+  if (d == "sim" || d == "hid") return true;
+  if (d.rfind("hid:", 0) != 0) return false;
+  const std::string ids = d.substr(4);
+  const auto colon = ids.find(':');
+  if (colon == std::string::npos) return false;
+  const auto hex = [](const std::string& t) {
+    return !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos;
+  };
+  return hex(ids.substr(0, colon)) && hex(ids.substr(colon + 1));
 }
 
-double number(const std::string& flag, const char* text) {
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(v)) usage(flag + " needs a number, got '" + text + "'");
-  return v;
-}
-
-Options parse(int argc, char** argv) {
+Options parse(cli::Parser& p) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> const char* {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--field") o.field = value();
-    else if (a == "--seconds") o.seconds = number(a, value());
-    else if (a == "--rate") o.rate = number(a, value());
-    else if (a == "--trace") o.trace = value();
-    else if (a == "--plots") o.plots = value();
-    else if (a == "--device") o.device = value();
-    else if (a == "--help" || a == "-h") usage("help requested");
-    else if (!a.empty() && a[0] == '-') usage("unknown option " + a);
-    else o.image = a;
+  bool image_given = false;
+  while (p.next()) {
+    if (p.is("--field")) {
+      o.field = p.choice<const char*>(
+          "field", {{"tangible", "tangible"}, {"wall", "wall"}, {"spring", "spring"}, {"none", "none"}});
+    } else if (p.is("--seconds")) {
+      o.seconds = p.real(cli::open_closed(0.0, 3600.0));
+    } else if (p.is("--rate")) {
+      o.rate = p.real(cli::closed(min_servo_rate, max_servo_rate));
+    } else if (p.is("--realtime")) {
+      o.realtime = p.choice<RealTime>(
+          "real-time mode", {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
+    } else if (p.is("--trace")) {
+      o.trace = p.output_file();
+    } else if (p.is("--plots")) {
+      o.plots = p.output_dir();
+    } else if (p.is("--device")) {
+      o.device = p.value();
+      if (!valid_device(o.device))
+        usage("--device must be sim, hid or hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), got '" +
+              o.device + "'");
+    } else if (p.positional() && !image_given) {
+      o.image = p.token();
+      image_given = true;
+    } else {
+      p.unknown();
+    }
   }
-  if (o.seconds <= 0.0 || o.seconds > 3600.0) usage("--seconds must be in (0, 3600]");
-  if (o.rate < min_servo_rate || o.rate > max_servo_rate) usage("--rate must be within [1, 10000] Hz");
+  // 0 ticks would mean "no limit" to the loop: insist on at least one.
+  if (std::llround(o.seconds * o.rate) < 1) {
+    char text[160];
+    std::snprintf(text, sizeof text, "--seconds %g is less than one tick at %g Hz; the minimum is %g s", o.seconds,
+                  o.rate, 0.5 / o.rate);
+    usage(text);
+  }
+  p.finish();  // the trace and plot paths, before the run
+  // the picture, before the run (decoders' own complaints muted: one line)
+  (void)cli::quiet_stderr([&] { return load_image(o.image); });
   return o;
 }
 
@@ -237,6 +279,7 @@ int run(const Options& o) {
   ForceArm device(*transport);
   LoopConfig config;
   config.rate = o.rate;
+  config.realtime = o.realtime;
   // A stall of the machine (a late wake, a stale state) latches zero force;
   // the demo re-arms through the soft start once states are fresh for 0.5 s.
   config.recover_after = 0.5;
@@ -330,10 +373,6 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(parse(argc, argv));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "\nservo_demo: %s\n", e.what());
-    return 1;
-  }
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
+  return cli::main("servo_demo", usage_text, argc, argv, [](cli::Parser& p) { return run(parse(p)); });
 }

@@ -4,12 +4,22 @@
 //   2. read_once / write_once: the user owns the thread and its timing.
 #include <cstdio>
 
+#include "common/cli.hpp"
 #include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
 
 using namespace hapticfield;
 
-int main() {
+namespace {
+
+constexpr const char* usage =
+    "usage: servo_callback\n"
+    "Runs the two servo-loop styles (a callback; read_once / write_once) for 2 s + 1 s\n"
+    "against the simulated arm and prints what each saw. Takes no options.\n"
+    "  -h, --help   this text\n"
+    "Exit status: 0 done, 1 failure, 2 usage error.\n";
+
+int run() {
   SteadyClock clock;
   SimulatedArmConfig config;
   config.hand.path = HandPath::circle({0.0, 0.0, 0.0}, 0.02, 0.05);  // the hand draws a 2 cm circle
@@ -43,4 +53,13 @@ int main() {
               glm::length(loop.last_command()));
   loop.write_once(glm::dvec3{0.0});
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return cli::main("servo_callback", usage, argc, argv, [](cli::Parser& p) {
+    while (p.next()) p.unknown();
+    return run();
+  });
 }

@@ -18,7 +18,7 @@
 // evaluated from a fresh field state. --force-map draws, over a gray copy of
 // the picture, the force felt moving right at 100 mm/s: red where it
 // resists (climbing), green where it assists (descending). On bad input: one line on stderr,
-// exit status 1.
+// exit status 1 (2 for usage errors).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -36,6 +36,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "common/cli.hpp"
+#include "common/csv.hpp"
 #include "hapticfield/normals.hpp"
 
 using namespace hapticfield;
@@ -59,32 +61,29 @@ struct Args {
 };
 
 constexpr const char* usage =
-    "usage: picture_normals IMAGE --face \"x1,y1 x2,y2 x3,y3 x4,y4\" [--face ...] [--size W,H] "
-    "[--intrinsics FILE.yml | --focal F [--center cx,cy]] [--overlay OUT.png] "
-    "[--probes IN.csv --forces OUT.csv] [--force-map OUT.png] [--gradient] [--shading CELL_PX] "
-    "[--verbose]";
+    "usage: picture_normals IMAGE --face \"x1,y1 x2,y2 x3,y3 x4,y4\" [--face ...] [options]\n"
+    "Estimates the normals of planar faces marked in a picture (Kim & Kwon 2013).\n"
+    "  IMAGE                 picture file (any format OpenCV reads)\n"
+    "  --face CORNERS        4 corners [px] going around the face, each coordinate in\n"
+    "                        [-1e6, 1e6]; repeat for more faces\n"
+    "  --size W,H            face size [mm], each in (0, 1e6]; one for all faces or one per face\n"
+    "                        (without it the aspect ratio is recovered with K)\n"
+    "  --intrinsics FILE.yml camera matrix from an OpenCV calibration file\n"
+    "  --focal F             focal length [px], in [1, 1e6] (without it, estimated)\n"
+    "  --center cx,cy        principal point [px], each in [-1e6, 1e6]; needs --focal\n"
+    "  --overlay OUT.png     draw the faces and their normals over the picture\n"
+    "  --probes IN.csv       x,y,vx,vy per line [px, px/s], finite, at most 1000000 lines;\n"
+    "                        needs --forces\n"
+    "  --forces OUT.csv      x,y,fx,fy per probe [N], image axes (fy down)\n"
+    "  --force-map OUT.png   the force felt moving right at 100 mm/s: red resists, green assists\n"
+    "  --gradient            force from the slope itself instead of along the motion\n"
+    "  --shading CELL        force shading on a grid of CELL [px], in [1, 1e4]\n"
+    "  --verbose             per-face diagnostics on stderr\n"
+    "  -h, --help            this text\n"
+    "Exit status: 0 done, 1 bad input (files, degenerate faces), 2 usage error.\n";
 
-double parse_number(const std::string& text, const std::string& what) {
-  std::size_t used = 0;
-  double value = 0.0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  // skip trailing spaces
-  while (used < text.size() && std::isspace(static_cast<unsigned char>(text[used]))) ++used;
-  if (text.empty() || used != text.size() || !std::isfinite(value))
-    throw std::invalid_argument(what + ": '" + text + "' is not a finite number");
-  return value;
-}
-
-glm::dvec2 parse_pair(const std::string& text, const std::string& what) {
-  const auto comma = text.find(',');
-  if (comma == std::string::npos)
-    throw std::invalid_argument(what + ": expected x,y, got '" + text + "'");
-  return {parse_number(text.substr(0, comma), what), parse_number(text.substr(comma + 1), what)};
-}
+/// Pixel coordinates accepted on the command line [px].
+const cli::Interval pixel_range = cli::closed(-1e6, 1e6);
 
 std::vector<glm::dvec2> parse_face(const std::string& raw) {
   // tolerate "x, y" and ';' between corners
@@ -98,72 +97,62 @@ std::vector<glm::dvec2> parse_face(const std::string& raw) {
   std::istringstream in(text);
   std::vector<glm::dvec2> points;
   std::string token;
-  while (in >> token) points.push_back(parse_pair(token, "--face"));
+  while (in >> token && points.size() <= 4) {
+    const auto [x, y] = cli::parse_pair(token, "--face", pixel_range);
+    points.push_back({x, y});
+  }
   if (points.size() != 4)
-    throw std::invalid_argument("--face expects 4 corners \"x1,y1 x2,y2 x3,y3 x4,y4\" [px], got " +
-                                std::to_string(points.size()) + " in '" + text + "'");
+    throw cli::UsageError("--face expects 4 corners \"x1,y1 x2,y2 x3,y3 x4,y4\" [px], got " +
+                          (points.size() > 4 ? std::string("more") : std::to_string(points.size())));
   return points;
 }
 
-Args parse(int argc, char** argv) {
+Args parse(cli::Parser& p) {
   Args a;
-  const auto value = [&](int& i) -> std::string {
-    if (i + 1 >= argc) throw std::invalid_argument(std::string(argv[i]) + " needs a value");
-    return argv[++i];
-  };
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--face") {
-      a.faces.push_back(parse_face(value(i)));
-    } else if (arg == "--size") {
-      const glm::dvec2 s = parse_pair(value(i), "--size");
-      if (s.x <= 0.0 || s.y <= 0.0) throw std::invalid_argument("--size W,H must be positive [mm]");
-      a.sizes.push_back(s);
-    } else if (arg == "--intrinsics") {
-      a.intrinsics = value(i);
-    } else if (arg == "--focal") {
-      a.focal = parse_number(value(i), "--focal");
-      if (*a.focal <= 0.0)
-        throw std::invalid_argument("--focal must be a positive focal length [px]");
-    } else if (arg == "--center" || arg == "--centre") {
-      a.centre = parse_pair(value(i), "--center");
-    } else if (arg == "--overlay") {
-      a.overlay = value(i);
-    } else if (arg == "--force-map") {
-      a.force_map = value(i);
-    } else if (arg == "--probes") {
-      a.probes = value(i);
-    } else if (arg == "--forces") {
-      a.forces = value(i);
-    } else if (arg == "--gradient") {
+  while (p.next()) {
+    if (p.is("--face")) {
+      a.faces.push_back(parse_face(p.value()));
+    } else if (p.is("--size")) {
+      const auto [w, h] = p.pair(cli::open_closed(0.0, 1e6));
+      a.sizes.push_back({w, h});
+    } else if (p.is("--intrinsics")) {
+      a.intrinsics = p.value();
+    } else if (p.is("--focal")) {
+      a.focal = p.real(cli::closed(1.0, 1e6));
+    } else if (p.is("--center") || p.is("--centre")) {
+      const auto [x, y] = p.pair(pixel_range);
+      a.centre = glm::dvec2{x, y};
+    } else if (p.is("--overlay")) {
+      a.overlay = p.output_file();
+    } else if (p.is("--force-map")) {
+      a.force_map = p.output_file();
+    } else if (p.is("--probes")) {
+      a.probes = p.value();
+    } else if (p.is("--forces")) {
+      a.forces = p.output_file();
+    } else if (p.is("--gradient")) {
       a.gradient = true;
-    } else if (arg == "--shading") {
-      a.shading = parse_number(value(i), "--shading");
-      if (a.shading < 1.0)
-        throw std::invalid_argument("--shading needs a grid spacing of at least 1 [px]");
-    } else if (arg == "--verbose") {
+    } else if (p.is("--shading")) {
+      a.shading = p.real(cli::closed(1.0, 1e4));
+    } else if (p.is("--verbose")) {
       a.verbose = true;
-    } else if (arg == "--help" || arg == "-h") {
-      std::cout << usage << "\n";
-      std::exit(0);
-    } else if (!arg.empty() && arg[0] == '-' && arg.size() > 1 &&
-               !std::isdigit(static_cast<unsigned char>(arg[1]))) {
-      throw std::invalid_argument("unknown option '" + arg + "'");
-    } else if (a.image.empty()) {
-      a.image = arg;
+    } else if (p.positional() && a.image.empty()) {
+      a.image = p.token();
+    } else if (p.positional()) {
+      throw cli::UsageError("unexpected argument '" + p.token() + "' (one IMAGE only)");
     } else {
-      throw std::invalid_argument("unexpected argument '" + arg + "' (one IMAGE only)");
+      p.unknown();
     }
   }
-  if (a.image.empty()) throw std::invalid_argument("no IMAGE given");
-  if (a.faces.empty()) throw std::invalid_argument("no --face given");
+  if (a.image.empty()) throw cli::UsageError("no IMAGE given");
+  if (a.faces.empty()) throw cli::UsageError("no --face given");
   if (a.sizes.size() > 1 && a.sizes.size() != a.faces.size())
-    throw std::invalid_argument("give one --size for all faces or one per --face");
+    throw cli::UsageError("give one --size for all faces or one per --face");
   if (!a.intrinsics.empty() && (a.focal || a.centre))
-    throw std::invalid_argument("--intrinsics and --focal/--center are exclusive");
-  if (a.centre && !a.focal) throw std::invalid_argument("--center needs --focal");
-  if (a.probes.empty() != a.forces.empty())
-    throw std::invalid_argument("--probes and --forces go together");
+    throw cli::UsageError("--intrinsics and --focal/--center are exclusive");
+  if (a.centre && !a.focal) throw cli::UsageError("--center needs --focal");
+  if (a.probes.empty() != a.forces.empty()) throw cli::UsageError("--probes and --forces go together");
+  p.finish();
   return a;
 }
 
@@ -266,7 +255,7 @@ void draw_overlay(const std::string& path, const cv::Mat& image, const Camera& c
                 cv::LINE_AA);
   }
   if (!cv::imwrite(path, out))
-    throw std::invalid_argument("--overlay: cannot write '" + path + "'");
+    throw FileError("--overlay: cannot write '" + path + "'");
 }
 
 void draw_force_map(const std::string& path, const cv::Mat& image, const NormalField& field) {
@@ -288,46 +277,14 @@ void draw_force_map(const std::string& path, const cv::Mat& image, const NormalF
         px[c] = cv::saturate_cast<uchar>((1.0 - 0.8 * a) * px[c] + 0.8 * a * tint[c]);
     }
   if (!cv::imwrite(path, out))
-    throw std::invalid_argument("--force-map: cannot write '" + path + "'");
+    throw FileError("--force-map: cannot write '" + path + "'");
 }
 
 void evaluate_probes(const Args& a, NormalField& field) {
-  std::ifstream in(a.probes);
-  if (!in) throw std::invalid_argument("--probes: cannot read '" + a.probes + "'");
-  std::vector<std::array<double, 4>> rows;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.find_first_not_of(" \t") == std::string::npos ||
-        line[line.find_first_not_of(" \t")] == '#')
-      continue;
-    std::array<double, 4> v{};
-    std::stringstream cells(line);
-    std::string cell;
-    int k = 0;
-    bool numeric = true;
-    while (std::getline(cells, cell, ',')) {
-      if (k >= 4) {
-        k = 5;
-        break;
-      }
-      try {
-        v[static_cast<std::size_t>(k)] = parse_number(cell, "--probes");
-      } catch (const std::invalid_argument&) {
-        numeric = false;
-      }
-      ++k;
-    }
-    if (!numeric && rows.empty() && number == 1) continue;  // a header line
-    if (!numeric || k != 4)
-      throw std::invalid_argument("--probes: line " + std::to_string(number) + " of '" + a.probes +
-                                  "' is not x,y,vx,vy");
-    rows.push_back(v);
-  }
+  const auto rows =
+      cli::read_csv<4>(a.probes, {.columns = "x,y,vx,vy", .what = "probes", .finite_only = true});
   std::ofstream out(a.forces);
-  if (!out) throw std::invalid_argument("--forces: cannot write '" + a.forces + "'");
+  if (!out) throw FileError("--forces: cannot write '" + a.forces + "'");
   for (const auto& r : rows) {
     field.reset();  // each probe on its own: the filter starts from its velocity
     const glm::dvec3 f = field.force(field.probe_at({r[0], r[1]}, {r[2], r[3]}));
@@ -337,16 +294,14 @@ void evaluate_probes(const Args& a, NormalField& field) {
                   fi.y + 0.0);  // + 0.0: no "-0"
     out << buf;
   }
-  if (!out) throw std::invalid_argument("--forces: cannot write '" + a.forces + "'");
+  if (!out) throw FileError("--forces: cannot write '" + a.forces + "'");
 }
 
-int run(int argc, char** argv) {
-  const Args a = parse(argc, argv);
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(a.image, ec))
-    throw std::invalid_argument("cannot read image '" + a.image + "'");
-  const cv::Mat image = cv::imread(a.image, cv::IMREAD_COLOR);
-  if (image.empty()) throw std::invalid_argument("cannot read image '" + a.image + "'");
+int run(const Args& a) {
+  check_file(a.image, std::uintmax_t{1} << 34);
+  const cv::Mat image = cli::quiet_stderr([&] { return cv::imread(a.image, cv::IMREAD_COLOR); });
+  if (image.empty())
+    throw FileError("cannot decode '" + a.image + "': not a picture OpenCV can read, or corrupt");
   std::ostringstream notes;
   const Camera camera = make_camera(a, image.cols, image.rows, notes);
   std::vector<FacePose> poses;
@@ -390,11 +345,7 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   cv::utils::logging::setLogLevel(
-      cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, below
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "picture_normals: " << e.what() << "\n";
-    return 1;
-  }
+      cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
+  return cli::main("picture_normals", usage, argc, argv,
+                   [](cli::Parser& p) { return run(parse(p)); });
 }

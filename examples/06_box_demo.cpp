@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <numbers>
@@ -28,6 +29,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "common/cli.hpp"
 #include "hapticfield/normals.hpp"
 
 using namespace hapticfield;
@@ -43,39 +45,54 @@ struct Args {
   std::string check;
 };
 
-Args parse(int argc, char** argv) {
+constexpr const char* usage =
+    "usage: box_demo [--rotation DEG] [--noise PX] [--trials N] [--seed S] [--out DIR]\n"
+    "       box_demo --rotation DEG --check NORMALS.txt\n"
+    "Kim & Kwon's rotated-box accuracy stimulus, synthetic: estimates the two visible\n"
+    "faces' normals from exact and noisy corners and prints the accuracy tables.\n"
+    "  --rotation DEG   one view only [deg], in (0, 90) (default: 15 to 75 in 5 degree steps)\n"
+    "  --noise PX       corner displacement [px], in [0, 100] (default 1)\n"
+    "  --trials N       noisy trials per face, 1..100000 (default 200)\n"
+    "  --seed S         random seed, 0..4294967295 (default 2013)\n"
+    "  --out DIR        write box_DEG.png, box_DEG.args and box_DEG_probes.csv per view\n"
+    "  --check FILE     compare picture_normals' 'normal: nx ny nz' lines with the truth;\n"
+    "                   exit 0 when each is within 0.5 degrees, 1 otherwise\n"
+    "  -h, --help       this text\n"
+    "Exit status: 0 done, 1 bad input or a failed check, 2 usage error.\n";
+
+Args parse(cli::Parser& p) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value (or unknown option)");
-    const std::string v = argv[++i];
-    if (arg == "--rotation") {
-      a.rotations = {std::stod(v)};
-    } else if (arg == "--noise") {
-      a.noise = std::stod(v);
-      if (!(a.noise >= 0.0)) throw std::invalid_argument("--noise must be >= 0 [px]");
-    } else if (arg == "--trials") {
-      a.trials = std::stoi(v);
-      if (a.trials < 1) throw std::invalid_argument("--trials must be >= 1");
-    } else if (arg == "--seed") {
-      a.seed = static_cast<unsigned>(std::stoul(v));
-    } else if (arg == "--out") {
-      a.out = v;
-    } else if (arg == "--check") {
-      a.check = v;
+  while (p.next()) {
+    if (p.is("--rotation")) {
+      a.rotations = {p.real(cli::open(0.0, 90.0))};
+    } else if (p.is("--noise")) {
+      a.noise = p.real(cli::closed(0.0, 100.0));
+    } else if (p.is("--trials")) {
+      a.trials = static_cast<int>(p.integer(1, 100000));
+    } else if (p.is("--seed")) {
+      a.seed = static_cast<unsigned>(p.integer(0, 4294967295LL));
+    } else if (p.is("--out")) {
+      a.out = p.output_dir();
+    } else if (p.is("--check")) {
+      a.check = p.value();
     } else {
-      throw std::invalid_argument("unknown option '" + arg + "'");
+      p.unknown();
     }
   }
-  if (!a.check.empty() && a.rotations.size() != 1)
-    throw std::invalid_argument("--check needs --rotation");
+  if (!a.check.empty() && a.rotations.size() != 1) throw cli::UsageError("--check needs --rotation");
+  p.finish();
   return a;
 }
 
 int check(const Args& a, const BoxScene& scene) {
   const BoxView view = render_box(scene, a.rotations[0], false);
-  std::ifstream in(a.check);
-  if (!in) throw std::invalid_argument("--check: cannot read '" + a.check + "'");
+  std::string text;
+  try {
+    text = read_file(a.check, std::uintmax_t{1} << 20);
+  } catch (const FileError& e) {
+    throw FileError(std::string("--check: ") + e.what());
+  }
+  std::istringstream in(text);
   std::string line;
   std::size_t f = 0;
   int failures = 0;
@@ -84,7 +101,7 @@ int check(const Args& a, const BoxScene& scene) {
     std::string tag;
     glm::dvec3 n{0.0};
     if (!(s >> tag >> n.x >> n.y >> n.z) || tag != "normal:") continue;
-    if (f >= 2) throw std::invalid_argument("--check: more than two normals");
+    if (f >= 2) throw FileError("--check: more than two normals in '" + a.check + "'");
     const double err = angle_between_deg(n, view.normals[f]);
     std::printf("face %zu: %.6f %.6f %.6f vs true %.6f %.6f %.6f: %.4f deg\n", f, n.x, n.y, n.z,
                 view.normals[f].x, view.normals[f].y, view.normals[f].z, err);
@@ -92,7 +109,8 @@ int check(const Args& a, const BoxScene& scene) {
     ++f;
   }
   if (f != 2)
-    throw std::invalid_argument("--check: expected two normal lines, got " + std::to_string(f));
+    throw FileError("--check: expected two 'normal: nx ny nz' lines in '" + a.check + "', got " +
+                    std::to_string(f));
   return failures == 0 ? 0 : 1;
 }
 
@@ -100,7 +118,7 @@ void write_files(const Args& a, const BoxScene& scene, const BoxView& view) {
   const std::string base =
       a.out + "/box_" + std::to_string(static_cast<int>(std::lround(view.rotation_deg)));
   if (!cv::imwrite(base + ".png", view.picture))
-    throw std::invalid_argument("cannot write " + base + ".png");
+    throw FileError("--out: cannot write '" + base + ".png'");
   std::ofstream args(base + ".args");
   for (const auto& face : view.corners) {
     args << "--face\n";
@@ -122,12 +140,13 @@ void write_files(const Args& a, const BoxScene& scene, const BoxView& view) {
            << c.x << "," << c.y << ",-200,0\n"
            << c.x << "," << c.y << ",0,200\n";
   }
+  if (!args || !probes) throw FileError("--out: cannot write '" + base + ".args' or '" + base + "_probes.csv'");
 }
 
-int run(int argc, char** argv) {
-  const Args a = parse(argc, argv);
+int run(const Args& a) {
   const BoxScene scene;
   if (!a.check.empty()) return check(a, scene);
+  if (!a.out.empty()) std::filesystem::create_directories(a.out);
   const Camera camera = scene.camera();
   const glm::dvec2 size{scene.edge_mm, scene.edge_mm};
   std::mt19937 rng(a.seed);
@@ -240,10 +259,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "box_demo: " << e.what() << "\n";
-    return 1;
-  }
+  return cli::main("box_demo", usage, argc, argv, [](cli::Parser& p) { return run(parse(p)); });
 }

@@ -22,6 +22,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "common/cli.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
 
@@ -168,21 +169,17 @@ void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<c
   std::cout << "  " << stem << ".png  (" << t.description << ")\n";
 }
 
-}  // namespace
+constexpr const char* usage =
+    "usage: texture_gallery [--out DIR] [--hatt DIR]\n"
+    "Strokes every texture kind at 50 mm/s, 1 N, 1 kHz for 2 s and writes each force\n"
+    "trace and its power spectrum (PNG and CSV) and gallery.png.\n"
+    "  --out DIR    output folder, created if needed (default out/texture_gallery)\n"
+    "  --hatt DIR   also every HaTT modelSet XML file in DIR (the toolkit's XML/ folder)\n"
+    "  -h, --help   this text\n"
+    "Exit status: 0 done, 1 bad input (HaTT files, output folder), 2 usage error.\n";
 
-int main(int argc, char** argv) {
-  fs::path out = "out/texture_gallery";
-  fs::path hatt_dir;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else if (a == "--hatt" && i + 1 < argc) hatt_dir = argv[++i];
-    else {
-      std::cerr << "usage: texture_gallery [--out DIR] [--hatt DIR]\n";
-      return 2;
-    }
-  }
-  try {
+int run(const fs::path& out, const fs::path& hatt_dir) {
+  {
     fs::create_directories(out);
     std::vector<Trace> traces;
     const TextureParams lateral{0.5, 1e-3, false, glm::dvec3{1.0, 1.0, 0.0}};
@@ -256,11 +253,29 @@ int main(int argc, char** argv) {
       cv::resize(tiles[i], small, cv::Size(320, 210), 0, 0, cv::INTER_AREA);
       small.copyTo(gallery(cv::Rect(static_cast<int>(i % cols) * 320, static_cast<int>(i / cols) * 210, 320, 210)));
     }
-    cv::imwrite((out / "gallery.png").string(), gallery);
+    if (!cv::imwrite((out / "gallery.png").string(), gallery))
+      throw FileError("--out: cannot write '" + (out / "gallery.png").string() + "'");
     std::cout << "  gallery.png (" << tiles.size() << " plots)\n";
-  } catch (const std::exception& e) {
-    std::cerr << "texture_gallery: " << e.what() << '\n';
-    return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return cli::main("texture_gallery", usage, argc, argv, [](cli::Parser& p) {
+    std::string out = "out/texture_gallery";
+    std::string hatt_dir;
+    bool out_given = false;
+    while (p.next()) {
+      if (p.is("--out")) out = p.output_dir(), out_given = true;
+      else if (p.is("--hatt")) hatt_dir = p.value();
+      else p.unknown();
+    }
+    if (!out_given) p.default_output_dir("--out", out);
+    if (!hatt_dir.empty() && !fs::is_directory(hatt_dir))
+      throw FileError("--hatt: '" + hatt_dir + "' is not a folder");
+    p.finish();
+    return run(out, hatt_dir);
+  });
 }

@@ -18,9 +18,11 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "common/cli.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
 #include "hapticfield/texture/image_maps.hpp"
@@ -29,26 +31,25 @@ using namespace hapticfield;
 using namespace hapticfield::texture;
 namespace fs = std::filesystem;
 
-int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::cerr << "usage: false_texture IMAGE [--out DIR] [--levels N]\n";
-    return 2;
-  }
-  const std::string image_path = argv[1];
-  fs::path out = "out/false_texture";
-  int levels = 4;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else if (a == "--levels" && i + 1 < argc) levels = std::stoi(argv[++i]);
-    else {
-      std::cerr << "usage: false_texture IMAGE [--out DIR] [--levels N]\n";
-      return 2;
-    }
-  }
-  try {
-    if (levels < 2 || levels > 8) throw std::invalid_argument("--levels must be in 2..8");
-    const cv::Mat image = load_image(image_path);
+namespace {
+
+constexpr const char* usage =
+    "usage: false_texture IMAGE [--out DIR] [--levels N]\n"
+    "False texturing and data visualisation: a texture per gray band of the picture and\n"
+    "friction modulated by brightness, stroked along three lines at 50 mm/s.\n"
+    "  IMAGE        picture file (any format OpenCV reads), fitted into 100 x 100 mm\n"
+    "  --out DIR    output folder for false_texture.png and strokes.csv, created if needed\n"
+    "               (default out/false_texture)\n"
+    "  --levels N   gray bands, each with its own texture, 2..8 (default 4)\n"
+    "  -h, --help   this text\n"
+    "Exit status: 0 done, 1 bad input (picture, output folder), 2 usage error.\n";
+
+int run(const std::string& image_path, const fs::path& out, int levels) {
+  {
+    check_file(image_path, std::uintmax_t{1} << 34);
+    const cv::Mat image = cli::quiet_stderr([&] { return cv::imread(image_path, cv::IMREAD_COLOR); });
+    if (image.empty())
+      throw FileError("cannot decode '" + image_path + "': not a picture OpenCV can read, or corrupt");
     const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, 100.0);
     const LabelMap labels = label_map_from_gray_levels(image, levels, mapping);
 
@@ -161,11 +162,32 @@ int main(int argc, char** argv) {
       const int r = middle_region[static_cast<std::size_t>(i)];
       if (r >= 0) cv::line(canvas, {x0, top + 22}, {x1, top + 22}, palette[r], 5);
     }
-    cv::imwrite((out / "false_texture.png").string(), canvas);
+    if (!csv.flush()) throw FileError("--out: cannot write '" + (out / "strokes.csv").string() + "'");
+    if (!cv::imwrite((out / "false_texture.png").string(), canvas))
+      throw FileError("--out: cannot write '" + (out / "false_texture.png").string() + "'");
     std::cout << "wrote " << (out / "false_texture.png").string() << " and " << (out / "strokes.csv").string() << '\n';
-  } catch (const std::exception& e) {
-    std::cerr << "false_texture: " << e.what() << '\n';
-    return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
+  return cli::main("false_texture", usage, argc, argv, [](cli::Parser& p) {
+    std::string image;
+    std::string out = "out/false_texture";
+    bool out_given = false;
+    int levels = 4;
+    while (p.next()) {
+      if (p.is("--out")) out = p.output_dir(), out_given = true;
+      else if (p.is("--levels")) levels = static_cast<int>(p.integer(2, 8));  // 8 colours in the legend
+      else if (p.positional() && image.empty()) image = p.token();
+      else p.unknown();
+    }
+    if (image.empty()) throw cli::UsageError("no IMAGE given");
+    if (!out_given) p.default_output_dir("--out", out);
+    p.finish();
+    return run(image, out, levels);
+  });
 }

@@ -1,0 +1,396 @@
+// Every command-line tool against a table of bad input: missing, empty,
+// folder, truncated and mislabelled files; NaN, Inf, huge, zero, negative
+// and non-numeric values for every numeric flag; unknown flags and flags
+// without a value. Each case must end, within a hard time limit, in exit
+// status 2 (usage) or 1 (bad input) and exactly one stderr line starting
+// with the tool's name; the cases that must succeed check their result.
+#include <catch2/catch.hpp>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::map<std::string, std::string> tools = {
+    {"tangible_image", HAPTICFIELD_TOOL_TANGIBLE_IMAGE},
+    {"tangible_experiment", HAPTICFIELD_TOOL_TANGIBLE_EXPERIMENT},
+    {"servo_demo", HAPTICFIELD_TOOL_SERVO_DEMO},
+    {"servo_callback", HAPTICFIELD_TOOL_SERVO_CALLBACK},
+    {"picture_normals", HAPTICFIELD_TOOL_PICTURE_NORMALS},
+    {"box_demo", HAPTICFIELD_TOOL_BOX_DEMO},
+    {"texture_gallery", HAPTICFIELD_TOOL_TEXTURE_GALLERY},
+    {"false_texture", HAPTICFIELD_TOOL_FALSE_TEXTURE},
+};
+
+constexpr int ok = 0;
+constexpr int bad_input = 1;
+constexpr int usage = 2;
+constexpr auto time_limit = std::chrono::seconds(20);  // a hung tool is killed and fails
+
+const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / "cli_bad_input";
+
+std::string in_tmp(const std::string& name) { return (tmp / name).string(); }
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+struct Result {
+  int status{-1};  // exit status, -1 when killed or signalled
+  bool timed_out{false};
+  std::string out;
+  std::string err;
+};
+
+/// Runs a tool with posix_spawn, stdout and stderr to files, killed after
+/// the time limit.
+Result run(const std::string& tool, const std::vector<std::string>& args) {
+  const std::string out_file = in_tmp("stdout.txt");
+  const std::string err_file = in_tmp("stderr.txt");
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<std::string> argv_text{tools.at(tool)};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  REQUIRE(spawned == 0);
+
+  Result r;
+  int raw = 0;
+  const auto deadline = std::chrono::steady_clock::now() + time_limit;
+  while (waitpid(pid, &raw, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &raw, 0);
+      r.timed_out = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  if (!r.timed_out && WIFEXITED(raw)) r.status = WEXITSTATUS(raw);
+  r.out = slurp(out_file);
+  r.err = slurp(err_file);
+  return r;
+}
+
+struct Case {
+  std::string tool;
+  std::vector<std::string> args;
+  int expect;
+  std::string says{};  // a piece of the stderr line, when it matters
+};
+
+/// Checks one error case: status, one stderr line naming the tool.
+void check_error(const Case& c) {
+  std::string shown = c.tool;
+  for (const auto& a : c.args) shown += " '" + a + "'";
+  CAPTURE(shown);
+  const Result r = run(c.tool, c.args);
+  CAPTURE(r.err);
+  REQUIRE_FALSE(r.timed_out);
+  CHECK(r.status == c.expect);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.size() > c.tool.size() + 3);
+  CHECK(r.err.rfind(c.tool + ": ", 0) == 0);
+  CHECK(r.err.back() == '\n');
+  CHECK(r.err.find("terminate called") == std::string::npos);
+  CHECK(r.err.find("Aborted") == std::string::npos);
+  if (!c.says.empty()) CHECK(r.err.find(c.says) != std::string::npos);
+}
+
+/// The bad files every file flag is tried with.
+struct BadFiles {
+  std::string missing, empty, folder, truncated_png, text_png, truncated_csv, garbage_csv, plain_file;
+};
+
+BadFiles make_bad_files() {
+  fs::create_directories(tmp / "folder");
+  BadFiles b;
+  b.missing = in_tmp("missing.png");
+  b.empty = in_tmp("empty.png");
+  write(b.empty, "");
+  b.folder = in_tmp("folder");
+  b.truncated_png = in_tmp("truncated.png");
+  const std::string photo = slurp(fs::path(HAPTICFIELD_SOURCE_DIR) / "examples/data/coffee.png");
+  REQUIRE(photo.size() > 400);
+  write(b.truncated_png, photo.substr(0, 300));
+  b.text_png = in_tmp("text.png");
+  write(b.text_png, "this is text, not a picture\n");
+  b.truncated_csv = in_tmp("truncated.csv");
+  write(b.truncated_csv, "x,y,vx,vy\n10,10,100,0\n12,1");
+  b.garbage_csv = in_tmp("garbage.csv");
+  write(b.garbage_csv, std::string("x,y,vx,vy\n10,10,100,0\n\x01\x02garbage,\xff,,\n", 38));
+  b.plain_file = in_tmp("plain.txt");
+  write(b.plain_file, "a file, not a folder\n");
+  return b;
+}
+
+/// A 60 x 40 px picture, white with black from column 30.
+std::string make_step_picture() {
+  cv::Mat step(40, 60, CV_8UC3, cv::Scalar::all(255));
+  step(cv::Rect(30, 0, 30, 40)).setTo(cv::Scalar::all(0));
+  const std::string p = in_tmp("step.png");
+  REQUIRE(cv::imwrite(p, step));
+  return p;
+}
+
+const std::vector<std::string> bad_numbers = {"nan", "inf", "-inf", "1e400", "0", "-1", "abc", "3x", "", " 3"};
+
+/// Adds a case per bad value of a numeric flag (values the flag accepts
+/// are left out).
+void add_numeric(std::vector<Case>& cases, const std::string& tool, std::vector<std::string> before,
+                 const std::string& flag, const std::vector<std::string>& accepted = {},
+                 const std::string& prefix = "", const std::string& suffix = "", std::vector<std::string> after = {}) {
+  for (const std::string& v : bad_numbers) {
+    if (std::find(accepted.begin(), accepted.end(), v) != accepted.end()) continue;
+    std::vector<std::string> args = before;
+    args.push_back(flag);
+    args.push_back(prefix + v + suffix);
+    args.insert(args.end(), after.begin(), after.end());
+    cases.push_back({tool, args, usage, flag});
+  }
+}
+
+const std::string face = "10,10 50,10 50,30 10,30";
+
+}  // namespace
+
+TEST_CASE("--help: usage on stdout, nothing on stderr, exit 0") {
+  fs::create_directories(tmp);
+  for (const auto& [tool, path] : tools) {
+    for (const char* flag : {"--help", "-h"}) {
+      CAPTURE(tool, flag);
+      const Result r = run(tool, {flag});
+      REQUIRE_FALSE(r.timed_out);
+      CHECK(r.status == ok);
+      CHECK(r.err.empty());
+      CHECK(r.out.rfind("usage: " + tool, 0) == 0);
+      CHECK(r.out.find("--help") != std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("unknown flags, flags without a value, stray arguments: exit 2") {
+  fs::create_directories(tmp);
+  const std::string picture = make_step_picture();
+  const std::vector<Case> cases = {
+      {"tangible_image", {picture, "--bogus"}, usage, "unknown option '--bogus'"},
+      {"tangible_image", {picture, "--size"}, usage, "--size needs a value"},
+      {"tangible_image", {}, usage, "no IMAGE"},
+      {"tangible_image", {picture, picture}, usage, "more than one IMAGE"},
+      {"tangible_image", {picture, "--mask", "fancy"}, usage, "unknown mask"},
+      {"tangible_image", {picture, "--probes", "x.csv"}, usage, "go together"},
+      {"tangible_experiment", {"--bogus"}, usage, "unknown option"},
+      {"tangible_experiment", {"--size"}, usage, "needs a value"},
+      {"tangible_experiment", {"stray"}, usage, "unexpected argument"},
+      {"servo_demo", {"--bogus"}, usage, "unknown option"},
+      {"servo_demo", {"--seconds"}, usage, "needs a value"},
+      {"servo_demo", {"--field", "lava"}, usage, "unknown field"},
+      {"servo_demo", {"--realtime", "sometimes"}, usage, "unknown real-time mode"},
+      {"servo_demo", {"--device", "usb"}, usage, "--device"},
+      {"servo_demo", {"--device", "hid:12345:1"}, usage, "--device"},
+      {"servo_demo", {picture, picture}, usage, "unexpected argument"},
+      {"servo_callback", {"--bogus"}, usage, "unknown option"},
+      {"servo_callback", {"stray"}, usage, "unexpected argument"},
+      {"picture_normals", {picture}, usage, "no --face"},
+      {"picture_normals", {picture, "--face"}, usage, "needs a value"},
+      {"picture_normals", {picture, "--face", face, "--bogus"}, usage, "unknown option"},
+      {"picture_normals", {picture, "--face", "1,2 3,4"}, usage, "4 corners"},
+      {"picture_normals", {picture, "--face", face, "--center", "1,2"}, usage, "--center needs --focal"},
+      {"picture_normals", {picture, "--face", face, "--forces", "f.csv"}, usage, "go together"},
+      {"box_demo", {"--bogus"}, usage, "unknown option"},
+      {"box_demo", {"--trials"}, usage, "needs a value"},
+      {"box_demo", {"--check", "x.txt"}, usage, "--check needs --rotation"},
+      {"texture_gallery", {"--bogus"}, usage, "unknown option"},
+      {"texture_gallery", {"--out"}, usage, "needs a value"},
+      {"false_texture", {}, usage, "no IMAGE"},
+      {"false_texture", {picture, "--levels"}, usage, "needs a value"},
+      {"false_texture", {picture, "--bogus"}, usage, "unknown option"},
+  };
+  for (const Case& c : cases) check_error(c);
+}
+
+TEST_CASE("every numeric flag: NaN, Inf, huge, zero, negative, garbage: exit 2 naming the flag") {
+  fs::create_directories(tmp);
+  const std::string picture = make_step_picture();
+  std::vector<Case> cases;
+  add_numeric(cases, "tangible_image", {picture}, "--size");
+  add_numeric(cases, "tangible_image", {picture, "--mask", "gauss", "--size", "5"}, "--sigma");
+  add_numeric(cases, "tangible_experiment", {}, "--size");
+  add_numeric(cases, "servo_demo", {"--field", "none"}, "--seconds");
+  add_numeric(cases, "servo_demo", {"--field", "none"}, "--rate");
+  add_numeric(cases, "picture_normals", {picture, "--face", face}, "--focal");
+  add_numeric(cases, "picture_normals", {picture, "--face", face}, "--shading");
+  // pairs allow spaces around the comma ("x, y"), so " 3" is fine there
+  add_numeric(cases, "picture_normals", {picture, "--face", face}, "--size", {" 3"}, "", ",100");
+  add_numeric(cases, "picture_normals", {picture, "--face", face}, "--size", {" 3"}, "100,");
+  add_numeric(cases, "picture_normals", {picture, "--face", face, "--focal", "500"}, "--center", {"0", "-1", " 3"},
+              "", ",20");
+  add_numeric(cases, "picture_normals", {picture}, "--face", {"0", "-1", " 3"}, "", ",10 50,10 50,30 10,30");
+  add_numeric(cases, "box_demo", {}, "--rotation");
+  add_numeric(cases, "box_demo", {}, "--noise", {"0"});
+  add_numeric(cases, "box_demo", {}, "--trials");
+  add_numeric(cases, "box_demo", {}, "--seed", {"0"});
+  add_numeric(cases, "false_texture", {picture}, "--levels");
+  // values just outside the documented ranges
+  cases.push_back({"tangible_image", {picture, "--size", "99999999999"}, usage, "--size"});
+  cases.push_back({"tangible_image", {picture, "--size", "4"}, usage, "not allowed"});
+  cases.push_back({"tangible_experiment", {"--size", "255"}, usage, "256..8192"});
+  cases.push_back({"servo_demo", {"--seconds", "0.0001"}, usage, "the minimum is 0.0005 s"});
+  cases.push_back({"servo_demo", {"--seconds", "0.004", "--rate", "100"}, usage, "the minimum is 0.005 s"});
+  cases.push_back({"servo_demo", {"--seconds", "3601"}, usage, "(0, 3600]"});
+  cases.push_back({"servo_demo", {"--rate", "10001"}, usage, "[1, 10000]"});
+  cases.push_back({"picture_normals", {picture, "--face", face, "--focal", "1e-300"}, usage, "[1, 1e6]"});
+  cases.push_back({"picture_normals", {picture, "--face", face, "--focal", "1e7"}, usage, "[1, 1e6]"});
+  cases.push_back({"box_demo", {"--rotation", "90"}, usage, "(0, 90)"});
+  cases.push_back({"box_demo", {"--trials", "2e9"}, usage, "--trials"});
+  cases.push_back({"box_demo", {"--trials", "100001"}, usage, "1..100000"});
+  cases.push_back({"box_demo", {"--seed", "4294967296"}, usage, "--seed"});
+  cases.push_back({"box_demo", {"--noise", "100.5"}, usage, "[0, 100]"});
+  cases.push_back({"false_texture", {picture, "--levels", "9"}, usage, "2..8"});
+  cases.push_back({"false_texture", {picture, "--levels", "99999999999"}, usage, "2..8"});
+  for (const Case& c : cases) check_error(c);
+}
+
+TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
+  const BadFiles b = make_bad_files();
+  const std::string picture = make_step_picture();
+  std::vector<Case> cases;
+  for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_png, b.text_png}) {
+    cases.push_back({"tangible_image", {file}, bad_input, file});
+    cases.push_back({"servo_demo", {file, "--seconds", "0.001"}, bad_input, file});
+    cases.push_back({"picture_normals", {file, "--face", face}, bad_input, file});
+    cases.push_back({"false_texture", {file, "--out", in_tmp("false_texture")}, bad_input, file});
+  }
+  for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_csv, b.garbage_csv, b.text_png}) {
+    cases.push_back({"tangible_image", {picture, "--size", "3", "--probes", file, "--forces", in_tmp("f.csv")},
+                     bad_input, file});
+    cases.push_back({"picture_normals",
+                     {picture, "--face", face, "--probes", file, "--forces", in_tmp("f.csv")}, bad_input, file});
+    cases.push_back({"box_demo", {"--rotation", "45", "--check", file}, bad_input, "--check"});
+    cases.push_back({"picture_normals", {picture, "--face", face, "--intrinsics", file}, bad_input, file});
+  }
+  // the truncated CSV names its line; NaN in picture_normals' probes is bad input
+  cases.push_back({"tangible_image",
+                   {picture, "--size", "3", "--probes", b.truncated_csv, "--forces", in_tmp("f.csv")},
+                   bad_input, "truncated.csv:2: expected 'x,y'"});
+  write(in_tmp("nan4.csv"), "1,2,nan,4\n");
+  cases.push_back({"picture_normals",
+                   {picture, "--face", face, "--probes", in_tmp("nan4.csv"), "--forces", in_tmp("f.csv")},
+                   bad_input, "nan4.csv:1: values must be finite"});
+  // output paths, checked before any work
+  const std::string no_dir = in_tmp("no/such/dir/out.csv");
+  const std::string under_file = b.plain_file + "/sub";
+  cases.push_back({"tangible_image", {picture, "--probes", b.truncated_csv, "--forces", no_dir}, bad_input, "--forces"});
+  cases.push_back({"tangible_image", {picture, "--probes", b.truncated_csv, "--forces", b.folder}, bad_input, "--forces"});
+  cases.push_back({"tangible_image", {picture, "--maps", b.plain_file}, bad_input, "--maps"});
+  cases.push_back({"tangible_image", {picture, "--maps", under_file}, bad_input, "--maps"});
+  cases.push_back({"servo_demo", {"--seconds", "0.001", "--trace", no_dir}, bad_input, "--trace"});
+  cases.push_back({"servo_demo", {"--seconds", "0.001", "--plots", under_file}, bad_input, "--plots"});
+  cases.push_back({"picture_normals", {picture, "--face", face, "--overlay", no_dir}, bad_input, "--overlay"});
+  cases.push_back({"picture_normals", {picture, "--face", face, "--force-map", b.folder}, bad_input, "--force-map"});
+  cases.push_back({"box_demo", {"--rotation", "45", "--out", under_file}, bad_input, "--out"});
+  cases.push_back({"texture_gallery", {"--out", under_file}, bad_input, "--out"});
+  cases.push_back({"texture_gallery", {"--out", in_tmp("gallery"), "--hatt", b.missing}, bad_input, "--hatt"});
+  cases.push_back({"texture_gallery", {"--out", in_tmp("gallery"), "--hatt", b.plain_file}, bad_input, "--hatt"});
+  cases.push_back({"false_texture", {picture, "--out", b.plain_file}, bad_input, "--out"});
+  for (const Case& c : cases) check_error(c);
+  CHECK_FALSE(fs::exists(in_tmp("no")));  // nothing was created on the way
+}
+
+TEST_CASE("good input at the edges of the ranges gives the right result") {
+  fs::create_directories(tmp);
+  const std::string picture = make_step_picture();
+
+  SECTION("servo_demo: the shortest run is one tick, traced") {
+    for (const auto& [seconds, rate, ticks] : std::vector<std::tuple<std::string, std::string, int>>{
+             {"0.0005", "1000", 1}, {"0.001", "1000", 1}, {"0.003", "1000", 3}, {"0.05", "100", 5}}) {
+      CAPTURE(seconds, rate);
+      const std::string trace = in_tmp("trace.csv");
+      fs::remove(trace);
+      const Result r = run("servo_demo", {"--field", "none", "--realtime", "off", "--seconds", seconds, "--rate",
+                                          rate, "--trace", trace, "--plots", in_tmp("plots/new")});
+      REQUIRE_FALSE(r.timed_out);
+      CAPTURE(r.err);
+      REQUIRE(r.status == ok);
+      CHECK(r.out.find(std::to_string(ticks) + " ticks at") != std::string::npos);
+      const std::string text = slurp(trace);
+      CHECK(std::count(text.begin(), text.end(), '\n') == ticks + 1);  // header + one row per tick
+      CHECK(fs::exists(in_tmp("plots/new/force.png")));
+    }
+  }
+  SECTION("tangible_image: probes with a header, CRLF, comments and blank lines") {
+    const std::string probes = in_tmp("probes_crlf.csv");
+    write(probes, "x,y\r\n# a comment\r\n30,20\r\n\r\n 10 , 20 \r\n");
+    const std::string forces = in_tmp("forces_crlf.csv");
+    const Result r = run("tangible_image", {picture, "--size", "3", "--probes", probes, "--forces", forces});
+    CAPTURE(r.err);
+    REQUIRE(r.status == ok);
+    std::string text = slurp(forces);
+    REQUIRE(text.rfind("x,y,fx,fy\n", 0) == 0);
+    text = text.substr(10);
+    std::replace(text.begin(), text.end(), ',', ' ');
+    std::istringstream numbers(text);
+    const std::vector<double> v{std::istream_iterator<double>(numbers), std::istream_iterator<double>()};
+    REQUIRE(v.size() == 8);  // two probes: x, y, fx, fy
+    CHECK(v[0] == 30.0);
+    CHECK(v[2] == Approx(1.0));  // on the edge: magnitude 1 toward black (+x)
+    CHECK(v[3] == Approx(0.0).margin(1e-12));
+    CHECK(v[4] == 10.0);
+    CHECK(v[6] == 0.0);  // flat white
+  }
+  SECTION("box_demo: one view, one trial, a fresh output folder") {
+    const Result r = run("box_demo", {"--rotation", "45", "--trials", "1", "--noise", "0", "--seed", "0", "--out",
+                                      in_tmp("box/new")});
+    CAPTURE(r.err);
+    REQUIRE(r.status == ok);
+    CHECK(fs::exists(in_tmp("box/new/box_45.png")));
+    CHECK(r.out.find("worst:") != std::string::npos);
+  }
+  SECTION("tangible_experiment: the smallest picture") {
+    const Result r = run("tangible_experiment", {"--size", "256"});
+    REQUIRE(r.status == ok);
+    CHECK(r.out.find("| 17 |") != std::string::npos);
+  }
+  SECTION("false_texture: the most and fewest levels") {
+    for (const char* levels : {"2", "8"}) {
+      const Result r = run("false_texture", {picture, "--levels", levels, "--out", in_tmp("ft")});
+      CAPTURE(r.err);
+      REQUIRE(r.status == ok);
+      CHECK(fs::file_size(in_tmp("ft/strokes.csv")) > 100);
+    }
+  }
+}
