@@ -4,7 +4,7 @@
 //
 //   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
 //              [--realtime off|best_effort|enforce] [--trace OUT.csv] [--plots DIR]
-//              [--device sim|hid[:VID:PID]]
+//              [--device sim|hid[:VID:PID]|woody:p1|p2|p4[:PRESET][:sim]]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -61,16 +61,45 @@ constexpr const char* usage_text =
     "                        or enforce (refuse to start without real-time scheduling)\n"
     "  --trace OUT.csv       write t, position [m], force [N] and period [s] per tick\n"
     "  --plots DIR           write force.png and periods.png into DIR (created if needed)\n"
-    "  --device D            sim (default), hid, or hid:VID:PID (hexadecimal ids)\n"
+    "  --device D            sim (default), hid, or hid:VID:PID (hexadecimal ids): our protocol;\n"
+    "                        woody:GEN[:PRESET][:sim]: a WoodenHaptics arm, GEN p1 or p2 (USB HID)\n"
+    "                        or p4 (serial text; simulated only here), PRESET woody_v2015 (default),\n"
+    "                        woodenhaptics_v2019, aluhaptics_v2 or vintage; :sim simulates it\n"
     "  -h, --help            this text\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
 
 /// A usage error found while setting up (an unknown field or device).
 [[noreturn]] void usage(const std::string& error) { throw cli::UsageError(error); }
 
-/// "sim", "hid" or "hid:VID:PID" with 1 to 4 hexadecimal digits per id.
+/// A WoodenHaptics device string: woody:p1|p2|p4[:preset][:sim].
+struct WoodySpec {
+  woody::Generation generation{woody::Generation::p4_text};
+  std::string preset{"woody_v2015"};
+  bool simulated{false};
+};
+bool parse_woody(const std::string& d, WoodySpec& spec) {
+  if (d.rfind("woody:", 0) != 0) return false;
+  std::string rest = d.substr(6);
+  if (rest.size() >= 4 && rest.compare(rest.size() - 4, 4, ":sim") == 0) {
+    spec.simulated = true;
+    rest.resize(rest.size() - 4);
+  }
+  const std::string gen = rest.substr(0, rest.find(':'));
+  if (rest.find(':') != std::string::npos) spec.preset = rest.substr(rest.find(':') + 1);
+  if (gen == "p1") spec.generation = woody::Generation::p1_hid8;
+  else if (gen == "p2") spec.generation = woody::Generation::p2_hid14;
+  else if (gen == "p4") spec.generation = woody::Generation::p4_text;
+  else return false;
+  for (const char* known : {"woody_v2015", "woodenhaptics_v2019", "aluhaptics_v2", "vintage"})
+    if (spec.preset == known) return true;
+  return false;
+}
+
+/// "sim", "hid" or "hid:VID:PID" with 1 to 4 hexadecimal digits per id, or
+/// a WoodenHaptics device string.
 bool valid_device(const std::string& d) {
-  if (d == "sim" || d == "hid") return true;
+  WoodySpec woody_spec;
+  if (d == "sim" || d == "hid" || parse_woody(d, woody_spec)) return true;
   if (d.rfind("hid:", 0) != 0) return false;
   const std::string ids = d.substr(4);
   const auto colon = ids.find(':');
@@ -102,8 +131,8 @@ Options parse(cli::Parser& p) {
     } else if (p.is("--device")) {
       o.device = p.value();
       if (!valid_device(o.device))
-        usage("--device must be sim, hid or hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), got '" +
-              o.device + "'");
+        usage("--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001) or "
+              "woody:p1|p2|p4[:PRESET][:sim], got '" + o.device + "'");
     } else if (p.positional() && !image_given) {
       o.image = p.token();
       image_given = true;
@@ -236,6 +265,24 @@ void print_status(const LoopSnapshot& s, std::uint32_t latched, double t) {
   std::fflush(stdout);
 }
 
+/// Prints the link counters of the device, whichever protocol it speaks.
+void print_link(const ForceArm& device) {
+  const LinkCounters& link = device.counters();
+  std::printf("link: %llu reports, %llu dropped, %llu corrupt, %llu resyncs, %llu commands\n",
+              static_cast<unsigned long long>(link.reports), static_cast<unsigned long long>(link.dropped),
+              static_cast<unsigned long long>(link.corrupt), static_cast<unsigned long long>(link.resyncs),
+              static_cast<unsigned long long>(link.commands));
+}
+void print_link(const WoodyArm& device) {
+  const WoodyCounters& c = device.counters();
+  std::printf("link: %llu replies, %llu with firmware error bits, %llu malformed, %llu commands\n",
+              static_cast<unsigned long long>(c.reports), static_cast<unsigned long long>(c.error_replies),
+              static_cast<unsigned long long>(c.malformed), static_cast<unsigned long long>(c.commands));
+}
+
+template <Device D>
+int run_demo(const Options& o, D& device, AnyField& field, SteadyClock& clock, bool hardware);
+
 int run(const Options& o) {
   const cv::Mat image = cv::imread(o.image, cv::IMREAD_COLOR);
   if (image.empty()) throw std::runtime_error("cannot read image " + o.image);
@@ -246,15 +293,44 @@ int run(const Options& o) {
   SteadyClock clock;
   const auto now = [&clock] { return clock.now(); };
   const double width = image.cols / mapping.px_per_mm() * 1e-3, height = image.rows / mapping.px_per_mm() * 1e-3;
+  // The hand aims 8 mm behind the picture plane (its spring then presses
+  // with up to 300 N/m * 8 mm = 2.4 N) and raster-scans the picture.
+  const auto scan = [&](glm::dvec3 centre) {
+    return HandPath::raster(centre + glm::dvec3{0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
+  };
+
+  WoodySpec woody_spec;
+  if (parse_woody(o.device, woody_spec)) {
+    const WoodyArmConfig wc = WoodyArmConfig::defaults(woody_spec.generation, woody_presets::by_name(woody_spec.preset));
+    std::unique_ptr<SimulatedWoody> woody_arm;
+    std::unique_ptr<Transport> woody_link;
+    if (woody_spec.simulated) {
+      SimulatedWoodyConfig sc;
+      sc.generation = wc.generation;
+      sc.kinematics = wc.kinematics;
+      sc.encoder_sign = wc.encoder_sign;
+      sc.hand.path = scan(glm::dvec3{0.0});  // the hand pulls the handle from its rest pose onto the picture
+      woody_arm = std::make_unique<SimulatedWoody>(sc);
+      woody_link = std::make_unique<SimulatedWoodyTransport>(*woody_arm, now);
+    } else if (wc.generation != woody::Generation::p4_text) {
+#if HAPTICFIELD_EXAMPLE_HID
+      woody_link = std::make_unique<HidTransport>(0x1234, 0x0006);  // the mbed ids of WoodenHaptics 1.5
+#else
+      throw std::runtime_error("this build has no hidapi: --device woody:p1|p2 is unavailable");
+#endif
+    } else {
+      usage("--device woody:p4 drives a serial arm, which this demo only simulates: use woody:p4:sim");
+    }
+    WoodyArm device(*woody_link, wc);
+    return run_demo(o, device, field, clock, !woody_spec.simulated);
+  }
 
   std::unique_ptr<SimulatedArm> arm;
   std::unique_ptr<Transport> transport;
   bool hardware = false;
   if (o.device == "sim") {
     SimulatedArmConfig c;
-    // The hand aims 8 mm behind the picture plane (its spring then presses
-    // with up to 300 N/m * 8 mm = 2.4 N) and raster-scans the picture.
-    c.hand.path = HandPath::raster({0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
+    c.hand.path = scan(glm::dvec3{0.0});
     arm = std::make_unique<SimulatedArm>(c);
     transport = std::make_unique<SimulatedTransport>(*arm, now);
   } else if (o.device.rfind("hid", 0) == 0) {
@@ -277,13 +353,18 @@ int run(const Options& o) {
   }
 
   ForceArm device(*transport);
+  return run_demo(o, device, field, clock, hardware);
+}
+
+template <Device D>
+int run_demo(const Options& o, D& device, AnyField& field, SteadyClock& clock, bool hardware) {
   LoopConfig config;
   config.rate = o.rate;
   config.realtime = o.realtime;
   // A stall of the machine (a late wake, a stale state) latches zero force;
   // the demo re-arms through the soft start once states are fresh for 0.5 s.
   config.recover_after = 0.5;
-  ServoLoop<ForceArm, SteadyClock> loop(device, clock, config);
+  ServoLoop<D, SteadyClock> loop(device, clock, config);
 
   if (hardware) {
     std::printf("WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
@@ -353,10 +434,7 @@ int run(const Options& o) {
                 static_cast<unsigned long long>(s.recoveries),
                 loop.safety().latched() ? "; still latched at the end" : "");
   }
-  const LinkCounters& link = device.counters();
-  std::printf("link: %llu reports, %llu dropped, %llu corrupt, %llu commands\n",
-              static_cast<unsigned long long>(link.reports), static_cast<unsigned long long>(link.dropped),
-              static_cast<unsigned long long>(link.corrupt), static_cast<unsigned long long>(link.commands));
+  print_link(device);
   if (!o.trace.empty()) {
     write_trace(o.trace, rows);
     std::printf("trace: %s (%zu rows)\n", o.trace.c_str(), rows.size());
