@@ -19,6 +19,7 @@
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
+#include "hapticfield/texture/hatt.hpp"
 
 using namespace hapticfield;
 using namespace hapticfield::texture;

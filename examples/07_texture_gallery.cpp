@@ -23,6 +23,7 @@
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
+#include "hapticfield/texture/hatt.hpp"
 
 using namespace hapticfield;
 using namespace hapticfield::texture;
