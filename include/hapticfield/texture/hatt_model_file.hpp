@@ -48,8 +48,8 @@ inline constexpr std::size_t max_hatt_order = 256;
 inline constexpr std::size_t max_hatt_models = 4096;
 inline constexpr std::size_t max_hatt_triangles = 2 * max_hatt_models;
 /// Budget for converting <ARcoeff> to LSFs in one file: the sum over the
-/// converted models of (p + 1)^2 (about 2 us each, so at most ~0.4 s).
-inline constexpr std::size_t max_hatt_conversion_work = 200000;
+/// converted models of (p + 1)^2 (about 2 us each, so at most ~0.2 s).
+inline constexpr std::size_t max_hatt_conversion_work = 100000;
 
 namespace detail {
 
@@ -283,8 +283,9 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
     const auto f = [&](int v) { return set.forces[static_cast<std::size_t>(v)]; };
     const double ax = s(t[1]) - s(t[0]), ay = f(t[1]) - f(t[0]);
     const double bx = s(t[2]) - s(t[0]), by = f(t[2]) - f(t[0]);
-    if (std::fabs(ax * by - ay * bx) <= 1e-12 * (std::fabs(ax * by) + std::fabs(ay * bx) + 1e-300))
-      hatt_fail(source, cat("<tri> ", std::to_string(i + 1), ": degenerate (its vertices are collinear)"));
+    const double det = ax * by - ay * bx;
+    if (!std::isfinite(det) || std::fabs(det) <= 1e-12 * (std::fabs(ax * by) + std::fabs(ay * bx) + 1e-300))
+      hatt_fail(source, cat("<tri> ", std::to_string(i + 1), ": degenerate (its vertices are collinear or too far apart)"));
     set.triangles.push_back(t);
   }
 
