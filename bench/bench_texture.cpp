@@ -19,6 +19,7 @@
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
+#include "hapticfield/texture/hatt.hpp"
 
 using namespace hapticfield;
 using namespace hapticfield::texture;
@@ -199,6 +200,29 @@ int main(int argc, char** argv) {
   rows.push_back({"HaTT update(), 64 models, 98 triangles, AR(40)",
                   measure([&](int i) { big_tex.update(20.0 + (i % 380), 0.2 + 0.0095 * (i % 400)); keep(big_tex.variance()); }, n)});
   field_row("HaTT AR(40) tick, 98 triangles, update every tick", big_tex);
+
+  // setup code (not per tick): reading model files and converting <ARcoeff>
+  const auto ar_of_order = [](int p) {
+    std::vector<double> a(static_cast<std::size_t>(p) + 1, 0.0);
+    a[0] = 1.0;
+    a[1] = -0.5;
+    return a;
+  };
+  const std::vector<double> a20 = ar_of_order(20), a64 = ar_of_order(64);
+  const int setup_n = std::max(50, n / 1000);
+  rows.push_back({"setup: ar_to_lsf, order 20", measure([&](int) { keep(ar_to_lsf(a20)[0]); }, setup_n)});
+  rows.push_back({"setup: ar_to_lsf, order 64", measure([&](int) { keep(ar_to_lsf(a64)[0]); }, setup_n)});
+  const std::string toolkit = hapticfield::read_file(HAPTICFIELD_SOURCE_DIR "/tests/data/hatt/Models_Toolkit 1kHz ARMA.xml");
+  rows.push_back({"setup: parse a toolkit 1 kHz ARMA file (6 KB, 4 models)",
+                  measure([&](int) { keep(parse_hatt_model_set(toolkit, "bench").mu); }, setup_n)});
+  const std::string hostile = hapticfield::read_file(HAPTICFIELD_SOURCE_DIR "/tests/fuzz/corpus_hatt/hostile_2000_coefficients.xml");
+  rows.push_back({"setup: reject the 4.5 KB file with 2000 <ARcoeff> values", measure([&](int) {
+                    try {
+                      (void)parse_hatt_model_set(hostile, "bench");
+                    } catch (const HattFileError& e) {
+                      keep(static_cast<double>(e.what()[0]));
+                    }
+                  }, setup_n)});
 
   const Stats& base = rows.front().s;
   std::printf("Texture benchmark: %d samples per row; ratios against the baseline row.\n\n", n);

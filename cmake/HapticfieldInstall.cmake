@@ -1,5 +1,5 @@
 # Install rules: headers, one export set per component (so a consumer that
-# uses only the core never needs OpenCV or hidapi), a Config file that finds
+# uses only the core never needs OpenCV, pugixml or hidapi), a Config file that finds
 # each component's dependencies, a version file and a pkg-config file.
 include(CMakePackageConfigHelpers)
 
@@ -9,6 +9,10 @@ install(DIRECTORY "${PROJECT_SOURCE_DIR}/include/hapticfield" DESTINATION "${CMA
 
 install(TARGETS hapticfield_core EXPORT hapticfieldCoreTargets)
 install(EXPORT hapticfieldCoreTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+if(HAPTICFIELD_HAS_PUGIXML)
+  install(TARGETS hapticfield_hatt EXPORT hapticfieldHattTargets)
+  install(EXPORT hapticfieldHattTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+endif()
 if(HAPTICFIELD_HAS_IMAGE)
   install(TARGETS hapticfield_image EXPORT hapticfieldImageTargets)
   install(EXPORT hapticfieldImageTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
@@ -30,6 +34,9 @@ install(FILES "${PROJECT_BINARY_DIR}/hapticfieldConfig.cmake"
         DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
 
 set(HAPTICFIELD_PC_REQUIRES "glm")
+if(HAPTICFIELD_HAS_PUGIXML)
+  string(APPEND HAPTICFIELD_PC_REQUIRES " pugixml")
+endif()
 if(HAPTICFIELD_HAS_IMAGE)
   string(APPEND HAPTICFIELD_PC_REQUIRES " opencv4")
 endif()

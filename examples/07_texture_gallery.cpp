@@ -25,6 +25,7 @@
 #include "common/cli.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
+#include "hapticfield/texture/hatt.hpp"
 
 using namespace hapticfield;
 using namespace hapticfield::texture;

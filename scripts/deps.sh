@@ -3,7 +3,7 @@
 # Needs root (or sudo) only when something has to be installed.
 set -euo pipefail
 
-packages=(g++ clang libclang-rt-14-dev cmake make pkg-config libglm-dev libopencv-dev libhidapi-dev catch2)
+packages=(g++ clang libclang-rt-14-dev cmake make pkg-config libglm-dev libopencv-dev libhidapi-dev libpugixml-dev catch2)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -6,6 +6,7 @@
 // never pull, non-finite input, and zero allocations per tick.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -15,6 +16,7 @@
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
+#include "hapticfield/texture/hatt.hpp"
 
 using namespace hapticfield;
 using namespace hapticfield::texture;
@@ -219,6 +221,31 @@ TEST_CASE("a HaTT texture selects its model by |Fc| of this tick") {
   f = field.force(probe_at({0.0, 0.0, -0.5e-3}, {0.3, 0.0, 0.0}, 3.0));
   CHECK(uses_model(1));
   CHECK_THAT(f.x, WithinAbs(-0.3 * 0.5, 1e-9));
+}
+
+TEST_CASE("a HaTT texture on a tilted plane vibrates along that plane's normal and rubs in its tangent plane") {
+  const HattModelSet s =
+      load_hatt_model_set(std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / "tests/data/hatt/Models_Synthetic Grid.xml");
+  const glm::dvec3 n = glm::normalize(glm::dvec3{0.3, -0.2, 1.0});
+  const PlaneConstraint plane(PlaneConstraintConfig{glm::dvec3{0.0}, n, 1000.0, 0.0});
+  // The configured normal (+z) is only a fallback: the touched plane's wins.
+  auto vibration = contact(plane, HattTexture<>(s, HattParams{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false}));
+  auto rubbing = contact(plane, HattTexture<>(s, HattParams{0.0, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, true}));
+  const SurfaceFrame frame = surface_frame(n);
+  double largest = 0.0;
+  for (int i = 0; i < 500; ++i) {
+    // slide along the plane's first tangent, 2 mm deep
+    const glm::dvec3 v = 0.2 * frame.tangent1;
+    const glm::dvec3 p = -2e-3 * n + static_cast<double>(i) * 1e-3 * v;
+    const glm::dvec3 fc = plane.force(probe_at(p, v));
+    const glm::dvec3 ft = vibration.force(probe_at(p, v)) - fc;
+    const glm::dvec3 ff = rubbing.force(probe_at(p, v)) - fc;
+    REQUIRE(glm::length(glm::cross(ft, n)) <= 1e-9 * (1.0 + glm::length(ft)));  // Ft is along n
+    REQUIRE(std::fabs(glm::dot(ff, n)) <= 1e-12);                               // Ff lies in the tangent plane
+    REQUIRE(glm::dot(ff, v) < 0.0);                                             // and opposes the sliding
+    largest = std::max(largest, glm::length(ft));
+  }
+  CHECK(largest > 1e-3);  // the model did vibrate
 }
 
 TEST_CASE("no contact: no texture and no friction, and the parts are not called") {

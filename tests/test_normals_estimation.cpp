@@ -210,7 +210,162 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
     CHECK_THROWS_WITH(Camera::from_file(bad_f), Catch::Contains("focal length"));
     const std::string garbage = tmp_path("garbage.yml");
     std::ofstream(garbage) << "%YAML:1.0\ncamera_matrix: [1, 2\n";
-    CHECK_THROWS_AS(Camera::from_file(garbage), std::invalid_argument);
+    CHECK_THROWS_AS(Camera::from_file(garbage), CalibrationError);
+  }
+}
+
+namespace {
+
+/// Writes `bytes` to a temporary file and returns its path.
+std::string write_tmp(const std::string& name, const std::string& bytes) {
+  const std::string path = tmp_path(name);
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path;
+}
+
+/// Camera::from_file(path) must throw CalibrationError naming the file and
+/// containing `needle`.
+void rejects(const std::string& path, const std::string& needle) {
+  try {
+    (void)Camera::from_file(path);
+  } catch (const CalibrationError& e) {
+    INFO(e.what());
+    CHECK(std::string(e.what()).find(needle) != std::string::npos);
+    CHECK(std::string(e.what()).find(path) != std::string::npos);
+    return;
+  }
+  FAIL("no CalibrationError for " << path << " (" << needle << ")");
+}
+
+}  // namespace
+
+TEST_CASE("calibrations written by cv::FileStorage (YAML and XML) read back exactly") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const int n : {4, 5, 8, 12, 14}) {
+    for (const char* ext : {".yml", ".yaml", ".xml"}) {
+      INFO(n << " coefficients, " << ext);
+      const cv::Matx33d k(900.0 + 100 * u(rng), 0.25 * u(rng), 320.0 + 10 * u(rng), 0.0, 880.0 + 100 * u(rng),
+                          240.0 + 10 * u(rng), 0.0, 0.0, 1.0);
+      std::vector<double> d(static_cast<std::size_t>(n));
+      for (double& x : d) x = 0.3 * u(rng) * std::pow(10.0, -6.0 * (u(rng) + 1.0));  // down to 1e-13
+      const std::string path = tmp_path("opencv_" + std::to_string(n) + ext);
+      {
+        cv::FileStorage fs(path, cv::FileStorage::WRITE);
+        fs << "calibration_time" << "Sun Nov 22 12:00:00 2026";  // nodes we do not read are skipped
+        fs << "image_width" << 1280 << "image_height" << 960;
+        fs << "board" << "{" << "width" << 9 << "height" << 6 << "square_size" << 0.025 << "}";
+        fs << "flags" << 0;
+        fs << "camera_matrix" << cv::Mat(k);
+        cv::Mat dist(d);
+        fs << "distortion_coefficients" << (n % 2 ? dist : cv::Mat(dist.t()));  // N x 1 and 1 x N
+        fs << "avg_reprojection_error" << 0.21;
+        cv::Mat views(25, 6, CV_64F);
+        cv::randu(views, -1.0, 1.0);
+        fs << "extrinsic_parameters" << views;  // a large matrix we do not read
+        fs << "image_points" << cv::Mat(40, 1, CV_32FC2, cv::Scalar(1.5f, 2.5f));
+      }
+      const Camera c = Camera::from_file(path);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) CHECK_THAT(c.matrix()(i, j), Catch::Matchers::WithinAbs(k(i, j), 1e-12));
+      REQUIRE(c.distortion().size() == d.size());
+      for (std::size_t i = 0; i < d.size(); ++i) CHECK_THAT(c.distortion()[i], Catch::Matchers::WithinAbs(d[i], 1e-12));
+      CHECK(c.width() == 1280);
+      CHECK(c.height() == 960);
+    }
+  }
+  // float matrices (dt: f) and the other accepted names
+  const std::string f = tmp_path("opencv_float.yml");
+  {
+    cv::FileStorage fs(f, cv::FileStorage::WRITE);
+    fs << "camera_matrix" << cv::Mat(cv::Matx33f(700.5f, 0, 300.25f, 0, 701.5f, 200.75f, 0, 0, 1));
+    fs << "dist_coeffs" << cv::Mat(std::vector<float>{0.125f, -0.25f, 0.0f, 0.0f});
+  }
+  const Camera c = Camera::from_file(f);
+  CHECK(c.matrix()(0, 2) == 300.25);
+  CHECK(c.distortion()[1] == -0.25);
+}
+
+TEST_CASE("hostile calibration files are clear errors, never a crash, hang or huge allocation") {
+  // the three files that crashed or exhausted cv::FileStorage
+  rejects(write_tmp("truncated_decl.xml", "<?xml version="), "malformed XML");
+  REQUIRE(std::filesystem::file_size(tmp_path("truncated_decl.xml")) == 14);
+  rejects(write_tmp("short.yml", "%YAML:1.\n{ :"), "%YAML:1.0");
+  REQUIRE(std::filesystem::file_size(tmp_path("short.yml")) == 12);
+  const std::string good = "%YAML:1.0\n---\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+                           "   data: [ 800., 0., 320., 0., 800., 240., 0., 0., 1. ]\n";
+  REQUIRE(Camera::from_file(write_tmp("good.yml", good)).matrix()(0, 0) == 800.0);
+  std::string typo = good;
+  typo.replace(typo.find("cols: 3"), 7, "cols:k 3");
+  rejects(write_tmp("typo.yml", typo), "line 5");
+  // sizes are bounded before data is read
+  std::string big = good;
+  big.replace(big.find("rows: 3"), 7, "rows: 100000000");
+  rejects(write_tmp("big.yml", big), "not an integer in 0..64");
+  std::string wide = good;
+  wide.replace(wide.find("rows: 3"), 7, "rows: 4");
+  rejects(write_tmp("wide.yml", wide), "must be 3x3, not 4x3");
+  std::string more = good;
+  more.replace(more.find("1. ]"), 4, "1., 7. ]");
+  rejects(write_tmp("more.yml", more), "more values than rows x cols");
+  std::string fewer = good;
+  fewer.replace(fewer.find(", 1. ]"), 6, " ]");
+  rejects(write_tmp("fewer.yml", fewer), "8 values in 'data', rows x cols = 9");
+  std::string open_list = good;
+  open_list.replace(open_list.find(" ]"), 2, "");
+  rejects(write_tmp("open.yml", open_list), "not closed");
+  std::string nan = good;
+  nan.replace(nan.find("800."), 4, ".Nan");
+  rejects(write_tmp("nan.yml", nan), "not a finite number");
+  std::string multi = good;
+  multi.replace(multi.find("dt: d"), 5, "dt: \"3d\"");
+  rejects(write_tmp("channels.yml", multi), "'dt' must be one of");
+  rejects(write_tmp("seven.yml", good + "distortion_coefficients: !!opencv-matrix\n   rows: 7\n   cols: 1\n   dt: d\n"
+                                          "   data: [ 0., 0., 0., 0., 0., 0., 0. ]\n"),
+          "4, 5, 8, 12 or 14 coefficients, not 7x1");
+  rejects(write_tmp("twice.yml", good + good.substr(good.find("camera_matrix"))), "a second 'camera_matrix'");
+  rejects(write_tmp("bad_k.yml", std::string(good).replace(good.find("0., 0., 1."), 10, "0., 0., 2.")),
+          "camera matrix must be");
+  rejects(write_tmp("width.yml", good + "image_width: -5\n"), "'image_width'");
+  rejects(write_tmp("json.json", "{ \"camera_matrix\": 1 }"), "JSON");
+  rejects(write_tmp("empty.yml", ""), "empty file");
+  rejects(write_tmp("binary.yml", std::string("\x89PNG\r\n\x1a\n\0\0", 10)), "not an OpenCV calibration file");
+  rejects(write_tmp("no_root.xml", "<?xml version=\"1.0\"?>\n<storage/>"), "<opencv_storage>");
+  const std::string xml = "<?xml version=\"1.0\"?>\n<opencv_storage>\n<camera_matrix type_id=\"opencv-matrix\">"
+                          "<rows>3</rows><cols>3</cols><dt>d</dt><data>800. 0. 320. 0. 800. 240. 0. 0. 1.</data>"
+                          "</camera_matrix>\n</opencv_storage>\n";
+  REQUIRE(Camera::from_file(write_tmp("good.xml", xml)).matrix()(1, 2) == 240.0);
+  rejects(write_tmp("big.xml", std::string(xml).replace(xml.find("<rows>3"), 7, "<rows>99999999")), "<camera_matrix><rows>");
+  rejects(write_tmp("nodata.xml", std::string(xml).replace(xml.find("<data>"), 6, "<date>").replace(xml.find("</data>"), 7, "</date>")),
+          "missing <data>");
+  // entities are not expanded
+  rejects(write_tmp("laughs.xml", "<?xml version=\"1.0\"?><!DOCTYPE opencv_storage [<!ENTITY a \"1\">]>"
+                                  "<opencv_storage><image_width>&a;</image_width></opencv_storage>"),
+          "'image_width'");
+  // files: missing, a directory, too large (the same FileError as everywhere)
+  CHECK_THROWS_WITH(Camera::from_file(tmp_path("none.yml")), "cannot open '" + tmp_path("none.yml") + "': no such file");
+  CHECK_THROWS_AS(Camera::from_file(tmp_path("")), FileError);
+  const std::string huge = write_tmp("huge.yml", good + std::string(max_calibration_file_bytes, '#'));
+  CHECK_THROWS_WITH(Camera::from_file(huge), Catch::Contains("larger than the limit"));
+  // every truncation of a file OpenCV wrote is a CalibrationError or a valid camera
+  for (const char* ext : {".yml", ".xml"}) {
+    const std::string path = tmp_path(std::string("whole") + ext);
+    {
+      cv::FileStorage fs(path, cv::FileStorage::WRITE);
+      fs << "image_width" << 640 << "camera_matrix" << cv::Mat(cv::Matx33d(800, 0, 320, 0, 800, 240, 0, 0, 1));
+      fs << "distortion_coefficients" << cv::Mat(std::vector<double>{0.1, -0.2, 0.001, 0.002, 0.05});
+    }
+    const std::string text = read_file(path);
+    int other = 0;
+    for (std::size_t n = 0; n <= text.size(); ++n) {
+      try {
+        (void)Camera::from_text(std::string_view(text).substr(0, n), "cut");
+      } catch (const CalibrationError&) {
+      } catch (...) {
+        ++other;
+      }
+    }
+    CHECK(other == 0);
   }
 }
 

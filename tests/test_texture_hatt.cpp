@@ -11,7 +11,9 @@
 // 2.13 has no SKIP) when the variable is unset.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
+#include <complex>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -25,6 +27,7 @@
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
+#include "hapticfield/texture/hatt.hpp"
 
 using namespace hapticfield;
 using namespace hapticfield::texture;
@@ -151,7 +154,7 @@ TEST_CASE("malformed or incomplete modelSet documents throw a clear error") {
   const auto fails_with = [](const std::string& doc, const std::string& needle) {
     try {
       (void)parse_hatt_model_set(doc, "bad.xml");
-    } catch (const std::invalid_argument& e) {
+    } catch (const HattFileError& e) {
       INFO(e.what());
       CHECK(std::string(e.what()).find(needle) != std::string::npos);
       CHECK(std::string(e.what()).find("bad.xml") != std::string::npos);
@@ -159,9 +162,9 @@ TEST_CASE("malformed or incomplete modelSet documents throw a clear error") {
     }
     FAIL("no exception for: " << needle);
   };
-  fails_with("", "root element");
-  fails_with("<modelSet><mu>0.2</mu>", "missing end tag");
-  fails_with("<modelSet><mu>0.2</nu></modelSet>", "does not match");
+  fails_with("", "no root element");
+  fails_with("<modelSet><mu>0.2</mu>", "malformed XML");
+  fails_with("<modelSet><mu>0.2</nu></modelSet>", "malformed XML");
   fails_with("<modelSet><mu>0.2</mu></modelSet><extra/>", "after the root");
   fails_with("<models/>", "expected <modelSet>");
   fails_with(minimal(""), "missing <mu>");
@@ -180,15 +183,20 @@ TEST_CASE("malformed or incomplete modelSet documents throw a clear error") {
   fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>",
                      "<tri><value>1</value><value>2</value><value>3</value></tri>",
                      "<ARlsf><value>0.5</value></ARlsf>"),
-             "numARCoeff values");
+             "<ARlsf> holds 1 values, numARCoeff = 2");
   fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>",
                      "<tri><value>1</value><value>2</value><value>3</value></tri>", ""),
              "missing <ARlsf>");
   std::string wrong_count = minimal();
   wrong_count.replace(wrong_count.find("<numMod>3"), 9, "<numMod>4");
   fails_with(wrong_count, "numMod");
-  CHECK_THROWS_AS(load_hatt_model_set(data_dir / "no such file.xml"), std::invalid_argument);
-  CHECK_THROWS_AS(hatt_model_files(data_dir / "no such dir"), std::invalid_argument);
+  // a missing file is the same FileError as for any other component
+  const std::string missing = (data_dir / "no such file.xml").string();
+  CHECK_THROWS_WITH(load_hatt_model_set(missing), "cannot open '" + missing + "': no such file");
+  CHECK_THROWS_AS(load_hatt_model_set(missing), FileError);
+  CHECK_THROWS_AS(load_hatt_model_set(data_dir), FileError);  // a directory, not a file
+  CHECK_THROWS_AS(hatt_model_files(data_dir / "no such dir"), FileError);
+  CHECK_THROWS_AS(hatt_model_files(data_dir / "Models_Synthetic ARMA.xml"), FileError);
 }
 
 TEST_CASE("every truncation of a model file is a clear error, never a crash") {
@@ -201,12 +209,12 @@ TEST_CASE("every truncation of a model file is a clear error, never a crash") {
   for (std::size_t n = 0; n < end; ++n) {
     try {
       (void)parse_hatt_model_set(std::string_view(text).substr(0, n));
-    } catch (const std::invalid_argument&) {
+    } catch (const HattFileError&) {
       ++thrown;
     }
   }
   CHECK(thrown == static_cast<int>(end));
-  // corrupting any one byte either still parses or gives std::invalid_argument
+  // corrupting any one byte either still parses or gives HattFileError
   int other = 0;
   for (std::size_t i = 0; i < text.size(); ++i)
     for (char c : {'<', '>', '&'}) {
@@ -214,12 +222,253 @@ TEST_CASE("every truncation of a model file is a clear error, never a crash") {
       bad[i] = c;
       try {
         (void)parse_hatt_model_set(bad);
-      } catch (const std::invalid_argument&) {
+      } catch (const HattFileError&) {
       } catch (...) {
         ++other;
       }
     }
   CHECK(other == 0);
+}
+
+// --- the toolkit's own file layout -------------------------------------------------------
+
+namespace {
+
+std::string read_text(const std::filesystem::path& p) { return hapticfield::read_file(p.string()); }
+
+void replace_all(std::string& s, const std::string& from, const std::string& to) {
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+}
+
+/// Band powers of the synthesised acceleration (averaged Hann-windowed
+/// periodograms of 1024-sample segments, 8 bands of 64 bins) against the model's own
+/// spectrum var gain^2 |B(e^jw)|^2 / |A(e^jw)|^2 from the file's
+/// <ARcoeff>/<MAcoeff>; returns the largest band error [dB].
+double spectrum_error_db(HattTexture<>& tex, const HattModel& model, double gain, double period, Probe p) {
+  constexpr std::size_t seg = 1024, segments = 64;
+  p.period = period;
+  for (int i = 0; i < 2000; ++i) (void)tex.force(p);  // settle the filter
+  std::vector<double> power(seg / 2, 0.0), hann(seg);
+  double w2 = 0;
+  for (std::size_t n = 0; n < seg; ++n)
+    w2 += (hann[n] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(n) / seg)) * hann[n];
+  for (std::size_t s = 0; s < segments; ++s) {
+    std::vector<std::complex<double>> x(seg);
+    for (std::size_t n = 0; n < seg; ++n) {
+      (void)tex.force(p);
+      x[n] = hann[n] * tex.acceleration();
+    }
+    fft(x);
+    for (std::size_t k = 0; k < seg / 2; ++k) power[k] += std::norm(x[k]) / (w2 * segments);
+  }
+  const auto response = [](const std::vector<double>& c, double w) {
+    std::complex<double> v = 0;
+    for (std::size_t k = 0; k < c.size(); ++k) v += c[k] * std::exp(std::complex<double>(0, -w * static_cast<double>(k)));
+    return std::norm(v);
+  };
+  double worst = 0;
+  for (std::size_t band = 0; band < 8; ++band) {
+    double measured = 0, model_power = 0;
+    for (std::size_t k = std::max<std::size_t>(1, band * 64); k < (band + 1) * 64; ++k) {
+      const double w = 2.0 * std::numbers::pi * static_cast<double>(k) / seg;
+      measured += power[k];
+      const double ma = model.ma_coeff.empty() ? 1.0 : response(model.ma_coeff, w);
+      model_power += model.variance * gain * gain * ma / response(model.ar_coeff, w);
+    }
+    worst = std::max(worst, std::fabs(10.0 * std::log10(measured / model_power)));
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("toolkit files: capitalised <SampleRate>, <SpeedUnits>, <AccelUnits>, <ForceUnits> are read") {
+  const HattModelSet k1 = load_hatt_model_set(data_dir / "Models_Toolkit 1kHz ARMA.xml");
+  CHECK(k1.name == "Toolkit 1kHz ARMA");  // <material>
+  CHECK(k1.sample_rate == 1000.0);
+  CHECK(k1.speed_to_file == 1000.0);
+  CHECK(k1.acceleration_to_si == 1.0);
+  CHECK(k1.ar_order == 6);
+  CHECK(k1.ma_order == 4);
+  CHECK(k1.mu == 0.412345);
+  REQUIRE(k1.models.size() == 4);
+  CHECK(k1.models[0].ar_coeff.size() == 7);  // the toolkit writes a_0 = 1 first
+  CHECK(k1.triangles[1] == std::array<int, 3>{1, 2, 3});
+  const HattModelSet k10 = load_hatt_model_set(data_dir / "Models_Toolkit 10kHz AR.xml");
+  CHECK(k10.sample_rate == 10000.0);
+  CHECK(k10.ar_order == 8);
+  CHECK(k10.ma_order == 0);
+
+  // the same file in lower-case spelling reads the same; g is converted
+  std::string text = read_text(data_dir / "Models_Toolkit 1kHz ARMA.xml");
+  std::string lower = text;
+  for (const char* name : {"SampleRate", "SpeedUnits", "AccelUnits", "ForceUnits"}) {
+    std::string l = name;
+    l[0] = static_cast<char>(l[0] - 'A' + 'a');
+    replace_all(lower, name, l);
+  }
+  REQUIRE(lower != text);
+  CHECK(parse_hatt_model_set(lower).sample_rate == 1000.0);
+  std::string in_g = text;
+  replace_all(in_g, "<AccelUnits>m/s^2</AccelUnits>", "<AccelUnits>g</AccelUnits>");
+  CHECK(parse_hatt_model_set(in_g).acceleration_to_si == 9.80665);
+  // both spellings at once, and units we do not know, are errors naming the field
+  std::string both = text;
+  replace_all(both, "<SampleRate>1000</SampleRate>", "<SampleRate>1000</SampleRate><sampleRate>1000</sampleRate>");
+  CHECK_THROWS_WITH(parse_hatt_model_set(both, "k.xml"), Catch::Contains("k.xml") && Catch::Contains("both <SampleRate> and <sampleRate>"));
+  std::string furlong = text;
+  replace_all(furlong, "<SpeedUnits>mm/s</SpeedUnits>", "<SpeedUnits>in/s</SpeedUnits>");
+  CHECK_THROWS_WITH(parse_hatt_model_set(furlong, "k.xml"), Catch::Contains("<SpeedUnits> must be mm/s or m/s"));
+  std::string newton = text;
+  replace_all(newton, "<ForceUnits>N</ForceUnits>", "<ForceUnits>lbf</ForceUnits>");
+  CHECK_THROWS_AS(parse_hatt_model_set(newton), HattFileError);
+  // without <SampleRate> a set is a 10 kHz model (the toolkit's originals)
+  std::string no_rate = read_text(data_dir / "Models_Toolkit 10kHz AR.xml");
+  replace_all(no_rate, "<SampleRate>10000</SampleRate>", "");
+  CHECK(parse_hatt_model_set(no_rate).sample_rate == 10000.0);
+}
+
+TEST_CASE("toolkit <ARcoeff> lists (a_0 = 1 first) convert to the file's own LSFs") {
+  const HattModelSet with_lsf = load_hatt_model_set(data_dir / "Models_Toolkit 10kHz AR.xml");
+  std::string text = read_text(data_dir / "Models_Toolkit 10kHz AR.xml");
+  while (text.find("<ARlsf>") != std::string::npos)
+    text.erase(text.find("<ARlsf>"), text.find("</ARlsf>") + 8 - text.find("<ARlsf>"));
+  const HattModelSet converted = parse_hatt_model_set(text);
+  for (std::size_t m = 0; m < 4; ++m)
+    for (std::size_t i = 0; i < 8; ++i)  // the file's LSFs are written with 6 decimals
+      CHECK_THAT(converted.models[m].ar_lsf[i], WithinAbs(with_lsf.models[m].ar_lsf[i], 1e-6));
+}
+
+TEST_CASE("a 1 kHz toolkit model makes one step per 1 kHz tick and its spectrum is the model's") {
+  const HattModelSet s = load_hatt_model_set(data_dir / "Models_Toolkit 1kHz ARMA.xml");
+  HattParams params;
+  params.seed = 11;
+  HattTexture<> tex(s, params);
+  CHECK(tex.steps_per_tick(1e-3) == 1);
+  HattParams one = params;
+  one.match_sample_rate = false;
+  HattTexture<> reference(s, one);
+  Probe p = stroke(0.2, 2.0);  // vertex 4: 200 mm/s, 2 N
+  p.period = 1e-3;
+  for (int i = 0; i < 100; ++i) {
+    (void)tex.force(p);
+    (void)reference.force(p);
+    REQUIRE(tex.acceleration() == reference.acceleration());
+  }
+  for (std::size_t v : {1u, 3u}) {
+    INFO("vertex " << v);
+    HattTexture<> t(s, params);
+    const double err = spectrum_error_db(t, s.models[v], s.models[v].gain, 1e-3, stroke(s.speeds[v] / 1000.0, s.forces[v]));
+    CHECK(err < 0.5);
+    // read as a 10 kHz model (the lower-case-only reader did this), its
+    // 1 kHz output is about 10 dB off in some band: the test can tell
+    HattModelSet wrong = s;
+    wrong.sample_rate = 10000.0;
+    HattTexture<> w(wrong, params);
+    CHECK(spectrum_error_db(w, s.models[v], s.models[v].gain, 1e-3, stroke(s.speeds[v] / 1000.0, s.forces[v])) > 3.0);
+  }
+}
+
+TEST_CASE("a 10 kHz toolkit AR model in a 10 kHz loop: one step per tick, the model's spectrum") {
+  const HattModelSet s = load_hatt_model_set(data_dir / "Models_Toolkit 10kHz AR.xml");
+  HattTexture<> tex(s, HattParams{});
+  CHECK(tex.steps_per_tick(1e-4) == 1);
+  CHECK(tex.steps_per_tick(1e-3) == 10);
+  const std::size_t v = 3;
+  CHECK(spectrum_error_db(tex, s.models[v], 1.0, 1e-4, stroke(s.speeds[v] / 1000.0, s.forces[v])) < 0.5);
+}
+
+// --- hostile files ------------------------------------------------------------------------
+
+namespace {
+
+/// A model set with `models` vertices on a parabola (one triangle) whose
+/// models carry only <ARcoeff> lists of `coeffs` values (numARCoeff = order).
+std::string coeff_only_set(std::size_t models, std::size_t order, std::size_t coeffs, bool distinct = true) {
+  std::string s = "<modelSet><mu>0.1</mu><numMod>" + std::to_string(models) + "</numMod><numTri>1</numTri><speedList>";
+  for (std::size_t i = 0; i < models; ++i) s += "<value>" + std::to_string(i) + "</value>";
+  s += "</speedList><forceList>";
+  for (std::size_t i = 0; i < models; ++i) s += "<value>" + std::to_string(i * i) + "</value>";
+  s += "</forceList><tri><value>1</value><value>2</value><value>3</value></tri><numARCoeff>" + std::to_string(order) +
+       "</numARCoeff>";
+  for (std::size_t m = 0; m < models; ++m) {
+    s += "<model><ARcoeff><value>" + std::string(distinct ? "-0.0" + std::to_string(m + 1) : "-0.5") + "</value>";
+    for (std::size_t k = 1; k < coeffs; ++k) s += "<value>0</value>";
+    s += "</ARcoeff><var>1</var><speedMod>" + std::to_string(m) + "</speedMod><forceMod>" + std::to_string(m * m) +
+         "</forceMod></model>";
+  }
+  return s + "</modelSet>";
+}
+
+template <class F>
+double seconds(F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void throws_hatt(const std::string& doc, const std::string& needle) {
+  try {
+    (void)parse_hatt_model_set(doc, "hostile.xml");
+  } catch (const HattFileError& e) {
+    INFO(e.what());
+    CHECK(std::string(e.what()).find(needle) != std::string::npos);
+    CHECK(std::string(e.what()).find("hostile.xml") != std::string::npos);
+    return;
+  }
+  FAIL("no HattFileError for: " << needle);
+}
+
+}  // namespace
+
+TEST_CASE("hostile model files: sizes are checked before anything is converted") {
+  // 2000 coefficients against numARCoeff = 4 (4.3 KB; this took a minute
+  // when the list was converted first): rejected by its size
+  std::string long_list = coeff_only_set(3, 4, 4);
+  std::string tokens = "-0.5";
+  for (int k = 1; k < 2000; ++k) tokens += " 0";
+  long_list.replace(long_list.find("<ARcoeff>") + 9, long_list.find("</ARcoeff>") - long_list.find("<ARcoeff>") - 9, tokens);
+  CHECK(long_list.size() < 5000);
+  double t = seconds([&] { throws_hatt(long_list, "<ARcoeff> holds 2000 values, numARCoeff = 4"); });
+  CHECK(t < 1.0);  // loose bound: the size check converts nothing
+  // orders, model and triangle counts beyond the caps
+  throws_hatt(coeff_only_set(3, 2000, 2000), "<numARCoeff> must be an integer in 0..256");
+  std::string many = coeff_only_set(3, 4, 4);
+  replace_all(many, "<numMod>3</numMod>", "<numMod>1000000</numMod>");
+  throws_hatt(many, "<numMod> must be an integer in 0..4096");
+  replace_all(many, "<numMod>1000000</numMod>", "<numMod>1e300</numMod>");
+  throws_hatt(many, "<numMod> must be an integer");
+  // a0 must be 1 when numARCoeff + 1 values are given
+  std::string a0 = coeff_only_set(3, 4, 5);
+  throws_hatt(a0, "must start with 1");
+}
+
+TEST_CASE("hostile model files: a 1 MB file of order-256 <ARcoeff> lists fails on the conversion budget") {
+  const std::string doc = coeff_only_set(250, 256, 256);
+  CHECK(doc.size() > 1000000);
+  CHECK(doc.size() < 1100000);
+  // (256 + 1)^2 = 66049: the second distinct list is over the budget
+  const double t = seconds([&] { throws_hatt(doc, "too many <ARcoeff> lists to convert"); });
+  CHECK(t < 1.0);  // loose bound; the budget allows ~0.2 s of conversion
+  // repeated lists (as the toolkit repeats models) are converted once
+  const HattModelSet same = parse_hatt_model_set(coeff_only_set(250, 256, 256, false));
+  CHECK(same.models.size() == 250);
+  CHECK(same.models[0].ar_lsf == same.models[249].ar_lsf);
+}
+
+TEST_CASE("hostile model files: entities, deep nesting and stray roots are clear errors") {
+  // entities are not expanded (no "billion laughs"): the text stays "&b;"
+  std::string laughs = "<?xml version=\"1.0\"?><!DOCTYPE modelSet [<!ENTITY a \"1111111111\">"
+                       "<!ENTITY b \"&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;\">]>" + minimal("<mu>&b;</mu>").substr(21);
+  throws_hatt(laughs, "<mu> is not a finite number");
+  // 100000 nested elements: parsed without recursion, then the field is missing
+  std::string deep = "<modelSet>";
+  for (int i = 0; i < 100000; ++i) deep += "<a>";
+  for (int i = 0; i < 100000; ++i) deep += "</a>";
+  throws_hatt(deep + "</modelSet>", "missing <mu>");
+  throws_hatt(std::string(20, '\0'), "expected <modelSet>");
+  throws_hatt("<?xml version=", "malformed XML");
+  throws_hatt(minimal() + "<modelSet/>", "after the root element");
 }
 
 // --- interpolation ----------------------------------------------------------------------

@@ -9,3 +9,4 @@
 #include "hapticfield/servo.hpp"
 #include "hapticfield/normals.hpp"
 #include "hapticfield/texture.hpp"
+#include "hapticfield/texture/hatt.hpp"

@@ -24,6 +24,7 @@ endif()
 run(${CMAKE_COMMAND} ${consumer_args})
 run(${CMAKE_COMMAND} --build "${WORK_DIR}/build")
 run("${WORK_DIR}/build/consumer_core")
+run("${WORK_DIR}/build/consumer_hatt" "${SOURCE_DIR}/tests/data/hatt/Models_Toolkit 1kHz ARMA.xml")
 run("${WORK_DIR}/build/consumer_image" "${SOURCE_DIR}/examples/data/coffee.png")
 if(MODE STREQUAL "find_package")
   # The pkg-config file must name the installed headers.

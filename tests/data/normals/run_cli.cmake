@@ -75,8 +75,15 @@ run(EXPECT ok OUT out ERR err COMMAND "${PICTURE_NORMALS}" "${WORK_DIR}/box_45.p
 file(WRITE "${WORK_DIR}/normals_intrinsics.txt" "${out}")
 run(EXPECT ok OUT out ERR err COMMAND "${BOX_DEMO}" --rotation 45 --check "${WORK_DIR}/normals_intrinsics.txt")
 
-# bad input: non-zero exit and one line on stderr
-foreach(bad IN ITEMS "--face;1,2 3,4" "--face;0,0 10,10 10,0 0,10" "--face;1,2 3,4 5,6 x,8" "--face;0,0 10,10 20,20 0,30" "--focal;-5;--face;0,0 10,0 10,10 0,10"
+# bad input: non-zero exit and one line on stderr; the three calibration
+# files once crashed or exhausted the tool inside cv::FileStorage
+file(WRITE "${WORK_DIR}/decl.xml" "<?xml version=")
+file(WRITE "${WORK_DIR}/short.yml" "%YAML:1.\n{ :")
+file(WRITE "${WORK_DIR}/typo.yml" "%YAML:1.0\n---\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols:k 3\n   dt: d\n   data: [ 800., 0., 320., 0., 800., 240., 0., 0., 1. ]\n")
+foreach(bad IN ITEMS "--intrinsics;${WORK_DIR}/decl.xml;--face;0,0 10,0 10,10 0,10"
+                     "--intrinsics;${WORK_DIR}/short.yml;--face;0,0 10,0 10,10 0,10"
+                     "--intrinsics;${WORK_DIR}/typo.yml;--face;0,0 10,0 10,10 0,10"
+                      "--face;1,2 3,4" "--face;0,0 10,10 10,0 0,10" "--face;1,2 3,4 5,6 x,8" "--face;0,0 10,10 20,20 0,30" "--focal;-5;--face;0,0 10,0 10,10 0,10"
                      "--intrinsics;${WORK_DIR}/missing.yml;--face;0,0 10,0 10,10 0,10" "--face;0,0 10,0 10,10 0,10;--probes;x.csv")
   run(EXPECT fail OUT out ERR err COMMAND "${PICTURE_NORMALS}" "${WORK_DIR}/box_45.png" ${bad})
   string(REGEX MATCHALL "\n" newlines "${err}")
