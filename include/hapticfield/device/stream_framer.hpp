@@ -5,7 +5,8 @@
 ///   - reports: a frame is a report id byte followed by the rest of that
 ///     report (protocol::report_size(id) bytes in all), ending in a valid
 ///     CRC-16. An unknown id or a bad CRC drops one byte and scans again
-///     (resynchronisation); a partial frame waits for more bytes.
+///     (resynchronisation); a partial frame waits for more bytes, unless a
+///     complete valid frame follows it (then the head was a stray byte).
 ///   - lines: '\n'-terminated text lines (the '\n' removed, NUL padding
 ///     stripped), at most max_line bytes; longer lines are dropped whole.
 /// Fixed storage, no allocation, no exceptions: the firmware core and the
@@ -96,7 +97,10 @@ class StreamFramer {
     while (end_ > begin_) {
       const std::size_t need = protocol::report_size(buffer_[begin_]);
       if (need == 0 || need > out.size()) { ++begin_; ++counters_.skipped; continue; }
-      if (end_ - begin_ < need) return Status::no_data;  // partial: wait for the rest
+      if (end_ - begin_ < need) {  // partial, or a stray byte that looks like an id
+        if (!skip_to_complete_frame(out.size())) return Status::no_data;  // wait for the rest
+        continue;
+      }
       const std::span<const std::uint8_t> frame(buffer_.data() + begin_, need);
       if (protocol::detail::get_u16(frame, need - 2) != protocol::crc16(frame.first(need - 2))) {
         ++begin_;  // not a frame boundary after all: rescan from the next byte
@@ -110,6 +114,21 @@ class StreamFramer {
       return Status::ok;
     }
     return Status::no_data;
+  }
+
+  /// A complete, valid frame further on means the head is garbage (a stray
+  /// byte that looked like an id): skip to it. False when there is none.
+  bool skip_to_complete_frame(std::size_t limit) noexcept {
+    for (std::size_t at = begin_ + 1; at < end_; ++at) {
+      const std::size_t need = protocol::report_size(buffer_[at]);
+      if (need == 0 || need > limit || end_ - at < need) continue;
+      const std::span<const std::uint8_t> frame(buffer_.data() + at, need);
+      if (protocol::detail::get_u16(frame, need - 2) != protocol::crc16(frame.first(need - 2))) continue;
+      counters_.skipped += at - begin_;
+      begin_ = at;
+      return true;
+    }
+    return false;
   }
 
   Status next_line(std::span<std::uint8_t> out, std::size_t& size) noexcept {

@@ -122,6 +122,7 @@ class FirmwareCore {
     ++counters_.commands;
     command_ = c;
     fresh_command_ = true;
+    if (!(c.flags & protocol::command_flags::arm)) armed_ = false;  // disarm at once; arming waits for tick()
   }
 
   /// Fills out with feature report id (device info or configuration).
