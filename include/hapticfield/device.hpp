@@ -5,6 +5,7 @@
 /// recording) and the simulated arm. For real hardware include
 /// hapticfield/device/hid_transport.hpp and link hapticfield::hid.
 
+#include "hapticfield/device/firmware_loopback.hpp"
 #include "hapticfield/device/force_arm.hpp"
 #include "hapticfield/device/kinematics.hpp"
 #include "hapticfield/device/protocol.hpp"
@@ -14,6 +15,7 @@
 #include "hapticfield/device/simulated_woody.hpp"
 #include "hapticfield/device/state.hpp"
 #include "hapticfield/device/status.hpp"
+#include "hapticfield/device/stream_framer.hpp"
 #include "hapticfield/device/transport.hpp"
 #include "hapticfield/device/woody_arm.hpp"
 #include "hapticfield/device/woody_codec.hpp"

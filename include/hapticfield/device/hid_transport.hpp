@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "hapticfield/core/error.hpp"
+#include "hapticfield/device/device_error.hpp"
 #include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/spsc_ring.hpp"
 #include "hapticfield/device/transport.hpp"
@@ -42,12 +43,6 @@ inline constexpr std::uint16_t default_vendor_id = 0x1209;
 inline constexpr std::uint16_t default_product_id = 0x0001;
 /// The shipped udev rule that gives users access to the hidraw node.
 inline constexpr const char* udev_rule_name = "udev/70-hapticfield.rules";
-
-/// No device matched, or it could not be opened.
-class DeviceError : public Error {
- public:
-  using Error::Error;
-};
 
 /// One HID device hidapi can see.
 struct HidDeviceInfo {

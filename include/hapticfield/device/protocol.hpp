@@ -26,6 +26,8 @@ enum class ReportId : std::uint8_t {
   device_info = 0x10,    ///< feature (get): geometry, encoders, limits
   configuration = 0x11,  ///< feature (get/set): watchdog period
   control = 0x12,        ///< feature (set): arm, disarm, clear fault, home
+  feature_request = 0x13,  ///< serial links only: host asks for a feature report (get)
+  feature_reply = 0x14,    ///< serial links only: device answers a set (or a failed get)
 };
 
 /// Report sizes including the id byte and the trailing CRC [bytes].
@@ -34,6 +36,8 @@ inline constexpr std::size_t command_size = 16;
 inline constexpr std::size_t device_info_size = 50;
 inline constexpr std::size_t configuration_size = 8;
 inline constexpr std::size_t control_size = 4;
+inline constexpr std::size_t feature_request_size = 4;
+inline constexpr std::size_t feature_reply_size = 5;
 
 /// Byte offsets of every field, named once for encoders and decoders alike
 /// (docs/device-protocol.md has the same tables). Byte 0 is the report id,
@@ -78,6 +82,13 @@ inline constexpr std::size_t reserved = 4;  ///< u16, zero
 namespace control {
 inline constexpr std::size_t operation = 1;  ///< u8 ControlOp
 }  // namespace control
+namespace feature_request {
+inline constexpr std::size_t requested = 1;  ///< u8 id of the feature report asked for
+}  // namespace feature_request
+namespace feature_reply {
+inline constexpr std::size_t report = 1;  ///< u8 id of the feature report answered
+inline constexpr std::size_t status = 2;  ///< u8 Status of the set (or why a get failed)
+}  // namespace feature_reply
 }  // namespace offset
 
 namespace detail {
@@ -347,6 +358,59 @@ inline std::size_t encode(ControlOp op, std::span<std::uint8_t> out) noexcept {
   return Status::ok;
 }
 
+/// Serial framing (docs/device-protocol.md, "Serial framing"): the host asks
+/// for feature report `id` with this frame; the device answers with the
+/// report itself, or a FeatureReply when it cannot.
+inline std::size_t encode_feature_request(std::uint8_t id, std::span<std::uint8_t> out) noexcept {
+  using namespace detail;
+  if (out.size() < feature_request_size) return 0;
+  put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::feature_request));
+  put_u8(out, offset::feature_request::requested, id);
+  seal(out, feature_request_size);
+  return feature_request_size;
+}
+
+/// Parses a feature request; id is the feature report asked for.
+[[nodiscard]] inline Status decode_feature_request(std::span<const std::uint8_t> in, std::uint8_t& id) noexcept {
+  using namespace detail;
+  if (in.empty()) return Status::short_report;
+  if (in[offset::id] != static_cast<std::uint8_t>(ReportId::feature_request)) return Status::unknown_report;
+  if (in.size() < feature_request_size) return Status::short_report;
+  if (get_u16(in, feature_request_size - 2) != crc16(in.first(feature_request_size - 2))) return Status::bad_crc;
+  id = in[offset::feature_request::requested];
+  return Status::ok;
+}
+
+/// The device's answer to a set feature (or a get it cannot serve) on a
+/// serial link: which report, and the Status the device returned.
+struct FeatureReply {
+  std::uint8_t report{0};     ///< id of the feature report answered
+  Status status{Status::ok};  ///< outcome on the device
+};
+
+inline std::size_t encode(const FeatureReply& r, std::span<std::uint8_t> out) noexcept {
+  using namespace detail;
+  if (out.size() < feature_reply_size) return 0;
+  put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::feature_reply));
+  put_u8(out, offset::feature_reply::report, r.report);
+  put_u8(out, offset::feature_reply::status, static_cast<std::uint8_t>(r.status));
+  seal(out, feature_reply_size);
+  return feature_reply_size;
+}
+
+[[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, FeatureReply& r) noexcept {
+  using namespace detail;
+  if (in.empty()) return Status::short_report;
+  if (in[offset::id] != static_cast<std::uint8_t>(ReportId::feature_reply)) return Status::unknown_report;
+  if (in.size() < feature_reply_size) return Status::short_report;
+  if (get_u16(in, feature_reply_size - 2) != crc16(in.first(feature_reply_size - 2))) return Status::bad_crc;
+  const std::uint8_t status = in[offset::feature_reply::status];
+  if (status > static_cast<std::uint8_t>(Status::resync)) return Status::bad_value;
+  r.report = in[offset::feature_reply::report];
+  r.status = static_cast<Status>(status);
+  return Status::ok;
+}
+
 /// Size of the report whose id is the first byte, or 0 for an unknown id.
 [[nodiscard]] constexpr std::size_t report_size(std::uint8_t id) noexcept {
   switch (static_cast<ReportId>(id)) {
@@ -355,6 +419,8 @@ inline std::size_t encode(ControlOp op, std::span<std::uint8_t> out) noexcept {
     case ReportId::device_info: return device_info_size;
     case ReportId::configuration: return configuration_size;
     case ReportId::control: return control_size;
+    case ReportId::feature_request: return feature_request_size;
+    case ReportId::feature_reply: return feature_reply_size;
   }
   return 0;
 }

@@ -160,14 +160,78 @@ struct SimulatedArmConfig {
   }
 };
 
+/// The arm's mechanics alone: joint dynamics (inertia, viscous and Coulomb
+/// friction, joint stops) under applied torques and the scripted hand.
+/// SimulatedArm runs its own firmware model on it; FirmwareLoopback
+/// (firmware_loopback.hpp) runs the reference firmware core on it.
+class ArmPlant {
+ public:
+  /// @throws std::invalid_argument when the configuration makes no sense.
+  explicit ArmPlant(const SimulatedArmConfig& config) : config_(config) {
+    config_.validate();
+    kin_ = PhantomKinematics(config_.kinematics);
+    q_ = config_.initial_q;
+  }
+
+  /// Integrates one firmware period (config().substeps steps) under the
+  /// joint torques tau [N m], starting at time t [s] (the hand's clock).
+  void period(const glm::dvec3& tau, double t) noexcept {
+    const double h = 1.0 / (config_.rate * config_.substeps);
+    for (int k = 0; k < config_.substeps; ++k) step(tau, t + k * h, h);
+  }
+
+  void set_hand(const Hand& hand) { hand.path.validate(); config_.hand = hand; }
+
+  [[nodiscard]] glm::dvec3 q() const noexcept { return q_; }
+  [[nodiscard]] glm::dvec3 qdot() const noexcept { return qd_; }
+  [[nodiscard]] glm::dvec3 position() const noexcept { return kin_.forward(q_); }
+  [[nodiscard]] glm::dvec3 velocity() const noexcept { return kin_.velocity(q_, qd_); }
+  /// Force the scripted hand applies to the handle in the last substep [N].
+  [[nodiscard]] glm::dvec3 hand_force() const noexcept { return hand_force_; }
+  [[nodiscard]] double kinetic_energy() const noexcept {
+    return 0.5 * (config_.inertia.x * qd_.x * qd_.x + config_.inertia.y * qd_.y * qd_.y + config_.inertia.z * qd_.z * qd_.z);
+  }
+  [[nodiscard]] const SimulatedArmConfig& config() const noexcept { return config_; }
+  [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return kin_; }
+
+ private:
+  void step(const glm::dvec3& applied, double t, double h) noexcept {
+    const glm::dvec3 p = kin_.forward(q_);
+    const glm::dvec3 v = kin_.velocity(q_, qd_);
+    glm::dvec3 tau_hand{0.0};
+    hand_force_ = glm::dvec3{0.0};
+    if (config_.hand.holding) {
+      const glm::dvec3 target = config_.hand.path.at(t);
+      const glm::dvec3 target_v = (config_.hand.path.at(t + 1e-4) - target) / 1e-4;
+      hand_force_ = config_.hand.stiffness * (target - p) + config_.hand.damping * (target_v - v);
+      tau_hand = kin_.torques(q_, hand_force_);
+    }
+    for (int i = 0; i < 3; ++i) {
+      const double drive = applied[i] + tau_hand[i] - config_.viscous[i] * qd_[i];
+      double qd = qd_[i] + h * drive / config_.inertia[i];
+      // Coulomb friction: opposes motion, sticks when it would reverse it.
+      const double dv = h * config_.coulomb[i] / config_.inertia[i];
+      if (qd > dv) qd -= dv; else if (qd < -dv) qd += dv; else qd = 0.0;
+      double q = q_[i] + h * qd;
+      if (q < config_.kinematics.q_min[i]) { q = config_.kinematics.q_min[i]; qd = std::fmax(qd, 0.0); }
+      if (q > config_.kinematics.q_max[i]) { q = config_.kinematics.q_max[i]; qd = std::fmin(qd, 0.0); }
+      q_[i] = q;
+      qd_[i] = qd;
+    }
+  }
+
+  SimulatedArmConfig config_;
+  PhantomKinematics kin_{};
+  glm::dvec3 q_{0.0};
+  glm::dvec3 qd_{0.0};
+  glm::dvec3 hand_force_{0.0};
+};
+
 /// The simulated arm and its firmware. tick() runs one firmware period.
 class SimulatedArm {
  public:
   /// @throws std::invalid_argument when the configuration makes no sense.
-  explicit SimulatedArm(SimulatedArmConfig config = {}) : config_(std::move(config)) {
-    config_.validate();
-    kin_ = PhantomKinematics(config_.kinematics);
-    q_ = config_.initial_q;
+  explicit SimulatedArm(SimulatedArmConfig config = {}) : config_(std::move(config)), plant_(config_) {
     watchdog_ticks_ = static_cast<std::int64_t>(std::ceil(config_.watchdog * config_.rate - 1e-9));
   }
 
@@ -265,8 +329,7 @@ class SimulatedArm {
       }
     }
     applied_torque_ = tau;
-    const double h = 1.0 / (config_.rate * config_.substeps);
-    for (int k = 0; k < config_.substeps; ++k) step(h);
+    plant_.period(tau, time());
   }
 
   /// The state report for the current tick (sequence increments each call).
@@ -276,7 +339,7 @@ class SimulatedArm {
     r.command_echo = last_command_.sequence;
     const double since_boot = static_cast<double>(tick_ - boot_tick_) / config_.rate;  // [s]
     r.timestamp_us = static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(since_boot * 1e6)) & 0xFFFFFFFFu);
-    r.encoder = kin_.counts(q_);
+    r.encoder = plant_.kinematics().counts(plant_.q());
     if (!homed_)
       for (std::size_t i = 0; i < 3; ++i) r.encoder[i] += config_.unhomed_offset[i];
     r.status = static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
@@ -306,20 +369,18 @@ class SimulatedArm {
   void inject_fault(std::uint16_t bits) noexcept { faults_ |= bits; }
   void release_estop() noexcept { faults_ &= static_cast<std::uint16_t>(~status_bits::estop); }
   void set_buttons(std::uint8_t b) noexcept { buttons_ = b; }
-  void set_hand(const Hand& hand) { hand.path.validate(); config_.hand = hand; }
+  void set_hand(const Hand& hand) { plant_.set_hand(hand); config_.hand = hand; }
 
   [[nodiscard]] double time() const noexcept { return static_cast<double>(tick_) / config_.rate; }
   [[nodiscard]] std::int64_t ticks() const noexcept { return tick_; }
-  [[nodiscard]] glm::dvec3 q() const noexcept { return q_; }
-  [[nodiscard]] glm::dvec3 qdot() const noexcept { return qd_; }
-  [[nodiscard]] glm::dvec3 position() const noexcept { return kin_.forward(q_); }
-  [[nodiscard]] glm::dvec3 velocity() const noexcept { return kin_.velocity(q_, qd_); }
+  [[nodiscard]] glm::dvec3 q() const noexcept { return plant_.q(); }
+  [[nodiscard]] glm::dvec3 qdot() const noexcept { return plant_.qdot(); }
+  [[nodiscard]] glm::dvec3 position() const noexcept { return plant_.position(); }
+  [[nodiscard]] glm::dvec3 velocity() const noexcept { return plant_.velocity(); }
   [[nodiscard]] glm::dvec3 applied_torque() const noexcept { return applied_torque_; }
   /// Force the scripted hand applies to the handle in the last substep [N].
-  [[nodiscard]] glm::dvec3 hand_force() const noexcept { return hand_force_; }
-  [[nodiscard]] double kinetic_energy() const noexcept {
-    return 0.5 * (config_.inertia.x * qd_.x * qd_.x + config_.inertia.y * qd_.y * qd_.y + config_.inertia.z * qd_.z * qd_.z);
-  }
+  [[nodiscard]] glm::dvec3 hand_force() const noexcept { return plant_.hand_force(); }
+  [[nodiscard]] double kinetic_energy() const noexcept { return plant_.kinetic_energy(); }
   [[nodiscard]] bool armed() const noexcept { return armed_; }
   [[nodiscard]] bool homed() const noexcept { return homed_; }
   [[nodiscard]] std::uint16_t faults() const noexcept { return faults_; }
@@ -327,43 +388,14 @@ class SimulatedArm {
   [[nodiscard]] std::uint64_t commands_accepted() const noexcept { return accepted_; }
   [[nodiscard]] std::uint64_t commands_rejected() const noexcept { return rejected_; }
   [[nodiscard]] const SimulatedArmConfig& config() const noexcept { return config_; }
-  [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return kin_; }
+  [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return plant_.kinematics(); }
+  [[nodiscard]] const ArmPlant& plant() const noexcept { return plant_; }
 
  private:
-  void step(double h) noexcept {
-    const glm::dvec3 p = kin_.forward(q_);
-    const glm::dvec3 v = kin_.velocity(q_, qd_);
-    glm::dvec3 tau_hand{0.0};
-    hand_force_ = glm::dvec3{0.0};
-    if (config_.hand.holding) {
-      const double t = time() + substep_ * h;
-      const glm::dvec3 target = config_.hand.path.at(t);
-      const glm::dvec3 target_v = (config_.hand.path.at(t + 1e-4) - target) / 1e-4;
-      hand_force_ = config_.hand.stiffness * (target - p) + config_.hand.damping * (target_v - v);
-      tau_hand = kin_.torques(q_, hand_force_);
-    }
-    substep_ = (substep_ + 1) % config_.substeps;
-    for (int i = 0; i < 3; ++i) {
-      const double drive = applied_torque_[i] + tau_hand[i] - config_.viscous[i] * qd_[i];
-      double qd = qd_[i] + h * drive / config_.inertia[i];
-      // Coulomb friction: opposes motion, sticks when it would reverse it.
-      const double dv = h * config_.coulomb[i] / config_.inertia[i];
-      if (qd > dv) qd -= dv; else if (qd < -dv) qd += dv; else qd = 0.0;
-      double q = q_[i] + h * qd;
-      if (q < config_.kinematics.q_min[i]) { q = config_.kinematics.q_min[i]; qd = std::fmax(qd, 0.0); }
-      if (q > config_.kinematics.q_max[i]) { q = config_.kinematics.q_max[i]; qd = std::fmin(qd, 0.0); }
-      q_[i] = q;
-      qd_[i] = qd;
-    }
-  }
-
   SimulatedArmConfig config_;
-  PhantomKinematics kin_{};
-  glm::dvec3 q_{0.0};
-  glm::dvec3 qd_{0.0};
+  ArmPlant plant_;
   glm::dvec3 command_torque_{0.0};
   glm::dvec3 applied_torque_{0.0};
-  glm::dvec3 hand_force_{0.0};
   protocol::CommandReport last_command_{};
   std::int64_t tick_{0};
   std::int64_t last_valid_tick_{0};
@@ -371,7 +403,6 @@ class SimulatedArm {
   std::uint64_t accepted_{0};
   std::uint64_t rejected_{0};
   int homing_left_{-1};
-  int substep_{0};
   std::uint16_t sequence_{0};
   std::int64_t boot_tick_{0};
   int boots_{0};

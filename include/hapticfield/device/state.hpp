@@ -16,18 +16,6 @@
 
 namespace hapticfield {
 
-/// Status bits of the input state report (see docs/device-protocol.md).
-namespace status_bits {
-inline constexpr std::uint16_t homed = 1u << 0;             ///< encoders referenced
-inline constexpr std::uint16_t armed = 1u << 1;             ///< motors enabled
-inline constexpr std::uint16_t watchdog_tripped = 1u << 2;  ///< latched: no valid command in time
-inline constexpr std::uint16_t over_current = 1u << 3;      ///< latched
-inline constexpr std::uint16_t over_temperature = 1u << 4;  ///< latched
-inline constexpr std::uint16_t estop = 1u << 5;             ///< emergency stop pressed
-/// Any bit that forbids force output.
-inline constexpr std::uint16_t any_fault = watchdog_tripped | over_current | over_temperature | estop;
-}  // namespace status_bits
-
 /// One timestamped state of the arm, in the device frame (x right, y up,
 /// z toward the user; origin at the home pose).
 struct DeviceState {

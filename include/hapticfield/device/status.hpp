@@ -1,6 +1,8 @@
 #pragma once
 /// @file status.hpp
-/// Results of device and transport calls on the servo path (never exceptions).
+/// Results of device and transport calls on the servo path (never exceptions)
+/// and the status bits of the state report. Freestanding: the firmware core
+/// includes it too.
 
 #include <cstdint>
 #include <string_view>
@@ -24,6 +26,18 @@ enum class Status : std::uint8_t {
   unsupported,      ///< the transport does not implement the call
   resync,           ///< the report stream jumped (device restart, long loss): held back until consistent
 };
+
+/// Status bits of the input state report (see docs/device-protocol.md).
+namespace status_bits {
+inline constexpr std::uint16_t homed = 1u << 0;             ///< encoders referenced
+inline constexpr std::uint16_t armed = 1u << 1;             ///< motors enabled
+inline constexpr std::uint16_t watchdog_tripped = 1u << 2;  ///< latched: no valid command in time
+inline constexpr std::uint16_t over_current = 1u << 3;      ///< latched
+inline constexpr std::uint16_t over_temperature = 1u << 4;  ///< latched
+inline constexpr std::uint16_t estop = 1u << 5;             ///< emergency stop pressed
+/// Any bit that forbids force output.
+inline constexpr std::uint16_t any_fault = watchdog_tripped | over_current | over_temperature | estop;
+}  // namespace status_bits
 
 /// Short human-readable name of a status.
 [[nodiscard]] constexpr std::string_view to_string(Status s) noexcept {
