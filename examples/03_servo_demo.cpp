@@ -4,7 +4,7 @@
 //
 //   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
 //              [--realtime off|best_effort|enforce] [--trace OUT.csv] [--plots DIR]
-//              [--device sim|hid[:VID:PID]|woody:p1|p2|p4[:PRESET][:sim]]
+//              [--device sim|hid[:VID:PID]|serial:PATH|woody:p1|p2|p4[:PRESET][:sim|:PATH]]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -29,6 +29,7 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
 #include "hapticfield/kernels.hpp"
+#include "hapticfield/device/serial_transport.hpp"
 #include "hapticfield/servo.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
 #include "hapticfield/device/hid_transport.hpp"
@@ -61,10 +62,11 @@ constexpr const char* usage_text =
     "                        or enforce (refuse to start without real-time scheduling)\n"
     "  --trace OUT.csv       write t, position [m], force [N] and period [s] per tick\n"
     "  --plots DIR           write force.png and periods.png into DIR (created if needed)\n"
-    "  --device D            sim (default), hid, or hid:VID:PID (hexadecimal ids): our protocol;\n"
-    "                        woody:GEN[:PRESET][:sim]: a WoodenHaptics arm, GEN p1 or p2 (USB HID)\n"
-    "                        or p4 (serial text; simulated only here), PRESET woody_v2015 (default),\n"
-    "                        woodenhaptics_v2019, aluhaptics_v2 or vintage; :sim simulates it\n"
+    "  --device D            sim (default), hid, hid:VID:PID (hexadecimal ids) or serial:PATH (a\n"
+    "                        tty such as /dev/ttyACM0): our protocol; woody:GEN[:PRESET][:sim|:PATH]:\n"
+    "                        a WoodenHaptics arm, GEN p1 or p2 (USB HID) or p4 (serial text, on the\n"
+    "                        tty PATH), PRESET woody_v2015 (default), woodenhaptics_v2019,\n"
+    "                        aluhaptics_v2 or vintage; :sim simulates it\n"
     "  -h, --help            this text\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
 
@@ -76,6 +78,7 @@ struct WoodySpec {
   woody::Generation generation{woody::Generation::p4_text};
   std::string preset{"woody_v2015"};
   bool simulated{false};
+  std::string port;  ///< tty of a P4 arm
 };
 bool parse_woody(const std::string& d, WoodySpec& spec) {
   if (d.rfind("woody:", 0) != 0) return false;
@@ -83,6 +86,9 @@ bool parse_woody(const std::string& d, WoodySpec& spec) {
   if (rest.size() >= 4 && rest.compare(rest.size() - 4, 4, ":sim") == 0) {
     spec.simulated = true;
     rest.resize(rest.size() - 4);
+  } else if (const auto slash = rest.find(":/"); slash != std::string::npos) {
+    spec.port = rest.substr(slash + 1);
+    rest.resize(slash);
   }
   const std::string gen = rest.substr(0, rest.find(':'));
   if (rest.find(':') != std::string::npos) spec.preset = rest.substr(rest.find(':') + 1);
@@ -90,6 +96,7 @@ bool parse_woody(const std::string& d, WoodySpec& spec) {
   else if (gen == "p2") spec.generation = woody::Generation::p2_hid14;
   else if (gen == "p4") spec.generation = woody::Generation::p4_text;
   else return false;
+  if (!spec.port.empty() && spec.generation != woody::Generation::p4_text) return false;  // P1/P2 are HID
   for (const char* known : {"woody_v2015", "woodenhaptics_v2019", "aluhaptics_v2", "vintage"})
     if (spec.preset == known) return true;
   return false;
@@ -100,6 +107,7 @@ bool parse_woody(const std::string& d, WoodySpec& spec) {
 bool valid_device(const std::string& d) {
   WoodySpec woody_spec;
   if (d == "sim" || d == "hid" || parse_woody(d, woody_spec)) return true;
+  if (d.rfind("serial:", 0) == 0) return d.size() > 7;
   if (d.rfind("hid:", 0) != 0) return false;
   const std::string ids = d.substr(4);
   const auto colon = ids.find(':');
@@ -131,8 +139,8 @@ Options parse(cli::Parser& p) {
     } else if (p.is("--device")) {
       o.device = p.value();
       if (!valid_device(o.device))
-        usage("--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001) or "
-              "woody:p1|p2|p4[:PRESET][:sim], got '" + o.device + "'");
+        usage("--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), serial:PATH or "
+              "woody:p1|p2|p4[:PRESET][:sim|:PATH], got '" + o.device + "'");
     } else if (p.positional() && !image_given) {
       o.image = p.token();
       image_given = true;
@@ -319,7 +327,8 @@ int run(const Options& o) {
       throw std::runtime_error("this build has no hidapi: --device woody:p1|p2 is unavailable");
 #endif
     } else {
-      usage("--device woody:p4 drives a serial arm, which this demo only simulates: use woody:p4:sim");
+      if (woody_spec.port.empty()) usage("--device woody:p4 needs the arm's tty, e.g. woody:p4:/dev/ttyACM0, or :sim");
+      woody_link = std::make_unique<SerialTransport>(woody_spec.port, SerialConfig{.framing = Framing::lines});
     }
     WoodyArm device(*woody_link, wc);
     return run_demo(o, device, field, clock, !woody_spec.simulated);
@@ -333,6 +342,9 @@ int run(const Options& o) {
     c.hand.path = scan(glm::dvec3{0.0});
     arm = std::make_unique<SimulatedArm>(c);
     transport = std::make_unique<SimulatedTransport>(*arm, now);
+  } else if (o.device.rfind("serial:", 0) == 0) {
+    transport = std::make_unique<SerialTransport>(o.device.substr(7));
+    hardware = true;
   } else if (o.device.rfind("hid", 0) == 0) {
 #if HAPTICFIELD_EXAMPLE_HID
     std::uint16_t vid = default_vendor_id, pid = default_product_id;
