@@ -329,3 +329,77 @@ TEST_CASE("serial: opening errors name the path") {
   c.baud = 12345;
   CHECK_THROWS_AS(SerialTransport(pty.path, c), std::invalid_argument);
 }
+
+TEST_CASE("serial: a WoodenHaptics P4 arm over a pty, through line framing, with the simulated P4 firmware") {
+  Pty pty;
+  SimulatedWoodyConfig sc;
+  sc.generation = woody::Generation::p4_text;
+  sc.hand.holding = false;
+  SimulatedWoody firmware(sc);
+  std::atomic<bool> stop{false};
+  std::atomic<int> replies{0};
+  // The P4 firmware on the master side: one reply per '\n'-terminated frame
+  // (NUL padding ignored), the arm's mechanics stepping one tick per frame.
+  std::thread peer([&] {
+    std::string line;
+    std::array<char, 256> rx{};
+    const auto give_up = std::chrono::steady_clock::now() + hard_timeout;
+    while (!stop.load() && std::chrono::steady_clock::now() < give_up) {
+      pollfd p{pty.master, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      const ssize_t n = ::read(pty.master, rx.data(), rx.size());
+      for (ssize_t i = 0; i < n; ++i) {
+        const char c = rx[static_cast<std::size_t>(i)];
+        if (c == '\0') continue;
+        if (c != '\n') { line += c; continue; }
+        firmware.tick();  // the frame without its '\n', as the firmware's parser sees it
+        const woody::P4Reply r =
+            firmware.receive_p4(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(line.data()), line.size()));
+        std::array<std::uint8_t, woody::p4_max_line> out{};
+        pty.write_master(std::span<const std::uint8_t>(out.data(), woody::encode(r, out)));
+        line.clear();
+        ++replies;
+      }
+    }
+  });
+  struct JoinOnExit {
+    std::atomic<bool>& stop;
+    std::thread& peer;
+    ~JoinOnExit() {
+      stop.store(true);
+      if (peer.joinable()) peer.join();
+    }
+  } join_on_exit{stop, peer};
+  {
+    SerialConfig config;
+    config.framing = Framing::lines;
+    SerialTransport serial(pty.path, config);
+    WoodyArmConfig wc = WoodyArmConfig::defaults(woody::Generation::p4_text);
+    wc.wake_timeout_us = 200000;  // the peer thread may be slow to get the processor on a loaded machine
+    WoodyArm arm(serial, wc);     // the wake-up: zero frames until the first reply
+    DeviceState s;
+    int fresh = 0;
+    for (int i = 0; i < 200 && fresh < 50; ++i) {
+      arm.write(glm::dvec3{0.0});
+      std::this_thread::sleep_for(1ms);
+      if (arm.read(s) == Status::ok) ++fresh;
+    }
+    CHECK(fresh >= 50);
+    CHECK(s.valid);
+    CHECK(arm.counters().error_replies == 0);
+    CHECK(arm.counters().malformed == 0);
+    // The position the host computes from the P4 encoders is the simulated arm's own.
+    CHECK(glm::length(s.position - firmware.position()) < 1e-3);
+    // A malformed frame written by hand gets an error reply, which the host counts.
+    serial.write(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>("[1,2]\n"), 6));
+    for (int i = 0; i < 100 && arm.counters().error_replies == 0; ++i) {
+      std::this_thread::sleep_for(1ms);
+      (void)arm.read(s);
+    }
+    CHECK(arm.counters().error_replies == 1);
+    CHECK((arm.last_error() & woody::p4_error::comma_count) != 0);
+  }
+  stop.store(true);
+  peer.join();
+  CHECK(replies.load() >= 50);
+}
