@@ -40,6 +40,7 @@ const std::map<std::string, std::string> tools = {
     {"box_demo", HAPTICFIELD_TOOL_BOX_DEMO},
     {"texture_gallery", HAPTICFIELD_TOOL_TEXTURE_GALLERY},
     {"false_texture", HAPTICFIELD_TOOL_FALSE_TEXTURE},
+    {"two_arms", HAPTICFIELD_TOOL_TWO_ARMS},
 };
 
 constexpr int ok = 0;
@@ -222,6 +223,14 @@ TEST_CASE("unknown flags, flags without a value, stray arguments: exit 2") {
       {"servo_demo", {"--realtime", "sometimes"}, usage, "unknown real-time mode"},
       {"servo_demo", {"--device", "usb"}, usage, "--device"},
       {"servo_demo", {"--device", "hid:12345:1"}, usage, "--device"},
+      {"servo_demo", {"--device", "serial:"}, usage, "--device"},
+      {"servo_demo", {"--device", "woody:p9:sim"}, usage, "--device"},
+      {"servo_demo", {"--device", "woody:p4:polhem_v3:sim"}, usage, "--device"},
+      {"servo_demo", {"--device", "woody:p1:/dev/ttyACM0"}, usage, "--device"},
+      {"servo_demo", {"--device", "woody:p4"}, usage, "needs the arm's tty"},
+      {"two_arms", {"--bogus"}, usage, "unknown option"},
+      {"two_arms", {"--policy", "panic"}, usage, "fault policy"},
+      {"two_arms", {"--seconds"}, usage, "needs a value"},
       {"servo_demo", {picture, picture}, usage, "unexpected argument"},
       {"servo_callback", {"--bogus"}, usage, "unknown option"},
       {"servo_callback", {"stray"}, usage, "unexpected argument"},
@@ -265,6 +274,8 @@ TEST_CASE("every numeric flag: NaN, Inf, huge, zero, negative, garbage: exit 2 n
   add_numeric(cases, "box_demo", {}, "--trials");
   add_numeric(cases, "box_demo", {}, "--seed", {"0"});
   add_numeric(cases, "false_texture", {picture}, "--levels");
+  add_numeric(cases, "two_arms", {}, "--seconds");
+  add_numeric(cases, "two_arms", {}, "--stiffness");
   // values just outside the documented ranges
   cases.push_back({"tangible_image", {picture, "--size", "99999999999"}, usage, "--size"});
   cases.push_back({"tangible_image", {picture, "--size", "4"}, usage, "not allowed"});
@@ -311,6 +322,10 @@ TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
   cases.push_back({"picture_normals",
                    {picture, "--face", face, "--probes", in_tmp("nan4.csv"), "--forces", in_tmp("f.csv")},
                    bad_input, "nan4.csv:1: values must be finite"});
+  // devices that are not there, or are not serial ports: one line, exit 1
+  cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.missing}, bad_input, "no serial port"});
+  cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.plain_file}, bad_input, "not a serial port"});
+  cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "woody:p4:" + b.folder}, bad_input, "cannot open"});
   // output paths, checked before any work
   const std::string no_dir = in_tmp("no/such/dir/out.csv");
   const std::string under_file = b.plain_file + "/sub";
