@@ -1,7 +1,13 @@
 // bench_servo: the servo loop's timing on this machine and the per-tick cost
 // of the device layer and the safety chain. Prints Markdown tables.
 //
-//   bench_servo [--seconds S]   (default 10 s per loop)
+//   bench_servo [--seconds S] [--load N]   (default 10 s per loop, no load)
+//
+// With --load N, N busy processes spin on the CPUs during a third table:
+// each loop with and without SCHED_FIFO (RealTime::best_effort), with the
+// periods longer than 4 ms counted as stalls and the CPU steal time the
+// kernel reports for the run (/proc/stat), which is the host stalling this
+// virtual machine rather than the loop overrunning.
 //
 // 1. ServoLoop (absolute deadlines, clock_nanosleep TIMER_ABSTIME) with the
 //    simulated arm and a wall field, side by side with a relative-sleep loop
@@ -18,9 +24,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <sched.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -51,12 +63,12 @@ struct TimingRow {
   double nominal_rate;
 };
 
-void print_timing(const TimingRow& r) {
+void print_timing(const TimingRow& r, const std::string& more = "") {
   const auto expected = static_cast<long long>(std::floor(r.seconds * r.nominal_rate));
-  std::printf("| %-34s | %9.3f | %+8.4f %% | %7.4f | %7.4f | %7.4f | %7.3f | %6llu | %6lld |\n", r.name, r.s.rate,
+  std::printf("| %-34s | %9.3f | %+8.4f %% | %7.4f | %7.4f | %7.4f | %7.3f | %6llu | %6lld |%s\n", r.name, r.s.rate,
               (r.s.rate / r.nominal_rate - 1.0) * 100.0, r.s.period_p50 * 1e3, r.s.period_p99 * 1e3,
               r.s.period_p999 * 1e3, r.s.period_max * 1e3, static_cast<unsigned long long>(r.s.missed_deadlines),
-              std::max(0LL, expected - static_cast<long long>(r.ticks)));
+              std::max(0LL, expected - static_cast<long long>(r.ticks)), more.c_str());
 }
 
 TimingRow run_servo_loop(double seconds, double rate) {
@@ -74,14 +86,65 @@ TimingRow run_servo_loop(double seconds, double rate) {
   return {"ServoLoop (absolute deadlines)", loop.statistics().ticks, elapsed, loop.statistics(), rate};
 }
 
-TimingRow run_relative_sleep(double seconds, double rate) {
+/// Asks SCHED_FIFO for the calling thread (as RealTime::best_effort does);
+/// true when granted. restore_other() goes back to SCHED_OTHER.
+bool fifo(int priority) {
+  sched_param sp{};
+  sp.sched_priority = priority;
+  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
+}
+void restore_other() {
+  sched_param sp{};
+  pthread_setschedparam(pthread_self(), SCHED_OTHER, &sp);
+}
+
+/// Steal time of all CPUs so far [s] (the 8th field of /proc/stat's cpu line).
+double steal_seconds() {
+  std::FILE* f = std::fopen("/proc/stat", "r");
+  if (!f) return 0.0;
+  unsigned long long v[8]{};
+  const int n = std::fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                            &v[6], &v[7]);
+  std::fclose(f);
+  return n == 8 ? static_cast<double>(v[7]) / static_cast<double>(sysconf(_SC_CLK_TCK)) : 0.0;
+}
+
+/// Periods longer than 4 ms in a loop's histogram: stalls.
+std::uint64_t stalls(const DurationHistogram& periods) {
+  std::uint64_t n = 0;
+  for (std::size_t i = 4000; i < DurationHistogram::bins; ++i) n += periods.bin(i);
+  return n;
+}
+
+/// N processes that spin until killed.
+struct BusyLoad {
+  std::vector<pid_t> pids;
+  explicit BusyLoad(int n) {
+    for (int i = 0; i < n; ++i) {
+      const pid_t pid = fork();
+      if (pid == 0) {
+        volatile unsigned long x = 0;
+        for (;;) x = x + 1;
+      }
+      if (pid > 0) pids.push_back(pid);
+    }
+  }
+  ~BusyLoad() {
+    for (const pid_t pid : pids) kill(pid, SIGKILL);
+    for (const pid_t pid : pids) waitpid(pid, nullptr, 0);
+  }
+};
+
+TimingRow run_relative_sleep(double seconds, double rate, const char* name = "relative sleep (work; sleep_for(T))",
+                             LoopStatistics* statistics = nullptr) {
   SteadyClock clock;
   SimulatedArm arm(arm_config());
   SimulatedTransport link(arm, [&clock] { return clock.now(); });
   ForceArm device(link);
   SafetyConfig sc;
   SafetyChain safety(sc, device.info().max_force);
-  LoopStatistics stats;
+  LoopStatistics own;
+  LoopStatistics& stats = statistics ? *statistics : own;
   Wall wall;
   device.request_home();
   device.set_armed(true);
@@ -109,7 +172,7 @@ TimingRow run_relative_sleep(double seconds, double rate) {
     std::this_thread::sleep_for(period);  // relative: every tick's latency adds up
   }
   const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
-  return {"relative sleep (work; sleep_for(T))", stats.snapshot().ticks, elapsed, stats.snapshot(), rate};
+  return {name, stats.snapshot().ticks, elapsed, stats.snapshot(), rate};
 }
 
 /// Serves one pre-encoded state report per read, with a fresh sequence and
@@ -170,13 +233,78 @@ Cost measure(long n, Tick&& tick) {
 
 }  // namespace
 
+/// The loops under N busy processes, with and without SCHED_FIFO.
+void loaded_table(double seconds, int load) {
+  std::printf("\n## Loop timing under load: %d busy processes on %ld CPUs, %.0f s per loop at 1 kHz\n\n", load,
+              sysconf(_SC_NPROCESSORS_ONLN), seconds);
+  std::printf("| loop | mean rate [Hz] | vs nominal | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | missed | short |"
+              " stalls > 4 ms | steal [ms] | latches |\n");
+  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  const auto extra = [](std::uint64_t stall_count, double steal, const std::string& latches) {
+    char text[96];
+    std::snprintf(text, sizeof text, " %6llu | %7.1f | %s |", static_cast<unsigned long long>(stall_count), steal * 1e3,
+                  latches.c_str());
+    return std::string(text);
+  };
+  for (const bool rt : {false, true}) {
+    {
+      BusyLoad busy(load);
+      const double steal0 = steal_seconds();
+      SteadyClock clock;
+      SimulatedArm arm(arm_config());
+      SimulatedTransport link(arm, [&clock] { return clock.now(); });
+      ForceArm device(link);
+      LoopConfig c;
+      c.realtime = rt ? RealTime::best_effort : RealTime::off;
+      ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+      Wall wall;
+      const std::int64_t t0 = clock.now();
+      loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * 1000.0)});
+      const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
+      const std::uint64_t latches = loop.statistics().latches;
+      const char* name = rt ? "ServoLoop, best_effort (SCHED_FIFO)" : "ServoLoop, real time off";
+      print_timing({name, loop.statistics().ticks, elapsed, loop.statistics(), 1000.0},
+                   extra(stalls(loop.detailed_statistics().periods()), steal_seconds() - steal0, std::to_string(latches)));
+    }
+    {
+      BusyLoad busy(load);
+      const double steal0 = steal_seconds();
+      const bool granted = rt && fifo(80);
+      auto statistics = std::make_unique<LoopStatistics>();  // 240 KB of histograms: not on the stack
+      const TimingRow r = run_relative_sleep(seconds, 1000.0,
+                                             rt ? (granted ? "relative sleep, SCHED_FIFO" : "relative sleep (FIFO refused)")
+                                                : "relative sleep, real time off",
+                                             statistics.get());
+      if (granted) restore_other();
+      print_timing(r, extra(stalls(statistics->periods()), steal_seconds() - steal0, "n/a"));
+    }
+  }
+  std::printf("\n(stalls: periods longer than 4 ms; steal: CPU time the hypervisor took from this virtual machine\n"
+              "during the run, all CPUs; latches: times the watchdog zeroed the force and disarmed)\n");
+}
+
 int main(int argc, char** argv) {
   double seconds = 10.0;
-  for (int i = 1; i < argc; ++i)
+  int load = 0;
+  for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) seconds = std::atof(argv[++i]);
-  if (!(seconds > 0.0)) {
-    std::fprintf(stderr, "usage: bench_servo [--seconds S]\n");
+    else if (std::strcmp(argv[i], "--load") == 0 && i + 1 < argc) load = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+      std::printf("usage: bench_servo [--seconds S] [--load N]\n  --seconds S  time per loop [s] (default 10)\n"
+                  "  --load N     also time the loops under N busy processes (default 0: skip)\n");
+      return 0;
+    } else {
+      std::fprintf(stderr, "bench_servo: unknown or incomplete option '%s' (--help shows the usage)\n", argv[i]);
+      return 2;
+    }
+  }
+  if (!(seconds > 0.0 && seconds <= 600.0) || load < 0 || load > 64) {
+    std::fprintf(stderr, "bench_servo: --seconds must be in (0, 600] and --load in 0..64\n");
     return 2;
+  }
+  if (load > 0) {
+    loaded_table(seconds, load);
+    return 0;
   }
 
   std::printf("## Loop timing: %.0f s per loop at 1 kHz (simulated arm, wall field)\n\n", seconds);
