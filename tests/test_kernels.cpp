@@ -331,6 +331,47 @@ TEST_CASE("a reused force map holds no stale values") {
   }
 }
 
+TEST_CASE("degenerate masks are refused at construction, every factory is normalisable") {
+  // sigma <= 0.026 px: every off-centre weight underflows to 0, the step
+  // response is 0 and forces would be 0 / 0 = NaN.
+  for (double sigma : {0.01, 0.025, 0.049, 1e-300}) {
+    CAPTURE(sigma);
+    CHECK_THROWS_WITH(Mask<>::gaussian(sigma, 5), Catch::Contains("at least 0.05") && Catch::Contains("sigma"));
+    CHECK_THROWS_AS(Mask<5>::gaussian(sigma), std::invalid_argument);
+    CHECK_THROWS_AS(TangibleImage(test_picture(40, 30, 1), {MaskKind::gaussian, 5, sigma}), std::invalid_argument);
+  }
+  CHECK_THROWS_AS(Mask<>::gaussian(infinity, 5), std::invalid_argument);
+  // At the smallest allowed sigma the mask is a central difference, finite
+  // and normalised: a black/white step still gives magnitude 1.
+  const Mask<> thin = Mask<>::gaussian(min_gaussian_sigma, 5);
+  CHECK(std::isnormal(thin.step_response()));
+  const TangibleImage image(step_picture(40, 30, 20), {MaskKind::gaussian, 5, min_gaussian_sigma, Border::clamp,
+                                                      default_fade_px, KernelChoice::direct});
+  CHECK(image.at_pixel(20, 15).x == Approx(1.0).epsilon(1e-12));
+  // Huge sigmas are flat Gaussians (Prewitt-like), never degenerate.
+  CHECK(std::isnormal(Mask<>::gaussian(1e200, 129).step_response()));
+  // Every factory at every allowed size: finite weights, a positive normal step response.
+  for (MaskKind kind : {MaskKind::prewitt, MaskKind::sobel, MaskKind::scharr, MaskKind::roberts, MaskKind::gaussian,
+                        MaskKind::emboss}) {
+    for (int size = 2; size <= max_mask_size; ++size) {
+      bool allowed = true;
+      try {
+        validate_mask_size(kind, size);
+      } catch (const std::invalid_argument&) {
+        allowed = false;
+      }
+      if (!allowed) continue;
+      CAPTURE(to_string(kind), size);
+      const Mask<> mask = Mask<>::make(kind, size);
+      CHECK(std::isnormal(mask.step_response()));
+      CHECK(mask.step_response() > 0.0);
+      bool finite = true;
+      for (double w : mask.x_weights()) finite = finite && std::isfinite(w);
+      CHECK(finite);
+    }
+  }
+}
+
 TEST_CASE("bad input: a clear error at setup, zero force at run time") {
   const GrayImage gray = test_picture(40, 30, 1);
   SECTION("mask size even or out of range") {

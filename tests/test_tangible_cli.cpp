@@ -151,6 +151,7 @@ TEST_CASE("bad input: one clear line on stderr and a non-zero exit") {
       {picture + " --border wrap", "unknown border"},
       {picture + " --gray hdr", "unknown gray"},
       {picture + " --sigma -1 --mask gauss --size 5", "--sigma"},
+      {picture + " --mask gauss --sigma 0.01 --size 5", "sigma must be finite and at least 0.05 px"},
       {picture + " --size five", "expects an integer"},
       {picture + " --probes " + bad_probes, "go together"},
       {picture + " --size 3 --probes " + bad_probes + " --forces " + path_of("f.csv"), ":3: expected 'x,y'"},
