@@ -74,15 +74,27 @@ inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int
   for (int q = interior_end; q < n; ++q) out[q * stride] = gray_full_scale - src[border_index(c_first + q, w, border)];
 }
 
-/// Sets every pixel of the map outside [x0, x1] x [y0, y1] to zero.
-inline void zero_outside(ForceMap& map, int x0, int x1, int y0, int y1) {
+/// Fills every pixel of the map outside [x0, x1] x [y0, y1] with the force
+/// of the nearest pixel inside, faded linearly to zero over fade_px of
+/// Euclidean distance: what ImageForce::at_pixel() gives there.
+inline void extend_outside(ForceMap& map, int x0, int x1, int y0, int y1, double fade_px) {
   for (int y = 0; y < map.height; ++y) {
     float* fx = &map.fx[map.index(0, y)];
     float* fy = &map.fy[map.index(0, y)];
+    const int py = std::clamp(y, y0, y1);
+    const float* sx = &map.fx[map.index(0, py)];
+    const float* sy = &map.fy[map.index(0, py)];
     const bool whole = y < y0 || y > y1;
     for (int x = 0; x < map.width; ++x) {
-      if (whole || x < x0 || x > x1) fx[x] = fy[x] = 0.0f;
-      else x = x1;  // skip the interior
+      if (!whole && x >= x0 && x <= x1) {
+        x = x1;  // skip the interior
+        continue;
+      }
+      const int px = std::clamp(x, x0, x1);
+      const double d = std::hypot(double(x - px), double(y - py));  // [px]
+      const double g = d < fade_px ? 1.0 - d / fade_px : 0.0;
+      fx[x] = static_cast<float>(g * sx[px]);
+      fy[x] = static_cast<float>(g * sy[px]);
     }
   }
 }
@@ -242,7 +254,8 @@ inline void prewitt_band(const GrayImage& gray, int h, Border border, double fad
 /// Rows live in a small ring buffer, so memory traffic stays near one read
 /// of the picture and one write of the map. `threads` > 1 splits the rows
 /// into bands computed in parallel (setup work, never a servo tick). Equals
-/// force_map() of TangibleImage{prewitt, size, border} to float rounding.
+/// force_map() of TangibleImage{prewitt, size, border} to float rounding,
+/// the edge fades of ImageForce included.
 /// @throws std::invalid_argument as TangibleImage, or for threads < 1.
 inline void prewitt_force_map(const GrayImage& gray, int size, Border border, ForceMap& map,
                               double fade_px = default_fade_px, int threads = 1) {
@@ -266,7 +279,6 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
   const int lo = full_mask ? h : 0;
   const int x_hi = full_mask ? width - 1 - h : width - 1;
   const int y_hi = full_mask ? height - 1 - h : height - 1;
-  if (full_mask) detail::zero_outside(map, lo, x_hi, lo, y_hi);
 
   constexpr int min_band_rows = 64;
   const int rows = y_hi - lo + 1;
@@ -289,6 +301,7 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
   for (std::thread& w : workers) w.join();
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
+  if (full_mask) detail::extend_outside(map, lo, x_hi, lo, y_hi, fade_px);
 }
 
 /// The Prewitt map in a new ForceMap; see the overload that writes into one.
