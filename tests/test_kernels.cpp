@@ -464,6 +464,74 @@ TEST_CASE("the O(1) Prewitt map equals the per-pixel kernel map") {
   }
 }
 
+TEST_CASE("the integer Prewitt map is exact on 8-bit and colour pictures, and falls back to double") {
+  // 8-bit gray and the paper's colour weights take the exact 32-bit route
+  // (see force_map.hpp); the floats then differ from the direct kernel's
+  // double result by the float rounding alone.
+  cv::theRNG().state = 5;
+  cv::Mat colour(120, 160, CV_8UC3);
+  cv::randu(colour, cv::Scalar::all(0), cv::Scalar::all(256));
+  cv::GaussianBlur(colour, colour, cv::Size(0, 0), 1.5);
+  cv::Mat eight;
+  cv::cvtColor(colour, eight, cv::COLOR_BGR2GRAY);
+  GrayImage spoilt = to_gray(colour, GrayWeights::paper);
+  spoilt.at(80, 70) += 0.3;  // one level the sampled rows do not see: not an integer in any fixed point
+  REQUIRE(detail::guess_fixed_point_scale(spoilt) == 100.0);
+  const std::vector<GrayImage> pictures = {to_gray(eight), to_gray(colour, GrayWeights::paper), spoilt};
+  for (std::size_t p = 0; p < pictures.size(); ++p) {
+    for (int size : {3, 17, 65, 129}) {
+      if (size > pictures[p].height()) continue;
+      for (Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
+        CAPTURE(p, size, to_string(border));
+        TangibleOptions o;
+        o.size = size;
+        o.border = border;
+        o.kernel = KernelChoice::direct;
+        const ForceMap reference = force_map(TangibleImage(pictures[p], o));
+        const ForceMap fast = prewitt_force_map(pictures[p], size, border);
+        double worst = 0.0;
+        for (std::size_t i = 0; i < fast.fx.size(); ++i) {
+          const double tol_x = 1.2e-7 * std::abs(reference.fx[i]);  // float rounding (twice in suspend's margin)
+          const double tol_y = 1.2e-7 * std::abs(reference.fy[i]);
+          worst = std::max({worst, std::abs(fast.fx[i] - reference.fx[i]) - tol_x,
+                            std::abs(fast.fy[i] - reference.fy[i]) - tol_y});
+        }
+        if (p < 2) CHECK(worst <= 1e-12);  // exact up to float rounding
+        else CHECK(worst <= 1e-6);         // the double route, as for any picture
+      }
+    }
+  }
+}
+
+TEST_CASE("the AVX2 and baseline builds of a map band give the same planes") {
+  if (!detail::has_avx2()) {
+    WARN("this CPU has no AVX2: only the baseline band runs");
+    return;
+  }
+  const GrayImage gray = test_picture(200, 90, 3);
+  GrayImage levels = gray;
+  for (int y = 0; y < levels.height(); ++y)
+    for (int x = 0; x < levels.width(); ++x) levels.at(x, y) = std::round(gray.at(x, y));
+  for (const GrayImage* g : {&gray, static_cast<const GrayImage*>(&levels)}) {
+    for (double d : {0.0, 1.0}) {
+      if (d > 0.0 && g == &gray) continue;  // the integer route needs integer levels
+      ForceMap a{g->width(), g->height(), std::vector<float>(g->pixels().size()), std::vector<float>(g->pixels().size())};
+      ForceMap b = a;
+      const detail::PrewittBand band{g, 8, Border::reflect, 10.0, 1e-3, d, 0, g->width() - 1, g->height() - 1,
+                                     0, g->height() - 1, &a};
+      REQUIRE(detail::prewitt_band_baseline(band));
+      detail::PrewittBand other = band;
+      other.map = &b;
+      REQUIRE(detail::prewitt_band_avx2(other));
+      double worst = 0.0;
+      for (std::size_t i = 0; i < a.fx.size(); ++i)
+        worst = std::max({worst, std::abs(double(a.fx[i]) - b.fx[i]), std::abs(double(a.fy[i]) - b.fy[i])});
+      CAPTURE(d);
+      CHECK(worst <= (d > 0.0 ? 0.0 : 1e-6));  // integers: identical; double: FMA contraction may differ
+    }
+  }
+}
+
 TEST_CASE("the Prewitt map computed in bands on several threads equals one thread's") {
   const GrayImage gray = test_picture(257, 301, 33);
   for (Border border : {Border::suspend, Border::reflect, Border::fade}) {

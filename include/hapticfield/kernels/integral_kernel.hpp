@@ -23,6 +23,7 @@
 /// to m = 17; 64-bit cells (24 bytes) otherwise. Large tables ask Linux for
 /// transparent huge pages, so random queries do not miss the TLB.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -99,21 +100,44 @@ class LargeArray {
   std::size_t size_ = 0;
 };
 
+/// Distance of q from the nearest integer, for q in [0, 2^31) (anything
+/// else gives a large value); cheap enough to vectorise.
+[[nodiscard]] inline double off_integer(double q) noexcept {
+  if (!(q >= 0.0 && q < 2147483647.0)) return 1.0;
+  return std::abs(q - static_cast<double>(static_cast<std::int32_t>(q + 0.5)));
+}
+
+/// Largest off_integer(p d) over the first n values of p.
+[[nodiscard]] inline double max_off_integer(const double* p, std::size_t n, double d) noexcept {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, off_integer(p[i] * d));
+  return worst;
+}
+
+/// Tolerance of the integer test [levels x D]: double gray levels from
+/// integer channels carry rounding of about 1e-13.
+inline constexpr double integer_tolerance = 1e-6;
+
 /// The smallest D in {1, 100, 1000} for which every P D is an integer (to
-/// 1e-6), else 2^24: the fixed-point scale of the integral tables.
+/// integer_tolerance), else 2^24: the fixed-point scale of the integral
+/// tables.
 [[nodiscard]] inline double fixed_point_scale(const GrayImage& image) noexcept {
-  for (const double d : {1.0, 100.0, 1000.0}) {
-    bool integral = true;
-    for (const double p : image.pixels()) {
-      const double q = p * d;
-      if (!(std::abs(q - std::nearbyint(q)) <= 1e-6)) {
-        integral = false;
-        break;
-      }
-    }
-    if (integral) return d;
-  }
+  const std::vector<double>& p = image.pixels();
+  for (const double d : {1.0, 100.0, 1000.0})
+    if (max_off_integer(p.data(), p.size(), d) <= integer_tolerance) return d;
   return 16777216.0;  // 2^24
+}
+
+/// The D of fixed_point_scale() judged from a few rows only (0 when none
+/// fits): a guess for code that checks every value as it converts it.
+[[nodiscard]] inline double guess_fixed_point_scale(const GrayImage& image) noexcept {
+  for (const double d : {1.0, 100.0, 1000.0}) {
+    bool fits = true;
+    for (const int y : {0, image.height() / 3, image.height() / 2, image.height() - 1})
+      fits = fits && max_off_integer(image.row(y), static_cast<std::size_t>(image.width()), d) <= integer_tolerance;
+    if (fits) return d;
+  }
+  return 0.0;
 }
 
 }  // namespace detail
@@ -196,7 +220,7 @@ class IntegralKernel {
         for (int c = 0; c < pw; ++c) {
           const int sx = c - pad_;
           if (!fill && (sx < 0 || sx >= width_)) continue;
-          q[static_cast<std::size_t>(c)] = static_cast<S>(std::llround(src[detail::border_index(sx, width_, border_)] * d));
+          q[static_cast<std::size_t>(c)] = static_cast<S>(std::llround(src[detail::border_index(sx, width_, border_)] * d));  // setup: exact rounding
         }
       }
       Cell<U>* above = table.data() + static_cast<std::size_t>(r) * stride_;
