@@ -30,6 +30,7 @@
 #endif
 #if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
 #define HAPTICFIELD_X86_DISPATCH 1
+#include <immintrin.h>
 #else
 #define HAPTICFIELD_X86_DISPATCH 0
 #endif
@@ -321,6 +322,68 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_in(const GrayImage& gray, int
   return true;
 }
 
+/// Prefix sums of one row for the integer route: c0[t + 1] = sum of b[0..t],
+/// d0[t + 1] = sum of s b[s], c1[t + 1] = sum of r[0..t] (modulo 2^32).
+HAPTICFIELD_ALWAYS_INLINE inline void prefix_sums_scalar(const std::uint32_t* HAPTICFIELD_RESTRICT b,
+                                                         const std::uint32_t* HAPTICFIELD_RESTRICT r, std::size_t n,
+                                                         std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                         std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                         std::uint32_t* HAPTICFIELD_RESTRICT c1, std::size_t from = 0,
+                                                         std::uint32_t s0 = 0, std::uint32_t sd = 0,
+                                                         std::uint32_t s1 = 0) noexcept {
+  for (std::size_t t = from; t < n; ++t) {
+    s0 += b[t];
+    sd += static_cast<std::uint32_t>(t) * b[t];
+    s1 += r[t];
+    c0[t + 1] = s0;
+    d0[t + 1] = sd;
+    c1[t + 1] = s1;
+  }
+}
+
+#if HAPTICFIELD_X86_DISPATCH
+/// Inclusive prefix sum of eight uint32 lanes, plus carry.
+__attribute__((target("avx2"), always_inline)) inline __m256i scan8(__m256i x, __m256i carry) noexcept {
+  x = _mm256_add_epi32(x, _mm256_slli_si256(x, 4));
+  x = _mm256_add_epi32(x, _mm256_slli_si256(x, 8));
+  const __m256i low_total = _mm256_shuffle_epi32(x, 0xFF);                        // element 3 of each half
+  x = _mm256_add_epi32(x, _mm256_permute2x128_si256(low_total, low_total, 0x08));  // into the upper half only
+  return _mm256_add_epi32(x, carry);
+}
+
+/// The same with AVX2: an in-register scan of eight sums at a time (two
+/// shifted adds per 128-bit half, then the lower half's total carried into
+/// the upper half and the running total into both).
+__attribute__((target("avx2"))) inline void prefix_sums_avx2(const std::uint32_t* HAPTICFIELD_RESTRICT b,
+                                                             const std::uint32_t* HAPTICFIELD_RESTRICT r,
+                                                             std::size_t n, std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                             std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                             std::uint32_t* HAPTICFIELD_RESTRICT c1) noexcept {
+  const __m256i last = _mm256_set1_epi32(7);
+  __m256i k0 = _mm256_setzero_si256();
+  __m256i kd = _mm256_setzero_si256();
+  __m256i k1 = _mm256_setzero_si256();
+  __m256i index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i eight = _mm256_set1_epi32(8);
+  std::size_t t = 0;
+  for (; t + 8 <= n; t += 8) {
+    const __m256i vb = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + t));
+    const __m256i vr = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + t));
+    const __m256i s0 = scan8(vb, k0);
+    const __m256i sd = scan8(_mm256_mullo_epi32(vb, index), kd);
+    const __m256i s1 = scan8(vr, k1);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(c0 + t + 1), s0);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(d0 + t + 1), sd);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(c1 + t + 1), s1);
+    k0 = _mm256_permutevar8x32_epi32(s0, last);
+    kd = _mm256_permutevar8x32_epi32(sd, last);
+    k1 = _mm256_permutevar8x32_epi32(s1, last);
+    index = _mm256_add_epi32(index, eight);
+  }
+  prefix_sums_scalar(b, r, n, c0, d0, c1, t, c0[t], d0[t], c1[t]);
+}
+#endif
+
 /// The integer route for one band: vertical first, then prefix sums along
 /// the row. Down the columns, V0 = sum of Q over the window's rows (running,
 /// vectorised across the row) and V1 = sum of i Q(y + i) (a running ramp).
@@ -329,6 +392,7 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_in(const GrayImage& gray, int
 /// add per table and element, the rest vectorised. All modulo 2^32 (see
 /// MapArithmetic<std::uint32_t>). Returns false when a gray level was not
 /// an integer in the fixed point d.
+template <bool Avx2>
 HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray, int h, Border border, double fade_px,
                                                            double scale, double d, int lo, int x_hi, int y_hi,
                                                            int y_first, int y_last, ForceMap& map) {
@@ -379,24 +443,12 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
         r[t] += hh * out[t] + hh1 * in[t] - box;
       }
     }
-    {
-      U s0 = 0;
-      U sd = 0;
-      U s1 = 0;
-      const U* HAPTICFIELD_RESTRICT b = v0.data();
-      const U* HAPTICFIELD_RESTRICT r = v1.data();
-      U* HAPTICFIELD_RESTRICT pc0 = c0.data();
-      U* HAPTICFIELD_RESTRICT pd0 = d0.data();
-      U* HAPTICFIELD_RESTRICT pc1 = c1.data();
-      for (std::size_t t = 0; t < n; ++t) {
-        s0 += b[t];
-        sd += static_cast<U>(t) * b[t];
-        s1 += r[t];
-        pc0[t + 1] = s0;
-        pd0[t + 1] = sd;
-        pc1[t + 1] = s1;
-      }
-    }
+#if HAPTICFIELD_X86_DISPATCH
+    if constexpr (Avx2) prefix_sums_avx2(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+    else prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+#else
+    prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+#endif
     float* HAPTICFIELD_RESTRICT fx = &map.fx[map.index(lo, y)];
     float* HAPTICFIELD_RESTRICT fy = &map.fy[map.index(lo, y)];
     const U* HAPTICFIELD_RESTRICT pc0 = c0.data();
@@ -439,21 +491,22 @@ struct PrewittBand {
 };
 
 /// Returns false when the integer arithmetic met a non-integer level.
+template <bool Avx2>
 HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_any(const PrewittBand& a) {
   if (a.d > 0.0)
-    return prewitt_band_integer(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi, a.y_first,
+    return prewitt_band_integer<Avx2>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi, a.y_first,
                                 a.y_last, *a.map);
   return prewitt_band_in<double>(*a.gray, a.h, a.border, a.fade_px, a.scale, 1.0, a.lo, a.x_hi, a.y_hi, a.y_first,
                                  a.y_last, *a.map);
 }
 
 /// The band for baseline x86-64 (or any other target).
-inline bool prewitt_band_baseline(const PrewittBand& a) { return prewitt_band_any(a); }
+inline bool prewitt_band_baseline(const PrewittBand& a) { return prewitt_band_any<false>(a); }
 
 #if HAPTICFIELD_X86_DISPATCH
 /// The same code compiled for AVX2 (8 integer or 4 double lanes), chosen at
 /// run time when the CPU has it.
-__attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand& a) { return prewitt_band_any(a); }
+__attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand& a) { return prewitt_band_any<true>(a); }
 #endif
 
 /// True when the CPU runs prewitt_band_avx2().
