@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <exception>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -95,14 +96,15 @@ struct MapArithmetic<std::uint32_t> {
   /// integer in the low mantissa bits): no branch and no out-of-range cast,
   /// so the conversion loop vectorises. bad gets non-zero bits when p d is
   /// not an integer to 2^-21 (rounding p d 2^20 then disagrees with 2^20 Q),
-  /// is negative or 2^31 or more, or is NaN.
+  /// lies outside [0, 255 d], or is NaN.
   [[nodiscard]] static std::uint32_t value(double p, double d, std::uint64_t& bad) noexcept {
     constexpr double magic = 6755399441055744.0;  // 1.5 * 2^52
     const auto bits = std::bit_cast<std::int64_t>(magic);
     const double q = p * d;
     const std::int64_t k = std::bit_cast<std::int64_t>(q + magic) - bits;
     const std::int64_t k20 = std::bit_cast<std::int64_t>(q * 1048576.0 + magic) - bits;
-    bad |= static_cast<std::uint64_t>(k20 - k * 1048576) | (static_cast<std::uint64_t>(k) >> 31);
+    bad |= static_cast<std::uint64_t>(k20 - k * 1048576) | (static_cast<std::uint64_t>(k) >> 31) |
+           static_cast<std::uint64_t>(k > static_cast<std::int64_t>(gray_full_scale * d));
     return static_cast<std::uint32_t>(k);
   }
   [[nodiscard]] static std::uint32_t weight(int i) noexcept { return static_cast<std::uint32_t>(i); }
@@ -111,11 +113,42 @@ struct MapArithmetic<std::uint32_t> {
   }
 };
 
+#if HAPTICFIELD_X86_DISPATCH
+/// Q = round((255 - p) d) for n contiguous levels, four at a time; returns
+/// non-zero when one is not an integer to integer_tolerance or lies outside
+/// [0, 255 d] (NaN included). The conversion is exact for integers whatever
+/// the rounding mode.
+__attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(const double* HAPTICFIELD_RESTRICT p, int n,
+                                                                         double d,
+                                                                         std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
+  const __m256d vd = _mm256_set1_pd(d);
+  const __m256d top = _mm256_set1_pd(gray_full_scale * d);
+  const __m256d tol = _mm256_set1_pd(integer_tolerance);
+  const __m256d low = _mm256_set1_pd(-integer_tolerance);
+  const __m256d high = _mm256_set1_pd(gray_full_scale * d + integer_tolerance);
+  const __m256d sign = _mm256_set1_pd(-0.0);
+  int bad = 0;
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const __m256d q = _mm256_sub_pd(top, _mm256_mul_pd(_mm256_loadu_pd(p + i), vd));
+    const __m128i k = _mm256_cvtpd_epi32(q);
+    const __m256d off = _mm256_andnot_pd(sign, _mm256_sub_pd(q, _mm256_cvtepi32_pd(k)));
+    const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(off, tol, _CMP_LE_OQ), _mm256_cmp_pd(q, low, _CMP_GE_OQ)),
+                                     _mm256_cmp_pd(q, high, _CMP_LE_OQ));
+    bad |= _mm256_movemask_pd(ok) ^ 0xF;
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), k);
+  }
+  std::uint64_t rest = 0;
+  for (; i < n; ++i) out[i] = MapArithmetic<std::uint32_t>::value(gray_full_scale - p[i], d, rest);
+  return static_cast<std::uint64_t>(bad) | rest;
+}
+#endif
+
 /// Inverted picture row `row`, columns c_first .. c_first + n - 1, extended
 /// past the picture's sides by the border policy, into out[q * stride], in
 /// the arithmetic T (scale d for integers). Returns non-zero when a scaled
 /// value was not an integer (always 0 for double).
-template <class T>
+template <class T, bool Avx2 = false>
 HAPTICFIELD_ALWAYS_INLINE inline std::uint64_t inverted_padded_row(const GrayImage& gray, int row, int c_first, int n,
                                                                    Border border, T* HAPTICFIELD_RESTRICT out,
                                                                    int stride, double d) {
@@ -127,7 +160,18 @@ HAPTICFIELD_ALWAYS_INLINE inline std::uint64_t inverted_padded_row(const GrayIma
   const int interior_end = std::clamp(w - c_first, interior_begin, n);
   for (int q = 0; q < interior_begin; ++q)
     out[q * stride] = A::value(gray_full_scale - src[border_index(c_first + q, w, border)], d, worst);
-  if (stride == 1) {  // contiguous: vectorises
+  bool done = false;
+#if HAPTICFIELD_X86_DISPATCH
+  if constexpr (Avx2 && std::is_same_v<T, std::uint32_t>) {
+    if (stride == 1) {
+      worst |= convert_levels_avx2(src + c_first + interior_begin, interior_end - interior_begin, d,
+                                   out + interior_begin);
+      done = true;
+    }
+  }
+#endif
+  if (done) {
+  } else if (stride == 1) {  // contiguous: vectorises
     const double* HAPTICFIELD_RESTRICT in = src + c_first;
     for (int q = interior_begin; q < interior_end; ++q) out[q] = A::value(gray_full_scale - in[q], d, worst);
   } else {
@@ -409,7 +453,7 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
   };
   std::uint64_t bad = 0;  // non-zero once a scaled gray level was not an integer
   const auto convert = [&](int r) HAPTICFIELD_ALWAYS_INLINE {
-    bad |= inverted_padded_row<U>(gray, border_index(r, height, border), lo - h, n_in, border, q_row(r), 1, d);
+    bad |= inverted_padded_row<U, Avx2>(gray, border_index(r, height, border), lo - h, n_in, border, q_row(r), 1, d);
   };
   std::vector<U> v0(n, 0u);
   std::vector<U> v1(n, 0u);
@@ -428,7 +472,6 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
   std::vector<U> d0(n + 1, 0u);
   std::vector<U> c1(n + 1, 0u);
   const U hh = A::weight(h);
-  const U hh1 = A::weight(h + 1);
   const int width = 2 * h + 1;
   for (int y = y_first; y <= y_last; ++y) {
     if (y > y_first) {  // row y - 1 - h leaves the window, row y + h enters
@@ -440,7 +483,7 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
       for (std::size_t t = 0; t < n; ++t) {
         const U box = b[t] + (in[t] - out[t]);
         b[t] = box;
-        r[t] += hh * out[t] + hh1 * in[t] - box;
+        r[t] += hh * (out[t] + in[t]) + in[t] - box;  // h out + (h + 1) in - box, one multiply
       }
     }
 #if HAPTICFIELD_X86_DISPATCH
