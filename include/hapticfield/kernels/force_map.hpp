@@ -428,6 +428,75 @@ __attribute__((target("avx2"))) inline void prefix_sums_avx2(const std::uint32_t
 }
 #endif
 
+/// One output row of the integer route: for x in [0, n_out), the window
+/// t in [x, x + 2h] of the prefix sums gives box = dc0, fx = dd0 - (x + h) box,
+/// fy = dc1, each an exact int32 scaled to float with one rounding.
+HAPTICFIELD_ALWAYS_INLINE inline void integer_output_scalar(const std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                            const std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                            const std::uint32_t* HAPTICFIELD_RESTRICT c1, int h,
+                                                            int from, int n_out, double scale,
+                                                            float* HAPTICFIELD_RESTRICT fx,
+                                                            float* HAPTICFIELD_RESTRICT fy) noexcept {
+  using U = std::uint32_t;
+  const int width = 2 * h + 1;
+  for (int x = from; x < n_out; ++x) {
+    const U box = c0[x + width] - c0[x];
+    const U mx = (d0[x + width] - d0[x]) - static_cast<U>(x + h) * box;  // sum of (t - centre) V0(t)
+    const U my = c1[x + width] - c1[x];
+    fx[x] = MapArithmetic<U>::out(mx, scale);
+    fy[x] = MapArithmetic<U>::out(my, scale);
+  }
+}
+
+#if HAPTICFIELD_X86_DISPATCH
+/// Eight uint32 from memory, unaligned.
+__attribute__((target("avx2"), always_inline)) inline __m256i load8(const std::uint32_t* p) noexcept {
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+}
+
+/// Eight exact int32 forces to float, through double (one rounding).
+__attribute__((target("avx2"), always_inline)) inline __m256 scale8(__m256i v, __m256d scale) noexcept {
+  const __m128 lo = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_cvtepi32_pd(_mm256_castsi256_si128(v)), scale));
+  const __m128 hi = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_cvtepi32_pd(_mm256_extracti128_si256(v, 1)), scale));
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+}
+
+/// integer_output_scalar() eight pixels at a time. Where the rows allow,
+/// the planes are written with non-temporal stores: the map is larger than
+/// the caches and is not read back here, so this saves reading every
+/// output line before writing it. The caller issues the store fence.
+__attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                                const std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                                const std::uint32_t* HAPTICFIELD_RESTRICT c1, int h,
+                                                                int n_out, double scale,
+                                                                float* HAPTICFIELD_RESTRICT fx,
+                                                                float* HAPTICFIELD_RESTRICT fy) noexcept {
+  const int width = 2 * h + 1;
+  // Head: up to the first x where both rows are 32-byte aligned (they are
+  // equally misaligned when the planes were allocated alike).
+  int x = 0;
+  const bool same_phase = ((reinterpret_cast<std::uintptr_t>(fx) ^ reinterpret_cast<std::uintptr_t>(fy)) & 31u) == 0;
+  if (same_phase)
+    while (x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 31u) != 0) ++x;
+  else
+    x = n_out;  // unusual layout: scalar throughout
+  integer_output_scalar(c0, d0, c1, h, 0, x, scale, fx, fy);
+  const __m256d vs = _mm256_set1_pd(scale);
+  __m256i centre = _mm256_add_epi32(_mm256_set1_epi32(x + h), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  const __m256i eight = _mm256_set1_epi32(8);
+  for (; x + 8 <= n_out; x += 8) {
+    const __m256i box = _mm256_sub_epi32(load8(c0 + x + width), load8(c0 + x));
+    const __m256i mx = _mm256_sub_epi32(_mm256_sub_epi32(load8(d0 + x + width), load8(d0 + x)),
+                                        _mm256_mullo_epi32(centre, box));
+    const __m256i my = _mm256_sub_epi32(load8(c1 + x + width), load8(c1 + x));
+    _mm256_stream_ps(fx + x, scale8(mx, vs));
+    _mm256_stream_ps(fy + x, scale8(my, vs));
+    centre = _mm256_add_epi32(centre, eight);
+  }
+  integer_output_scalar(c0, d0, c1, h, x, n_out, scale, fx, fy);
+}
+#endif
+
 /// The integer route for one band: vertical first, then prefix sums along
 /// the row. Down the columns, V0 = sum of Q over the window's rows (running,
 /// vectorised across the row) and V1 = sum of i Q(y + i) (a running ramp).
@@ -498,13 +567,12 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
     const U* HAPTICFIELD_RESTRICT pd0 = d0.data();
     const U* HAPTICFIELD_RESTRICT pc1 = c1.data();
     if (border != Border::fade) {
-      for (int x = 0; x < n_out; ++x) {
-        const U box = pc0[x + width] - pc0[x];
-        const U mx = (pd0[x + width] - pd0[x]) - static_cast<U>(x + h) * box;  // sum of (t - centre) V0(t)
-        const U my = pc1[x + width] - pc1[x];
-        fx[x] = A::out(mx, scale);  // exact integer, one rounding to float
-        fy[x] = A::out(my, scale);
-      }
+#if HAPTICFIELD_X86_DISPATCH
+      if constexpr (Avx2) integer_output_avx2(pc0, pd0, pc1, h, n_out, scale, fx, fy);
+      else integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
+#else
+      integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
+#endif
     } else {
       const double row_inside = std::min(y - lo, y_hi - y);
       for (int x = 0; x < n_out; ++x) {
@@ -518,6 +586,9 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
       }
     }
   }
+#if HAPTICFIELD_X86_DISPATCH
+  if constexpr (Avx2) _mm_sfence();  // the non-temporal stores are visible before the band returns
+#endif
   return bad == 0;
 }
 
