@@ -3,7 +3,10 @@
 //   tangible_image IMAGE [--mask prewitt|sobel|scharr|roberts|gauss|emboss]
 //                  [--size M] [--sigma S] [--border suspend|clamp|reflect|fade]
 //                  [--gray paper|bt601] [--maps DIR] [--probes IN.csv --forces OUT.csv]
+//                  [--max-mpx N]
 //
+// --max-mpx raises or lowers the largest picture accepted (default 100 Mpx,
+// checked from the file header before decoding).
 // --maps writes the force pictures (fx, fy, magnitude, arrows) and float
 // planes; --probes reads x,y per line (pixels, x right, y down, integer =
 // pixel centre, a header line allowed) and --forces gets x,y,fx,fy: the
@@ -13,6 +16,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -33,13 +37,14 @@ struct UsageError : std::runtime_error {
 constexpr const char* usage =
     "usage: tangible_image IMAGE [--mask prewitt|sobel|scharr|roberts|gauss|emboss] [--size M]\n"
     "                      [--sigma S] [--border suspend|clamp|reflect|fade] [--gray paper|bt601]\n"
-    "                      [--maps DIR] [--probes IN.csv --forces OUT.csv]\n";
+    "                      [--maps DIR] [--probes IN.csv --forces OUT.csv] [--max-mpx N]\n";
 
 struct Arguments {
   std::string image;
   hf::TangibleOptions options;
   bool size_given = false;
   hf::GrayWeights gray = hf::GrayWeights::paper;
+  std::uint64_t max_pixels = hf::default_max_pixels;  ///< largest picture loaded [px]
   std::optional<std::string> maps;
   std::optional<std::string> probes;
   std::optional<std::string> forces;
@@ -104,6 +109,11 @@ Arguments parse(int argc, char** argv) {
       if (g == "paper") a.gray = hf::GrayWeights::paper;
       else if (g == "bt601") a.gray = hf::GrayWeights::bt601;
       else throw UsageError("unknown gray weights '" + g + "' (paper, bt601)");
+    } else if (arg == "--max-mpx") {
+      const double mpx = parse_double(arg, value());
+      if (!std::isfinite(mpx) || mpx <= 0.0 || mpx > 1e6)
+        throw UsageError("--max-mpx must be a number of megapixels in (0, 1e6]");
+      a.max_pixels = static_cast<std::uint64_t>(mpx * 1e6);
     } else if (arg == "--maps") {
       a.maps = value();
     } else if (arg == "--probes") {
@@ -183,8 +193,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const cv::Mat photo = hf::load_image(args.image);
-    const hf::GrayImage gray = hf::load_gray(args.image, args.gray);
+    const cv::Mat photo = hf::load_image(args.image, args.max_pixels);
+    const hf::GrayImage gray = hf::to_gray(photo, args.gray);
     const auto start = std::chrono::steady_clock::now();
     const hf::TangibleImage image(gray, args.options);
     const double setup_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
