@@ -99,12 +99,12 @@ struct MapArithmetic<std::uint32_t> {
   /// lies outside [0, 255 d], or is NaN.
   [[nodiscard]] static std::uint32_t value(double p, double d, std::uint64_t& bad) noexcept {
     constexpr double magic = 6755399441055744.0;  // 1.5 * 2^52
-    const auto bits = std::bit_cast<std::int64_t>(magic);
+    const auto bits = std::bit_cast<std::uint64_t>(magic);
     const double q = p * d;
-    const std::int64_t k = std::bit_cast<std::int64_t>(q + magic) - bits;
-    const std::int64_t k20 = std::bit_cast<std::int64_t>(q * 1048576.0 + magic) - bits;
-    bad |= static_cast<std::uint64_t>(k20 - k * 1048576) | (static_cast<std::uint64_t>(k) >> 31) |
-           static_cast<std::uint64_t>(k > static_cast<std::int64_t>(gray_full_scale * d));
+    // unsigned: any bit pattern (NaN, huge values) wraps instead of overflowing
+    const std::uint64_t k = std::bit_cast<std::uint64_t>(q + magic) - bits;
+    const std::uint64_t k20 = std::bit_cast<std::uint64_t>(q * 1048576.0 + magic) - bits;
+    bad |= (k20 - (k << 20)) | (k >> 31) | static_cast<std::uint64_t>(k > static_cast<std::uint64_t>(gray_full_scale * d));
     return static_cast<std::uint32_t>(k);
   }
   [[nodiscard]] static std::uint32_t weight(int i) noexcept { return static_cast<std::uint32_t>(i); }

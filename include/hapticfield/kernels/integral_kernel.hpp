@@ -123,6 +123,10 @@ inline constexpr double integer_tolerance = 1e-6;
 /// tables.
 [[nodiscard]] inline double fixed_point_scale(const GrayImage& image) noexcept {
   const std::vector<double>& p = image.pixels();
+  // Levels outside [0, 255] (which GrayImage does not promise to exclude)
+  // would void the force bound of the narrow route: take the wide one.
+  for (const double v : p)
+    if (!(v >= 0.0 && v <= gray_full_scale)) return 16777216.0;
   for (const double d : {1.0, 100.0, 1000.0})
     if (max_off_integer(p.data(), p.size(), d) <= integer_tolerance) return d;
   return 16777216.0;  // 2^24
