@@ -3,7 +3,10 @@
 //   tangible_image IMAGE [--mask prewitt|sobel|scharr|roberts|gauss|emboss]
 //                  [--size M] [--sigma S] [--border suspend|clamp|reflect|fade]
 //                  [--gray paper|bt601] [--maps DIR] [--probes IN.csv --forces OUT.csv]
+//                  [--max-mpx N]
 //
+// --max-mpx raises or lowers the largest picture accepted (default 100 Mpx,
+// checked from the file header before decoding).
 // --maps writes the force pictures (fx, fy, magnitude, arrows) and float
 // planes; --probes reads x,y per line (pixels, x right, y down, integer =
 // pixel centre, a header line allowed) and --forces gets x,y,fx,fy: the
@@ -13,6 +16,8 @@
 
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -41,6 +46,8 @@ constexpr const char* usage =
     "  --probes IN.csv       x,y per line [px] (x right, y down, integer = pixel centre;\n"
     "                        a header line allowed), at most 1000000 lines; needs --forces\n"
     "  --forces OUT.csv      x,y,fx,fy per probe: the normalised force (1 = black/white edge), fy down\n"
+    "  --max-mpx N           largest picture accepted [megapixels], in (0, 1e6] (default 100),\n"
+    "                        read from the file header before anything is decoded\n"
     "  -h, --help            this text\n"
     "Exit status: 0 done, 1 bad input (files, pictures), 2 usage error.\n";
 
@@ -49,6 +56,7 @@ struct Arguments {
   hf::TangibleOptions options;
   bool size_given = false;
   hf::GrayWeights gray = hf::GrayWeights::paper;
+  std::uint64_t max_pixels = hf::default_max_pixels;  ///< largest picture loaded [px]
   std::optional<std::string> maps;
   std::optional<std::string> probes;
   std::optional<std::string> forces;
@@ -76,6 +84,8 @@ Arguments parse(hf::cli::Parser& p) {
                                                {"fade", hf::Border::fade}});
     } else if (p.is("--gray")) {
       a.gray = p.choice<hf::GrayWeights>("gray weights", {{"paper", hf::GrayWeights::paper}, {"bt601", hf::GrayWeights::bt601}});
+    } else if (p.is("--max-mpx")) {
+      a.max_pixels = static_cast<std::uint64_t>(p.real(hf::cli::open_closed(0.0, 1e6)) * 1e6);
     } else if (p.is("--maps")) {
       a.maps = p.output_dir();
     } else if (p.is("--probes")) {
@@ -118,8 +128,8 @@ void write_forces(const std::string& path, const std::vector<std::array<double, 
 }
 
 int run(const Arguments& args) {
-  const cv::Mat photo = hf::cli::quiet_stderr([&] { return hf::load_image(args.image); });
-  const hf::GrayImage gray = hf::cli::quiet_stderr([&] { return hf::load_gray(args.image, args.gray); });
+  const cv::Mat photo = hf::cli::quiet_stderr([&] { return hf::load_image(args.image, args.max_pixels); });
+  const hf::GrayImage gray = hf::to_gray(photo, args.gray);  // decoded once
   const auto start = std::chrono::steady_clock::now();
   const hf::TangibleImage image(gray, args.options);
   const double setup_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -258,6 +258,7 @@ TEST_CASE("every numeric flag: NaN, Inf, huge, zero, negative, garbage: exit 2 n
   std::vector<Case> cases;
   add_numeric(cases, "tangible_image", {picture}, "--size");
   add_numeric(cases, "tangible_image", {picture, "--mask", "gauss", "--size", "5"}, "--sigma");
+  add_numeric(cases, "tangible_image", {picture}, "--max-mpx");
   add_numeric(cases, "tangible_experiment", {}, "--size");
   add_numeric(cases, "servo_demo", {"--field", "none"}, "--seconds");
   add_numeric(cases, "servo_demo", {"--field", "none"}, "--rate");

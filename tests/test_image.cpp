@@ -3,7 +3,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -133,4 +135,89 @@ TEST_CASE("bad pictures give a clear ImageError") {
   const GrayImage one = load_gray(tiny);
   CHECK(one.width() == 1);
   CHECK(one.at(0, 0) == 9.0);
+}
+
+namespace {
+
+/// A PNG of 8 bytes of signature and an IHDR chunk that declares width x
+/// height px of 8-bit gray, followed by a truncated IDAT: 45 bytes that a
+/// decoder would answer by allocating width x height bytes.
+std::string crafted_png(const std::string& name, std::uint32_t width, std::uint32_t height) {
+  const std::string path = tmp_path(name);
+  std::ofstream out(path, std::ios::binary);
+  const auto be32 = [&out](std::uint32_t v) {
+    for (int s = 24; s >= 0; s -= 8) out.put(static_cast<char>((v >> s) & 0xFF));
+  };
+  out.write("\x89PNG\r\n\x1a\n", 8);
+  be32(13);
+  out.write("IHDR", 4);
+  be32(width);
+  be32(height);
+  out.write("\x08\x00\x00\x00\x00", 5);  // 8-bit gray, deflate, no filter, no interlace
+  be32(0);                               // CRC (never reached)
+  be32(100);
+  out.write("IDAT", 4);
+  out.write("\x78\x9c", 2);
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("the picture size is read from the header, every format OpenCV writes") {
+  const cv::Mat picture = random_bgr(123, 45, 7);
+  cv::Mat gray;
+  cv::cvtColor(picture, gray, cv::COLOR_BGR2GRAY);
+  struct Case {
+    std::string name;
+    cv::Mat mat;
+  };
+  const std::vector<Case> cases = {{"size.png", picture}, {"size.jpg", picture}, {"size.bmp", picture},
+                                   {"size.tiff", picture}, {"size.ppm", picture}, {"size.pgm", gray},
+                                   {"size.pbm", gray},     {"size.pam", picture}};
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    const std::string path = tmp_path(c.name);
+    REQUIRE(cv::imwrite(path, c.mat));
+    const std::optional<PictureSize> size = read_picture_size(path);
+    REQUIRE(size.has_value());
+    CHECK(size->width == 123);
+    CHECK(size->height == 45);
+    // the limit is inclusive: exactly 123 x 45 px loads, one pixel less refuses
+    CHECK(load_image(path, 123 * 45).cols == 123);
+    CHECK_THROWS_WITH(load_image(path, 123 * 45 - 1),
+                      Catch::Contains("123 x 45 px") && Catch::Contains("limit of 5534 px") &&
+                          Catch::Contains(c.name));
+    CHECK_THROWS_AS(load_gray(path, GrayWeights::paper, 100), ImageError);
+  }
+  // a format the header reader does not parse is checked after decoding
+  const std::string webp = tmp_path("size.webp");
+  if (cv::imwrite(webp, picture)) {
+    CHECK_FALSE(read_picture_size(webp).has_value());
+    CHECK_THROWS_WITH(load_image(webp, 1000), Catch::Contains("123 x 45 px"));
+    CHECK(load_image(webp).cols == 123);
+  }
+}
+
+TEST_CASE("a small file that declares a huge picture fails before decoding") {
+  // 20000 x 20000 px in 45 bytes: decoding would allocate 400 MB for the
+  // 8-bit plane alone (and a tangible image many times that).
+  const std::string huge = crafted_png("huge.png", 20000, 20000);
+  REQUIRE(std::filesystem::file_size(huge) < 64);
+  CHECK_THROWS_AS(load_image(huge), ImageError);
+  CHECK_THROWS_WITH(load_gray(huge), Catch::Contains("huge.png") && Catch::Contains("20000 x 20000 px") &&
+                                         Catch::Contains("limit of 100000000 px"));
+  // the largest PNG dimensions (2^31 - 1 each) do not overflow the product
+  CHECK_THROWS_WITH(load_image(crafted_png("widest.png", 0x7fffffff, 0x7fffffff)),
+                    Catch::Contains("2147483647 x 2147483647 px"));
+  // raising the limit lets the header pass; the truncated data then fails to decode
+  CHECK_THROWS_WITH(load_image(crafted_png("small.png", 20, 20), 400), Catch::Contains("cannot decode"));
+  // zero sizes are malformed headers
+  CHECK_THROWS_WITH(load_image(crafted_png("zero.png", 0, 20)), Catch::Contains("declares 0 x 20 px"));
+  // a Netpbm text header declaring 1e9 x 1e9 px
+  const std::string pgm = tmp_path("huge.pgm");
+  {
+    std::ofstream out(pgm, std::ios::binary);
+    out << "P5\n# a comment\n1000000000 1000000000\n255\n\x01\x02";
+  }
+  CHECK_THROWS_WITH(load_image(pgm), Catch::Contains("1000000000 x 1000000000 px"));
 }

@@ -3,6 +3,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <string>
 #include <limits>
 #include <random>
 #include <vector>
@@ -156,6 +158,52 @@ TEST_CASE("the O(1) integral kernel equals the direct kernel to 1e-9 of full sca
   }
 }
 
+TEST_CASE("the O(1) kernel is exact on 8-bit gray and on colour through the paper's or BT.601 weights") {
+  // Integer tables hold P D exactly (D = 1, 100, 1000), so the O(1) force
+  // equals the direct kernel to the direct kernel's own double rounding.
+  cv::theRNG().state = 21;
+  cv::Mat colour(150, 170, CV_8UC3);
+  cv::randu(colour, cv::Scalar::all(0), cv::Scalar::all(256));
+  cv::GaussianBlur(colour, colour, cv::Size(0, 0), 2.0);  // photograph-like: smooth plus edges
+  cv::Mat eight;
+  cv::cvtColor(colour, eight, cv::COLOR_BGR2GRAY);
+  struct Picture {
+    const char* name;
+    GrayImage gray;
+  };
+  const std::vector<Picture> pictures = {{"8-bit gray", to_gray(eight)},
+                                         {"colour, paper weights", to_gray(colour, GrayWeights::paper)},
+                                         {"colour, BT.601", to_gray(colour, GrayWeights::bt601)}};
+  std::mt19937 rng(17);
+  for (const Picture& p : pictures) {
+    const GrayImage inv = inverted(p.gray);
+    for (MaskKind kind : {MaskKind::prewitt, MaskKind::emboss}) {
+      for (int size : {3, 17, 33, 65, 129}) {
+        for (Border border : {Border::suspend, Border::clamp, Border::reflect}) {
+          CAPTURE(p.name, to_string(kind), size, to_string(border));
+          const DirectKernel<> direct(inv, Mask<>::make(kind, size), border);
+          const IntegralKernel fast(inv, kind, size, border);
+          const ImageForce<IntegralKernel> sampler(fast);
+          // 12-byte cells where the force bound fits 31 bits (see integral_kernel.hpp)
+          const bool narrow = std::string(p.name) == "8-bit gray" ||
+                              (std::string(p.name) == "colour, paper weights" && size <= 65) || size <= 17;
+          CHECK(fast.bytes_per_cell() == (narrow ? 12u : 24u));
+          double worst = 0.0;
+          for (int i = 0; i < 400; ++i) {
+            const int x = std::uniform_int_distribution<int>(0, inv.width() - 1)(rng);
+            const int y = std::uniform_int_distribution<int>(0, inv.height() - 1)(rng);
+            if (!sampler.in_domain(x, y)) continue;
+            const glm::dvec2 a = direct.at_pixel(x, y);
+            const glm::dvec2 b = fast.at_pixel(x, y);
+            worst = std::max({worst, std::abs(a.x - b.x), std::abs(a.y - b.y)});
+          }
+          CHECK(worst <= 1e-13);
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("a black/white step edge gives magnitude 1 toward black, for every mask") {
   const GrayImage step = step_picture(64, 48, 32);  // black from column 32 on
   for (const MaskCase& mc : all_masks) {
@@ -225,24 +273,33 @@ TEST_CASE("border policies") {
   TangibleOptions o;
   o.size = 9;  // anchor 4: the mask fits for pixel centres 4 .. width - 5
 
-  SECTION("suspend: zero where the mask leaves the image, the kernel's force inside") {
+  SECTION("suspend: the kernel's force where the mask fits, faded out over fade_px beyond") {
     o.border = Border::suspend;
+    o.fade_px = 4.0;
     const TangibleImage image(gray, o);
-    CHECK(image.at(3.0, 20.0) == glm::dvec2{0.0});
-    CHECK(image.at(56.0, 20.0) == glm::dvec2{0.0});
-    CHECK(image.at(20.0, 46.0) == glm::dvec2{0.0});
-    CHECK(image.at(4.0, 20.0) != glm::dvec2{0.0});
-    // half a pixel past the last full-mask pixel: half its force
-    CHECK(image.at(3.5, 20.0).x == Approx(0.5 * image.at(4.0, 20.0).x));
+    const glm::dvec2 last = image.at(4.0, 20.0);  // last full-mask column
+    CHECK(last != glm::dvec2{0.0});
+    CHECK(image.at(3.0, 20.0) == last * 0.75);  // 1 px beyond: 1 - 1/4 of the edge force
+    CHECK(image.at(2.0, 20.0) == last * 0.5);
+    CHECK(image.at(0.0, 20.0) == glm::dvec2{0.0});  // 4 px beyond: nothing
+    CHECK(image.at(59.0, 20.0) == glm::dvec2{0.0});  // last full-mask column 55, row 45
+    CHECK(image.at(20.0, 49.0) == glm::dvec2{0.0});
+    CHECK(image.at(20.0, 47.0) == image.at(20.0, 45.0) * 0.5);
+    // across a corner the distance is Euclidean: (3, 3) is sqrt(2) px from (4, 4)
+    CHECK(image.at(3.0, 3.0).x == Approx(image.at(4.0, 4.0).x * (1.0 - std::sqrt(2.0) / 4.0)));
+    CHECK(image.at_pixel(3, 20) == image.at(3.0, 20.0));
   }
-  SECTION("clamp and reflect: a force right up to the picture's edge") {
+  SECTION("clamp and reflect: the kernel up to the picture's edge, faded out over fade_px outside") {
     for (Border b : {Border::clamp, Border::reflect}) {
       o.border = b;
-      const TangibleImage image(gray, o);
-      CHECK(image.at(0.0, 20.0) != glm::dvec2{0.0});
-      CHECK(image.at(-0.25, 20.0) == image.at(0.0, 20.0));  // the outer half pixel keeps the edge force
-      CHECK(image.at(-0.6, 20.0) == glm::dvec2{0.0});       // beyond the picture: nothing
-      CHECK(image.at(59.0, 49.0) != glm::dvec2{0.0});
+      const TangibleImage image(gray, o);  // fade_px 10
+      const glm::dvec2 edge = image.at(0.0, 20.0);
+      CHECK(edge != glm::dvec2{0.0});
+      CHECK(image.at(-0.5, 20.0) == edge * 0.95);
+      CHECK(image.at(-5.0, 20.0) == edge * 0.5);
+      CHECK(image.at(-10.0, 20.0) == glm::dvec2{0.0});
+      CHECK(image.at(59.0, 20.0) != glm::dvec2{0.0});  // (reflect mirrors a corner's patch: 0 there)
+      CHECK(image.at(64.0, 20.0) == image.at(59.0, 20.0) * 0.5);
     }
   }
   SECTION("fade: a linear ramp over the last k pixels") {
@@ -256,6 +313,113 @@ TEST_CASE("border policies") {
     CHECK(faded.at(9.0, 25.0).x == Approx(0.5 * hard.at(9.0, 25.0).x));
     CHECK(faded.at(14.0, 25.0) == hard.at(14.0, 25.0));
     CHECK(faded.at(30.0, 25.0) == hard.at(30.0, 25.0));
+  }
+}
+
+namespace {
+
+/// Real photographs to stroke: the shipped one, and any found in installed
+/// packages (OpenCV samples, scikit-image data).
+std::vector<std::string> real_photographs() {
+  std::vector<std::string> found = {std::string(HAPTICFIELD_SOURCE_DIR) + "/examples/data/coffee.png"};
+  const char* candidates[] = {
+      "/usr/share/opencv4/samples/data/fruits.jpg", "/usr/share/opencv4/samples/data/baboon.jpg",
+      "/usr/share/opencv4/samples/data/building.jpg", "/usr/lib/python3/dist-packages/skimage/data/astronaut.png",
+      "/usr/lib/python3/dist-packages/skimage/data/camera.png"};
+  for (const char* c : candidates)
+    if (std::filesystem::exists(c)) found.emplace_back(c);
+  if (found.size() == 1)
+    WARN("only examples/data/coffee.png is stroked: no OpenCV sample or scikit-image pictures are installed");
+  return found;
+}
+
+}  // namespace
+
+TEST_CASE("leaving a real photograph is never a step, for every border policy and mask size") {
+  // A HIP crossing the edge at 0.64 px per sample (a servo tick). Outside the
+  // kernel's domain the force must change by less than the force JND, 7% of
+  // the largest force in the picture, per sample. Where the kernel itself
+  // varies (an oblique exit slides along the edge; the fade band lies over
+  // the picture) the bound is that variation plus 7%: R below is the same
+  // field with the policy's fades removed, evaluated at the nearest domain
+  // point, so |F1 - F0| <= |R1 - R0| + 7% is exactly "the border policy
+  // adds no more than the JND".
+  constexpr double step_px = 0.64;
+  constexpr double jnd = 0.07;
+  for (const std::string& path : real_photographs()) {
+    const GrayImage gray = load_gray(path);
+    const double w = gray.width();
+    const double h = gray.height();
+    for (const Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
+      for (const MaskCase mc : std::vector<MaskCase>{{MaskKind::prewitt, 3},
+                                                     {MaskKind::prewitt, 5},
+                                                     {MaskKind::prewitt, 17},
+                                                     {MaskKind::prewitt, 33},
+                                                     {MaskKind::prewitt, 65},
+                                                     {MaskKind::sobel, 5},
+                                                     {MaskKind::gaussian, 9}}) {
+        CAPTURE(path, to_string(border), to_string(mc.kind), mc.size);
+        TangibleOptions o{mc.kind, mc.size, 0.0, border};
+        const TangibleImage image(gray, o);
+        o.border = border == Border::fade ? Border::suspend : border;  // same domain, no fade
+        const TangibleImage raw(gray, o);
+        const double largest = force_map(image).max_magnitude();
+        REQUIRE(largest > 0.0);
+        // the kernel's domain: pixel centres where it is evaluated
+        const double lo = needs_full_mask(border) ? mc.size / 2 : 0.0;
+        const double x_hi = w - 1 - lo;
+        const double y_hi = h - 1 - lo;
+        const auto nearest = [&](double x, double y) {
+          return raw.at(std::clamp(x, lo, x_hi), std::clamp(y, lo, y_hi));
+        };
+        struct Stroke {
+          double x, y, dx, dy;
+          bool fixed_exit;  // leaves through a point (perpendicular or corner): R is constant outside
+        };
+        std::vector<Stroke> strokes;
+        const double inset = mc.size + 2.0 * default_fade_px;  // start inside every band
+        for (int k = 1; k <= 5; ++k) {
+          const double fx = k / 6.0;
+          strokes.push_back({w - 1 - inset, fx * h, 1, 0, true});   // out through the right edge
+          strokes.push_back({inset, fx * h, -1, 0, true});          // left
+          strokes.push_back({fx * w, h - 1 - inset, 0, 1, true});   // bottom
+          strokes.push_back({fx * w, inset, 0, -1, true});          // top
+        }
+        for (const double sx : {-1.0, 1.0})
+          for (const double sy : {-1.0, 1.0}) {
+            const double cx = sx > 0 ? x_hi : lo;  // the domain's corner
+            const double cy = sy > 0 ? y_hi : lo;
+            const double d = 2.0 * inset;
+            strokes.push_back({cx - sx * d, cy - sy * d, sx * std::sqrt(0.5), sy * std::sqrt(0.5), true});
+            // oblique: 30 degrees to the edge, through the side near the corner
+            strokes.push_back({cx - sx * 3 * d, cy - sy * d, sx * std::cos(0.5236), sy * std::sin(0.5236), false});
+          }
+        double worst_fixed = 0.0;
+        double worst_excess = 0.0;
+        for (const Stroke& st : strokes) {
+          glm::dvec2 f0 = image.at(st.x, st.y);
+          glm::dvec2 r0 = nearest(st.x, st.y);
+          bool was_outside = false;
+          for (int i = 1; i < 4 * static_cast<int>(inset + default_fade_px) + 400; ++i) {
+            const double x = st.x + step_px * i * st.dx;
+            const double y = st.y + step_px * i * st.dy;
+            const glm::dvec2 f1 = image.at(x, y);
+            const glm::dvec2 r1 = nearest(x, y);
+            const double step = glm::length(f1 - f0) / largest;
+            const bool outside = x < lo || x > x_hi || y < lo || y > y_hi;
+            // both samples outside: only the fade acts (the crossing step is bounded below)
+            if (st.fixed_exit && outside && was_outside) worst_fixed = std::max(worst_fixed, step);
+            was_outside = outside;
+            worst_excess = std::max(worst_excess, step - glm::length(r1 - r0) / largest);
+            f0 = f1;
+            r0 = r1;
+          }
+          REQUIRE(f0 == glm::dvec2{0.0});  // every stroke ends beyond the band
+        }
+        CHECK(worst_fixed <= jnd);
+        CHECK(worst_excess <= jnd);
+      }
+    }
   }
 }
 
@@ -300,6 +464,74 @@ TEST_CASE("the O(1) Prewitt map equals the per-pixel kernel map") {
   }
 }
 
+TEST_CASE("the integer Prewitt map is exact on 8-bit and colour pictures, and falls back to double") {
+  // 8-bit gray and the paper's colour weights take the exact 32-bit route
+  // (see force_map.hpp); the floats then differ from the direct kernel's
+  // double result by the float rounding alone.
+  cv::theRNG().state = 5;
+  cv::Mat colour(120, 160, CV_8UC3);
+  cv::randu(colour, cv::Scalar::all(0), cv::Scalar::all(256));
+  cv::GaussianBlur(colour, colour, cv::Size(0, 0), 1.5);
+  cv::Mat eight;
+  cv::cvtColor(colour, eight, cv::COLOR_BGR2GRAY);
+  GrayImage spoilt = to_gray(colour, GrayWeights::paper);
+  spoilt.at(80, 70) += 0.3;  // one level the sampled rows do not see: not an integer in any fixed point
+  REQUIRE(detail::guess_fixed_point_scale(spoilt) == 100.0);
+  const std::vector<GrayImage> pictures = {to_gray(eight), to_gray(colour, GrayWeights::paper), spoilt};
+  for (std::size_t p = 0; p < pictures.size(); ++p) {
+    for (int size : {3, 17, 65, 129}) {
+      if (size > pictures[p].height()) continue;
+      for (Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
+        CAPTURE(p, size, to_string(border));
+        TangibleOptions o;
+        o.size = size;
+        o.border = border;
+        o.kernel = KernelChoice::direct;
+        const ForceMap reference = force_map(TangibleImage(pictures[p], o));
+        const ForceMap fast = prewitt_force_map(pictures[p], size, border);
+        double worst = 0.0;
+        for (std::size_t i = 0; i < fast.fx.size(); ++i) {
+          const double tol_x = 1.2e-7 * std::abs(reference.fx[i]);  // float rounding (twice in suspend's margin)
+          const double tol_y = 1.2e-7 * std::abs(reference.fy[i]);
+          worst = std::max({worst, std::abs(fast.fx[i] - reference.fx[i]) - tol_x,
+                            std::abs(fast.fy[i] - reference.fy[i]) - tol_y});
+        }
+        if (p < 2) CHECK(worst <= 1e-12);  // exact up to float rounding
+        else CHECK(worst <= 1e-6);         // the double route, as for any picture
+      }
+    }
+  }
+}
+
+TEST_CASE("the AVX2 and baseline builds of a map band give the same planes") {
+  if (!detail::has_avx2()) {
+    WARN("this CPU has no AVX2: only the baseline band runs");
+    return;
+  }
+  const GrayImage gray = test_picture(200, 90, 3);
+  GrayImage levels = gray;
+  for (int y = 0; y < levels.height(); ++y)
+    for (int x = 0; x < levels.width(); ++x) levels.at(x, y) = std::round(gray.at(x, y));
+  for (const GrayImage* g : {&gray, static_cast<const GrayImage*>(&levels)}) {
+    for (double d : {0.0, 1.0}) {
+      if (d > 0.0 && g == &gray) continue;  // the integer route needs integer levels
+      ForceMap a{g->width(), g->height(), std::vector<float>(g->pixels().size()), std::vector<float>(g->pixels().size())};
+      ForceMap b = a;
+      const detail::PrewittBand band{g, 8, Border::reflect, 10.0, 1e-3, d, 0, g->width() - 1, g->height() - 1,
+                                     0, g->height() - 1, &a};
+      REQUIRE(detail::prewitt_band_baseline(band));
+      detail::PrewittBand other = band;
+      other.map = &b;
+      REQUIRE(detail::prewitt_band_avx2(other));
+      double worst = 0.0;
+      for (std::size_t i = 0; i < a.fx.size(); ++i)
+        worst = std::max({worst, std::abs(double(a.fx[i]) - b.fx[i]), std::abs(double(a.fy[i]) - b.fy[i])});
+      CAPTURE(d);
+      CHECK(worst <= (d > 0.0 ? 0.0 : 1e-6));  // integers: identical; double: FMA contraction may differ
+    }
+  }
+}
+
 TEST_CASE("the Prewitt map computed in bands on several threads equals one thread's") {
   const GrayImage gray = test_picture(257, 301, 33);
   for (Border border : {Border::suspend, Border::reflect, Border::fade}) {
@@ -328,6 +560,47 @@ TEST_CASE("a reused force map holds no stale values") {
     REQUIRE(reused.height == 70);
     REQUIRE(reused.fx == fresh.fx);
     REQUIRE(reused.fy == fresh.fy);
+  }
+}
+
+TEST_CASE("degenerate masks are refused at construction, every factory is normalisable") {
+  // sigma <= 0.026 px: every off-centre weight underflows to 0, the step
+  // response is 0 and forces would be 0 / 0 = NaN.
+  for (double sigma : {0.01, 0.025, 0.049, 1e-300}) {
+    CAPTURE(sigma);
+    CHECK_THROWS_WITH(Mask<>::gaussian(sigma, 5), Catch::Contains("at least 0.05") && Catch::Contains("sigma"));
+    CHECK_THROWS_AS(Mask<5>::gaussian(sigma), std::invalid_argument);
+    CHECK_THROWS_AS(TangibleImage(test_picture(40, 30, 1), {MaskKind::gaussian, 5, sigma}), std::invalid_argument);
+  }
+  CHECK_THROWS_AS(Mask<>::gaussian(infinity, 5), std::invalid_argument);
+  // At the smallest allowed sigma the mask is a central difference, finite
+  // and normalised: a black/white step still gives magnitude 1.
+  const Mask<> thin = Mask<>::gaussian(min_gaussian_sigma, 5);
+  CHECK(std::isnormal(thin.step_response()));
+  const TangibleImage image(step_picture(40, 30, 20), {MaskKind::gaussian, 5, min_gaussian_sigma, Border::clamp,
+                                                      default_fade_px, KernelChoice::direct});
+  CHECK(image.at_pixel(20, 15).x == Approx(1.0).epsilon(1e-12));
+  // Huge sigmas are flat Gaussians (Prewitt-like), never degenerate.
+  CHECK(std::isnormal(Mask<>::gaussian(1e200, 129).step_response()));
+  // Every factory at every allowed size: finite weights, a positive normal step response.
+  for (MaskKind kind : {MaskKind::prewitt, MaskKind::sobel, MaskKind::scharr, MaskKind::roberts, MaskKind::gaussian,
+                        MaskKind::emboss}) {
+    for (int size = 2; size <= max_mask_size; ++size) {
+      bool allowed = true;
+      try {
+        validate_mask_size(kind, size);
+      } catch (const std::invalid_argument&) {
+        allowed = false;
+      }
+      if (!allowed) continue;
+      CAPTURE(to_string(kind), size);
+      const Mask<> mask = Mask<>::make(kind, size);
+      CHECK(std::isnormal(mask.step_response()));
+      CHECK(mask.step_response() > 0.0);
+      bool finite = true;
+      for (double w : mask.x_weights()) finite = finite && std::isfinite(w);
+      CHECK(finite);
+    }
   }
 }
 
@@ -368,8 +641,8 @@ TEST_CASE("bad input: a clear error at setup, zero force at run time") {
       CHECK(image.at(bad, 10.0) == glm::dvec2{0.0});
       CHECK(image.at(10.0, bad) == glm::dvec2{0.0});
     }
-    CHECK(image.at(-1.0, 10.0) == glm::dvec2{0.0});
-    CHECK(image.at(40.0, 10.0) == glm::dvec2{0.0});
+    CHECK(image.at(-1.0 - default_fade_px, 10.0) == glm::dvec2{0.0});  // beyond the fade band
+    CHECK(image.at(39.0 + default_fade_px, 10.0) == glm::dvec2{0.0});
     CHECK(image.at(10.0, 1e300) == glm::dvec2{0.0});
     CHECK(image.at(-1e300, -1e300) == glm::dvec2{0.0});
     TangibleImageField<> field(image, PlaneMapping(1.0, {20.0, 15.0}), 2.0);

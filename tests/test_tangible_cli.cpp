@@ -135,6 +135,11 @@ TEST_CASE("bad input: one clear line on stderr and a non-zero exit") {
     std::ofstream out(bad_probes);
     out << "x,y\n1,2\nthree,4\n";
   }
+  const std::string huge = path_of("huge.png");  // a 45-byte PNG header declaring 20000 x 20000 px
+  {
+    std::ofstream out(huge, std::ios::binary);
+    out.write("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x4e\x20\0\0\x4e\x20\x08\0\0\0\0\0\0\0\0", 33);
+  }
   struct Case {
     std::string args;
     std::string says;
@@ -151,6 +156,10 @@ TEST_CASE("bad input: one clear line on stderr and a non-zero exit") {
       {picture + " --border wrap", "unknown border"},
       {picture + " --gray hdr", "unknown gray"},
       {picture + " --sigma -1 --mask gauss --size 5", "--sigma"},
+      {picture + " --mask gauss --sigma 0.01 --size 5", "sigma must be finite and at least 0.05 px"},
+      {huge, "20000 x 20000 px (400000000 px) is larger than the limit of 100000000 px"},
+      {picture + " --max-mpx 0.001", "is larger than the limit of 1000 px"},
+      {picture + " --max-mpx -1", "--max-mpx"},
       {picture + " --size five", "expects an integer"},
       {picture + " --probes " + bad_probes, "go together"},
       {picture + " --size 3 --probes " + bad_probes + " --forces " + path_of("f.csv"), ":3: expected 'x,y'"},

@@ -5,3 +5,4 @@
 #include "hapticfield/image/gray_image.hpp"
 #include "hapticfield/image/grayscale.hpp"
 #include "hapticfield/image/load.hpp"
+#include "hapticfield/image/picture_size.hpp"

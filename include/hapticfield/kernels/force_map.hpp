@@ -5,10 +5,13 @@
 /// running sums that matches the per-pixel kernels to float rounding.
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -18,7 +21,20 @@
 #include "hapticfield/kernels/border.hpp"
 #include "hapticfield/kernels/direct_kernel.hpp"
 #include "hapticfield/kernels/image_force.hpp"
+#include "hapticfield/kernels/integral_kernel.hpp"
 #include "hapticfield/kernels/mask.hpp"
+
+#if defined(__GNUC__) || defined(__clang__)
+#define HAPTICFIELD_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define HAPTICFIELD_ALWAYS_INLINE
+#endif
+#if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
+#define HAPTICFIELD_X86_DISPATCH 1
+#include <immintrin.h>
+#else
+#define HAPTICFIELD_X86_DISPATCH 0
+#endif
 
 namespace hapticfield {
 
@@ -60,29 +76,134 @@ template <class Source>
 
 namespace detail {
 
+/// Arithmetic of the map's running sums. double: the gray levels as they
+/// are. std::uint32_t: gray levels as exact integers Q = P D (see
+/// integral_kernel.hpp), summed modulo 2^32; the final force is exact as
+/// long as its true value fits 31 bits, which prewitt_force_map() checks.
+template <class T>
+struct MapArithmetic;
+
+template <>
+struct MapArithmetic<double> {
+  [[nodiscard]] static double value(double p, double, std::uint64_t&) noexcept { return p; }
+  [[nodiscard]] static double weight(int i) noexcept { return static_cast<double>(i); }
+  [[nodiscard]] static float out(double v, double scale) noexcept { return static_cast<float>(v * scale); }
+};
+
+template <>
+struct MapArithmetic<std::uint32_t> {
+  /// Q = round(p d), by the 1.5 * 2^52 trick (adding it leaves the rounded
+  /// integer in the low mantissa bits): no branch and no out-of-range cast,
+  /// so the conversion loop vectorises. bad gets non-zero bits when p d is
+  /// not an integer to 2^-21 (rounding p d 2^20 then disagrees with 2^20 Q),
+  /// lies outside [0, 255 d], or is NaN.
+  [[nodiscard]] static std::uint32_t value(double p, double d, std::uint64_t& bad) noexcept {
+    constexpr double magic = 6755399441055744.0;  // 1.5 * 2^52
+    const auto bits = std::bit_cast<std::uint64_t>(magic);
+    const double q = p * d;
+    // unsigned: any bit pattern (NaN, huge values) wraps instead of overflowing
+    const std::uint64_t k = std::bit_cast<std::uint64_t>(q + magic) - bits;
+    const std::uint64_t k20 = std::bit_cast<std::uint64_t>(q * 1048576.0 + magic) - bits;
+    bad |= (k20 - (k << 20)) | (k >> 31) | static_cast<std::uint64_t>(k > static_cast<std::uint64_t>(gray_full_scale * d));
+    return static_cast<std::uint32_t>(k);
+  }
+  [[nodiscard]] static std::uint32_t weight(int i) noexcept { return static_cast<std::uint32_t>(i); }
+  [[nodiscard]] static float out(std::uint32_t v, double scale) noexcept {
+    return static_cast<float>(static_cast<double>(static_cast<std::int32_t>(v)) * scale);
+  }
+};
+
+#if HAPTICFIELD_X86_DISPATCH
+/// Q = round((255 - p) d) for n contiguous levels, four at a time; returns
+/// non-zero when one is not an integer to integer_tolerance or lies outside
+/// [0, 255 d] (NaN included). The conversion is exact for integers whatever
+/// the rounding mode.
+__attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(const double* HAPTICFIELD_RESTRICT p, int n,
+                                                                         double d,
+                                                                         std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
+  const __m256d vd = _mm256_set1_pd(d);
+  const __m256d top = _mm256_set1_pd(gray_full_scale * d);
+  const __m256d tol = _mm256_set1_pd(integer_tolerance);
+  const __m256d low = _mm256_set1_pd(-integer_tolerance);
+  const __m256d high = _mm256_set1_pd(gray_full_scale * d + integer_tolerance);
+  const __m256d sign = _mm256_set1_pd(-0.0);
+  int bad = 0;
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const __m256d q = _mm256_sub_pd(top, _mm256_mul_pd(_mm256_loadu_pd(p + i), vd));
+    const __m128i k = _mm256_cvtpd_epi32(q);
+    const __m256d off = _mm256_andnot_pd(sign, _mm256_sub_pd(q, _mm256_cvtepi32_pd(k)));
+    const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(off, tol, _CMP_LE_OQ), _mm256_cmp_pd(q, low, _CMP_GE_OQ)),
+                                     _mm256_cmp_pd(q, high, _CMP_LE_OQ));
+    bad |= _mm256_movemask_pd(ok) ^ 0xF;
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), k);
+  }
+  std::uint64_t rest = 0;
+  for (; i < n; ++i) out[i] = MapArithmetic<std::uint32_t>::value(gray_full_scale - p[i], d, rest);
+  return static_cast<std::uint64_t>(bad) | rest;
+}
+#endif
+
 /// Inverted picture row `row`, columns c_first .. c_first + n - 1, extended
-/// past the picture's sides by the border policy, into out[q * stride].
-inline void inverted_padded_row(const GrayImage& gray, int row, int c_first, int n, Border border, double* out,
-                                int stride) {
+/// past the picture's sides by the border policy, into out[q * stride], in
+/// the arithmetic T (scale d for integers). Returns non-zero when a scaled
+/// value was not an integer (always 0 for double).
+template <class T, bool Avx2 = false>
+HAPTICFIELD_ALWAYS_INLINE inline std::uint64_t inverted_padded_row(const GrayImage& gray, int row, int c_first, int n,
+                                                                   Border border, T* HAPTICFIELD_RESTRICT out,
+                                                                   int stride, double d) {
+  using A = MapArithmetic<T>;
+  std::uint64_t worst = 0;
   const double* src = gray.row(row);
   const int w = gray.width();
   const int interior_begin = std::clamp(-c_first, 0, n);
   const int interior_end = std::clamp(w - c_first, interior_begin, n);
   for (int q = 0; q < interior_begin; ++q)
-    out[q * stride] = gray_full_scale - src[border_index(c_first + q, w, border)];
-  for (int q = interior_begin; q < interior_end; ++q) out[q * stride] = gray_full_scale - src[c_first + q];
-  for (int q = interior_end; q < n; ++q) out[q * stride] = gray_full_scale - src[border_index(c_first + q, w, border)];
+    out[q * stride] = A::value(gray_full_scale - src[border_index(c_first + q, w, border)], d, worst);
+  bool done = false;
+#if HAPTICFIELD_X86_DISPATCH
+  if constexpr (Avx2 && std::is_same_v<T, std::uint32_t>) {
+    if (stride == 1) {
+      worst |= convert_levels_avx2(src + c_first + interior_begin, interior_end - interior_begin, d,
+                                   out + interior_begin);
+      done = true;
+    }
+  }
+#endif
+  if (done) {
+  } else if (stride == 1) {  // contiguous: vectorises
+    const double* HAPTICFIELD_RESTRICT in = src + c_first;
+    for (int q = interior_begin; q < interior_end; ++q) out[q] = A::value(gray_full_scale - in[q], d, worst);
+  } else {
+    for (int q = interior_begin; q < interior_end; ++q)
+      out[q * stride] = A::value(gray_full_scale - src[c_first + q], d, worst);
+  }
+  for (int q = interior_end; q < n; ++q)
+    out[q * stride] = A::value(gray_full_scale - src[border_index(c_first + q, w, border)], d, worst);
+  return worst;
 }
 
-/// Sets every pixel of the map outside [x0, x1] x [y0, y1] to zero.
-inline void zero_outside(ForceMap& map, int x0, int x1, int y0, int y1) {
+/// Fills every pixel of the map outside [x0, x1] x [y0, y1] with the force
+/// of the nearest pixel inside, faded linearly to zero over fade_px of
+/// Euclidean distance: what ImageForce::at_pixel() gives there.
+inline void extend_outside(ForceMap& map, int x0, int x1, int y0, int y1, double fade_px) {
   for (int y = 0; y < map.height; ++y) {
     float* fx = &map.fx[map.index(0, y)];
     float* fy = &map.fy[map.index(0, y)];
+    const int py = std::clamp(y, y0, y1);
+    const float* sx = &map.fx[map.index(0, py)];
+    const float* sy = &map.fy[map.index(0, py)];
     const bool whole = y < y0 || y > y1;
     for (int x = 0; x < map.width; ++x) {
-      if (whole || x < x0 || x > x1) fx[x] = fy[x] = 0.0f;
-      else x = x1;  // skip the interior
+      if (!whole && x >= x0 && x <= x1) {
+        x = x1;  // skip the interior
+        continue;
+      }
+      const int px = std::clamp(x, x0, x1);
+      const double d = std::hypot(double(x - px), double(y - py));  // [px]
+      const double g = d < fade_px ? 1.0 - d / fade_px : 0.0;
+      fx[x] = static_cast<float>(g * sx[px]);
+      fy[x] = static_cast<float>(g * sy[px]);
     }
   }
 }
@@ -96,79 +217,91 @@ namespace detail {
 /// (fx); with fx, fy given, also writes the row scaled by `scale`. A function
 /// of its own so the compiler sees the restrict-qualified parameters and
 /// vectorises the loop.
-inline void slide_columns(double* HAPTICFIELD_RESTRICT box, double* HAPTICFIELD_RESTRICT ramp,
-                          double* HAPTICFIELD_RESTRICT moment, const double* HAPTICFIELD_RESTRICT in0,
-                          const double* HAPTICFIELD_RESTRICT out0, const double* HAPTICFIELD_RESTRICT in1,
-                          const double* HAPTICFIELD_RESTRICT out1, int n, double h, float* HAPTICFIELD_RESTRICT fx,
-                          float* HAPTICFIELD_RESTRICT fy, double scale) noexcept {
+template <class T>
+HAPTICFIELD_ALWAYS_INLINE inline void slide_columns(T* HAPTICFIELD_RESTRICT box, T* HAPTICFIELD_RESTRICT ramp,
+                                                    T* HAPTICFIELD_RESTRICT moment, const T* HAPTICFIELD_RESTRICT in0,
+                                                    const T* HAPTICFIELD_RESTRICT out0, const T* HAPTICFIELD_RESTRICT in1,
+                                                    const T* HAPTICFIELD_RESTRICT out1, int n, T h,
+                                                    float* HAPTICFIELD_RESTRICT fx, float* HAPTICFIELD_RESTRICT fy,
+                                                    double scale) noexcept {
+  using A = MapArithmetic<T>;
+  const T h1 = h + T(1);
   if (fx == nullptr) {
     for (int x = 0; x < n; ++x) {
-      const double b = box[x] + (in0[x] - out0[x]);
+      const T b = box[x] + (in0[x] - out0[x]);
       box[x] = b;
-      ramp[x] += h * out0[x] + (h + 1.0) * in0[x] - b;
+      ramp[x] += h * out0[x] + h1 * in0[x] - b;
       moment[x] += in1[x] - out1[x];
     }
     return;
   }
   for (int x = 0; x < n; ++x) {
-    const double b = box[x] + (in0[x] - out0[x]);
-    const double r = ramp[x] + (h * out0[x] + (h + 1.0) * in0[x] - b);
-    const double m = moment[x] + (in1[x] - out1[x]);
+    const T b = box[x] + (in0[x] - out0[x]);
+    const T r = ramp[x] + (h * out0[x] + h1 * in0[x] - b);
+    const T m = moment[x] + (in1[x] - out1[x]);
     box[x] = b;
     ramp[x] = r;
     moment[x] = m;
-    fx[x] = static_cast<float>(m * scale);
-    fy[x] = static_cast<float>(r * scale);
+    fx[x] = A::out(m, scale);
+    fy[x] = A::out(r, scale);
   }
 }
 
 /// Output rows y_first .. y_last of the Prewitt map; the output region is
 /// [lo, x_hi] x [lo, y_hi]. See prewitt_force_map().
-inline void prewitt_band(const GrayImage& gray, int h, Border border, double fade_px, double scale, int lo, int x_hi,
-                         int y_hi, int y_first, int y_last, ForceMap& map) {
+template <class T>
+HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_in(const GrayImage& gray, int h, Border border, double fade_px,
+                                                      double scale, double d, int lo, int x_hi, int y_hi, int y_first,
+                                                      int y_last, ForceMap& map) {
+  using A = MapArithmetic<T>;
   const int height = gray.height();
   const int n_out = x_hi - lo + 1;
   const int n_in = n_out + 2 * h;
   const int r_last = y_last + h;
 
   // Ring of horizontal results: rows y - h - 1 .. y + h + 3 are alive at once.
-  constexpr int batch = 4;
+  constexpr int batch = 32 / static_cast<int>(sizeof(T));  // one 256-bit vector of rows
   const int ring = 2 * h + 2 + batch;
-  std::vector<double> h0(static_cast<std::size_t>(ring) * n_out);
-  std::vector<double> h1(h0.size());
-  const auto h0_row = [&](int r) { return &h0[static_cast<std::size_t>((r + ring * 4) % ring) * n_out]; };
-  const auto h1_row = [&](int r) { return &h1[static_cast<std::size_t>((r + ring * 4) % ring) * n_out]; };
+  std::vector<T> h0(static_cast<std::size_t>(ring) * n_out);
+  std::vector<T> h1(h0.size());
+  const auto h0_row = [&](int r) HAPTICFIELD_ALWAYS_INLINE {
+    return &h0[static_cast<std::size_t>((r + ring * 4) % ring) * n_out];
+  };
+  const auto h1_row = [&](int r) HAPTICFIELD_ALWAYS_INLINE {
+    return &h1[static_cast<std::size_t>((r + ring * 4) % ring) * n_out];
+  };
 
   // Horizontal pass for rows r .. r + k - 1 (k <= batch). The rows are
   // interleaved (column q of row b at q * batch + b) so the running sums of
   // the batch advance together in vector registers.
-  std::vector<double> rows(static_cast<std::size_t>(batch) * n_in, 0.0);
-  const auto horizontal = [&](int r, int k) {
+  std::vector<T> rows(static_cast<std::size_t>(batch) * n_in, T(0));
+  const auto horizontal = [&](int r, int k) HAPTICFIELD_ALWAYS_INLINE {
     for (int b = 0; b < k; ++b)
-      detail::inverted_padded_row(gray, detail::border_index(r + b, height, border), lo - h, n_in, border,
-                                  &rows[b], batch);
-    double s[batch] = {};
-    double m1[batch] = {};
+      (void)detail::inverted_padded_row<T>(gray, detail::border_index(r + b, height, border), lo - h, n_in, border,
+                                           &rows[b], batch, d);
+    T s[batch] = {};
+    T m1[batch] = {};
     for (int q = 0; q <= 2 * h; ++q)
       for (int b = 0; b < batch; ++b) {
         s[b] += rows[q * batch + b];
-        m1[b] += (q - h) * rows[q * batch + b];
+        m1[b] += A::weight(q - h) * rows[q * batch + b];
       }
-    double* o0[batch] = {};
-    double* o1[batch] = {};
+    T* o0[batch] = {};
+    T* o1[batch] = {};
     for (int b = 0; b < k; ++b) {
       o0[b] = h0_row(r + b);
       o1[b] = h1_row(r + b);
       o0[b][0] = s[b];
       o1[b][0] = m1[b];
     }
-    const double hh = h;
+    const T hh = A::weight(h);
+    const T hh1 = A::weight(h + 1);
     for (int i = 1; i < n_out; ++i) {
-      const double* leaving = &rows[static_cast<std::size_t>(i - 1) * batch];
-      const double* entering = &rows[static_cast<std::size_t>(i + 2 * h) * batch];
+      const T* leaving = &rows[static_cast<std::size_t>(i - 1) * batch];
+      const T* entering = &rows[static_cast<std::size_t>(i + 2 * h) * batch];
       for (int b = 0; b < batch; ++b) {
         s[b] += entering[b] - leaving[b];
-        m1[b] += hh * leaving[b] + (hh + 1.0) * entering[b] - s[b];  // sum of j P(x + j), from x - 1
+        m1[b] += hh * leaving[b] + hh1 * entering[b] - s[b];  // sum of j P(x + j), from x - 1
       }
       for (int b = 0; b < k; ++b) {
         o0[b][i] = s[b];
@@ -177,7 +310,7 @@ inline void prewitt_band(const GrayImage& gray, int h, Border border, double fad
     }
   };
   int computed = y_first - h;  // next row without a horizontal result
-  const auto ensure = [&](int r) {
+  const auto ensure = [&](int r) HAPTICFIELD_ALWAYS_INLINE {
     while (computed <= r) {
       const int k = std::min(batch, r_last - computed + 1);
       horizontal(computed, k);
@@ -187,26 +320,27 @@ inline void prewitt_band(const GrayImage& gray, int h, Border border, double fad
 
   // Vertical pass. box = sum of H0 over the window, ramp = sum of i H0(y + i)
   // (fy), moment = sum of H1(y + i) (fx).
-  std::vector<double> box(static_cast<std::size_t>(n_out), 0.0);
-  std::vector<double> ramp(static_cast<std::size_t>(n_out), 0.0);
-  std::vector<double> moment(static_cast<std::size_t>(n_out), 0.0);
+  std::vector<T> box(static_cast<std::size_t>(n_out), T(0));
+  std::vector<T> ramp(static_cast<std::size_t>(n_out), T(0));
+  std::vector<T> moment(static_cast<std::size_t>(n_out), T(0));
   ensure(y_first + h);
   for (int i = -h; i <= h; ++i) {
-    const double* a = h0_row(y_first + i);
-    const double* b = h1_row(y_first + i);
+    const T* a = h0_row(y_first + i);
+    const T* b = h1_row(y_first + i);
+    const T wi = A::weight(i);
     for (int x = 0; x < n_out; ++x) {
       box[x] += a[x];
-      ramp[x] += i * a[x];
+      ramp[x] += wi * a[x];
       moment[x] += b[x];
     }
   }
-  const double hh = h;
+  const T hh = A::weight(h);
   for (int y = y_first; y <= y_last; ++y) {
     float* fx = &map.fx[map.index(lo, y)];
     float* fy = &map.fy[map.index(lo, y)];
-    double* bx = box.data();
-    double* rp = ramp.data();
-    double* mo = moment.data();
+    T* bx = box.data();
+    T* rp = ramp.data();
+    T* mo = moment.data();
     const bool fade = border == Border::fade;
     if (y > y_first) {  // slide the window down: row y - 1 - h leaves, row y + h enters
       ensure(y + h);
@@ -219,16 +353,290 @@ inline void prewitt_band(const GrayImage& gray, int h, Border border, double fad
       for (int x = 0; x < n_out; ++x) {
         const double inside = std::min(row_inside, static_cast<double>(std::min(x, n_out - 1 - x)));
         const double g = scale * std::clamp(inside / fade_px, 0.0, 1.0);
-        fx[x] = static_cast<float>(mo[x] * g);
-        fy[x] = static_cast<float>(rp[x] * g);
+        fx[x] = A::out(mo[x], g);
+        fy[x] = A::out(rp[x], g);
       }
     } else {
       for (int x = 0; x < n_out; ++x) {
-        fx[x] = static_cast<float>(mo[x] * scale);
-        fy[x] = static_cast<float>(rp[x] * scale);
+        fx[x] = A::out(mo[x], scale);
+        fy[x] = A::out(rp[x], scale);
       }
     }
   }
+  return true;
+}
+
+/// Prefix sums of one row for the integer route: c0[t + 1] = sum of b[0..t],
+/// d0[t + 1] = sum of s b[s], c1[t + 1] = sum of r[0..t] (modulo 2^32).
+HAPTICFIELD_ALWAYS_INLINE inline void prefix_sums_scalar(const std::uint32_t* HAPTICFIELD_RESTRICT b,
+                                                         const std::uint32_t* HAPTICFIELD_RESTRICT r, std::size_t n,
+                                                         std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                         std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                         std::uint32_t* HAPTICFIELD_RESTRICT c1, std::size_t from = 0,
+                                                         std::uint32_t s0 = 0, std::uint32_t sd = 0,
+                                                         std::uint32_t s1 = 0) noexcept {
+  for (std::size_t t = from; t < n; ++t) {
+    s0 += b[t];
+    sd += static_cast<std::uint32_t>(t) * b[t];
+    s1 += r[t];
+    c0[t + 1] = s0;
+    d0[t + 1] = sd;
+    c1[t + 1] = s1;
+  }
+}
+
+#if HAPTICFIELD_X86_DISPATCH
+/// Inclusive prefix sum of eight uint32 lanes, plus carry.
+__attribute__((target("avx2"), always_inline)) inline __m256i scan8(__m256i x, __m256i carry) noexcept {
+  x = _mm256_add_epi32(x, _mm256_slli_si256(x, 4));
+  x = _mm256_add_epi32(x, _mm256_slli_si256(x, 8));
+  const __m256i low_total = _mm256_shuffle_epi32(x, 0xFF);                        // element 3 of each half
+  x = _mm256_add_epi32(x, _mm256_permute2x128_si256(low_total, low_total, 0x08));  // into the upper half only
+  return _mm256_add_epi32(x, carry);
+}
+
+/// The same with AVX2: an in-register scan of eight sums at a time (two
+/// shifted adds per 128-bit half, then the lower half's total carried into
+/// the upper half and the running total into both).
+__attribute__((target("avx2"))) inline void prefix_sums_avx2(const std::uint32_t* HAPTICFIELD_RESTRICT b,
+                                                             const std::uint32_t* HAPTICFIELD_RESTRICT r,
+                                                             std::size_t n, std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                             std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                             std::uint32_t* HAPTICFIELD_RESTRICT c1) noexcept {
+  const __m256i last = _mm256_set1_epi32(7);
+  __m256i k0 = _mm256_setzero_si256();
+  __m256i kd = _mm256_setzero_si256();
+  __m256i k1 = _mm256_setzero_si256();
+  __m256i index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i eight = _mm256_set1_epi32(8);
+  std::size_t t = 0;
+  for (; t + 8 <= n; t += 8) {
+    const __m256i vb = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + t));
+    const __m256i vr = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + t));
+    const __m256i s0 = scan8(vb, k0);
+    const __m256i sd = scan8(_mm256_mullo_epi32(vb, index), kd);
+    const __m256i s1 = scan8(vr, k1);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(c0 + t + 1), s0);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(d0 + t + 1), sd);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(c1 + t + 1), s1);
+    k0 = _mm256_permutevar8x32_epi32(s0, last);
+    kd = _mm256_permutevar8x32_epi32(sd, last);
+    k1 = _mm256_permutevar8x32_epi32(s1, last);
+    index = _mm256_add_epi32(index, eight);
+  }
+  prefix_sums_scalar(b, r, n, c0, d0, c1, t, c0[t], d0[t], c1[t]);
+}
+#endif
+
+/// One output row of the integer route: for x in [0, n_out), the window
+/// t in [x, x + 2h] of the prefix sums gives box = dc0, fx = dd0 - (x + h) box,
+/// fy = dc1, each an exact int32 scaled to float with one rounding.
+HAPTICFIELD_ALWAYS_INLINE inline void integer_output_scalar(const std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                            const std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                            const std::uint32_t* HAPTICFIELD_RESTRICT c1, int h,
+                                                            int from, int n_out, double scale,
+                                                            float* HAPTICFIELD_RESTRICT fx,
+                                                            float* HAPTICFIELD_RESTRICT fy) noexcept {
+  using U = std::uint32_t;
+  const int width = 2 * h + 1;
+  for (int x = from; x < n_out; ++x) {
+    const U box = c0[x + width] - c0[x];
+    const U mx = (d0[x + width] - d0[x]) - static_cast<U>(x + h) * box;  // sum of (t - centre) V0(t)
+    const U my = c1[x + width] - c1[x];
+    fx[x] = MapArithmetic<U>::out(mx, scale);
+    fy[x] = MapArithmetic<U>::out(my, scale);
+  }
+}
+
+#if HAPTICFIELD_X86_DISPATCH
+/// Eight uint32 from memory, unaligned.
+__attribute__((target("avx2"), always_inline)) inline __m256i load8(const std::uint32_t* p) noexcept {
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+}
+
+/// Eight exact int32 forces to float, through double (one rounding).
+__attribute__((target("avx2"), always_inline)) inline __m256 scale8(__m256i v, __m256d scale) noexcept {
+  const __m128 lo = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_cvtepi32_pd(_mm256_castsi256_si128(v)), scale));
+  const __m128 hi = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_cvtepi32_pd(_mm256_extracti128_si256(v, 1)), scale));
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+}
+
+/// integer_output_scalar() eight pixels at a time. Where the rows allow,
+/// the planes are written with non-temporal stores: the map is larger than
+/// the caches and is not read back here, so this saves reading every
+/// output line before writing it. The caller issues the store fence.
+__attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                                const std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                                const std::uint32_t* HAPTICFIELD_RESTRICT c1, int h,
+                                                                int n_out, double scale,
+                                                                float* HAPTICFIELD_RESTRICT fx,
+                                                                float* HAPTICFIELD_RESTRICT fy) noexcept {
+  const int width = 2 * h + 1;
+  // Head: up to the first x where both rows are 32-byte aligned (they are
+  // equally misaligned when the planes were allocated alike).
+  int x = 0;
+  const bool same_phase = ((reinterpret_cast<std::uintptr_t>(fx) ^ reinterpret_cast<std::uintptr_t>(fy)) & 31u) == 0;
+  if (same_phase)
+    while (x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 31u) != 0) ++x;
+  else
+    x = n_out;  // unusual layout: scalar throughout
+  integer_output_scalar(c0, d0, c1, h, 0, x, scale, fx, fy);
+  const __m256d vs = _mm256_set1_pd(scale);
+  __m256i centre = _mm256_add_epi32(_mm256_set1_epi32(x + h), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  const __m256i eight = _mm256_set1_epi32(8);
+  for (; x + 8 <= n_out; x += 8) {
+    const __m256i box = _mm256_sub_epi32(load8(c0 + x + width), load8(c0 + x));
+    const __m256i mx = _mm256_sub_epi32(_mm256_sub_epi32(load8(d0 + x + width), load8(d0 + x)),
+                                        _mm256_mullo_epi32(centre, box));
+    const __m256i my = _mm256_sub_epi32(load8(c1 + x + width), load8(c1 + x));
+    _mm256_stream_ps(fx + x, scale8(mx, vs));
+    _mm256_stream_ps(fy + x, scale8(my, vs));
+    centre = _mm256_add_epi32(centre, eight);
+  }
+  integer_output_scalar(c0, d0, c1, h, x, n_out, scale, fx, fy);
+}
+#endif
+
+/// The integer route for one band: vertical first, then prefix sums along
+/// the row. Down the columns, V0 = sum of Q over the window's rows (running,
+/// vectorised across the row) and V1 = sum of i Q(y + i) (a running ramp).
+/// Along the row, prefix sums C0, D0 (of t V0(t)) and C1 give, for a window
+/// [x - h, x + h], box = dC0, fx = dD0 - x box and fy = dC1: one dependent
+/// add per table and element, the rest vectorised. All modulo 2^32 (see
+/// MapArithmetic<std::uint32_t>). Returns false when a gray level was not
+/// an integer in the fixed point d.
+template <bool Avx2>
+HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray, int h, Border border, double fade_px,
+                                                           double scale, double d, int lo, int x_hi, int y_hi,
+                                                           int y_first, int y_last, ForceMap& map) {
+  using U = std::uint32_t;
+  using A = MapArithmetic<U>;
+  const int height = gray.height();
+  const int n_out = x_hi - lo + 1;
+  const int n_in = n_out + 2 * h;
+  const std::size_t n = static_cast<std::size_t>(n_in);
+  const int ring = 2 * h + 2;  // rows y - h - 1 .. y + h
+  std::vector<U> q(static_cast<std::size_t>(ring) * n);
+  const auto q_row = [&](int r) HAPTICFIELD_ALWAYS_INLINE {
+    return &q[static_cast<std::size_t>(((r % ring) + ring) % ring) * n];
+  };
+  std::uint64_t bad = 0;  // non-zero once a scaled gray level was not an integer
+  const auto convert = [&](int r) HAPTICFIELD_ALWAYS_INLINE {
+    bad |= inverted_padded_row<U, Avx2>(gray, border_index(r, height, border), lo - h, n_in, border, q_row(r), 1, d);
+  };
+  std::vector<U> v0(n, 0u);
+  std::vector<U> v1(n, 0u);
+  for (int i = -h; i <= h; ++i) {
+    convert(y_first + i);
+    const U* HAPTICFIELD_RESTRICT row = q_row(y_first + i);
+    U* HAPTICFIELD_RESTRICT b = v0.data();
+    U* HAPTICFIELD_RESTRICT r = v1.data();
+    const U wi = A::weight(i);
+    for (std::size_t t = 0; t < n; ++t) {
+      b[t] += row[t];
+      r[t] += wi * row[t];
+    }
+  }
+  std::vector<U> c0(n + 1, 0u);
+  std::vector<U> d0(n + 1, 0u);
+  std::vector<U> c1(n + 1, 0u);
+  const U hh = A::weight(h);
+  const int width = 2 * h + 1;
+  for (int y = y_first; y <= y_last; ++y) {
+    if (y > y_first) {  // row y - 1 - h leaves the window, row y + h enters
+      convert(y + h);
+      const U* HAPTICFIELD_RESTRICT in = q_row(y + h);
+      const U* HAPTICFIELD_RESTRICT out = q_row(y - 1 - h);
+      U* HAPTICFIELD_RESTRICT b = v0.data();
+      U* HAPTICFIELD_RESTRICT r = v1.data();
+      for (std::size_t t = 0; t < n; ++t) {
+        const U box = b[t] + (in[t] - out[t]);
+        b[t] = box;
+        r[t] += hh * (out[t] + in[t]) + in[t] - box;  // h out + (h + 1) in - box, one multiply
+      }
+    }
+#if HAPTICFIELD_X86_DISPATCH
+    if constexpr (Avx2) prefix_sums_avx2(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+    else prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+#else
+    prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+#endif
+    float* HAPTICFIELD_RESTRICT fx = &map.fx[map.index(lo, y)];
+    float* HAPTICFIELD_RESTRICT fy = &map.fy[map.index(lo, y)];
+    const U* HAPTICFIELD_RESTRICT pc0 = c0.data();
+    const U* HAPTICFIELD_RESTRICT pd0 = d0.data();
+    const U* HAPTICFIELD_RESTRICT pc1 = c1.data();
+    if (border != Border::fade) {
+#if HAPTICFIELD_X86_DISPATCH
+      if constexpr (Avx2) integer_output_avx2(pc0, pd0, pc1, h, n_out, scale, fx, fy);
+      else integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
+#else
+      integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
+#endif
+    } else {
+      const double row_inside = std::min(y - lo, y_hi - y);
+      for (int x = 0; x < n_out; ++x) {
+        const U box = pc0[x + width] - pc0[x];
+        const U mx = (pd0[x + width] - pd0[x]) - static_cast<U>(x + h) * box;
+        const U my = pc1[x + width] - pc1[x];
+        const double inside = std::min(row_inside, static_cast<double>(std::min(x, n_out - 1 - x)));
+        const double g = scale * std::clamp(inside / fade_px, 0.0, 1.0);
+        fx[x] = A::out(mx, g);
+        fy[x] = A::out(my, g);
+      }
+    }
+  }
+#if HAPTICFIELD_X86_DISPATCH
+  if constexpr (Avx2) _mm_sfence();  // the non-temporal stores are visible before the band returns
+#endif
+  return bad == 0;
+}
+
+/// Arguments of one band of the Prewitt map.
+struct PrewittBand {
+  const GrayImage* gray;
+  int h;
+  Border border;
+  double fade_px;
+  double scale;  ///< [1 / (gray level D)] to the normalised force
+  double d;      ///< fixed-point scale of integer arithmetic; 0 for double
+  int lo, x_hi, y_hi, y_first, y_last;
+  ForceMap* map;
+};
+
+/// Returns false when the integer arithmetic met a non-integer level.
+template <bool Avx2>
+HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_any(const PrewittBand& a) {
+  if (a.d > 0.0)
+    return prewitt_band_integer<Avx2>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi, a.y_first,
+                                a.y_last, *a.map);
+  return prewitt_band_in<double>(*a.gray, a.h, a.border, a.fade_px, a.scale, 1.0, a.lo, a.x_hi, a.y_hi, a.y_first,
+                                 a.y_last, *a.map);
+}
+
+/// The band for baseline x86-64 (or any other target).
+inline bool prewitt_band_baseline(const PrewittBand& a) { return prewitt_band_any<false>(a); }
+
+#if HAPTICFIELD_X86_DISPATCH
+/// The same code compiled for AVX2 (8 integer or 4 double lanes), chosen at
+/// run time when the CPU has it.
+__attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand& a) { return prewitt_band_any<true>(a); }
+#endif
+
+/// True when the CPU runs prewitt_band_avx2().
+[[nodiscard]] inline bool has_avx2() noexcept {
+#if HAPTICFIELD_X86_DISPATCH
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+inline bool prewitt_band(const PrewittBand& a) {
+#if HAPTICFIELD_X86_DISPATCH
+  if (has_avx2()) return prewitt_band_avx2(a);
+#endif
+  return prewitt_band_baseline(a);
 }
 
 }  // namespace detail
@@ -242,7 +650,8 @@ inline void prewitt_band(const GrayImage& gray, int h, Border border, double fad
 /// Rows live in a small ring buffer, so memory traffic stays near one read
 /// of the picture and one write of the map. `threads` > 1 splits the rows
 /// into bands computed in parallel (setup work, never a servo tick). Equals
-/// force_map() of TangibleImage{prewitt, size, border} to float rounding.
+/// force_map() of TangibleImage{prewitt, size, border} to float rounding,
+/// the edge fades of ImageForce included.
 /// @throws std::invalid_argument as TangibleImage, or for threads < 1.
 inline void prewitt_force_map(const GrayImage& gray, int size, Border border, ForceMap& map,
                               double fade_px = default_fade_px, int threads = 1) {
@@ -255,6 +664,12 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
   const int width = gray.width();
   const int height = gray.height();
   const double scale = 1.0 / Mask<>::prewitt(size).step_response();
+  // Exact 32-bit integer sums when the picture's levels are integers in a
+  // small fixed point (see integral_kernel.hpp) and the force fits 31 bits.
+  // Each band checks every level as it converts it; if one is not an
+  // integer after all, the map is computed again in double.
+  const double guess = detail::guess_fixed_point_scale(gray);
+  const bool integer = guess > 0.0 && guess * gray_full_scale * size * h * (h + 1.0) < 2147483648.0;
 
   map.width = width;
   map.height = height;
@@ -266,29 +681,35 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
   const int lo = full_mask ? h : 0;
   const int x_hi = full_mask ? width - 1 - h : width - 1;
   const int y_hi = full_mask ? height - 1 - h : height - 1;
-  if (full_mask) detail::zero_outside(map, lo, x_hi, lo, y_hi);
 
   constexpr int min_band_rows = 64;
   const int rows = y_hi - lo + 1;
   const int bands = std::max(1, std::min(threads, rows / min_band_rows));
-  std::vector<std::thread> workers;
-  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(bands));
-  for (int band = bands - 1; band >= 0; --band) {
-    const int first = lo + static_cast<int>(static_cast<long>(rows) * band / bands);
-    const int last = lo + static_cast<int>(static_cast<long>(rows) * (band + 1) / bands) - 1;
-    auto work = [&, band, first, last] {
-      try {
-        detail::prewitt_band(gray, h, border, fade_px, scale, lo, x_hi, y_hi, first, last, map);
-      } catch (...) {
-        errors[static_cast<std::size_t>(band)] = std::current_exception();
-      }
-    };
-    if (band == 0) work();
-    else workers.emplace_back(work);
-  }
-  for (std::thread& w : workers) w.join();
-  for (const std::exception_ptr& e : errors)
-    if (e) std::rethrow_exception(e);
+  const auto run = [&](double d) {
+    std::vector<std::thread> workers;
+    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(bands));
+    std::vector<char> exact(static_cast<std::size_t>(bands), 1);
+    for (int band = bands - 1; band >= 0; --band) {
+      const int first = lo + static_cast<int>(static_cast<long>(rows) * band / bands);
+      const int last = lo + static_cast<int>(static_cast<long>(rows) * (band + 1) / bands) - 1;
+      auto work = [&, band, first, last] {
+        try {
+          exact[static_cast<std::size_t>(band)] = detail::prewitt_band(
+              {&gray, h, border, fade_px, d > 0.0 ? scale / d : scale, d, lo, x_hi, y_hi, first, last, &map});
+        } catch (...) {
+          errors[static_cast<std::size_t>(band)] = std::current_exception();
+        }
+      };
+      if (band == 0) work();
+      else workers.emplace_back(work);
+    }
+    for (std::thread& w : workers) w.join();
+    for (const std::exception_ptr& e : errors)
+      if (e) std::rethrow_exception(e);
+    return std::all_of(exact.begin(), exact.end(), [](char ok) { return ok != 0; });
+  };
+  if (!run(integer ? guess : 0.0)) (void)run(0.0);
+  if (full_mask) detail::extend_outside(map, lo, x_hi, lo, y_hi, fade_px);
 }
 
 /// The Prewitt map in a new ForceMap; see the overload that writes into one.

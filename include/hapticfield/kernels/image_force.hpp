@@ -4,7 +4,8 @@
 /// kernel. Integer coordinates are pixel centres; between them the four
 /// surrounding pixel forces are interpolated bilinearly, so a HIP moving
 /// slowly never feels a step. The border policy decides what lies beyond the
-/// region where the mask fits.
+/// region where the mask fits, and every policy fades the force out over a
+/// band at the edge, so leaving the picture is no step either.
 
 #include <algorithm>
 #include <cmath>
@@ -29,13 +30,31 @@ concept PixelKernel = requires(const K& k, int x, int y) {
   { k.border() } -> std::same_as<Border>;
 };
 
-/// Default width of the fade ramp for Border::fade [px].
-inline constexpr double default_fade_px = 8.0;
+/// Default width of the band over which the force fades to zero at the
+/// edge of the evaluated region, for every border policy [px]. A hand at
+/// 0.1 m/s on a 6.4 px/mm picture moves 0.64 px per 1 kHz tick; the fade
+/// alone then changes the force by at most 0.64 / 10 = 6.4% of the edge
+/// force per tick, below the 7% force JND.
+inline constexpr double default_fade_px = 10.0;
 
+/// Force at any continuous image position, continuous along any path,
+/// leaving the picture included.
+///
+/// The kernel is evaluated in a domain of pixel centres: the picture for
+/// clamp and reflect, the pixels where the whole mask fits for suspend and
+/// fade. Inside it, forces are interpolated bilinearly. Beyond it, every
+/// policy carries the force of the nearest domain point outward and fades
+/// it linearly to zero over fade_px [px] (Euclidean distance to the
+/// domain), so no path meets a step:
+///   - clamp, reflect: the edge force, faded over fade_px outside the picture;
+///   - suspend: the paper's region; the last full-mask force fades over
+///     fade_px beyond it (into the picture's margin, then outside);
+///   - fade: ramps to zero over the last fade_px inside the full-mask region
+///     and is zero everywhere beyond it.
 template <PixelKernel Kernel>
 class ImageForce {
  public:
-  /// @param fade_px  ramp width for Border::fade [px], finite and > 0
+  /// @param fade_px  width of the fade band [px], finite and > 0
   /// @throws std::invalid_argument for a bad fade width.
   explicit ImageForce(Kernel kernel, double fade_px = default_fade_px)
       : kernel_(std::move(kernel)), fade_px_(fade_px) {
@@ -58,32 +77,42 @@ class ImageForce {
 
   /// Normalised force at image position (x, y) [px] (x right, y down): a
   /// black/white step edge gives magnitude 1 toward black. Zero for
-  /// non-finite positions, outside the picture, and where the border policy
-  /// suspends the force.
+  /// non-finite positions and from fade_px beyond the domain on (see the
+  /// class comment).
   [[nodiscard]] glm::dvec2 at(double x, double y) const noexcept {
     if (!std::isfinite(x) || !std::isfinite(y)) return glm::dvec2{0.0};
-    if (x < -0.5 || y < -0.5 || x > kernel_.width() - 0.5 || y > kernel_.height() - 0.5) return glm::dvec2{0.0};
-    const double xf = std::floor(x);
-    const double yf = std::floor(y);
+    const double cx = std::clamp(x, double(x_lo_), double(x_hi_));
+    const double cy = std::clamp(y, double(y_lo_), double(y_hi_));
+    double outside = 1.0;  // fade beyond the domain
+    if (cx != x || cy != y) {
+      const double d = std::hypot(x - cx, y - cy);  // [px] to the nearest domain point
+      if (!(d < fade_px_)) return glm::dvec2{0.0};
+      outside = 1.0 - d / fade_px_;
+    }
+    const double xf = std::floor(cx);
+    const double yf = std::floor(cy);
     const int x0 = static_cast<int>(xf);
     const int y0 = static_cast<int>(yf);
-    const double tx = x - xf;
-    const double ty = y - yf;
+    const double tx = cx - xf;
+    const double ty = cy - yf;
     glm::dvec2 f{0.0};
     f += corner(x0, y0, (1.0 - tx) * (1.0 - ty));
     f += corner(x0 + 1, y0, tx * (1.0 - ty));
     f += corner(x0, y0 + 1, (1.0 - tx) * ty);
     f += corner(x0 + 1, y0 + 1, tx * ty);
-    if (kernel_.border() == Border::fade) f *= fade(x, y);
-    return f;
+    if (kernel_.border() == Border::fade) f *= fade(cx, cy);
+    return outside * f;
   }
 
   /// Normalised force at the centre of pixel (x, y) exactly as the border
-  /// policy defines it (fade included): what at(x, y) returns there.
+  /// policy defines it (both fades included): what at(x, y) returns there.
   [[nodiscard]] glm::dvec2 at_pixel(int x, int y) const noexcept {
-    glm::dvec2 f = corner(x, y, 1.0);
-    if (kernel_.border() == Border::fade) f *= fade(x, y);
-    return f;
+    if (in_domain(x, y)) {
+      glm::dvec2 f = kernel_.at_pixel(x, y);
+      if (kernel_.border() == Border::fade) f *= fade(x, y);
+      return f;
+    }
+    return at(x, y);
   }
 
   [[nodiscard]] const Kernel& kernel() const noexcept { return kernel_; }
@@ -96,12 +125,10 @@ class ImageForce {
   }
 
  private:
+  /// One bilinear corner; (x, y) lies in the domain whenever weight != 0.
   [[nodiscard]] glm::dvec2 corner(int x, int y, double weight) const noexcept {
     if (weight == 0.0) return glm::dvec2{0.0};
-    if (in_domain(x, y)) return weight * kernel_.at_pixel(x, y);
-    if (needs_full_mask(kernel_.border())) return glm::dvec2{0.0};
-    // clamp / reflect: only the half-pixel fringe of the picture lands here.
-    return weight * kernel_.at_pixel(std::clamp(x, x_lo_, x_hi_), std::clamp(y, y_lo_, y_hi_));
+    return weight * kernel_.at_pixel(x, y);
   }
 
   /// Linear ramp from 0 at the last pixel where the mask fits to 1 at

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -35,6 +36,20 @@ inline constexpr int dynamic_size = 0;
 inline constexpr int min_mask_size = 3;    ///< smallest odd mask [px]
 inline constexpr int max_mask_size = 129;  ///< largest mask [px]
 inline constexpr int max_sobel_size = 31;  ///< largest Sobel aperture (as OpenCV) [px]
+/// Smallest Gaussian-derivative sigma [px]. Below it the off-centre weights
+/// shrink toward underflow (every one is 0 for sigma <= 0.026 px, and the
+/// mask would divide by a zero step response); at 0.05 px the weight one
+/// pixel off centre is exp(-200) ~ 1e-87, still a normal double.
+inline constexpr double min_gaussian_sigma = 0.05;
+
+namespace detail {
+/// A number as "%g" prints it (0.05, 1e-300), for error messages.
+[[nodiscard]] inline std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+}  // namespace detail
 
 /// Name of a mask kind as the command-line tools spell it.
 [[nodiscard]] constexpr const char* to_string(MaskKind kind) noexcept {
@@ -112,10 +127,13 @@ class Mask {
 
   /// First derivative of a Gaussian of standard deviation sigma [px]:
   /// x weight = (c - centre) exp(-((c - centre)^2 + (r - centre)^2) / (2 sigma^2)).
-  /// @throws std::invalid_argument for a sigma that is not finite and positive.
+  /// @throws std::invalid_argument for a sigma that is not finite or is below
+  ///         min_gaussian_sigma (the message gives the allowed range).
   [[nodiscard]] static Mask gaussian(double sigma, int size = Size) {
-    if (!std::isfinite(sigma) || sigma <= 0.0)
-      throw std::invalid_argument("mask gauss: sigma must be finite and positive [px], got " + std::to_string(sigma));
+    if (!std::isfinite(sigma) || sigma < min_gaussian_sigma)
+      throw std::invalid_argument("mask gauss: sigma must be finite and at least " + detail::short_number(min_gaussian_sigma) +
+                                  " px (smaller sigmas make every off-centre weight underflow to 0), got " +
+                                  detail::short_number(sigma));
     const double two_sigma2 = 2.0 * sigma * sigma;
     return build(MaskKind::gaussian, size, [&](int r, int c, int a) {
       const double dc = c - a;
@@ -155,7 +173,8 @@ class Mask {
 
   /// Response to an ideal black/white step edge across the mask centre on the
   /// inverted image: 255 times the sum of the positive x weights. Dividing by
-  /// it makes that edge a force of magnitude 1 toward black.
+  /// it makes that edge a force of magnitude 1 toward black. Every factory
+  /// guarantees it is finite and positive.
   [[nodiscard]] double step_response() const noexcept { return step_response_; }
 
  private:
@@ -173,14 +192,23 @@ class Mask {
     if constexpr (Size == dynamic_size) mask.x_.assign(static_cast<std::size_t>(size) * size, 0.0);
     const int a = size / 2;
     double positive = 0.0;
+    bool finite = true;
     for (int r = 0; r < size; ++r) {
       for (int c = 0; c < size; ++c) {
         const double w = weight(r, c, a);
         mask.x_[r * size + c] = w;
+        finite = finite && std::isfinite(w);
         if (w > 0.0) positive += w;
       }
     }
     mask.step_response_ = gray_full_scale * positive;
+    // A mask whose positive weights sum to 0 (all underflowed) or overflow
+    // would normalise by 0 or infinity: NaN forces. Refuse it here.
+    if (!finite || !std::isnormal(mask.step_response_) || !std::isnormal(1.0 / mask.step_response_))
+      throw std::invalid_argument(std::string("mask ") + to_string(kind) + " " + std::to_string(size) + " x " +
+                                  std::to_string(size) +
+                                  ": the weights degenerate (non-finite, or the positive weights sum to " +
+                                  std::to_string(positive) + "); no force can be normalised");
     return mask;
   }
 
