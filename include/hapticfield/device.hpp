@@ -7,10 +7,13 @@
 
 #include "hapticfield/device/firmware_loopback.hpp"
 #include "hapticfield/device/force_arm.hpp"
+#include "hapticfield/device/inverse3.hpp"
+#include "hapticfield/device/inverse3_codec.hpp"
 #include "hapticfield/device/kinematics.hpp"
 #include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/recording.hpp"
 #include "hapticfield/device/simulated_arm.hpp"
+#include "hapticfield/device/simulated_inverse3.hpp"
 #include "hapticfield/device/simulated_transport.hpp"
 #include "hapticfield/device/simulated_woody.hpp"
 #include "hapticfield/device/state.hpp"

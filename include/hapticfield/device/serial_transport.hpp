@@ -4,8 +4,11 @@
 /// as a Teensy or an RP2040, a UART adapter, a pseudo-terminal), POSIX only.
 /// The port is put in raw mode, non-blocking, VMIN = 0 and VTIME = 0. Bytes
 /// are cut into frames by a fixed StreamFramer: this protocol's reports
-/// (found by id and CRC, resynchronising after garbage), or '\n'-terminated
-/// text lines for text-protocol arms. Nothing allocates after construction.
+/// (found by id and CRC, resynchronising after garbage), '\n'-terminated
+/// text lines for text-protocol arms, or fixed-size frames for binary
+/// request/reply arms (set_frame_size() between exchanges; a read that
+/// waits and times out mid-frame drops the partial frame). Nothing
+/// allocates after construction.
 ///
 /// Per call read() does one read(2) (and a poll(2) with zero timeout only
 /// when that read returned nothing, to tell an idle port from a hung-up
@@ -27,6 +30,7 @@
 #include <cstring>
 #include <span>
 #include <string>
+#include <string_view>
 
 #include "hapticfield/device/device_error.hpp"
 #include "hapticfield/device/protocol.hpp"
@@ -39,6 +43,7 @@ namespace hapticfield {
 struct SerialConfig {
   Framing framing{Framing::reports};  ///< binary reports, or text lines
   std::size_t max_line{256};          ///< longest text line [bytes] (line framing)
+  std::size_t frame_size{0};          ///< frame size [bytes] (fixed framing; 0: set later with set_frame_size)
   int baud{115200};                   ///< line rate [baud] (USB CDC ignores it)
   int feature_timeout_us{200000};     ///< longest wait for a feature reply [us] (setup only)
 };
@@ -55,6 +60,9 @@ class SerialTransport final : public Transport {
       : config_(config), framer_(config.framing, config.max_line) {
     if (config_.max_line < 1 || config_.max_line >= buffer_capacity)
       throw std::invalid_argument("SerialConfig: max_line must be 1..1023 [bytes]");
+    if (config_.frame_size > buffer_capacity / 2)
+      throw std::invalid_argument("SerialConfig: frame_size must be 0..512 [bytes]");
+    if (config_.framing == Framing::fixed) framer_.set_frame_size(config_.frame_size);
     if (config_.feature_timeout_us < 1 || config_.feature_timeout_us > 10'000'000)
       throw std::invalid_argument("SerialConfig: feature_timeout_us must be 1..1e7 [us]");
     const speed_t speed = to_speed(config_.baud);
@@ -90,10 +98,13 @@ class SerialTransport final : public Transport {
   }
 
   /// Next complete frame (report or line); no_data when none is complete.
-  /// timeout_us > 0 waits up to that long for bytes.
+  /// timeout_us > 0 waits up to that long for bytes. Fixed framing waits
+  /// up to timeout_us for a whole frame, and when the wait ends mid-frame
+  /// drops the partial frame (counted as skipped) and returns timeout.
   Status read(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept override {
     if (disconnected_) return Status::disconnected;
     if (framer_.next(buffer, size) == Status::ok) return Status::ok;
+    if (config_.framing == Framing::fixed && timeout_us > 0) return read_fixed(buffer, size, timeout_us);
     if (const Status s = fill(timeout_us); s == Status::disconnected) return s;
     return framer_.next(buffer, size) == Status::ok ? Status::ok : Status::no_data;
   }
@@ -135,6 +146,17 @@ class SerialTransport final : public Transport {
     std::size_t size = 0;
     return await(report[0], reply, size, false);
   }
+
+  /// Fixed framing: frames of n bytes (1..512) from now on; pending bytes
+  /// are dropped. unsupported in the other framings.
+  Status set_frame_size(std::size_t n) noexcept override {
+    if (config_.framing != Framing::fixed) return Status::unsupported;
+    if (n < 1 || !framer_.set_frame_size(n)) return Status::bad_value;
+    return Status::ok;
+  }
+  std::size_t drop_pending() noexcept override { return framer_.drop_pending(); }
+  [[nodiscard]] std::size_t pending() const noexcept override { return framer_.pending(); }
+  [[nodiscard]] std::string_view where() const noexcept override { return path_; }
 
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
   [[nodiscard]] bool disconnected() const noexcept { return disconnected_; }
@@ -186,6 +208,22 @@ class SerialTransport final : public Transport {
     if (n > 0) { framer_.commit(static_cast<std::size_t>(n)); return Status::ok; }
     if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return gone();
     return Status::no_data;
+  }
+
+  /// Fixed framing, waiting: fills until a whole frame is there or the
+  /// deadline passes (setup and request/reply exchanges, not the servo path).
+  Status read_fixed(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept {
+    using clock = std::chrono::steady_clock;
+    const auto deadline = clock::now() + std::chrono::microseconds(timeout_us);
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::microseconds>(deadline - clock::now()).count();
+      if (left <= 0) break;
+      if (fill(static_cast<int>(left)) == Status::disconnected) return Status::disconnected;
+      if (framer_.next(buffer, size) == Status::ok) return Status::ok;
+    }
+    if (framer_.pending() == 0) return Status::no_data;
+    framer_.drop_pending();  // timed out mid-frame: the rest will never line up
+    return Status::timeout;
   }
 
   Status gone() noexcept {

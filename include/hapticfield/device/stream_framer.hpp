@@ -9,6 +9,13 @@
 ///     complete valid frame follows it (then the head was a stray byte).
 ///   - lines: '\n'-terminated text lines (the '\n' removed, NUL padding
 ///     stripped), at most max_line bytes; longer lines are dropped whole.
+///   - fixed: every frame is the next N bytes (binary request/reply
+///     protocols whose replies carry no length or checksum). N is set with
+///     set_frame_size() between exchanges; nothing in the bytes can show a
+///     boundary, so the owner resynchronises: drop_pending() throws away a
+///     partial frame (SerialTransport does it when a waiting read times out
+///     mid-frame; a request/reply device does it when every request has
+///     its reply and bytes are still left over).
 /// Fixed storage, no allocation, no exceptions: the firmware core and the
 /// host's SerialTransport both use it (docs/device-protocol.md, "Serial
 /// framing").
@@ -28,6 +35,7 @@ namespace hapticfield {
 enum class Framing : std::uint8_t {
   reports,  ///< binary reports of this protocol, found by id and CRC
   lines,    ///< '\n'-terminated text lines
+  fixed,    ///< frames of a fixed size N (set_frame_size), no boundary marks
 };
 
 /// Counts of what a StreamFramer met.
@@ -69,7 +77,29 @@ class StreamFramer {
   /// Takes the next complete frame (or line) into out and sets size: ok, or
   /// no_data while none is complete.
   Status next(std::span<std::uint8_t> out, std::size_t& size) noexcept {
+    if (framing_ == Framing::fixed) return next_fixed(out, size);
     return framing_ == Framing::lines ? next_line(out, size) : next_report(out, size);
+  }
+
+  /// Fixed framing: frames of n bytes from now on (1..Capacity/2; 0: none,
+  /// next() returns no_data). Pending bytes are dropped (counted as
+  /// skipped): they belonged to the previous exchange. False when n is out
+  /// of range (nothing changes).
+  bool set_frame_size(std::size_t n) noexcept {
+    if (n > Capacity / 2) return false;
+    drop_pending();
+    frame_size_ = n;
+    return true;
+  }
+  [[nodiscard]] std::size_t frame_size() const noexcept { return frame_size_; }
+
+  /// Drops every pending byte (counted as skipped): resynchronisation of a
+  /// fixed-size stream. Returns how many bytes went.
+  std::size_t drop_pending() noexcept {
+    const std::size_t n = end_ - begin_;
+    counters_.skipped += n;
+    begin_ = end_ = 0;
+    return n;
   }
 
   /// Drops every pending byte (counted as overflow): a full buffer that
@@ -110,6 +140,19 @@ class StreamFramer {
       std::memcpy(out.data(), frame.data(), need);
       size = need;
       begin_ += need;
+      ++counters_.frames;
+      return Status::ok;
+    }
+    return Status::no_data;
+  }
+
+  Status next_fixed(std::span<std::uint8_t> out, std::size_t& size) noexcept {
+    while (frame_size_ != 0 && end_ - begin_ >= frame_size_) {
+      const std::size_t at = begin_;
+      begin_ += frame_size_;
+      if (frame_size_ > out.size()) { counters_.overflow += frame_size_; continue; }  // caller's buffer too small
+      std::memcpy(out.data(), buffer_.data() + at, frame_size_);
+      size = frame_size_;
       ++counters_.frames;
       return Status::ok;
     }
@@ -168,6 +211,7 @@ class StreamFramer {
   FramerCounters counters_{};
   Framing framing_;
   std::size_t max_line_;
+  std::size_t frame_size_{0};  ///< fixed framing [bytes]; 0: none set
   bool dropping_{false};
 };
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string_view>
 
 #include "hapticfield/device/status.hpp"
 
@@ -39,6 +40,24 @@ class Transport {
 
   /// Sends one feature report (the first byte is the report id).
   virtual Status send_feature(std::span<const std::uint8_t> report) noexcept = 0;
+
+  // Byte-stream transports with fixed-size framing (Framing::fixed) also
+  // implement the three calls below; the others keep these defaults.
+
+  /// Every later read() returns frames of n bytes; pending bytes are
+  /// dropped. unsupported when the transport has no fixed framing, bad_value
+  /// when n is out of its range.
+  virtual Status set_frame_size(std::size_t n) noexcept {
+    (void)n;
+    return Status::unsupported;
+  }
+  /// Drops received bytes not yet returned as a frame (resynchronisation);
+  /// returns how many.
+  virtual std::size_t drop_pending() noexcept { return 0; }
+  /// Bytes received but not yet returned as a frame.
+  [[nodiscard]] virtual std::size_t pending() const noexcept { return 0; }
+  /// Where the transport leads (a tty path), for messages; empty if unknown.
+  [[nodiscard]] virtual std::string_view where() const noexcept { return {}; }
 };
 
 }  // namespace hapticfield
