@@ -4,7 +4,7 @@
 //
 //   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
 //              [--realtime off|best_effort|enforce] [--trace OUT.csv] [--plots DIR]
-//              [--device sim|hid[:VID:PID]|serial:PATH|woody:p1|p2|p4[:PRESET][:sim|:PATH]]
+//              [--device sim|hid[:VID:PID]|serial:PATH|woody:p1|p2|p4[:PRESET][:sim|:PATH]|inverse3:PATH]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -29,6 +29,7 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
 #include "hapticfield/kernels.hpp"
+#include "hapticfield/device/inverse3.hpp"
 #include "hapticfield/device/serial_transport.hpp"
 #include "hapticfield/servo.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
@@ -66,7 +67,8 @@ constexpr const char* usage_text =
     "                        tty such as /dev/ttyACM0): our protocol; woody:GEN[:PRESET][:sim|:PATH]:\n"
     "                        a WoodenHaptics arm, GEN p1 or p2 (USB HID) or p4 (serial text, on the\n"
     "                        tty PATH), PRESET woody_v2015 (default), woodenhaptics_v2019,\n"
-    "                        aluhaptics_v2 or vintage; :sim simulates it\n"
+    "                        aluhaptics_v2 or vintage; :sim simulates it; inverse3:PATH: a Haply\n"
+    "                        Inverse3 on the tty PATH (never run on a real one: check its frame)\n"
     "  -h, --help            this text\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
 
@@ -108,6 +110,7 @@ bool valid_device(const std::string& d) {
   WoodySpec woody_spec;
   if (d == "sim" || d == "hid" || parse_woody(d, woody_spec)) return true;
   if (d.rfind("serial:", 0) == 0) return d.size() > 7;
+  if (d.rfind("inverse3:", 0) == 0) return d.size() > 9;
   if (d.rfind("hid:", 0) != 0) return false;
   const std::string ids = d.substr(4);
   const auto colon = ids.find(':');
@@ -139,8 +142,8 @@ Options parse(cli::Parser& p) {
     } else if (p.is("--device")) {
       o.device = p.value();
       if (!valid_device(o.device))
-        usage("--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), serial:PATH or "
-              "woody:p1|p2|p4[:PRESET][:sim|:PATH], got '" + o.device + "'");
+        usage("--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), serial:PATH, "
+              "woody:p1|p2|p4[:PRESET][:sim|:PATH] or inverse3:PATH, got '" + o.device + "'");
     } else if (p.positional() && !image_given) {
       o.image = p.token();
       image_given = true;
@@ -281,6 +284,13 @@ void print_link(const ForceArm& device) {
               static_cast<unsigned long long>(link.corrupt), static_cast<unsigned long long>(link.resyncs),
               static_cast<unsigned long long>(link.commands));
 }
+void print_link(const Inverse3& device) {
+  const Inverse3Counters& c = device.counters();
+  std::printf("link: %llu replies, %llu implausible, %llu resyncs, %llu bytes dropped, %llu lost, %llu commands\n",
+              static_cast<unsigned long long>(c.replies), static_cast<unsigned long long>(c.implausible),
+              static_cast<unsigned long long>(c.resyncs), static_cast<unsigned long long>(c.dropped_bytes),
+              static_cast<unsigned long long>(c.lost_replies), static_cast<unsigned long long>(c.commands));
+}
 void print_link(const WoodyArm& device) {
   const WoodyCounters& c = device.counters();
   std::printf("link: %llu replies, %llu with firmware error bits, %llu malformed, %llu commands\n",
@@ -306,6 +316,12 @@ int run(const Options& o) {
   const auto scan = [&](glm::dvec3 centre) {
     return HandPath::raster(centre + glm::dvec3{0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
   };
+
+  if (o.device.rfind("inverse3:", 0) == 0) {
+    SerialTransport port(o.device.substr(9), SerialConfig{.framing = Framing::fixed});
+    Inverse3 device(port);  // throws hapticfield::Error naming the port when it stays silent
+    return run_demo(o, device, field, clock, true);
+  }
 
   WoodySpec woody_spec;
   if (parse_woody(o.device, woody_spec)) {

@@ -224,6 +224,7 @@ TEST_CASE("unknown flags, flags without a value, stray arguments: exit 2") {
       {"servo_demo", {"--device", "usb"}, usage, "--device"},
       {"servo_demo", {"--device", "hid:12345:1"}, usage, "--device"},
       {"servo_demo", {"--device", "serial:"}, usage, "--device"},
+      {"servo_demo", {"--device", "inverse3:"}, usage, "--device"},
       {"servo_demo", {"--device", "woody:p9:sim"}, usage, "--device"},
       {"servo_demo", {"--device", "woody:p4:polhem_v3:sim"}, usage, "--device"},
       {"servo_demo", {"--device", "woody:p1:/dev/ttyACM0"}, usage, "--device"},
@@ -327,6 +328,7 @@ TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
   cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.missing}, bad_input, "no serial port"});
   cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.plain_file}, bad_input, "not a serial port"});
   cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "woody:p4:" + b.folder}, bad_input, "cannot open"});
+  cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "inverse3:" + b.missing}, bad_input, "no serial port"});
   // output paths, checked before any work
   const std::string no_dir = in_tmp("no/such/dir/out.csv");
   const std::string under_file = b.plain_file + "/sub";
