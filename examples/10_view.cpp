@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <functional>
@@ -405,6 +406,9 @@ int run_view(const Options& o, D& device, F& field, LiveField<AnyField>& live, S
 
 int run(const Options& o) {
   const cv::Mat picture = to_bgr8(cli::quiet_stderr([&] { return load_image(o.source); }));
+  if (o.screenshot.empty() && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
+    throw Error("no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "
+                "--seconds S");
   const PlaneMapping mapping = PlaneMapping::fit(picture.cols, picture.rows, 80.0);  // the picture spans 80 mm
   StillPicture source(picture);
   Scene scene = build_scene(source.frame(), o.scene, mapping);

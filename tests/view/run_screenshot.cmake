@@ -58,3 +58,10 @@ if(NOT found)
   message(FATAL_ERROR "hapticfield_view (sim) did not say where the probe was: ${out}")
 endif()
 check_shot(${WORK_DIR}/sim.png ${CMAKE_MATCH_1},${CMAKE_MATCH_2})
+
+# no display and no --screenshot: one clear line, exit 1, no crash
+execute_process(COMMAND ${CMAKE_COMMAND} -E env --unset=DISPLAY --unset=WAYLAND_DISPLAY ${VIEW} ${PICTURE}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "^hapticfield_view: no display")
+  message(FATAL_ERROR "without a display: exit ${rc}, '${err}'")
+endif()
