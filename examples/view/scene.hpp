@@ -124,8 +124,9 @@ class StillPicture {
 namespace detail {
 
 inline AnyField tangible(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping, cv::Mat& underlay) {
-  cv::Mat source = frame;
+  cv::Mat source;  // a new buffer: the frame itself is never blurred in place
   if (c.denoise_px > 0.0) cv::GaussianBlur(frame, source, cv::Size(), c.denoise_px);
+  else source = frame;
   TangibleOptions options;
   options.mask = c.mask;
   options.size = c.size;
