@@ -41,6 +41,9 @@ const std::map<std::string, std::string> tools = {
     {"texture_gallery", HAPTICFIELD_TOOL_TEXTURE_GALLERY},
     {"false_texture", HAPTICFIELD_TOOL_FALSE_TEXTURE},
     {"two_arms", HAPTICFIELD_TOOL_TWO_ARMS},
+#ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
+    {"hapticfield_view", HAPTICFIELD_TOOL_HAPTICFIELD_VIEW},
+#endif
 };
 
 constexpr int ok = 0;
@@ -412,3 +415,69 @@ TEST_CASE("good input at the edges of the ranges gives the right result") {
     }
   }
 }
+
+#ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
+TEST_CASE("hapticfield_view: bad command lines exit 2, bad pictures and paths exit 1, before any window") {
+  const BadFiles b = make_bad_files();
+  const std::string picture = make_step_picture();
+  const std::string shot = in_tmp("view.png");
+  // every case fails before a window could open; were one accepted, it
+  // would draw off-screen and exit 0 (and fail here) instead of opening one
+  const std::vector<std::string> offscreen = {"--seconds", "0.01", "--screenshot", shot};
+  std::vector<Case> cases = {
+      {"hapticfield_view", {}, usage, "missing SOURCE"},
+      {"hapticfield_view", {picture, "--bogus"}, usage, "unknown option"},
+      {"hapticfield_view", {picture, "--seconds"}, usage, "needs a value"},
+      {"hapticfield_view", {picture, "--field", "lava"}, usage, "unknown field"},
+      {"hapticfield_view", {picture, "--mask", "fancy"}, usage, "unknown mask"},
+      {"hapticfield_view", {picture, "--border", "wrap"}, usage, "unknown border"},
+      {"hapticfield_view", {picture, "--realtime", "sometimes"}, usage, "unknown real-time mode"},
+      {"hapticfield_view", {picture, "--device", "usb"}, usage, "--device"},
+      {"hapticfield_view", {picture, "--device", "hid:12345:1"}, usage, "--device"},
+      {"hapticfield_view", {picture, picture}, usage, "unexpected argument"},
+      {"hapticfield_view", {picture, "--screenshot", shot}, usage, "--screenshot needs --seconds"},
+      {"hapticfield_view", {picture, "--field", "normals"}, usage, "needs at least one --face"},
+      {"hapticfield_view", {picture, "--face", "1,2 3,4"}, usage, "4 corners"},
+      {"hapticfield_view", {picture, "--size", "4"}, usage, "does not suit mask prewitt"},
+      {"hapticfield_view", {picture, "--mask", "sobel", "--size", "33"}, usage, "odd 3..31"},
+      {"hapticfield_view", {picture, "--mask", "roberts", "--size", "3"}, usage, "(2)"},
+      {"hapticfield_view", {picture, "--seconds", "0.0001"}, usage, "the minimum is 0.0005 s"},
+      {"hapticfield_view", {picture, "--seconds", "3601"}, usage, "(0, 3600]"},
+      {"hapticfield_view", {picture, "--rate", "10001"}, usage, "[1, 10000]"},
+  };
+  const auto with_offscreen = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), picture);
+    return args;
+  };
+  add_numeric(cases, "hapticfield_view", {picture, "--screenshot", shot}, "--seconds");
+  add_numeric(cases, "hapticfield_view", with_offscreen({}), "--rate", {}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({}), "--size", {}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({}), "--denoise", {"0"}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({}), "--gain", {"0"}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({"--field", "texture"}), "--grain", {}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({"--field", "texture"}), "--texture-gain", {"0"}, "", "",
+              offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({"--field", "normals", "--face", face}), "--focal", {}, "", "",
+              offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({}), "--start", {"0", "-1", " 3"}, "", ",20", offscreen);
+  add_numeric(cases, "hapticfield_view", with_offscreen({"--field", "normals"}), "--face", {"0", "-1", " 3"}, "",
+              ",10 50,10 50,30 10,30", offscreen);
+  // bad pictures, output paths, and faces no camera can see: exit 1
+  for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_png, b.text_png}) {
+    std::vector<std::string> args = {file};
+    args.insert(args.end(), offscreen.begin(), offscreen.end());
+    cases.push_back({"hapticfield_view", args, bad_input, file});
+  }
+  cases.push_back({"hapticfield_view", {picture, "--seconds", "0.01", "--screenshot", in_tmp("no/such/dir/v.png")},
+                   bad_input, "--screenshot"});
+  cases.push_back({"hapticfield_view", {picture, "--seconds", "0.01", "--screenshot", b.folder}, bad_input,
+                   "--screenshot"});
+  cases.push_back({"hapticfield_view", {picture, "--shots", b.plain_file + "/sub"}, bad_input, "--shots"});
+  cases.push_back({"hapticfield_view",
+                   {picture, "--field", "normals", "--face", "10,10 20,20 30,30 40,40", "--seconds", "0.01",
+                    "--screenshot", shot},
+                   bad_input, "face 1"});
+  for (const Case& c : cases) check_error(c);
+  CHECK_FALSE(fs::exists(shot));  // no case drew anything
+}
+#endif

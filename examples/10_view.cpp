@@ -1,0 +1,466 @@
+// hapticfield_view: a live window showing what the arm feels. The picture
+// (or the field's own underlay: normals faces, a texture patch) with the
+// probe as a cursor and the force as an arrow, the loop's rate, jitter,
+// missed deadlines and safety events, and a rolling scope of Fx, Fy, |F|.
+// The probe follows the mouse (forces shown, not felt), the simulated arm's
+// scripted hand, or a real arm. The servo loop runs on its own thread and
+// never waits for drawing: ticks hand samples to the window through a
+// lock-free ring, the window hands new fields to the loop through a
+// LiveField. --screenshot draws the same view off-screen (no display).
+//
+//   hapticfield_view SOURCE [--field tangible|normals|texture] [field options]
+//       [--device mouse|sim|hid[:VID:PID]] [--screenshot OUT.png --seconds S]
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/highgui.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/cli.hpp"
+#include "hapticfield/core.hpp"
+#include "hapticfield/device.hpp"
+#include "hapticfield/image.hpp"
+#include "hapticfield/servo.hpp"
+#include "view/mouse_device.hpp"
+#include "view/sample_ring.hpp"
+#include "view/scene.hpp"
+#include "view/scope.hpp"
+#include "view/view_frame.hpp"
+#if HAPTICFIELD_EXAMPLE_HID
+#include "hapticfield/device/hid_transport.hpp"
+#endif
+
+using namespace hapticfield;
+using namespace hapticfield::view;
+
+namespace {
+
+constexpr const char* usage_text =
+    "usage: hapticfield_view SOURCE [options]\n"
+    "A live window showing what the arm feels: the picture under the probe, the probe as a\n"
+    "cursor, the force as an arrow, a rolling scope of Fx, Fy, |F| and the loop's timing and\n"
+    "safety events. The servo loop runs on its own thread and never waits for drawing.\n"
+    "  SOURCE               picture file (any format OpenCV reads)\n"
+    "  --field F            tangible (default), normals or texture\n"
+    "tangible images:\n"
+    "  --mask M             prewitt (default), sobel, scharr, roberts, gauss or emboss\n"
+    "  --size M             mask size [px]: odd 3..129 (sobel 3..31, scharr 3, roberts 2)\n"
+    "  --border B           suspend, clamp, reflect or fade (default)\n"
+    "  --denoise SIGMA      blur the picture first, sigma [px] in [0, 20] (default 0: none)\n"
+    "  --gain N             force at a black/white edge [N], in [0, 10] (default 1)\n"
+    "normals from a picture (Kim & Kwon):\n"
+    "  --face CORNERS       \"x1,y1 x2,y2 x3,y3 x4,y4\" [px] around a planar face; repeat per face\n"
+    "  --focal F            focal length [px] in [1, 1e6] (default: a 60 degree field of view)\n"
+    "stochastic texture:\n"
+    "  --grain MM           Gaussian lattice spacing [mm], in [0.1, 50] (default 2)\n"
+    "  --texture-gain N     force per texture unit [N], in [0, 5] (default 0.5)\n"
+    "probe and loop:\n"
+    "  --device D           mouse (default: forces shown, not felt), sim (the simulated arm's\n"
+    "                       scripted hand raster-scans the picture) or hid[:VID:PID] (a real arm)\n"
+    "  --start X,Y          the mouse probe's position before the pointer moves [px]\n"
+    "                       (default: the picture's centre)\n"
+    "  --rate HZ            servo rate [Hz], in [1, 10000] (default 1000)\n"
+    "  --realtime R         off, best_effort (default) or enforce\n"
+    "  --seconds S          stop after S [s], in (0, 3600] (window: default until q or Esc)\n"
+    "  --screenshot OUT.png draw the view off-screen after --seconds and write it; no window\n"
+    "  --shots DIR          where the s key saves screenshots (default: the current folder)\n"
+    "  -h, --help           this text\n"
+    "Keys: f field, m mask, + / - size (texture: grain), b border, d denoise, space pause and\n"
+    "[ ] seek (moving pictures), s screenshot, q or Esc quit.\n"
+    "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
+
+struct Options {
+  std::string source;
+  SceneConfig scene;
+  std::string device{"mouse"};
+  std::optional<glm::dvec2> start;
+  double rate{1000.0};
+  RealTime realtime{RealTime::best_effort};
+  std::optional<double> seconds;
+  std::string screenshot;
+  std::string shots{"."};
+};
+
+[[noreturn]] void usage(const std::string& error) { throw cli::UsageError(error); }
+
+bool valid_device(const std::string& d) {
+  if (d == "mouse" || d == "sim" || d == "hid") return true;
+  if (d.rfind("hid:", 0) != 0) return false;
+  const std::string ids = d.substr(4);
+  const auto colon = ids.find(':');
+  if (colon == std::string::npos) return false;
+  const auto hex = [](const std::string& t) {
+    return !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos;
+  };
+  return hex(ids.substr(0, colon)) && hex(ids.substr(colon + 1));
+}
+
+/// "x1,y1 x2,y2 x3,y3 x4,y4": four finite corners.
+std::vector<glm::dvec2> parse_face(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<glm::dvec2> corners;
+  std::string pair;
+  while (in >> pair) {
+    const auto [x, y] = cli::parse_pair(pair, "--face", cli::closed(-1e6, 1e6));
+    corners.emplace_back(x, y);
+  }
+  if (corners.size() != 4) usage("--face expects 4 corners \"x1,y1 x2,y2 x3,y3 x4,y4\", got " + std::to_string(corners.size()));
+  return corners;
+}
+
+Options parse(cli::Parser& p) {
+  Options o;
+  bool size_given = false;
+  while (p.next()) {
+    if (p.is("--field")) {
+      o.scene.kind = p.choice<FieldKind>(
+          "field", {{"tangible", FieldKind::tangible}, {"normals", FieldKind::normals}, {"texture", FieldKind::texture}});
+    } else if (p.is("--mask")) {
+      o.scene.mask = p.choice<MaskKind>("mask", {{"prewitt", MaskKind::prewitt}, {"sobel", MaskKind::sobel},
+                                                 {"scharr", MaskKind::scharr}, {"roberts", MaskKind::roberts},
+                                                 {"gauss", MaskKind::gaussian}, {"emboss", MaskKind::emboss}});
+    } else if (p.is("--size")) {
+      o.scene.size = static_cast<int>(p.integer(2, 129));
+      size_given = true;
+    } else if (p.is("--border")) {
+      o.scene.border = p.choice<Border>("border", {{"suspend", Border::suspend}, {"clamp", Border::clamp},
+                                                   {"reflect", Border::reflect}, {"fade", Border::fade}});
+    } else if (p.is("--denoise")) {
+      o.scene.denoise_px = p.real(cli::closed(0.0, 20.0));
+    } else if (p.is("--gain")) {
+      o.scene.gain = p.real(cli::closed(0.0, 10.0));
+    } else if (p.is("--face")) {
+      o.scene.faces.push_back(parse_face(p.value()));
+    } else if (p.is("--focal")) {
+      o.scene.focal_px = p.real(cli::closed(1.0, 1e6));
+    } else if (p.is("--grain")) {
+      o.scene.grain_mm = p.real(cli::closed(0.1, 50.0));
+    } else if (p.is("--texture-gain")) {
+      o.scene.texture_gain = p.real(cli::closed(0.0, 5.0));
+    } else if (p.is("--device")) {
+      o.device = p.value();
+      if (!valid_device(o.device))
+        usage("--device must be mouse, sim, hid or hid:VID:PID with hexadecimal ids, got '" + o.device + "'");
+    } else if (p.is("--start")) {
+      const auto [x, y] = p.pair(cli::closed(-1e6, 1e6));
+      o.start = glm::dvec2{x, y};
+    } else if (p.is("--rate")) {
+      o.rate = p.real(cli::closed(min_servo_rate, max_servo_rate));
+    } else if (p.is("--realtime")) {
+      o.realtime = p.choice<RealTime>(
+          "real-time mode", {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
+    } else if (p.is("--seconds")) {
+      o.seconds = p.real(cli::open_closed(0.0, 3600.0));
+    } else if (p.is("--screenshot")) {
+      o.screenshot = p.output_file();
+    } else if (p.is("--shots")) {
+      o.shots = p.output_dir();
+    } else if (p.positional() && o.source.empty()) {
+      o.source = p.token();
+    } else {
+      p.unknown();
+    }
+  }
+  if (o.source.empty()) usage("missing SOURCE (a picture file)");
+  if (!o.screenshot.empty() && !o.seconds) usage("--screenshot needs --seconds (how long the loop runs first)");
+  if (o.seconds && std::llround(*o.seconds * o.rate) < 1) {
+    char text[160];
+    std::snprintf(text, sizeof text, "--seconds %g is less than one tick at %g Hz; the minimum is %g s", *o.seconds,
+                  o.rate, 0.5 / o.rate);
+    usage(text);
+  }
+  const SizeRange r = size_range(o.scene.mask);
+  if (!size_given) o.scene.size = std::clamp(o.scene.size, r.lo, r.hi);
+  else if (o.scene.size < r.lo || o.scene.size > r.hi || (r.step == 2 && o.scene.size % 2 == 0))
+    usage(std::string("--size ") + std::to_string(o.scene.size) + " does not suit mask " + mask_name(o.scene.mask) +
+          " (" + (r.lo == r.hi ? std::to_string(r.lo) : "odd " + std::to_string(r.lo) + ".." + std::to_string(r.hi)) +
+          ")");
+  if (o.scene.kind == FieldKind::normals && o.scene.faces.empty()) usage("--field normals needs at least one --face");
+  p.finish();  // output paths, before any work
+  return o;
+}
+
+/// Any picture as 8-bit BGR.
+cv::Mat to_bgr8(const cv::Mat& in) {
+  cv::Mat eight;
+  if (in.depth() == CV_8U) eight = in;
+  else if (in.depth() == CV_16U) in.convertTo(eight, CV_8U, 1.0 / 257.0);
+  else in.convertTo(eight, CV_8U, 255.0);  // float pictures in [0, 1]
+  cv::Mat out;
+  if (eight.channels() == 1) cv::cvtColor(eight, out, cv::COLOR_GRAY2BGR);
+  else if (eight.channels() == 4) cv::cvtColor(eight, out, cv::COLOR_BGRA2BGR);
+  else if (eight.channels() == 3) out = eight;
+  else throw FileError("'" + std::string("picture") + "' has " + std::to_string(in.channels()) + " channels (1, 3 or 4 expected)");
+  return out;
+}
+
+/// The live field as a part of a composition (the LiveField stays put).
+struct LiveRef {
+  LiveField<AnyField>* live;
+  glm::dvec3 force(const Probe& p) noexcept { return live->force(p); }
+  void reset() noexcept { live->reset(); }
+};
+
+/// What the window thread shares with the mouse callback.
+struct Pointer {
+  const ViewLayout* layout{nullptr};
+  std::function<void(glm::dvec2)> moved;
+  cv::Size picture;
+};
+
+void on_mouse(int event, int x, int y, int /*flags*/, void* user) {
+  auto* p = static_cast<Pointer*>(user);
+  if (event != cv::EVENT_MOUSEMOVE || !p->moved) return;
+  glm::dvec2 px = p->layout->to_picture(x, y);
+  px.x = std::clamp(px.x, 0.0, p->picture.width - 1.0);
+  px.y = std::clamp(px.y, 0.0, p->picture.height - 1.0);
+  p->moved(px);
+}
+
+constexpr const char* window_title = "hapticfield_view";
+
+/// Runs the loop on its own thread and the view on this one.
+template <Device D, HapticField F, class Source>
+int run_view(const Options& o, D& device, F& field, LiveField<AnyField>& live, Source& source, Scene& scene,
+             SceneConfig cfg, const PlaneMapping& mapping, SteadyClock& clock, bool hardware,
+             std::function<void(glm::dvec2)> mouse_moved) {
+  LoopConfig config;
+  config.rate = o.rate;
+  config.realtime = o.realtime;
+  config.recover_after = 0.5;  // re-arm through the soft start after a stall
+  ServoLoop<D, SteadyClock> loop(device, clock, config);
+  SampleRing<8192> ring;
+
+  if (hardware) {
+    std::printf("WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
+                "Press Enter to start (Ctrl-C to abort)... ");
+    std::fflush(stdout);
+    std::string line;
+    std::getline(std::cin, line);
+  }
+
+  // the tick: tell the viewer where the probe is and what was commanded
+  auto tick = [&](const TickInput& in) noexcept {
+    (void)ring.push({in.probe.time, mapping.to_image(in.probe.position), loop.last_command()});
+    return field.force(in.probe);
+  };
+  const std::uint64_t ticks = o.seconds ? static_cast<std::uint64_t>(std::llround(*o.seconds * o.rate)) : no_tick_limit;
+  std::atomic<bool> done{false};
+  std::exception_ptr failure;
+  StopReason reason = StopReason::requested;
+  std::thread servo([&] {
+    try {
+      reason = loop.run(tick, {.max_ticks = ticks});
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    done.store(true, std::memory_order_release);
+  });
+
+  const ViewLayout layout = ViewLayout::for_picture(source.frame().cols, source.frame().rows);
+  Scope scope;
+  ViewSample now{};
+  now.pixel = o.start ? *o.start : glm::dvec2{source.frame().cols / 2.0, source.frame().rows / 2.0};
+  ViewStatus status;
+  status.source = std::filesystem::path(o.source).filename().string();
+  status.device = device.info().name;
+  status.field = scene.label;
+  const bool window = o.screenshot.empty();
+  const auto drain = [&] {
+    ViewSample s;
+    while (ring.pop(s)) {
+      scope.add(s);
+      now = s;
+    }
+    status.loop = loop.statistics();
+    status.latched = loop.safety().latched() != 0;
+    status.latch_bits = loop.safety().latched();
+    status.dropped = ring.dropped();
+  };
+  cv::Mat canvas;
+  Pointer pointer{&layout, std::move(mouse_moved), source.frame().size()};
+  int shot = 0;
+  double note_until = 0.0;
+  bool paused = false;
+  const auto rebuild = [&](const SceneConfig& next) {
+    try {
+      Scene fresh = build_scene(source.frame(), next, mapping);
+      live.publish(std::move(fresh.field));  // the loop picks it up on its next tick
+      scene.underlay = std::move(fresh.underlay);
+      scene.label = fresh.label;
+      status.field = scene.label;
+      cfg = next;
+    } catch (const std::exception& e) {
+      status.note = e.what();
+      note_until = now.t + 3.0;
+    }
+  };
+  const auto say = [&](const std::string& text) {
+    status.note = text;
+    note_until = now.t + 3.0;
+  };
+
+  if (window) {
+    cv::namedWindow(window_title, cv::WINDOW_AUTOSIZE);
+    cv::setMouseCallback(window_title, on_mouse, &pointer);
+  }
+  auto last_frame = std::chrono::steady_clock::now();
+  while (!done.load(std::memory_order_acquire)) {
+    drain();
+    if (!window) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
+    const auto t = std::chrono::steady_clock::now();
+    if (source.advance(std::chrono::duration<double>(t - last_frame).count())) rebuild(cfg);
+    last_frame = t;
+    if (now.t > note_until) status.note.clear();
+    status.paused = paused;
+    draw_view(canvas, layout, scene.underlay, scope, now, status);
+    cv::imshow(window_title, canvas);
+    const int key = cv::waitKey(15) & 0xff;
+    if (cv::getWindowProperty(window_title, cv::WND_PROP_VISIBLE) < 1.0) break;  // closed by the user
+    SceneConfig next = cfg;
+    switch (key) {
+      case 'q': case 27: loop.request_stop(); break;
+      case 'f': {
+        next.kind = next.kind == FieldKind::tangible ? FieldKind::normals
+                    : next.kind == FieldKind::normals ? FieldKind::texture : FieldKind::tangible;
+        if (next.kind == FieldKind::normals && next.faces.empty()) next.kind = FieldKind::texture;
+        rebuild(next);
+        break;
+      }
+      case 'm': {
+        next.mask = static_cast<MaskKind>((static_cast<int>(next.mask) + 1) % 6);
+        const SizeRange r = size_range(next.mask);
+        next.size = std::clamp(next.size | (r.step == 2 ? 1 : 0), r.lo, r.hi);
+        rebuild(next);
+        break;
+      }
+      case '+': case '=': case '-': {
+        const int steps = key == '-' ? -1 : 1;
+        if (next.kind == FieldKind::texture) next.grain_mm = std::clamp(next.grain_mm * (steps > 0 ? 1.5 : 1 / 1.5), 0.1, 50.0);
+        else next.size = step_size(next.mask, next.size, steps * std::max(1, next.size / 8));
+        rebuild(next);
+        break;
+      }
+      case 'b': next.border = static_cast<Border>((static_cast<int>(next.border) + 1) % 4); rebuild(next); break;
+      case 'd': next.denoise_px = next.denoise_px == 0.0 ? 1.0 : next.denoise_px >= 4.0 ? 0.0 : next.denoise_px * 2.0;
+        rebuild(next);
+        break;
+      case ' ':
+        if (!source.moving()) say("a still picture: nothing to pause");
+        else source.pause(paused = !paused);
+        break;
+      case '[': case ']':
+        if (!source.moving()) say("a still picture: nothing to seek");
+        else source.seek(key == '[' ? -1.0 : 1.0);
+        break;
+      case 's': {
+        const std::string path = (std::filesystem::path(o.shots) / ("hapticfield_view_" + std::to_string(++shot) + ".png")).string();
+        say(cv::imwrite(path, canvas) ? "saved " + path : "cannot write " + path);
+        break;
+      }
+      default: break;
+    }
+  }
+  loop.request_stop();
+  servo.join();
+  drain();
+  if (window) cv::destroyAllWindows();
+  if (failure) std::rethrow_exception(failure);
+  if (reason == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+
+  const LoopSnapshot& s = status.loop;
+  std::printf("%llu ticks at %.2f Hz, period p50 %.4f / p99 %.4f / max %.4f ms, late ticks %llu, missed deadlines "
+              "%llu, safety events %llu, latches %llu\n",
+              static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
+              s.period_max * 1e3, static_cast<unsigned long long>(s.overruns),
+              static_cast<unsigned long long>(s.missed_deadlines), static_cast<unsigned long long>(s.safety_events),
+              static_cast<unsigned long long>(s.latches));
+  if (!o.screenshot.empty()) {
+    status.note.clear();
+    draw_view(canvas, layout, scene.underlay, scope, now, status);
+    if (!cv::imwrite(o.screenshot, canvas)) throw FileError("--screenshot: cannot write '" + o.screenshot + "'");
+    const cv::Point at = layout.to_canvas(now.pixel);
+    std::printf("screenshot: %s, probe at %.2f,%.2f px of the picture (%d,%d on the screenshot)\n",
+                o.screenshot.c_str(), now.pixel.x, now.pixel.y, at.x, at.y);
+  }
+  return 0;
+}
+
+int run(const Options& o) {
+  const cv::Mat picture = to_bgr8(cli::quiet_stderr([&] { return load_image(o.source); }));
+  if (o.screenshot.empty() && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
+    throw Error("no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "
+                "--seconds S");
+  const PlaneMapping mapping = PlaneMapping::fit(picture.cols, picture.rows, 80.0);  // the picture spans 80 mm
+  StillPicture source(picture);
+  Scene scene = build_scene(source.frame(), o.scene, mapping);
+  LiveField<AnyField> live(std::move(scene.field));
+  LiveRef live_ref{&live};
+  SteadyClock clock;
+  const auto now = [&clock] { return clock.now(); };
+
+  if (o.device == "mouse") {
+    MouseDevice<SteadyClock> mouse(mapping, clock);
+    const glm::dvec2 start = o.start ? *o.start : glm::dvec2{picture.cols / 2.0, picture.rows / 2.0};
+    mouse.set_pixel(start.x, start.y);
+    return run_view(o, mouse, live_ref, live, source, scene, o.scene, mapping, clock, false,
+                    [&mouse](glm::dvec2 p) { mouse.set_pixel(p.x, p.y); });
+  }
+
+  // An arm: a stiff wall holds the handle on the picture's plane z = 0 (Fc)
+  // and the field adds its forces while the handle touches it.
+  const PlaneConstraint wall(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});  // [m], [N/m]
+  auto felt = contact(wall, live_ref);
+  std::unique_ptr<SimulatedArm> arm;
+  std::unique_ptr<Transport> transport;
+  bool hardware = false;
+  if (o.device == "sim") {
+    // The hand aims 8 mm behind the plane and raster-scans 90 % of the picture.
+    const double width = picture.cols / mapping.px_per_mm() * 1e-3, height = picture.rows / mapping.px_per_mm() * 1e-3;
+    SimulatedArmConfig c;
+    c.hand.path = HandPath::raster(glm::dvec3{0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
+    arm = std::make_unique<SimulatedArm>(c);
+    transport = std::make_unique<SimulatedTransport>(*arm, now);
+  } else {
+#if HAPTICFIELD_EXAMPLE_HID
+    std::uint16_t vid = default_vendor_id, pid = default_product_id;
+    if (o.device.size() > 3) {
+      unsigned v = 0, p = 0;
+      if (std::sscanf(o.device.c_str(), "hid:%x:%x", &v, &p) != 2) usage("--device hid:VID:PID takes hexadecimal ids");
+      vid = static_cast<std::uint16_t>(v);
+      pid = static_cast<std::uint16_t>(p);
+    }
+    transport = std::make_unique<HidTransport>(vid, pid);
+    hardware = true;
+#else
+    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
+#endif
+  }
+  ForceArm device(*transport);
+  return run_view(o, device, felt, live, source, scene, o.scene, mapping, clock, hardware, {});
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
+  return cli::main("hapticfield_view", usage_text, argc, argv, [](cli::Parser& p) { return run(parse(p)); });
+}

@@ -1,0 +1,215 @@
+#pragma once
+/// @file scene.hpp
+/// What the viewer shows and the servo loop feels: a field chosen by name
+/// with its main parameters (SceneConfig), built from the current frame of a
+/// FrameSource into a Scene (the field plus the picture drawn under the
+/// probe). Built on the viewer's thread (allocates, may throw); the field is
+/// then handed to the servo thread through a LiveField.
+///
+/// A moving picture plugs in as another FrameSource: frame() returns the
+/// current frame, advance() says when a new one is due (the viewer then
+/// rebuilds the scene from it), pause() and seek() serve the viewer's keys.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "hapticfield/core.hpp"
+#include "hapticfield/image.hpp"
+#include "hapticfield/kernels.hpp"
+#include "hapticfield/normals.hpp"
+#include "hapticfield/texture/noise.hpp"
+#include "hapticfield/texture/lattice.hpp"
+#include "hapticfield/texture/texture_field.hpp"
+
+namespace hapticfield::view {
+
+enum class FieldKind { tangible, normals, texture };
+
+[[nodiscard]] inline const char* field_name(FieldKind k) noexcept {
+  switch (k) {
+    case FieldKind::tangible: return "tangible";
+    case FieldKind::normals: return "normals";
+    case FieldKind::texture: return "texture";
+  }
+  return "?";
+}
+[[nodiscard]] inline const char* mask_name(MaskKind m) noexcept {
+  switch (m) {
+    case MaskKind::prewitt: return "prewitt";
+    case MaskKind::sobel: return "sobel";
+    case MaskKind::scharr: return "scharr";
+    case MaskKind::roberts: return "roberts";
+    case MaskKind::gaussian: return "gauss";
+    case MaskKind::emboss: return "emboss";
+  }
+  return "?";
+}
+[[nodiscard]] inline const char* border_name(Border b) noexcept {
+  switch (b) {
+    case Border::suspend: return "suspend";
+    case Border::clamp: return "clamp";
+    case Border::reflect: return "reflect";
+    case Border::fade: return "fade";
+  }
+  return "?";
+}
+
+/// The field and its main parameters; the viewer's keys change them.
+struct SceneConfig {
+  FieldKind kind{FieldKind::tangible};
+  // tangible images
+  MaskKind mask{MaskKind::prewitt};
+  int size{17};                  ///< mask size [px]
+  Border border{Border::fade};
+  double denoise_px{0.0};        ///< Gaussian blur of the picture before the masks, sigma [px]; 0: none
+  double gain{1.0};              ///< force at a black/white edge [N]
+  // normals from a picture
+  std::vector<std::vector<glm::dvec2>> faces;  ///< 4 corners per face [px]
+  double focal_px{0.0};          ///< focal length [px]; 0: a 60 degree field of view
+  double normals_max_force{kim_kwon_max_force};  ///< [N]
+  // stochastic texture
+  double grain_mm{2.0};          ///< lattice spacing [mm]
+  double texture_gain{0.5};      ///< force per texture unit [N]
+  std::uint32_t seed{1};
+};
+
+/// Mask sizes each mask accepts: (min, max, step).
+struct SizeRange {
+  int lo, hi, step;
+};
+[[nodiscard]] inline SizeRange size_range(MaskKind m) noexcept {
+  switch (m) {
+    case MaskKind::roberts: return {2, 2, 1};
+    case MaskKind::scharr: return {3, 3, 2};
+    case MaskKind::sobel: return {3, 31, 2};
+    default: return {3, 129, 2};
+  }
+}
+
+/// Moves a mask size by `steps` steps within its mask's range.
+[[nodiscard]] inline int step_size(MaskKind m, int size, int steps) noexcept {
+  const SizeRange r = size_range(m);
+  const int s = size + steps * r.step;
+  return std::clamp(s, r.lo, r.hi);
+}
+
+/// A field and what the viewer draws under the probe.
+struct Scene {
+  AnyField field;
+  cv::Mat underlay;     ///< BGR, the picture's size
+  std::string label;    ///< one line: the field and its parameters
+};
+
+/// A still picture as a frame source (a video source has the same shape).
+class StillPicture {
+ public:
+  explicit StillPicture(cv::Mat picture) : picture_(std::move(picture)) {}
+  [[nodiscard]] const cv::Mat& frame() const noexcept { return picture_; }
+  /// True when a new frame is due after `dt` [s]: never for a still.
+  bool advance(double /*dt*/) noexcept { return false; }
+  void pause(bool /*on*/) noexcept {}
+  void seek(double /*seconds*/) noexcept {}
+  [[nodiscard]] bool moving() const noexcept { return false; }
+
+ private:
+  cv::Mat picture_;
+};
+
+namespace detail {
+
+inline AnyField tangible(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping, cv::Mat& underlay) {
+  cv::Mat source;  // a new buffer: the frame itself is never blurred in place
+  if (c.denoise_px > 0.0) cv::GaussianBlur(frame, source, cv::Size(), c.denoise_px);
+  else source = frame;
+  TangibleOptions options;
+  options.mask = c.mask;
+  options.size = c.size;
+  options.border = c.border;
+  underlay = source.clone();
+  return AnyField(TangibleImageField(TangibleImage(to_gray(source), options), mapping, c.gain));
+}
+
+/// Normal direction as a colour: x to red, y to green, toward the camera to blue.
+inline cv::Scalar normal_colour(glm::dvec3 n) {
+  return cv::Scalar(127.5 * (1.0 - n.z), 127.5 * (1.0 + n.y), 127.5 * (1.0 + n.x));
+}
+
+inline AnyField normals(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping, cv::Mat& underlay) {
+  if (c.faces.empty()) throw std::invalid_argument("--field normals needs at least one --face");
+  const Camera camera = c.focal_px > 0.0
+                            ? Camera::from_focal(c.focal_px, Camera::image_centre(frame.cols, frame.rows))
+                            : Camera::from_field_of_view(60.0, frame.cols, frame.rows);
+  std::vector<ImageFace> faces;
+  cv::Mat tint = frame.clone();
+  for (std::size_t i = 0; i < c.faces.size(); ++i) {
+    FacePose pose;
+    try {
+      pose = estimate_rectangle_pose(camera, c.faces[i]);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("face " + std::to_string(i + 1) + ": " + e.what());
+    }
+    faces.push_back({c.faces[i], pose.normal});
+    std::vector<cv::Point> polygon;
+    for (const glm::dvec2& p : c.faces[i]) polygon.emplace_back(cvRound(p.x), cvRound(p.y));
+    cv::fillPoly(tint, std::vector<std::vector<cv::Point>>{polygon}, normal_colour(pose.normal));
+  }
+  cv::addWeighted(frame, 0.45, tint, 0.55, 0.0, underlay);
+  NormalFieldOptions options;
+  options.max_force = c.normals_max_force;
+  return AnyField(NormalField(frame.cols, frame.rows, std::move(faces), options, mapping));
+}
+
+inline AnyField texture_field(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping,
+                              cv::Mat& underlay) {
+  using namespace hapticfield::texture;
+  const double grain = c.grain_mm * 1e-3;  // [m]
+  NoiseLattice<GaussianNoise, 2> lattice(GaussianNoise(0.5), c.seed, glm::dvec3{grain}, Interpolation::cubic);
+  // the patch: the texture's x and y components over the picture, blue and green
+  underlay.create(frame.rows, frame.cols, CV_8UC3);
+  for (int y = 0; y < frame.rows; ++y)
+    for (int x = 0; x < frame.cols; ++x) {
+      const glm::dvec3 g = lattice(mapping.to_device(glm::dvec2{x, y}));
+      underlay.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(128.0 + 110.0 * g.x),
+                                               cv::saturate_cast<uchar>(128.0 + 110.0 * g.y), 110);
+    }
+  TextureParams params;
+  params.gain = c.texture_gain;
+  params.axes = {1.0, 1.0, 0.0};
+  return AnyField(TextureField(SpatialSource(lattice), params));
+}
+
+}  // namespace detail
+
+/// Builds the scene for `frame` (BGR) in the picture's mapping.
+/// @throws std::invalid_argument for parameters the field refuses.
+[[nodiscard]] inline Scene build_scene(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping) {
+  Scene s;
+  char label[160];
+  switch (c.kind) {
+    case FieldKind::tangible:
+      s.field = detail::tangible(frame, c, mapping, s.underlay);
+      std::snprintf(label, sizeof label, "tangible: %s %d px, border %s, denoise %.1f px, %.2f N at an edge",
+                    mask_name(c.mask), c.size, border_name(c.border), c.denoise_px, c.gain);
+      break;
+    case FieldKind::normals:
+      s.field = detail::normals(frame, c, mapping, s.underlay);
+      std::snprintf(label, sizeof label, "normals: %zu face(s), up to %.2f N along the motion", c.faces.size(),
+                    c.normals_max_force);
+      break;
+    case FieldKind::texture:
+      s.field = detail::texture_field(frame, c, mapping, s.underlay);
+      std::snprintf(label, sizeof label, "texture: Gaussian lattice %.2f mm, cubic, %.2f N", c.grain_mm,
+                    c.texture_gain);
+      break;
+  }
+  s.label = label;
+  return s;
+}
+
+}  // namespace hapticfield::view

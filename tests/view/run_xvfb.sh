@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# hapticfield_view in a real window under Xvfb: the window opens, runs for
+# two seconds with the mouse probe held at 150,120 px, the X server's whole
+# screen is grabbed (ImageMagick's import) and view_check finds the picture
+# and the cursor at the probe's position in it.
+#   tests/view/run_xvfb.sh BUILD_DIR
+set -euo pipefail
+build=${1:?usage: run_xvfb.sh BUILD_DIR}
+here=$(cd "$(dirname "$0")" && pwd)
+picture="$here/../../examples/data/coffee.png"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+xvfb-run -a -s "-screen 0 1280x1024x24" bash -c '
+  "$1" "$2" --start 150,120 --seconds 3 --realtime off > "$3/view.log" 2>&1 &
+  view=$!
+  sleep 2
+  import -window root "$3/screen.png"
+  wait "$view"' _ "$build/examples/hapticfield_view" "$picture" "$work"
+cat "$work/view.log"
+"$build/tests/view_check" "$work/screen.png" "$picture" 150,120
