@@ -343,7 +343,7 @@ TEST_CASE("serial: a WoodenHaptics P4 arm over a pty, through line framing, with
   std::thread peer([&] {
     std::string line;
     std::array<char, 256> rx{};
-    const auto give_up = std::chrono::steady_clock::now() + hard_timeout;
+    const auto give_up = std::chrono::steady_clock::now() + 12 * hard_timeout;  // the whole test, on a loaded machine
     while (!stop.load() && std::chrono::steady_clock::now() < give_up) {
       pollfd p{pty.master, POLLIN, 0};
       if (::poll(&p, 1, 20) <= 0) continue;
@@ -378,13 +378,20 @@ TEST_CASE("serial: a WoodenHaptics P4 arm over a pty, through line framing, with
     wc.wake_timeout_us = 200000;  // the peer thread may be slow to get the processor on a loaded machine
     WoodyArm arm(serial, wc);     // the wake-up: zero frames until the first reply
     DeviceState s;
-    int fresh = 0;
-    for (int i = 0; i < 200 && fresh < 50; ++i) {
+    // Lock-step: each command gets one reply; wait for it (bounded), however
+    // slowly the peer thread is scheduled.
+    const auto exchange = [&] {
       arm.write(glm::dvec3{0.0});
-      std::this_thread::sleep_for(1ms);
-      if (arm.read(s) == Status::ok) ++fresh;
-    }
-    CHECK(fresh >= 50);
+      const auto give_up = std::chrono::steady_clock::now() + hard_timeout;
+      while (std::chrono::steady_clock::now() < give_up) {
+        if (arm.read(s) == Status::ok) return true;
+        std::this_thread::sleep_for(200us);
+      }
+      return false;
+    };
+    int fresh = 0;
+    for (int i = 0; i < 50; ++i) fresh += exchange() ? 1 : 0;
+    CHECK(fresh == 50);
     CHECK(s.valid);
     CHECK(arm.counters().error_replies == 0);
     CHECK(arm.counters().malformed == 0);
@@ -392,8 +399,9 @@ TEST_CASE("serial: a WoodenHaptics P4 arm over a pty, through line framing, with
     CHECK(glm::length(s.position - firmware.position()) < 1e-3);
     // A malformed frame written by hand gets an error reply, which the host counts.
     serial.write(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>("[1,2]\n"), 6));
-    for (int i = 0; i < 100 && arm.counters().error_replies == 0; ++i) {
-      std::this_thread::sleep_for(1ms);
+    const auto give_up = std::chrono::steady_clock::now() + hard_timeout;
+    while (arm.counters().error_replies == 0 && std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(200us);
       (void)arm.read(s);
     }
     CHECK(arm.counters().error_replies == 1);
