@@ -82,13 +82,16 @@ class FramePreparer {
     switch (image.channels()) {
       case 1: image.convertTo(out, CV_32F); return;
       case 3:
-      case 4: {
-        const cv::Matx<float, 1, 3> bgr(0.11f, 0.59f, 0.3f);
-        cv::Mat three = image;
-        if (image.channels() == 4) cv::cvtColor(image, three, cv::COLOR_BGRA2BGR);
-        cv::Mat floats;
-        three.convertTo(floats, CV_32FC3);
-        cv::transform(floats, out, bgr);  // 1 x 3 matrix: one output channel
+      case 4: {  // one pass: B, G, R bytes to Y = 0.11 B + 0.59 G + 0.3 R
+        const int n = image.channels();
+        out.create(image.size(), CV_32FC1);
+        for (int y = 0; y < image.rows; ++y) {
+          const unsigned char* src = image.ptr<unsigned char>(y);
+          float* dst = out.ptr<float>(y);
+          for (int x = 0; x < image.cols; ++x, src += n)
+            dst[x] = 0.11f * static_cast<float>(src[0]) + 0.59f * static_cast<float>(src[1]) +
+                     0.3f * static_cast<float>(src[2]);
+        }
         return;
       }
       default: throw std::invalid_argument("FramePreparer: expected 1, 3 or 4 channels");
