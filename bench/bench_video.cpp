@@ -199,7 +199,9 @@ void bench_flicker(const std::string& clip, const std::string& plots) {
   std::printf("\n### Force flicker on %s (frame-to-frame RMS change of the normalised force, median over a "
               "24 x 18 grid)\n\n| denoise | m = 9 | m = 17 | m = 33 |\n|---|---|---|---|\n",
               clip.c_str());
-  std::vector<std::vector<double>> traces;  // fx at one point over time, per mode, m = 17
+  // fx over time at every grid point, per mode, m = 17
+  std::vector<std::vector<std::vector<double>>> traces;
+  std::vector<double> none_rms;  // m = 17, per grid point
   for (hf::DenoiseMode mode :
        {hf::DenoiseMode::none, hf::DenoiseMode::temporal, hf::DenoiseMode::spatial, hf::DenoiseMode::both}) {
     std::printf("| %s |", hf::to_string(mode));
@@ -212,7 +214,7 @@ void bench_flicker(const std::string& clip, const std::string& plots) {
       const int gx = 24, gy = 18;
       std::vector<double> sum2(gx * gy, 0.0);
       std::vector<glm::dvec2> previous(gx * gy);
-      std::vector<double> trace;
+      std::vector<std::vector<double>> trace(gx * gy);
       int n = 0;
       for (long k = 0; k < 200; ++k) {
         const double t = k / source.fps();
@@ -222,14 +224,15 @@ void bench_flicker(const std::string& clip, const std::string& plots) {
             const glm::dvec2 f = timeline.at(t, x, y);
             const int p = j * gx + i;
             if (k > 0) sum2[p] += glm::dot(f - previous[p], f - previous[p]);
+            if (m == 17) trace[p].push_back(f.x);
             previous[p] = f;
           }
         if (k > 0) ++n;
-        if (m == 17) trace.push_back(timeline.at(t, 0.3 * source.width(), 0.12 * source.height()).x);
         if (timeline.ended()) break;
       }
       std::vector<double> rms;
       for (double s : sum2) rms.push_back(std::sqrt(s / n));
+      if (m == 17 && mode == hf::DenoiseMode::none) none_rms = rms;
       std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
       std::printf(" %.5f |", rms[rms.size() / 2]);
       if (m == 17) traces.push_back(trace);
@@ -238,23 +241,33 @@ void bench_flicker(const std::string& clip, const std::string& plots) {
   }
   if (plots.empty()) return;
   std::filesystem::create_directories(plots);
+  // The grid point of median flicker without denoising: a typical static point.
+  std::vector<std::size_t> order(none_rms.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::nth_element(order.begin(), order.begin() + static_cast<long>(order.size() / 2), order.end(),
+                   [&](std::size_t a, std::size_t b) { return none_rms[a] < none_rms[b]; });
+  const std::size_t point = order[order.size() / 2];
+  std::vector<std::vector<double>> shown;
+  for (const auto& mode_traces : traces) shown.push_back(mode_traces[point]);
   const int w = 900, h = 300, mg = 40;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   double lo = 1e9, hi = -1e9;
-  for (const auto& t : traces)
+  for (const auto& t : shown)
     for (double v : t) lo = std::min(lo, v), hi = std::max(hi, v);
   if (hi <= lo) hi = lo + 1e-6;
   const cv::Scalar colours[4] = {{0, 0, 220}, {200, 0, 0}, {0, 150, 0}, {0, 0, 0}};
-  for (std::size_t c = 0; c < traces.size(); ++c)
-    for (std::size_t i = 1; i < traces[c].size(); ++i) {
+  for (std::size_t c = 0; c < shown.size(); ++c)
+    for (std::size_t i = 1; i < shown[c].size(); ++i) {
       const auto pt = [&](std::size_t k) {
-        return cv::Point(mg + static_cast<int>((w - 2 * mg) * static_cast<double>(k) / (traces[c].size() - 1)),
-                         h - mg - static_cast<int>((h - 2 * mg) * (traces[c][k] - lo) / (hi - lo)));
+        return cv::Point(mg + static_cast<int>((w - 2 * mg) * static_cast<double>(k) / (shown[c].size() - 1)),
+                         h - mg - static_cast<int>((h - 2 * mg) * (shown[c][k] - lo) / (hi - lo)));
       };
       cv::line(img, pt(i - 1), pt(i), colours[c], 1, cv::LINE_AA);
     }
-  cv::putText(img, "fx at a static point of vtest.avi over 200 frames (m = 17): none red, temporal blue, spatial green, "
-              "both black", {mg, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {0, 0, 0}, 1, cv::LINE_AA);
+  char title[200];
+  std::snprintf(title, sizeof title, "fx at a static point of the clip, 200 frames, m = 17 (range %.4f..%.4f): none red, "
+                "temporal blue, spatial green, both black", lo, hi);
+  cv::putText(img, title, {mg, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0}, 1, cv::LINE_AA);
   cv::imwrite(plots + "/flicker.png", img);
   std::printf("\nwrote %s/flicker.png\n", plots.c_str());
 }
