@@ -15,6 +15,8 @@ namespace hapticfield {
 
 inline constexpr double max_playback_rate = 16.0;  ///< [video s per loop s]
 
+static_assert(std::atomic<double>::is_always_lock_free, "the servo thread reads playback controls without a lock");
+
 struct PlaybackConfig {
   double rate = 1.0;    ///< video seconds per loop second, in (0, 16]
   double start = 0.0;   ///< video time at the first tick [s]
