@@ -472,3 +472,33 @@ TEST_CASE("opencv-doc's real clips: cuts in Megamind, the damaged copy plays, vt
     CHECK(timeline.cuts().empty());  // one static street camera
   }
 }
+
+TEST_CASE("a live source blends the previous and the newest frame one frame late, and fades across a cut",
+          "[video]") {
+  PrepareConfig config = plain_config();
+  config.cuts.min_scene_frames = 1;
+  FramePreparer prep(config);
+  WindowBuilder builder(0.1);
+  const double period = 0.04;  // [s]
+  const cv::Mat a = scene_frame(0, 0), b = scene_frame(0, 3), c = scene_frame(1, 0);
+  const TangibleImage fa = still(a, config.tangible), fb = still(b, config.tangible), fc = still(c, config.tangible);
+  // The first frame fades in from zero over [1.0, 1.1].
+  const FrameWindow w0 = builder.push_live(prep.prepare(a, 0, 0.0), 1.0, period);
+  CHECK(glm::length(w0.at(1.02, 26.0, 30.0)) == 0.0);
+  CHECK(w0.at(1.2, 26.0, 30.0).x == Approx(fa.at(26.0, 30.0).x).margin(1e-9));
+  // The next frame arrives at 1.2: blended in over [1.2, 1.24].
+  const FrameWindow w1 = builder.push_live(prep.prepare(b, 1, 0.0), 1.2, period);
+  for (double s : {0.0, 0.01, 0.03, 0.05}) {
+    CAPTURE(s);
+    const double alpha = std::min(s / period, 1.0);
+    const double expected = (1.0 - alpha) * fa.at(26.0, 30.0).x + alpha * fb.at(26.0, 30.0).x;
+    CHECK(w1.at(1.2 + s, 26.0, 30.0).x == Approx(expected).margin(1e-9));
+  }
+  // A cut arrives at 1.3: the last frame fades out, the new scene fades in.
+  auto cut = prep.prepare(c, 2, 0.0);
+  REQUIRE(cut->cut);
+  const FrameWindow w2 = builder.push_live(cut, 1.3, period);
+  CHECK(w2.at(1.325, 26.0, 30.0).x == Approx(0.5 * fb.at(26.0, 30.0).x).margin(1e-9));
+  CHECK(w2.at(1.375, 48.0, 14.0).y == Approx(0.5 * fc.at(48.0, 14.0).y).margin(1e-9));
+  CHECK(w2.at(1.5, 48.0, 14.0).y == Approx(fc.at(48.0, 14.0).y).margin(1e-9));
+}

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <vector>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -49,9 +50,22 @@ class VideoSource {
   /// @throws FileError for a missing or unreadable file; VideoError when no
   ///         backend can open it or its first frame does not decode.
   explicit VideoSource(const std::string& path, const VideoSourceConfig& config = {}) : config_(config), name_(path) {
-    if (path.find('%') == std::string::npos) (void)check_file(path, std::uintmax_t{1} << 40);
-    if (!capture_.open(path, cv::CAP_ANY) || !capture_.isOpened())
-      throw VideoError("cannot decode '" + path + "': not a video that this build can open");
+    const bool sequence = path.find('%') != std::string::npos;
+    if (!sequence) (void)check_file(path, std::uintmax_t{1} << 40);
+    // Named backends only: cv::CAP_ANY would also probe camera backends
+    // (gphoto2 over libusb) for a file that FFmpeg refuses.
+    bool opened = false;
+    const std::vector<int> apis = sequence ? std::vector<int>{cv::CAP_FFMPEG, cv::CAP_IMAGES}
+                                           : std::vector<int>{cv::CAP_FFMPEG, cv::CAP_OPENCV_MJPEG};
+    for (const int api : apis) {
+      try {
+        opened = capture_.open(path, api) && capture_.isOpened();
+      } catch (const cv::Exception&) {
+        opened = false;
+      }
+      if (opened) break;
+    }
+    if (!opened) throw VideoError("cannot decode '" + path + "': not a video that this build can open");
     init();
   }
 
@@ -59,7 +73,7 @@ class VideoSource {
   /// @throws VideoError when the camera does not open or gives no frame.
   VideoSource(int camera, const VideoSourceConfig& config = {})
       : config_(config), name_("camera " + std::to_string(camera)), live_(true) {
-    if (camera < 0 || !capture_.open(camera, cv::CAP_ANY) || !capture_.isOpened())
+    if (camera < 0 || !capture_.open(camera, cv::CAP_V4L2) || !capture_.isOpened())
       throw VideoError("cannot open " + name_);
     init();
   }
