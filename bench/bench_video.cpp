@@ -76,6 +76,7 @@ void bench_prepare(cv::Size size, int frames) {
                                {"gray + temporal denoising + tables (ours)", {}},
                                {"gray + spatial (bilateral) + tables (ours)", {}},
                                {"gray + both + tables (ours)", {}},
+                               {"gray + temporal + direct kernel, no tables (ours)", {}},
                                {"gray + 2 x cv::filter2D (CV_32F, 17 x 17)", {}},
                                {"gray + 2 x cv::sepFilter2D (CV_32F)", {}}};
   hf::PrepareConfig base;
@@ -87,6 +88,12 @@ void bench_prepare(cv::Size size, int frames) {
     c.denoise.mode = mode;
     preparers.emplace_back(c);
   }
+  {
+    hf::PrepareConfig c = base;
+    c.denoise.mode = hf::DenoiseMode::temporal;
+    c.tangible.kernel = hf::KernelChoice::direct;  // O(m^2) per lookup, nothing to build
+    preparers.emplace_back(c);
+  }
   // The same planes through OpenCV: the Prewitt x mask (column - centre) on the inverted gray.
   cv::Mat ramp(m, 1, CV_32F), ones(m, 1, CV_32F, cv::Scalar(1.0f));
   for (int i = 0; i < m; ++i) ramp.at<float>(i) = static_cast<float>(i - m / 2);
@@ -96,13 +103,13 @@ void bench_prepare(cv::Size size, int frames) {
     const cv::Mat& frame = input[static_cast<std::size_t>(round) % input.size()];
     for (std::size_t r = 0; r < routes.size(); ++r) {
       const auto t0 = Clock::now();
-      if (r < 4) {
+      if (r < 5) {
         auto f = preparers[r].prepare(frame, round, round / 30.0);
         sink = sink + f->image.at(10.0, 10.0).x;
       } else {
         hf::FramePreparer::to_gray32(frame, gray);
         inv = 255.0f - gray;
-        if (r == 4) {
+        if (r == 5) {
           cv::filter2D(inv, fx, CV_32F, kx);
           cv::filter2D(inv, fy, CV_32F, ky);
         } else {
@@ -142,7 +149,7 @@ void bench_decode(const std::string& path, int frames) {
               source.width(), source.height(), s.mean, s.p99, ms.size());
 }
 
-void bench_ticks(const std::string& clip, int ticks) {
+void bench_ticks(const std::string& clip, int ticks, hf::KernelChoice kernel) {
   // The still-picture field on the first frame, against the video field
   // paused mid-way between frames 3 and 4, after the fade-in at the start
   // (two lookups and a blend per tick).
@@ -152,6 +159,7 @@ void bench_ticks(const std::string& clip, int ticks) {
   (void)first.read(frame, index);
   hf::TangibleOptions options;
   options.border = hf::Border::fade;
+  options.kernel = kernel;
   const hf::PlaneMapping mapping = hf::PlaneMapping::fit(frame.cols, frame.rows, 80.0);
   hf::TangibleImageField still(hf::TangibleImage(hf::to_gray(frame), options), mapping, 1.0);
   hf::VideoFieldConfig config;
@@ -183,8 +191,9 @@ void bench_ticks(const std::string& clip, int ticks) {
     }
   }
   const Stats a = summarise(a_ns), b = summarise(b_ns);
-  std::printf("\n### Per tick, %d x %d px, Prewitt 17 (O(1) kernel), %d ticks each, interleaved\n\n", frame.cols,
-              frame.rows, ticks);
+  const char* name = kernel == hf::KernelChoice::direct ? "direct kernel" : "O(1) kernel";
+  std::printf("\n### Per tick, %d x %d px, Prewitt 17 (%s), %d ticks each, interleaved\n\n", frame.cols,
+              frame.rows, name, ticks);
   std::printf("| field | mean [ns] | p99 [ns] | worst [ns] | mean / still | p99 / still |\n|---|---|---|---|---|---|\n");
   std::printf("| TangibleImageField (still picture, baseline) | %.0f | %.0f | %.0f | 1.00x | 1.00x |\n", a.mean, a.p99,
               a.worst);
@@ -298,7 +307,8 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 40; ++k) w.write(synthetic_frame({1280, 720}, k));
   }
   bench_decode(hd, 40);
-  bench_ticks(hd, ticks);
+  bench_ticks(hd, ticks, hf::KernelChoice::automatic);
+  bench_ticks(hd, ticks / 4, hf::KernelChoice::direct);
   if (std::filesystem::exists(clip)) {
     bench_decode(clip, 100);
     bench_flicker(clip, plots);
