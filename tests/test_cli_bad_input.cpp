@@ -24,6 +24,10 @@
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+#ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#endif
 
 extern char** environ;
 
@@ -43,6 +47,8 @@ const std::map<std::string, std::string> tools = {
     {"two_arms", HAPTICFIELD_TOOL_TWO_ARMS},
 #ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
     {"hapticfield_view", HAPTICFIELD_TOOL_HAPTICFIELD_VIEW},
+#ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
+    {"tangible_video", HAPTICFIELD_TOOL_TANGIBLE_VIDEO},
 #endif
 };
 
@@ -479,5 +485,113 @@ TEST_CASE("hapticfield_view: bad command lines exit 2, bad pictures and paths ex
                    bad_input, "face 1"});
   for (const Case& c : cases) check_error(c);
   CHECK_FALSE(fs::exists(shot));  // no case drew anything
+#ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
+namespace {
+/// A 20-frame MJPG clip, 64 x 48 px at 20 fps: white, black from column 32
+/// (frames 0..9), then black, white from column 32 (a cut at frame 10).
+std::string make_clip() {
+  const std::string path = in_tmp("clip.avi");
+  cv::VideoWriter w(path, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 20.0, cv::Size(64, 48));
+  REQUIRE(w.isOpened());
+  w.set(cv::VIDEOWRITER_PROP_QUALITY, 100);
+  for (int k = 0; k < 20; ++k) {
+    cv::Mat f(48, 64, CV_8UC3, cv::Scalar::all(k < 10 ? 255 : 0));
+    f(cv::Rect(32, 0, 32, 48)).setTo(cv::Scalar::all(k < 10 ? 0 : 255));
+    w.write(f);
+  }
+  w.release();
+  return path;
+}
+}  // namespace
+
+TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line; good input plays") {
+  const BadFiles b = make_bad_files();
+  const std::string clip = make_clip();
+  const std::string forces = in_tmp("vf.csv");
+  const std::string probes = in_tmp("vp.csv");
+  write(probes, "t,x,y\n0.2,31.5,20\n0.25,31.5,20\n0.5,31.5,20\n0.56,31.5,20\n0.0,10,20\n");
+  std::vector<Case> cases = {
+      {"tangible_video", {}, usage, "no VIDEO"},
+      {"tangible_video", {clip, "--bogus"}, usage, "unknown option '--bogus'"},
+      {"tangible_video", {clip, clip}, usage, "more than one VIDEO"},
+      {"tangible_video", {clip, "--denoise", "lots"}, usage, "unknown denoise mode"},
+      {"tangible_video", {clip, "--mask", "fancy"}, usage, "unknown mask"},
+      {"tangible_video", {clip, "--border", "wrap"}, usage, "unknown border"},
+      {"tangible_video", {clip, "--size", "4"}, usage, "not allowed"},
+      {"tangible_video", {clip, "--probes", probes}, usage, "go together"},
+      {"tangible_video", {clip, "--device", "usb"}, usage, "--device"},
+      {"tangible_video", {"camera:abc"}, usage, "camera:N"},
+      {"tangible_video", {"camera:100"}, usage, "camera:N"},
+      {"tangible_video", {clip, "--fade-ms", "10001"}, usage, "[0, 10000]"},
+      {"tangible_video", {clip, "--seconds", "3601"}, usage, "(0, 3600]"},
+  };
+  add_numeric(cases, "tangible_video", {clip}, "--size");
+  add_numeric(cases, "tangible_video", {clip}, "--fade-ms", {"0"});
+  add_numeric(cases, "tangible_video", {clip}, "--seconds");
+  // videos: missing, empty, a folder, text named .avi, a truncated clip
+  const std::string text_avi = in_tmp("text.avi");
+  write(text_avi, "this is text, not a video\n");
+  const std::string truncated_avi = in_tmp("truncated.avi");
+  write(truncated_avi, slurp(clip).substr(0, 300));
+  for (const std::string& file : {b.missing, b.empty, b.folder, text_avi, truncated_avi, b.text_png})
+    cases.push_back({"tangible_video", {file, "--probes", probes, "--forces", forces}, bad_input, file});
+  // probes: missing, empty, folder, truncated, garbage, NaN, negative time
+  write(in_tmp("vnan.csv"), "0.1,nan,3\n");
+  write(in_tmp("vneg.csv"), "-0.5,3,3\n");
+  for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_csv, b.garbage_csv, in_tmp("vnan.csv"),
+                                   in_tmp("vneg.csv")})
+    cases.push_back({"tangible_video", {clip, "--probes", file, "--forces", forces}, bad_input, file});
+  // outputs, checked before any work
+  const std::string no_dir = in_tmp("no/such/dir/out.csv");
+  cases.push_back({"tangible_video", {clip, "--probes", probes, "--forces", no_dir}, bad_input, "--forces"});
+  cases.push_back({"tangible_video", {clip, "--probes", probes, "--forces", b.folder}, bad_input, "--forces"});
+  cases.push_back({"tangible_video", {clip, "--cuts", no_dir}, bad_input, "--cuts"});
+  cases.push_back({"tangible_video", {clip, "--trace", no_dir}, bad_input, "--trace"});
+  cases.push_back({"tangible_video", {clip, "--plots", b.plain_file + "/sub"}, bad_input, "--plots"});
+  for (const Case& c : cases) check_error(c);
+
+  SECTION("offline forces: the edge, the held frame before the cut, the fade, the new scene") {
+    const std::string cuts = in_tmp("vcuts.csv");
+    const Result r = run("tangible_video", {clip, "--size", "3", "--border", "clamp", "--denoise", "none", "--probes",
+                                            probes, "--forces", forces, "--cuts", cuts});
+    CAPTURE(r.err);
+    REQUIRE(r.status == ok);
+    CHECK(r.err.empty());
+    CHECK(slurp(cuts) == "frame,time\n10,0.5\n");
+    std::string text = slurp(forces);
+    REQUIRE(text.rfind("t,x,y,fx,fy\n", 0) == 0);
+    text = text.substr(12);
+    std::replace(text.begin(), text.end(), ',', ' ');
+    std::istringstream numbers(text);
+    const std::vector<double> v{std::istream_iterator<double>(numbers), std::istream_iterator<double>()};
+    REQUIRE(v.size() == 25);  // five probes, in the order given
+    // x = 31.5 is midway between pixel 31 (white) and 32 (black): an edge
+    // pixel's force through a 3 x 3 mask is 1, toward black (+x).
+    CHECK(v[3] == Approx(1.0).margin(0.03));      // t = 0.2: scene 1
+    CHECK(v[8] == Approx(1.0).margin(0.03));      // t = 0.25
+    CHECK(v[13] == Approx(1.0).margin(0.03));     // t = 0.5: the cut, the old scene held at full force
+    CHECK(v[18] == Approx(-0.2).margin(0.03));    // t = 0.56: fading in at 0.2 the new scene (toward -x)
+    CHECK(v[23] == Approx(0.0).margin(0.03));     // t = 0: white, and fading in from 0
+  }
+  SECTION("a damaged stream plays what decodes, without decoder chatter") {
+    std::string bytes = slurp(clip);
+    for (std::size_t i = bytes.size() / 3; i < bytes.size() / 2; i += 7) bytes[i] = static_cast<char>(i * 31);
+    const std::string damaged = in_tmp("damaged.avi");
+    write(damaged, bytes);
+    const Result r = run("tangible_video", {damaged, "--probes", probes, "--forces", forces});
+    CAPTURE(r.err, r.out);
+    REQUIRE_FALSE(r.timed_out);
+    CHECK(r.status == ok);
+    CHECK(r.err.empty());
+  }
+  SECTION("play mode on the simulated arm, traced") {
+    const std::string trace = in_tmp("vtrace.csv");
+    const Result r = run("tangible_video", {clip, "--seconds", "0.3", "--trace", trace, "--cuts", in_tmp("pc.csv")});
+    CAPTURE(r.err);
+    REQUIRE(r.status == ok);
+    CHECK(r.err.empty());
+    const std::string t = slurp(trace);
+    CHECK(std::count(t.begin(), t.end(), '\n') == 301);
+  }
 }
 #endif

@@ -1,0 +1,407 @@
+// tangible_video: feel a video (tangible video, "movie haptics").
+//
+//   tangible_video VIDEO [--mask prewitt|sobel|scharr|roberts|gauss|emboss] [--size M]
+//                  [--border suspend|clamp|reflect|fade] [--denoise none|temporal|spatial|both]
+//                  [--fade-ms MS] [--cuts OUT.csv] [--probes IN.csv --forces OUT.csv]
+//                  [--seconds S] [--device sim|hid[:VID:PID]] [--trace OUT.csv] [--plots DIR]
+//                  [--verbose]
+//
+// With --probes it renders offline, as fast as it can: t,x,y per line (t in
+// seconds of video time, frame k at k / fps; x, y in pixels as
+// tangible_image) to t,x,y,fx,fy (normalised, 1 = a black/white edge, fy
+// down), blends and fades included. Without --probes it plays the video to
+// the simulated arm (a scripted hand raster-scans it) or a HID arm in the
+// 1 kHz servo loop, with a live status line. Bad input: one line on stderr,
+// exit status 1 (2 for usage errors).
+#include <hapticfield/video.hpp>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/cli.hpp"
+#include "common/csv.hpp"
+
+#include "hapticfield/core.hpp"
+#include "hapticfield/device.hpp"
+#include "hapticfield/servo.hpp"
+#if HAPTICFIELD_EXAMPLE_HID
+#include "hapticfield/device/hid_transport.hpp"
+#endif
+
+namespace hf = hapticfield;
+
+namespace {
+
+constexpr const char* usage =
+    "usage: tangible_video VIDEO [options]\n"
+    "Feels a video: each frame as a tangible image, blended between frames, faded across scene cuts.\n"
+    "  VIDEO                 a video file (anything OpenCV opens), an image sequence (a printf\n"
+    "                        pattern such as frames/%04d.png) or camera:N (camera index N, 0..99)\n"
+    "  --mask KIND           prewitt (default), sobel, scharr, roberts, gauss or emboss\n"
+    "  --size M              mask size [px]: prewitt/gauss/emboss odd 3..129 (default 17),\n"
+    "                        sobel odd 3..31 (default 3), scharr 3, roberts 2\n"
+    "  --border B            suspend (default), clamp, reflect or fade\n"
+    "  --denoise D           none, temporal (default), spatial or both (compression noise)\n"
+    "  --fade-ms MS          fade out and in across a scene cut [ms], in [0, 10000] (default 100)\n"
+    "  --cuts OUT.csv        write frame,time [s] for each detected cut (frame = first of the new scene)\n"
+    "  --probes IN.csv       t,x,y per line: t [s of video time, frame k at k / fps], x, y [px]\n"
+    "                        (x right, y down, integer = pixel centre; a header line allowed); needs --forces\n"
+    "  --forces OUT.csv      t,x,y,fx,fy per probe: the normalised force (1 = black/white edge), fy down\n"
+    "  --seconds S           play time [s], in (0, 3600] (default: the video's length, at most 60)\n"
+    "  --device D            sim (default: the simulated arm, a scripted hand) or hid, hid:VID:PID\n"
+    "  --trace OUT.csv       write t, position [m], force [N] per tick (play mode)\n"
+    "  --plots DIR           write force.png (play mode) or forces.png (probe mode) into DIR\n"
+    "  --verbose             let OpenCV's and FFmpeg's own log lines through\n"
+    "  -h, --help            this text\n"
+    "Exit status: 0 done, 1 bad input (files, videos, devices), 2 usage error.\n";
+
+struct Arguments {
+  std::string video;
+  hf::TangibleOptions options;
+  bool size_given = false;
+  hf::DenoiseMode denoise = hf::DenoiseMode::temporal;
+  double fade_s = hf::default_cut_fade;
+  std::optional<std::string> cuts, probes, forces, trace, plots;
+  std::optional<double> seconds;
+  std::string device{"sim"};
+  bool verbose = false;
+};
+
+bool valid_device(const std::string& d) {
+  if (d == "sim" || d == "hid") return true;
+  if (d.rfind("hid:", 0) != 0) return false;
+  const std::string ids = d.substr(4);
+  const auto colon = ids.find(':');
+  const auto hex = [](const std::string& t) {
+    return !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos;
+  };
+  return colon != std::string::npos && hex(ids.substr(0, colon)) && hex(ids.substr(colon + 1));
+}
+
+Arguments parse(hf::cli::Parser& p) {
+  Arguments a;
+  while (p.next()) {
+    if (p.is("--mask")) {
+      a.options.mask = p.choice<hf::MaskKind>("mask", {{"prewitt", hf::MaskKind::prewitt},
+                                                       {"sobel", hf::MaskKind::sobel},
+                                                       {"scharr", hf::MaskKind::scharr},
+                                                       {"roberts", hf::MaskKind::roberts},
+                                                       {"gauss", hf::MaskKind::gaussian},
+                                                       {"emboss", hf::MaskKind::emboss}});
+    } else if (p.is("--size")) {
+      a.options.size = static_cast<int>(p.integer(1, 1000));
+      a.size_given = true;
+    } else if (p.is("--border")) {
+      a.options.border = p.choice<hf::Border>("border", {{"suspend", hf::Border::suspend},
+                                                         {"clamp", hf::Border::clamp},
+                                                         {"reflect", hf::Border::reflect},
+                                                         {"fade", hf::Border::fade}});
+    } else if (p.is("--denoise")) {
+      a.denoise = p.choice<hf::DenoiseMode>("denoise mode", {{"none", hf::DenoiseMode::none},
+                                                             {"temporal", hf::DenoiseMode::temporal},
+                                                             {"spatial", hf::DenoiseMode::spatial},
+                                                             {"both", hf::DenoiseMode::both}});
+    } else if (p.is("--fade-ms")) {
+      a.fade_s = p.real(hf::cli::closed(0.0, 10000.0)) * 1e-3;
+    } else if (p.is("--cuts")) {
+      a.cuts = p.output_file();
+    } else if (p.is("--probes")) {
+      a.probes = p.value();
+    } else if (p.is("--forces")) {
+      a.forces = p.output_file();
+    } else if (p.is("--seconds")) {
+      a.seconds = p.real(hf::cli::open_closed(0.0, 3600.0));
+    } else if (p.is("--device")) {
+      a.device = p.value();
+      if (!valid_device(a.device))
+        throw hf::cli::UsageError("--device must be sim, hid or hid:VID:PID with hexadecimal ids, got '" + a.device +
+                                  "'");
+    } else if (p.is("--trace")) {
+      a.trace = p.output_file();
+    } else if (p.is("--plots")) {
+      a.plots = p.output_dir();
+    } else if (p.is("--verbose")) {
+      a.verbose = true;
+    } else if (p.positional() && a.video.empty()) {
+      a.video = p.token();
+    } else if (p.positional()) {
+      throw hf::cli::UsageError("more than one VIDEO given ('" + a.video + "', '" + p.token() + "')");
+    } else {
+      p.unknown();
+    }
+  }
+  if (a.video.empty()) throw hf::cli::UsageError("no VIDEO given");
+  if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
+  if (a.probes && (a.trace || a.seconds)) throw hf::cli::UsageError("--trace and --seconds are for play mode, not --probes");
+  if (!a.size_given && a.options.mask == hf::MaskKind::roberts) a.options.size = 2;
+  if (!a.size_given && (a.options.mask == hf::MaskKind::scharr || a.options.mask == hf::MaskKind::sobel))
+    a.options.size = 3;
+  try {
+    hf::validate_mask_size(a.options.mask, a.options.size);
+  } catch (const std::invalid_argument& e) {
+    throw hf::cli::UsageError(std::string("--size: ") + e.what());
+  }
+  if (a.video.rfind("camera:", 0) == 0) (void)hf::cli::parse_integer(a.video.substr(7), "camera:N", 0, 99);
+  p.finish();
+  return a;
+}
+
+std::unique_ptr<hf::VideoSource> open_source(const Arguments& a) {
+  if (a.video.rfind("camera:", 0) == 0)
+    return std::make_unique<hf::VideoSource>(static_cast<int>(std::stol(a.video.substr(7))));
+  return std::make_unique<hf::VideoSource>(a.video);
+}
+
+hf::PrepareConfig prepare_config(const Arguments& a) {
+  hf::PrepareConfig c;
+  c.tangible = a.options;
+  c.denoise.mode = a.denoise;
+  return c;
+}
+
+void write_cuts(const std::string& path, const std::vector<hf::SceneCut>& cuts) {
+  std::FILE* out = std::fopen(path.c_str(), "w");
+  if (!out) throw std::runtime_error("cannot write cuts file '" + path + "'");
+  std::fprintf(out, "frame,time\n");
+  for (const hf::SceneCut& c : cuts) std::fprintf(out, "%ld,%.9g\n", c.frame, c.time);
+  if (std::fclose(out) != 0) throw std::runtime_error("cannot write cuts file '" + path + "'");
+}
+
+/// fx, fy and |F| against t, with the cuts marked.
+void plot_forces(const std::string& path, const std::vector<std::array<double, 5>>& rows,
+                 const std::vector<hf::SceneCut>& cuts) {
+  const int w = 1000, h = 400, m = 50;
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  double t0 = rows.front()[0], t1 = rows.back()[0], peak = 1e-9;
+  for (const auto& r : rows) peak = std::max({peak, std::abs(r[3]), std::abs(r[4]), std::hypot(r[3], r[4])});
+  if (t1 <= t0) t1 = t0 + 1e-3;
+  const auto px = [&](double t, double f) {
+    return cv::Point(m + static_cast<int>((w - 2 * m) * (t - t0) / (t1 - t0)),
+                     h / 2 - static_cast<int>((h / 2 - m) * f / peak));
+  };
+  cv::line(img, px(t0, 0), px(t1, 0), cv::Scalar(180, 180, 180));
+  for (const hf::SceneCut& c : cuts)
+    if (c.time >= t0 && c.time <= t1) cv::line(img, px(c.time, -peak), px(c.time, peak), cv::Scalar(0, 140, 255), 1);
+  const cv::Scalar colours[3] = {{200, 0, 0}, {0, 150, 0}, {0, 0, 0}};
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const auto value = [c](const std::array<double, 5>& r) { return c < 2 ? r[3 + c] : std::hypot(r[3], r[4]); };
+      cv::line(img, px(rows[i - 1][0], value(rows[i - 1])), px(rows[i][0], value(rows[i])), colours[c], 1, cv::LINE_AA);
+    }
+  char text[160];
+  std::snprintf(text, sizeof text, "normalised force over video time %.2f..%.2f s: fx blue, fy green, |F| black; "
+                "cuts orange; peak %.3f", t0, t1, peak);
+  cv::putText(img, text, {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
+  cv::imwrite(path, img);
+}
+
+int run_probes(const Arguments& a) {
+  auto source = open_source(a);
+  const auto probes = hf::cli::read_csv<3>(*a.probes, {.columns = "t,x,y", .what = "probes", .finite_only = true});
+  for (std::size_t i = 0; i < probes.size(); ++i)
+    if (probes[i][0] < 0.0 || probes[i][0] > 1e6)
+      throw hf::FileError(*a.probes + ": probe " + std::to_string(i + 1) + ": t must be in [0, 1e6] s");
+  std::vector<std::size_t> order(probes.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return probes[i][0] < probes[j][0]; });
+  hf::VideoTimeline timeline(*source, prepare_config(a), a.fade_s);
+  std::vector<std::array<double, 5>> rows(probes.size());
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i : order) {
+    const auto& [t, x, y] = probes[i];
+    const glm::dvec2 f = timeline.at(t, x, y);
+    rows[i] = {t, x, y, f.x, f.y};
+  }
+  if (a.cuts) timeline.run_to_end();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::FILE* out = std::fopen(a.forces->c_str(), "w");
+  if (!out) throw std::runtime_error("cannot write forces file '" + *a.forces + "'");
+  std::fprintf(out, "t,x,y,fx,fy\n");
+  for (const auto& r : rows) std::fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", r[0], r[1], r[2], r[3], r[4]);
+  if (std::fclose(out) != 0) throw std::runtime_error("cannot write forces file '" + *a.forces + "'");
+  std::printf("%s: %d x %d px at %.3f fps, %ld frames prepared in %.2f s, %zu cuts, %ld undecodable frames\n",
+              a.video.c_str(), source->width(), source->height(), source->fps(), timeline.prepared(), seconds,
+              timeline.cuts().size(), source->bad_frames());
+  std::printf("forces at %zu probes written to %s\n", rows.size(), a.forces->c_str());
+  if (a.cuts) {
+    write_cuts(*a.cuts, timeline.cuts());
+    std::printf("cuts: %s\n", a.cuts->c_str());
+  }
+  if (a.plots && !rows.empty()) {
+    std::filesystem::create_directories(*a.plots);
+    std::vector<std::array<double, 5>> sorted;
+    for (std::size_t i : order) sorted.push_back(rows[i]);
+    plot_forces(*a.plots + "/forces.png", sorted, timeline.cuts());
+    std::printf("plots: %s/forces.png\n", a.plots->c_str());
+  }
+  return 0;
+}
+
+struct Row {
+  double t{0.0};
+  glm::dvec3 position{0.0};
+  glm::dvec3 force{0.0};
+};
+
+int run_play(const Arguments& a) {
+  auto source = open_source(a);
+  const double duration = source->duration();
+  const double seconds = a.seconds.value_or(std::min(std::isfinite(duration) ? duration : 10.0, 60.0));
+  const int width = source->width(), height = source->height();
+  const std::string name = source->name();
+  const double fps = source->fps();
+  const hf::PlaneMapping mapping = hf::PlaneMapping::fit(width, height, 80.0);  // the video spans 80 mm
+  hf::VideoFieldConfig config;
+  config.prepare = prepare_config(a);
+  config.fade = a.fade_s;
+  config.gain = 1.0;  // [N] at a black/white edge
+  hf::VideoField video(std::move(source), mapping, config);
+  hf::VideoField* video_ptr = &video;
+  // The picture's plane holds the hand (Fc); the video's forces on top.
+  const hf::PlaneConstraint wall(hf::PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});
+  auto field = hf::contact(wall, std::move(video));
+  video_ptr = &field.part<0>();
+
+  hf::SteadyClock clock;
+  const auto now = [&clock] { return clock.now(); };
+  const double w_m = width / mapping.px_per_mm() * 1e-3, h_m = height / mapping.px_per_mm() * 1e-3;
+  std::unique_ptr<hf::SimulatedArm> arm;
+  std::unique_ptr<hf::Transport> transport;
+  bool hardware = false;
+  if (a.device == "sim") {
+    hf::SimulatedArmConfig c;
+    c.hand.path = hf::HandPath::raster(glm::dvec3{0.0, 0.0, -0.008}, w_m * 0.9, h_m * 0.9, 8, 0.06);
+    arm = std::make_unique<hf::SimulatedArm>(c);
+    transport = std::make_unique<hf::SimulatedTransport>(*arm, now);
+  } else {
+#if HAPTICFIELD_EXAMPLE_HID
+    std::uint16_t vid = hf::default_vendor_id, pid = hf::default_product_id;
+    if (a.device.size() > 3) {
+      unsigned v = 0, p = 0;
+      (void)std::sscanf(a.device.c_str(), "hid:%x:%x", &v, &p);
+      vid = static_cast<std::uint16_t>(v);
+      pid = static_cast<std::uint16_t>(p);
+    }
+    transport = std::make_unique<hf::HidTransport>(vid, pid);
+    hardware = true;
+#else
+    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
+#endif
+  }
+  hf::ForceArm device(*transport);
+  hf::LoopConfig loop_config;
+  loop_config.recover_after = 0.5;
+  hf::ServoLoop<hf::ForceArm, hf::SteadyClock> loop(device, clock, loop_config);
+  if (hardware) {
+    std::printf("WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
+                "Press Enter to start (Ctrl-C to abort)... ");
+    std::fflush(stdout);
+    std::string line;
+    std::getline(std::cin, line);
+  }
+  std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s\n", name.c_str(),
+              width, height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise),
+              a.fade_s * 1e3, seconds);
+
+  const auto ticks = static_cast<std::uint64_t>(std::max(1L, std::lround(seconds * loop_config.rate)));
+  std::vector<Row> rows;
+  rows.reserve(ticks + 8);  // the tick path only fills reserved rows
+  auto callback = [&](const hf::TickInput& in) noexcept {
+    if (rows.size() < rows.capacity()) {
+      if (!rows.empty()) rows.back().force = loop.last_command();
+      rows.push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}});
+    }
+    return field.force(in.probe);
+  };
+  std::atomic<bool> done{false};
+  std::exception_ptr failure;
+  std::thread servo([&] {
+    try {
+      (void)loop.run(callback, {.max_ticks = ticks});
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    done.store(true);
+  });
+  const auto status = [&] {
+    const hf::LoopSnapshot s = loop.statistics();
+    const hf::VideoStatistics v = video_ptr->statistics();
+    std::printf("\r video %7.2f s | frames %5ld dropped %4ld bad %3ld | cuts %3ld | rate %8.2f Hz | p99 %6.3f ms | "
+                "peak %5.2f N%s   ",
+                v.video_time, v.prepared, v.dropped, v.bad, v.cuts, s.rate, s.period_p99 * 1e3, s.peak_force,
+                loop.safety().latched() ? " | ZERO FORCE" : "");
+    std::fflush(stdout);
+  };
+  while (!done.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    status();
+  }
+  servo.join();
+  status();
+  std::printf("\n");
+  if (failure) std::rethrow_exception(failure);
+  const hf::VideoStatistics v = video_ptr->statistics();
+  const std::vector<hf::SceneCut> cuts = video_ptr->cuts();
+  video_ptr->stop();
+  std::printf("%ld frames prepared, %ld dropped (preparation lagged), %ld undecodable, %zu cuts:", v.prepared,
+              v.dropped, v.bad, cuts.size());
+  for (const hf::SceneCut& c : cuts) std::printf(" %ld (%.3f s)", c.frame, c.time);
+  std::printf("\n");
+  if (const std::string e = video_ptr->error(); !e.empty()) std::printf("the video stopped early: %s\n", e.c_str());
+  if (a.cuts) {
+    write_cuts(*a.cuts, cuts);
+    std::printf("cuts: %s\n", a.cuts->c_str());
+  }
+  if (a.trace) {
+    std::ofstream f(*a.trace);
+    if (!f) throw std::runtime_error("cannot write " + *a.trace);
+    f << "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N\n";
+    for (const Row& r : rows)
+      f << r.t << ',' << r.position.x << ',' << r.position.y << ',' << r.position.z << ',' << r.force.x << ','
+        << r.force.y << ',' << r.force.z << '\n';
+    std::printf("trace: %s (%zu rows)\n", a.trace->c_str(), rows.size());
+  }
+  if (a.plots && !rows.empty()) {
+    std::filesystem::create_directories(*a.plots);
+    std::vector<std::array<double, 5>> plot;
+    const double t_start = rows.front().t;
+    for (const Row& r : rows) plot.push_back({r.t - t_start, r.position.x, r.position.y, r.force.x, r.force.y});
+    plot_forces(*a.plots + "/force.png", plot, {});
+    std::printf("plots: %s/force.png\n", a.plots->c_str());
+  }
+  return 0;
+}
+
+int run(const Arguments& a) {
+  hf::quiet_video_logs(a.verbose);
+  if (a.verbose) return a.probes ? run_probes(a) : run_play(a);
+  // FFmpeg writes its own complaints about damaged streams to stderr: muted.
+  return hf::cli::quiet_stderr([&] { return a.probes ? run_probes(a) : run_play(a); });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool verbose = false;
+  for (int i = 1; i < argc; ++i) verbose = verbose || std::string(argv[i]) == "--verbose";
+  hf::quiet_video_logs(verbose);
+  if (!verbose) cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+  return hf::cli::main("tangible_video", usage, argc, argv, [](hf::cli::Parser& p) { return run(parse(p)); });
+}

@@ -1,0 +1,111 @@
+#pragma once
+/// @file frame_preparer.hpp
+/// FramePreparer: one decoded video frame to a VideoFrame, ready for the
+/// servo thread: gray levels (the paper's Y = 0.3 R + 0.59 G + 0.11 B),
+/// scene-cut detection, denoising, then the tangible-image tables (the O(1)
+/// kernel's integral images for Prewitt and emboss). Runs on the worker
+/// thread (or offline); allocates.
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "hapticfield/image/gray_image.hpp"
+#include "hapticfield/kernels/tangible_image.hpp"
+#include "hapticfield/video/denoise.hpp"
+#include "hapticfield/video/frame_window.hpp"
+#include "hapticfield/video/scene_cut.hpp"
+
+namespace hapticfield {
+
+struct PrepareConfig {
+  TangibleOptions tangible{};  ///< mask, size, border: as for a still picture
+  DenoiseConfig denoise{};
+  SceneCutConfig cuts{};
+};
+
+class FramePreparer {
+ public:
+  /// @throws std::invalid_argument for a bad mask size or denoise / cut setting.
+  explicit FramePreparer(const PrepareConfig& config)
+      : config_(config), denoiser_(config.denoise), cuts_(config.cuts) {
+    validate_mask_size(config.tangible.mask, config.tangible.size);
+  }
+
+  /// Prepares frame `index` at video time `time` [s] from a BGR (3 or 4
+  /// channel) or gray 8-bit image.
+  /// @throws std::invalid_argument for an empty frame, another depth or
+  ///         channel count, a size that differs from the first frame's, or a
+  ///         frame smaller than the mask.
+  std::shared_ptr<const VideoFrame> prepare(const cv::Mat& image, long index, double time) {
+    if (image.empty()) throw std::invalid_argument("FramePreparer: empty frame");
+    if (image.depth() != CV_8U) throw std::invalid_argument("FramePreparer: expected 8-bit frames");
+    if (size_.width > 0 && image.size() != size_)
+      throw std::invalid_argument("FramePreparer: frame size changed from " + std::to_string(size_.width) + " x " +
+                                  std::to_string(size_.height) + " px");
+    to_gray32(image, gray_);
+    const bool cut = cuts_.push(gray_);
+    denoiser_.apply(gray_, cut || !started_);
+    started_ = true;
+
+    GrayImage g(gray_.cols, gray_.rows);
+    for (int y = 0; y < gray_.rows; ++y) {
+      const float* src = gray_.ptr<float>(y);
+      double* dst = g.row(y);
+      for (int x = 0; x < gray_.cols; ++x) dst[x] = static_cast<double>(src[x]);
+    }
+    auto frame = std::make_shared<VideoFrame>(
+        VideoFrame{index, time, cut && index_ >= 0, cuts_.last_difference(), TangibleImage(g, config_.tangible)});
+    size_ = image.size();
+    index_ = index;
+    return frame;
+  }
+
+  /// The next frame starts a new scene without being a cut (a seek): the
+  /// temporal average and the cut detector restart.
+  void restart() noexcept {
+    cuts_.reset();
+    denoiser_.reset();
+    started_ = false;
+    index_ = -1;
+  }
+
+  /// The gray frame after denoising, as the mask saw it last [levels, CV_32F].
+  [[nodiscard]] const cv::Mat& last_gray() const noexcept { return gray_; }
+  [[nodiscard]] const PrepareConfig& config() const noexcept { return config_; }
+
+  /// Gray levels with the paper's weights, as float [0, 255].
+  static void to_gray32(const cv::Mat& image, cv::Mat& out) {
+    switch (image.channels()) {
+      case 1: image.convertTo(out, CV_32F); return;
+      case 3:
+      case 4: {  // one pass: B, G, R bytes to Y = 0.11 B + 0.59 G + 0.3 R
+        const int n = image.channels();
+        out.create(image.size(), CV_32FC1);
+        for (int y = 0; y < image.rows; ++y) {
+          const unsigned char* src = image.ptr<unsigned char>(y);
+          float* dst = out.ptr<float>(y);
+          for (int x = 0; x < image.cols; ++x, src += n)
+            dst[x] = 0.11f * static_cast<float>(src[0]) + 0.59f * static_cast<float>(src[1]) +
+                     0.3f * static_cast<float>(src[2]);
+        }
+        return;
+      }
+      default: throw std::invalid_argument("FramePreparer: expected 1, 3 or 4 channels");
+    }
+  }
+
+ private:
+  PrepareConfig config_;
+  FrameDenoiser denoiser_;
+  SceneCutDetector cuts_;
+  cv::Mat gray_;
+  cv::Size size_{0, 0};
+  long index_ = -1;
+  bool started_ = false;
+};
+
+}  // namespace hapticfield

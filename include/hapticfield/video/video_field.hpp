@@ -1,0 +1,285 @@
+#pragma once
+/// @file video_field.hpp
+/// VideoField: a video felt at 1 kHz (tangible video, "movie haptics").
+///
+/// A worker thread decodes frames, prepares them (gray, scene cuts,
+/// denoising, the kernel's tables; see FramePreparer) and publishes the
+/// window of the two frames that bracket the video time through a LiveField.
+/// The servo thread maps its loop time to video time (PlaybackClock), and
+/// blends the two frames' forces (FrameWindow): it never waits, locks or
+/// allocates. A file decodes one frame ahead; when preparation lags, frames
+/// whose successor is already due are dropped and counted, and windows are
+/// published in order only, so the rendered field never goes back in time
+/// (except by an explicit seek or loop). A live camera blends the previous
+/// and the newest frame, one frame late.
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "hapticfield/core/field.hpp"
+#include "hapticfield/core/live_field.hpp"
+#include "hapticfield/core/plane_mapping.hpp"
+#include "hapticfield/core/vector_math.hpp"
+#include "hapticfield/video/frame_preparer.hpp"
+#include "hapticfield/video/frame_window.hpp"
+#include "hapticfield/video/playback_clock.hpp"
+#include "hapticfield/video/video_source.hpp"
+
+namespace hapticfield {
+
+/// A detected scene cut: the first frame of the new scene.
+struct SceneCut {
+  long frame = 0;     ///< index of the first frame of the new scene
+  double time = 0.0;  ///< its timestamp [s of video time]
+};
+
+/// One published window as a field: the probe's time is video time.
+struct WindowField {
+  FrameWindow window;
+  PlaneMapping mapping;
+  double gain = 1.0;  ///< force at a black/white edge [N]
+
+  [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept {
+    if (!is_finite(probe.position)) return glm::dvec3{0.0};
+    const glm::dvec2 px = mapping.to_image(probe.position);
+    return gain * mapping.vector_to_device(window.at(probe.time, px.x, px.y));
+  }
+};
+
+struct VideoFieldConfig {
+  PrepareConfig prepare{};
+  PlaybackConfig playback{};  ///< a file's duration is filled in from the source when left infinite
+  double fade = default_cut_fade;  ///< fade time across a cut [s], [0, 10]
+  double gain = 1.0;               ///< force at a black/white edge [N], finite, >= 0
+  /// Called on the worker thread before each frame is prepared (tests use
+  /// it to make the worker slow); may be empty.
+  std::function<void(long)> before_prepare{};
+};
+
+/// Counters, readable from any thread.
+struct VideoStatistics {
+  long prepared = 0;   ///< frames prepared
+  long dropped = 0;    ///< frames skipped because preparation lagged
+  long bad = 0;        ///< frames that failed to decode
+  long published = 0;  ///< windows handed to the servo thread
+  long cuts = 0;       ///< scene cuts detected
+  bool ended = false;  ///< the stream ended (the last frame is held)
+  double video_time = 0.0;  ///< the servo thread's latest video time [s]
+};
+
+class VideoField {
+ public:
+  /// Starts the worker thread on `source`.
+  /// @throws std::invalid_argument for a bad gain, fade, mask or playback setting.
+  VideoField(std::unique_ptr<VideoSource> source, PlaneMapping mapping, VideoFieldConfig config)
+      : state_(std::make_unique<State>(std::move(source), mapping, std::move(config))) {
+    state_->worker = std::thread([s = state_.get()] { s->run(); });
+  }
+  VideoField(VideoField&&) noexcept = default;
+  VideoField& operator=(VideoField&&) noexcept = default;
+  ~VideoField() {
+    if (state_) state_->stop_and_join();
+  }
+
+  /// Force on the HIP [N] at the loop time probe.time [s]: servo thread only.
+  [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
+    State& s = *state_;
+    const double t = s.clock.at(probe.time);
+    s.video_time.store(t, std::memory_order_release);
+    Probe on = probe;
+    on.time = t;
+    return s.live.force(on);
+  }
+
+  /// Playback controls, from any thread.
+  [[nodiscard]] PlaybackClock& playback() noexcept { return state_->clock; }
+
+  [[nodiscard]] VideoStatistics statistics() const {
+    const State& s = *state_;
+    VideoStatistics v;
+    v.prepared = s.prepared.load();
+    v.dropped = s.dropped.load();
+    v.bad = s.bad.load();
+    v.published = s.published.load();
+    v.cuts = s.cut_count.load();
+    v.ended = s.ended.load();
+    v.video_time = s.video_time.load();
+    return v;
+  }
+
+  /// Every cut detected so far (not for the servo thread: it locks).
+  [[nodiscard]] std::vector<SceneCut> cuts() const {
+    std::lock_guard<std::mutex> lock(state_->cuts_mutex);
+    return state_->cuts;
+  }
+
+  /// The worker's error, if it stopped on one (empty otherwise).
+  [[nodiscard]] std::string error() const {
+    std::lock_guard<std::mutex> lock(state_->cuts_mutex);
+    return state_->error;
+  }
+
+  [[nodiscard]] double fps() const noexcept { return state_->fps; }
+  [[nodiscard]] int width() const noexcept { return state_->width; }
+  [[nodiscard]] int height() const noexcept { return state_->height; }
+
+  /// Stops the worker (the field keeps its last window).
+  void stop() { state_->stop_and_join(); }
+
+ private:
+  struct State {
+    State(std::unique_ptr<VideoSource> src, PlaneMapping map, VideoFieldConfig cfg)
+        : source(std::move(src)),
+          mapping(map),
+          config(std::move(cfg)),
+          preparer(config.prepare),
+          builder(config.fade),
+          clock(playback_config(*source, config.playback)),
+          fps(source->fps()),
+          width(source->width()),
+          height(source->height()) {
+      if (!std::isfinite(config.gain) || config.gain < 0.0)
+        throw std::invalid_argument("VideoField: gain must be finite and non-negative [N]");
+      video_time.store(config.playback.start);
+    }
+
+    static PlaybackConfig playback_config(const VideoSource& source, PlaybackConfig p) {
+      if (!std::isfinite(p.duration) && !source.live()) p.duration = source.duration();
+      if (source.live()) p.loop = false;
+      return p;
+    }
+
+    void stop_and_join() {
+      stop.store(true);
+      if (worker.joinable()) worker.join();
+    }
+
+    void publish(const FrameWindow& w) {
+      live.publish(WindowField{w, mapping, config.gain});
+      published.fetch_add(1);
+    }
+
+    void record_cut(const VideoFrame& f) {
+      cut_count.fetch_add(1);
+      std::lock_guard<std::mutex> lock(cuts_mutex);
+      cuts.push_back({f.index, f.time});
+    }
+
+    void run() noexcept {
+      try {
+        if (source->live()) run_live();
+        else run_file();
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(cuts_mutex);
+        error = e.what();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(cuts_mutex);
+        error = "unknown error";
+      }
+      ended.store(true);
+    }
+
+    void run_file() {
+      std::optional<FrameWindow> pending;
+      std::uint32_t epoch = clock.epoch();
+      bool end = false;
+      bool have_frame = false;
+      cv::Mat image;
+      if (config.playback.start > 0.0) source->seek(static_cast<long>(std::floor(config.playback.start * fps)));
+      while (!stop.load()) {
+        if (const std::uint32_t e = clock.epoch(); e != epoch) {  // a seek or a loop
+          epoch = e;
+          const double t = video_time.load(std::memory_order_acquire);
+          source->seek(static_cast<long>(std::floor(t * fps + 1e-9)));
+          preparer.restart();
+          builder.reset();
+          pending.reset();
+          end = have_frame = false;
+          ended.store(false);
+        }
+        const double t = video_time.load(std::memory_order_acquire);
+        if (!pending && !end) {
+          long index = 0;
+          if (!source->read(image, index)) {
+            end = true;
+            bad.store(source->bad_frames());
+            pending = builder.last();
+            ended.store(true);
+            continue;
+          }
+          bad.store(source->bad_frames());
+          if (have_frame && source->time_of(index + 1) <= t) {  // its successor is already due
+            dropped.fetch_add(1);
+            continue;
+          }
+          if (config.before_prepare) config.before_prepare(index);
+          std::shared_ptr<const VideoFrame> f = preparer.prepare(image, index, source->time_of(index));
+          prepared.fetch_add(1);
+          have_frame = true;
+          if (f->cut) record_cut(*f);
+          pending = builder.push(std::move(f));
+          continue;
+        }
+        if (pending && t >= pending->t0 - 1e-9) {
+          publish(*pending);
+          pending.reset();
+          continue;
+        }
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+      }
+    }
+
+    void run_live() {
+      cv::Mat image;
+      const double period = 1.0 / fps;
+      while (!stop.load()) {
+        long index = 0;
+        if (!source->read(image, index)) break;
+        bad.store(source->bad_frames());
+        if (config.before_prepare) config.before_prepare(index);
+        const double now = video_time.load(std::memory_order_acquire);
+        std::shared_ptr<const VideoFrame> f = preparer.prepare(image, index, now);
+        prepared.fetch_add(1);
+        if (f->cut) record_cut(*f);
+        publish(builder.push_live(std::move(f), now, period));
+      }
+    }
+
+    std::unique_ptr<VideoSource> source;
+    PlaneMapping mapping;
+    VideoFieldConfig config;
+    FramePreparer preparer;
+    WindowBuilder builder;
+    PlaybackClock clock;
+    double fps;
+    int width;
+    int height;
+    LiveField<WindowField> live;
+    std::atomic<double> video_time{0.0};
+    std::atomic<bool> stop{false};
+    std::atomic<bool> ended{false};
+    std::atomic<long> prepared{0}, dropped{0}, bad{0}, published{0}, cut_count{0};
+    mutable std::mutex cuts_mutex;
+    std::vector<SceneCut> cuts;
+    std::string error;
+    std::thread worker;
+  };
+
+  std::unique_ptr<State> state_;
+};
+
+static_assert(HapticField<VideoField>);
+
+}  // namespace hapticfield

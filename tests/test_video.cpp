@@ -1,0 +1,504 @@
+// Tests of tangible video: frame blending, scene cuts and their fades,
+// denoising, the playback clock, the worker-fed field (never waits, never
+// allocates, never goes back in time) and bad input. Exact tests use small
+// clips written here (lossless PNG sequences, and MJPG files for codec
+// noise); the tests on opencv-doc's real clips skip when it is absent.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "alloc_counter.hpp"
+#include "hapticfield/core.hpp"
+#include "hapticfield/video.hpp"
+
+using namespace hapticfield;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / "video";
+
+/// A picture of scene `scene` at frame `k`: scene 0 a dark bar on white
+/// moving right by `speed` px per frame; scene 1 a light disc on black.
+cv::Mat scene_frame(int scene, int k, int w = 96, int h = 64, double speed = 2.0) {
+  cv::Mat m;
+  if (scene == 0) {
+    m = cv::Mat(h, w, CV_8UC3, cv::Scalar(230, 230, 230));
+    const int x = 20 + static_cast<int>(std::lround(speed * k));
+    cv::rectangle(m, cv::Point(x, 10), cv::Point(x + 12, h - 10), cv::Scalar(30, 30, 30), cv::FILLED);
+  } else {
+    m = cv::Mat(h, w, CV_8UC3, cv::Scalar(20, 20, 20));
+    cv::circle(m, cv::Point(w / 2, h / 2), 18, cv::Scalar(220, 220, 220), cv::FILLED);
+  }
+  return m;
+}
+
+/// Writes frames as a PNG sequence; returns the printf pattern.
+std::string write_sequence(const std::string& name, const std::vector<cv::Mat>& frames) {
+  const fs::path dir = tmp / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    char file[32];
+    std::snprintf(file, sizeof file, "%04zu.png", i);
+    REQUIRE(cv::imwrite((dir / file).string(), frames[i]));
+  }
+  return (dir / "%04d.png").string();
+}
+
+/// Writes frames to an MJPG .avi (lossy, like a real codec); returns its path.
+std::string write_mjpg(const std::string& name, const std::vector<cv::Mat>& frames, double fps, int quality = 60) {
+  fs::create_directories(tmp);
+  const std::string path = (tmp / (name + ".avi")).string();
+  cv::VideoWriter writer(path, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps,
+                         frames.front().size());
+  REQUIRE(writer.isOpened());
+  writer.set(cv::VIDEOWRITER_PROP_QUALITY, quality);
+  for (const cv::Mat& f : frames) writer.write(f);
+  writer.release();
+  return path;
+}
+
+cv::Mat add_noise(const cv::Mat& m, double sigma, unsigned seed) {
+  cv::Mat noise(m.size(), CV_16SC3);
+  cv::theRNG().state = seed;
+  cv::randn(noise, 0.0, sigma);
+  cv::Mat out;
+  m.convertTo(out, CV_16SC3);
+  out += noise;
+  out.convertTo(out, CV_8UC3);
+  return out;
+}
+
+PrepareConfig plain_config(int size = 5) {
+  PrepareConfig c;
+  c.tangible.size = size;
+  c.tangible.border = Border::clamp;
+  c.denoise.mode = DenoiseMode::none;
+  return c;
+}
+
+/// The force of one still picture, through the still-picture API (the oracle).
+TangibleImage still(const cv::Mat& bgr, const TangibleOptions& o) { return TangibleImage(to_gray(bgr), o); }
+
+struct Quiet {
+  Quiet() {
+    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+    quiet_video_logs(false);
+  }
+} quiet;
+
+const char* opencv_doc_dir() {
+  for (const char* d : {"/usr/share/doc/opencv-doc/examples/data", "/usr/share/opencv4/samples/data"})
+    if (fs::exists(fs::path(d) / "vtest.avi") || fs::exists(fs::path(d) / "Megamind.avi")) return d;
+  return nullptr;
+}
+
+}  // namespace
+
+TEST_CASE("between cuts the force is the linear blend of the two bracketing frames", "[video]") {
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 6; ++k) frames.push_back(scene_frame(0, k));
+  VideoSource source(write_sequence("blend", frames), {.fallback_fps = 25.0});
+  const double fps = source.fps();
+  const PrepareConfig config = plain_config();
+  VideoTimeline timeline(source, config, 0.0);  // no fade at the start: exact blends from t = 0
+  for (int k = 0; k < 5; ++k) {
+    const TangibleImage a = still(frames[static_cast<std::size_t>(k)], config.tangible);
+    const TangibleImage b = still(frames[static_cast<std::size_t>(k + 1)], config.tangible);
+    for (double alpha : {0.0, 0.25, 0.5, 0.9}) {
+      const double t = (k + alpha) / fps;
+      for (double x : {21.0, 26.5, 33.0, 40.25}) {
+        const glm::dvec2 f = timeline.at(t, x, 30.0);
+        const glm::dvec2 expected = (1.0 - alpha) * a.at(x, 30.0) + alpha * b.at(x, 30.0);
+        CAPTURE(k, alpha, x);
+        CHECK(f.x == Approx(expected.x).margin(1e-9));
+        CHECK(f.y == Approx(expected.y).margin(1e-9));
+      }
+    }
+  }
+  // After the last frame it is held.
+  const glm::dvec2 end = timeline.at(100.0, 33.0, 30.0);
+  CHECK(end.x == Approx(still(frames.back(), config.tangible).at(33.0, 30.0).x).margin(1e-9));
+}
+
+TEST_CASE("a cut is found at its frame and faded out and in, never blended", "[video]") {
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 10; ++k) frames.push_back(scene_frame(0, k));
+  for (int k = 0; k < 8; ++k) frames.push_back(scene_frame(1, k));
+  VideoSource source(write_sequence("cut", frames), {.fallback_fps = 25.0});
+  const double fps = source.fps();
+  const PrepareConfig config = plain_config();
+  const double fade = 0.1;
+  VideoTimeline timeline(source, config, fade);
+  const double tc = 10.0 / fps;  // the first frame of scene 1
+  const TangibleImage last_a = still(frames[9], config.tangible);
+  const TangibleImage b10 = still(frames[10], config.tangible);
+  const TangibleImage b11 = still(frames[11], config.tangible);
+  const double x = 30.0, y = 14.0;  // on the bar's edge in scene 0, on the disc's edge region in scene 1
+  // Before the cut, frame 9 is held (never blended with frame 10).
+  CHECK(timeline.at(tc - 0.2 / fps, x, y).x == Approx(last_a.at(x, y).x).margin(1e-9));
+  for (double s : {0.0, 0.01, 0.025, 0.049}) {  // fade out of the old scene
+    CAPTURE(s);
+    const glm::dvec2 f = timeline.at(tc + s, x, y);
+    CHECK(f.x == Approx((1.0 - s / 0.05) * last_a.at(x, y).x).margin(1e-9));
+  }
+  for (double s : {0.06, 0.075, 0.099}) {  // fade in of the new one (blended 10 -> 11)
+    CAPTURE(s);
+    const double w = (s - 0.05) / 0.05;
+    const double alpha = (tc + s) * fps - 10.0;
+    const glm::dvec2 f = timeline.at(tc + s, 48.0, 14.0);
+    const glm::dvec2 expected = w * ((1.0 - alpha) * b10.at(48.0, 14.0) + alpha * b11.at(48.0, 14.0));
+    CHECK(f.y == Approx(expected.y).margin(1e-9));
+  }
+  timeline.run_to_end();
+  REQUIRE(timeline.cuts().size() == 1);
+  CHECK(timeline.cuts()[0].frame == 10);
+  CHECK(timeline.cuts()[0].time == Approx(tc));
+}
+
+TEST_CASE("scene cuts are found in a compressed, noisy clip with motion, and nowhere else", "[video]") {
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 15; ++k) frames.push_back(add_noise(scene_frame(0, k, 160, 96, 3.0), 6.0, 100u + k));
+  for (int k = 0; k < 15; ++k) frames.push_back(add_noise(scene_frame(1, k, 160, 96), 6.0, 200u + k));
+  for (int k = 15; k < 30; ++k) frames.push_back(add_noise(scene_frame(0, k, 160, 96, 3.0), 6.0, 300u + k));
+  VideoSource source(write_mjpg("cuts", frames, 30.0, 50));
+  VideoTimeline timeline(source, plain_config());
+  timeline.run_to_end();
+  std::vector<long> found;
+  for (const SceneCut& c : timeline.cuts()) found.push_back(c.frame);
+  CHECK(found == std::vector<long>{15, 30});
+  CHECK(timeline.prepared() == 45);
+}
+
+TEST_CASE("temporal denoising removes codec flicker at static points and keeps moving edges current", "[video]") {
+  // A static textured picture with fresh noise each frame, through MJPG,
+  // and a bar moving 3 px per frame over it.
+  cv::Mat base(96, 160, CV_8UC3);
+  for (int y = 0; y < base.rows; ++y)
+    for (int x = 0; x < base.cols; ++x) {
+      const auto v = static_cast<unsigned char>(128 + 60 * std::sin(x * 0.09) * std::cos(y * 0.13));
+      base.at<cv::Vec3b>(y, x) = {v, v, v};
+    }
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 40; ++k) {
+    cv::Mat f = base.clone();
+    const int bx = 10 + 3 * k;
+    cv::rectangle(f, cv::Point(bx, 60), cv::Point(bx + 8, 90), cv::Scalar(0, 0, 0), cv::FILLED);
+    frames.push_back(add_noise(f, 5.0, 7u + k));
+  }
+  const std::string clip = write_mjpg("flicker", frames, 30.0, 70);
+
+  const auto flicker = [&](DenoiseMode mode, std::vector<double>* bar_edge) {
+    VideoSource source(clip);
+    PrepareConfig c = plain_config(9);
+    c.denoise.mode = mode;
+    VideoTimeline timeline(source, c, 0.0);
+    double sum2 = 0.0;
+    long n = 0;
+    std::vector<glm::dvec2> previous;
+    for (int k = 0; k < 40; ++k) {
+      const double t = k / 30.0;
+      std::vector<glm::dvec2> now;
+      for (int y = 8; y < 50; y += 4)  // static area above the bar
+        for (int x = 8; x < 152; x += 4) now.push_back(timeline.at(t, x, y));
+      if (k >= 5 && !previous.empty())
+        for (std::size_t i = 0; i < now.size(); ++i) {
+          const glm::dvec2 d = now[i] - previous[i];
+          sum2 += d.x * d.x + d.y * d.y;
+          ++n;
+        }
+      previous = now;
+      if (bar_edge && k >= 5) {  // where the bar's left edge is felt: the strongest +x force on row 75
+        double best = -1.0, at = 0.0;
+        for (double x = 0.0; x < 160.0; x += 0.25) {
+          const double fx = timeline.at(t, x, 75.0).x;
+          if (fx > best) best = fx, at = x;
+        }
+        bar_edge->push_back(at);
+      }
+    }
+    return std::sqrt(sum2 / static_cast<double>(n));
+  };
+  std::vector<double> edge_none, edge_temporal, edge_both;
+  const double none = flicker(DenoiseMode::none, &edge_none);
+  const double temporal = flicker(DenoiseMode::temporal, &edge_temporal);
+  const double spatial = flicker(DenoiseMode::spatial, nullptr);
+  const double both = flicker(DenoiseMode::both, &edge_both);
+  CAPTURE(none, temporal, spatial, both);
+  CHECK(temporal < 0.6 * none);
+  CHECK(spatial < none);
+  CHECK(both < 0.6 * none);
+  // The moving bar's edge is felt where the current frame shows it.
+  for (std::size_t i = 0; i < edge_none.size(); ++i) {
+    CAPTURE(i);
+    CHECK(std::abs(edge_temporal[i] - edge_none[i]) <= 1.0);
+    CHECK(std::abs(edge_both[i] - edge_none[i]) <= 1.5);
+  }
+}
+
+TEST_CASE("the playback clock follows the loop's clock, pauses, seeks, changes rate and loops", "[video]") {
+  PlaybackClock clock(PlaybackConfig{.rate = 1.0, .start = 0.0, .loop = true, .duration = 2.0});
+  CHECK(clock.at(10.0) == Approx(0.0));  // anchored at the first tick
+  CHECK(clock.at(10.5) == Approx(0.5));
+  clock.pause();
+  CHECK(clock.at(11.0) == Approx(0.5));
+  CHECK(clock.at(12.0) == Approx(0.5));
+  clock.resume();  // from the next tick on
+  CHECK(clock.at(12.25) == Approx(0.5));
+  CHECK(clock.at(12.5) == Approx(0.75));
+  clock.set_rate(2.0);
+  CHECK(clock.at(12.5) == Approx(0.75));
+  CHECK(clock.at(12.75) == Approx(1.25));
+  const auto epoch = clock.epoch();
+  clock.seek(0.2);
+  CHECK(clock.at(12.8) == Approx(0.2));
+  CHECK(clock.epoch() == epoch + 1);
+  CHECK(clock.at(13.75) == Approx(0.1));  // 0.2 + 2 * 0.95 = 2.1: wraps to 0.1
+  CHECK(clock.at(13.8) == Approx(0.2));
+  CHECK(clock.epoch() == epoch + 2);
+  CHECK_THROWS_AS(clock.set_rate(0.0), std::invalid_argument);
+  CHECK_THROWS_AS(clock.set_rate(100.0), std::invalid_argument);
+  PlaybackClock once(PlaybackConfig{.duration = 1.0});
+  (void)once.at(0.0);
+  CHECK(once.at(5.0) == Approx(1.0));  // no loop: the end is held
+}
+
+TEST_CASE("the field's servo path never waits for, locks against or allocates with a slow worker", "[video][alloc]") {
+  // Frame k: a horizontal ramp whose slope grows with k, so the felt force
+  // grows with video time, blends included.
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 60; ++k) {
+    cv::Mat m(48, 64, CV_8UC3);
+    for (int x = 0; x < 64; ++x) {
+      const auto v = cv::saturate_cast<unsigned char>(128.0 - (0.5 + 0.05 * k) * (x - 32));
+      m.col(x).setTo(cv::Scalar(v, v, v));
+    }
+    frames.push_back(m);
+  }
+  const std::string seq = write_sequence("ramp", frames);
+  std::atomic<bool> hold{false};
+  std::atomic<bool> holding{false};
+  std::atomic<int> delay_ms{0};
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.playback.rate = 1.0;
+  config.before_prepare = [&](long index) {
+    if (index >= 3 && hold.load()) {
+      holding.store(true);
+      while (hold.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      holding.store(false);
+    }
+    if (const int d = delay_ms.load()) std::this_thread::sleep_for(std::chrono::milliseconds(d));
+  };
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});  // 1 px/mm, centred
+  hold.store(true);
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
+  Probe probe;
+  probe.position = {0.0, 0.0, 0.0};
+  double t = 0.0;
+  // Play until the worker is stuck in frame 3's preparation.
+  for (int i = 0; i < 5000 && !holding.load(); ++i) {
+    probe.time = t;
+    (void)field.force(probe);
+    t += 1e-3;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  REQUIRE(holding.load());
+  const double t_blocked = t;
+  glm::dvec3 sum{0.0};
+  // 20000 ticks of virtual time while the worker is blocked: none waits.
+  const long allocations = test::count_allocations([&] {
+    for (int i = 0; i < 20000; ++i) {
+      probe.time = t;
+      sum += field.force(probe);
+      t += 1e-3;
+    }
+  });
+  if (test::allocations_counted) CHECK(allocations == 0);
+  CHECK(std::isfinite(sum.x));
+  CHECK(t > t_blocked + 19.9);
+  CHECK(field.statistics().video_time == Approx(2.4));  // 60 frames at 25 fps: the end is held
+  hold.store(false);
+  field.playback().seek(0.0);  // back to the start: the worker restarts there
+  // Play on with a slow worker (8 ms per frame, 4x speed = 10 ms of video per
+  // frame period of 40 ms) in real time: frames are dropped, counted, and
+  // the force never goes back.
+  field.playback().set_rate(8.0);
+  delay_ms.store(8);
+  double last = 0.0;
+  bool monotonic = true;
+  long nonzero = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(300)) {
+    probe.time = t;
+    const double fx = field.force(probe).x;
+    if (fx != 0.0) {
+      ++nonzero;
+      if (fx < last - 1e-12) monotonic = false;
+      last = std::max(last, fx);
+    }
+    t += 1e-3;
+    std::this_thread::sleep_for(std::chrono::microseconds(1000));
+  }
+  const VideoStatistics s = field.statistics();
+  CAPTURE(s.prepared, s.dropped, s.published, nonzero);
+  CHECK(monotonic);
+  CHECK(nonzero > 50);
+  CHECK(s.dropped > 0);
+  field.stop();
+}
+
+TEST_CASE("a video field composes with a plane, textures and friction like a still picture", "[video]") {
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 4; ++k) frames.push_back(scene_frame(0, 0));
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = 0.0;
+  const PlaneMapping mapping(1.0, glm::dvec2{48.0, 32.0});
+  VideoField video(std::make_unique<VideoSource>(write_sequence("compose", frames)), mapping, config);
+  for (int i = 0; i < 2000 && video.statistics().published == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  REQUIRE(video.statistics().published > 0);
+  const PlaneConstraint plane(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1000.0, 0.0});
+  auto felt = contact(plane, std::move(video));
+  Probe p;
+  p.position = {(20.0 - 48.0) * 1e-3, 0.0, -1e-3};  // on the bar's left edge [m]; 1 mm into the plane
+  const glm::dvec3 f = felt.force(p);
+  const TangibleImage oracle = still(frames[0], config.prepare.tangible);
+  CHECK(f.z == Approx(1.0));  // Fc = 1000 N/m * 1 mm
+  CHECK(f.x == Approx(oracle.at(20.0, 32.0).x).margin(1e-9));
+  p.position.z = 1e-3;  // off the plane: nothing
+  CHECK(glm::length(felt.force(p)) == 0.0);
+}
+
+TEST_CASE("bad video input is one clear error, and a damaged stream plays what decodes", "[video][bad]") {
+  fs::create_directories(tmp);
+  CHECK_THROWS_AS(VideoSource((tmp / "missing.avi").string()), FileError);
+  const std::string text = (tmp / "text.avi").string();
+  std::ofstream(text) << "this is not a video\n";
+  try {
+    VideoSource s(text);
+    FAIL("a text file opened as a video");
+  } catch (const FileError& e) {
+    CHECK(std::string(e.what()).find("text.avi") != std::string::npos);
+  }
+  const std::string empty = (tmp / "empty.avi").string();
+  std::ofstream(empty).close();
+  CHECK_THROWS_AS(VideoSource(empty), FileError);
+  CHECK_THROWS_AS(VideoSource(tmp.string()), FileError);  // a folder
+
+  // An MJPG clip with a run of bytes overwritten in its middle.
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 30; ++k) frames.push_back(scene_frame(0, k, 96, 64, 1.0));
+  const std::string clip = write_mjpg("damaged", frames, 25.0);
+  {
+    std::fstream f(clip, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(0, std::ios::end);
+    const auto size = static_cast<long>(f.tellg());
+    std::mt19937 rng(5);
+    for (long at = size / 3; at < size / 3 + size / 6; ++at) {
+      f.seekp(at);
+      f.put(static_cast<char>(rng()));
+    }
+  }
+  VideoSource damaged(clip);
+  VideoTimeline timeline(damaged, plain_config());
+  timeline.run_to_end();
+  CHECK(timeline.prepared() > 0);
+  CHECK(timeline.prepared() <= 30);
+
+  // Bad settings.
+  CHECK_THROWS_AS(WindowBuilder(-1.0), std::invalid_argument);
+  CHECK_THROWS_AS(FrameDenoiser(DenoiseConfig{.weight = 0.0}), std::invalid_argument);
+  CHECK_THROWS_AS(SceneCutDetector(SceneCutConfig{.ratio = 0.5}), std::invalid_argument);
+  CHECK_THROWS_AS(PlaybackClock(PlaybackConfig{.rate = -1.0}), std::invalid_argument);
+  // A frame of another size in the stream, or smaller than the mask.
+  FramePreparer prep(plain_config(17));
+  CHECK_THROWS_AS(prep.prepare(cv::Mat(8, 8, CV_8UC3, cv::Scalar::all(0)), 0, 0.0), std::invalid_argument);
+  (void)prep.prepare(scene_frame(0, 0), 0, 0.0);
+  CHECK_THROWS_AS(prep.prepare(scene_frame(0, 0, 80, 64), 1, 0.04), std::invalid_argument);
+  // Non-finite probes and times give zero force.
+  FrameWindow w;
+  CHECK(glm::length(w.at(0.0, 1.0, 1.0)) == 0.0);
+}
+
+TEST_CASE("opencv-doc's real clips: cuts in Megamind, the damaged copy plays, vtest flicker", "[video][real]") {
+  const char* dir = opencv_doc_dir();
+  if (!dir) {
+    WARN("SKIPPED: opencv-doc's sample videos are not installed (apt-get install opencv-doc)");
+    return;
+  }
+  const fs::path d(dir);
+  if (fs::exists(d / "Megamind.avi")) {
+    VideoSource source((d / "Megamind.avi").string());
+    VideoTimeline timeline(source, plain_config(17));
+    timeline.run_to_end();
+    std::string list;
+    for (const SceneCut& c : timeline.cuts()) list += std::to_string(c.frame) + " ";
+    INFO("Megamind cuts: " << list);
+    // The three camera changes, checked by eye on a contact sheet of the
+    // clip (frames 97/98, 153/154, 199/200); frame 0 -> 1 is a fade from
+    // black, not a cut.
+    std::vector<long> frames;
+    for (const SceneCut& c : timeline.cuts()) frames.push_back(c.frame);
+    CHECK(frames == std::vector<long>{98, 154, 200});
+  }
+  if (fs::exists(d / "Megamind_bugy.avi")) {
+    VideoSource source((d / "Megamind_bugy.avi").string());
+    VideoTimeline timeline(source, plain_config(17));
+    timeline.run_to_end();
+    CHECK(timeline.prepared() > 10);
+  }
+  if (fs::exists(d / "vtest.avi")) {
+    VideoSource source((d / "vtest.avi").string());
+    VideoTimeline timeline(source, plain_config(17));
+    timeline.run_to_end();
+    CHECK(timeline.cuts().empty());  // one static street camera
+  }
+}
+
+TEST_CASE("a live source blends the previous and the newest frame one frame late, and fades across a cut",
+          "[video]") {
+  PrepareConfig config = plain_config();
+  config.cuts.min_scene_frames = 1;
+  FramePreparer prep(config);
+  WindowBuilder builder(0.1);
+  const double period = 0.04;  // [s]
+  const cv::Mat a = scene_frame(0, 0), b = scene_frame(0, 3), c = scene_frame(1, 0);
+  const TangibleImage fa = still(a, config.tangible), fb = still(b, config.tangible), fc = still(c, config.tangible);
+  // The first frame fades in from zero over [1.0, 1.1].
+  const FrameWindow w0 = builder.push_live(prep.prepare(a, 0, 0.0), 1.0, period);
+  CHECK(glm::length(w0.at(1.02, 26.0, 30.0)) == 0.0);
+  CHECK(w0.at(1.2, 26.0, 30.0).x == Approx(fa.at(26.0, 30.0).x).margin(1e-9));
+  // The next frame arrives at 1.2: blended in over [1.2, 1.24].
+  const FrameWindow w1 = builder.push_live(prep.prepare(b, 1, 0.0), 1.2, period);
+  for (double s : {0.0, 0.01, 0.03, 0.05}) {
+    CAPTURE(s);
+    const double alpha = std::min(s / period, 1.0);
+    const double expected = (1.0 - alpha) * fa.at(26.0, 30.0).x + alpha * fb.at(26.0, 30.0).x;
+    CHECK(w1.at(1.2 + s, 26.0, 30.0).x == Approx(expected).margin(1e-9));
+  }
+  // A cut arrives at 1.3: the last frame fades out, the new scene fades in.
+  auto cut = prep.prepare(c, 2, 0.0);
+  REQUIRE(cut->cut);
+  const FrameWindow w2 = builder.push_live(cut, 1.3, period);
+  CHECK(w2.at(1.325, 26.0, 30.0).x == Approx(0.5 * fb.at(26.0, 30.0).x).margin(1e-9));
+  CHECK(w2.at(1.375, 48.0, 14.0).y == Approx(0.5 * fc.at(48.0, 14.0).y).margin(1e-9));
+  CHECK(w2.at(1.5, 48.0, 14.0).y == Approx(fc.at(48.0, 14.0).y).margin(1e-9));
+}
