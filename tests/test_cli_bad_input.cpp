@@ -47,6 +47,7 @@ const std::map<std::string, std::string> tools = {
     {"two_arms", HAPTICFIELD_TOOL_TWO_ARMS},
 #ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
     {"hapticfield_view", HAPTICFIELD_TOOL_HAPTICFIELD_VIEW},
+#endif
 #ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
     {"tangible_video", HAPTICFIELD_TOOL_TANGIBLE_VIDEO},
 #endif
@@ -485,6 +486,9 @@ TEST_CASE("hapticfield_view: bad command lines exit 2, bad pictures and paths ex
                    bad_input, "face 1"});
   for (const Case& c : cases) check_error(c);
   CHECK_FALSE(fs::exists(shot));  // no case drew anything
+}
+#endif
+
 #ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
 namespace {
 /// A 20-frame MJPG clip, 64 x 48 px at 20 fps: white, black from column 32
