@@ -17,7 +17,7 @@ namespace {
 /// consecutive ticks.
 py::array_t<double> forces(Field& self, const Array& positions, const std::optional<Array>& velocities,
                            const std::optional<Array>& normal_forces, const std::optional<Array>& surface_normals,
-                           double period, double start_time) {
+                           double period, double start_time, const std::optional<py::array>& into) {
   if (!(std::isfinite(period) && period > 0.0)) throw py::value_error("forces: period must be finite and > 0 [s]");
   const py::ssize_t n = rows_of(positions, 3, "positions");
   if (velocities && rows_of(*velocities, 3, "velocities") != n)
@@ -26,7 +26,16 @@ py::array_t<double> forces(Field& self, const Array& positions, const std::optio
     throw py::value_error("normal_forces: must have as many entries as positions");
   if (surface_normals && rows_of(*surface_normals, 3, "surface_normals") != n)
     throw py::value_error("surface_normals: must have as many rows as positions");
-  auto out = matrix(n, 3);
+  py::array_t<double> out;
+  if (into) {
+    const py::array& o = *into;
+    if (!o.dtype().is(py::dtype::of<double>()) || o.ndim() != 2 || o.shape(0) != n || o.shape(1) != 3 ||
+        !(o.flags() & py::array::c_style) || !o.writeable())
+      throw py::value_error("out: expected a writable C-contiguous float64 array of shape N x 3");
+    out = py::reinterpret_borrow<py::array_t<double>>(o);
+  } else {
+    out = matrix(n, 3);
+  }
   const double* p = positions.data();
   const double* v = velocities ? velocities->data() : nullptr;
   const double* nf = normal_forces ? normal_forces->data() : nullptr;
@@ -81,10 +90,11 @@ void bind_core(py::module_& m) {
                     "normal force [N], surface normal).")
       .def("forces", &forces, py::arg("positions"), py::arg("velocities") = py::none(),
            py::arg("normal_forces") = py::none(), py::arg("surface_normals") = py::none(),
-           py::arg("period") = servo_period, py::arg("start_time") = 0.0,
+           py::arg("period") = servo_period, py::arg("start_time") = 0.0, py::arg("out") = py::none(),
            "Forces [N] (N x 3) at N probes: positions N x 3 [m], optional velocities N x 3 [m/s], normal forces "
            "N [N] and surface normals N x 3 (unit). The probes are evaluated in order as consecutive ticks "
-           "period [s] apart, so stateful fields (filters, local spheres) advance. The GIL is released.")
+           "period [s] apart, so stateful fields (filters, local spheres) advance. out: an N x 3 float64 array to "
+           "write into (reused between calls). The GIL is released.")
       .def(
           "force",
           [](Field& self, const V3& position, const V3& velocity, double normal_force, const V3& surface_normal) {

@@ -103,6 +103,16 @@ def test_vectorised_forces_equal_one_probe_at_a_time():
     np.testing.assert_array_equal(batch, single)
 
 
+def test_forces_write_into_a_given_array():
+    positions, velocities = stroke(300)
+    out = np.full((300, 3), np.nan)
+    result = make_scene().forces(positions, velocities, out=out)
+    assert np.shares_memory(result, out)
+    np.testing.assert_array_equal(out, make_scene().forces(positions, velocities))
+    with pytest.raises(ValueError, match="out"):
+        make_scene().forces(positions, velocities, out=np.zeros((300, 3), dtype=np.float32))
+
+
 def test_contact_is_fc_plus_texture_plus_friction_in_closed_form():
     k, depth, speed, mu, b = 1500.0, 1e-3, 0.05, 0.4, 0.5
     plane = hf.plane_contact(stiffness=k)
