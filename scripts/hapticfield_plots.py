@@ -94,7 +94,10 @@ def texture_panels(axes, entry, trace, psd):
     axes[0].legend(loc="upper right", fontsize="x-small")
     axes[0].grid(alpha=0.3)
     pairs = [(fr, p) for fr, p in zip(psd["frequency_Hz"], psd["psd_N2_per_Hz"]) if fr > 0 and p > 0]
-    if pairs:
+    if max(f) - min(f) < 1e-9:  # a constant force [N]: its spectrum is rounding noise
+        axes[1].text(0.5, 0.5, f"constant {f[0]:.3g} N: no spectrum", ha="center", va="center",
+                     transform=axes[1].transAxes)
+    elif pairs:
         axes[1].loglog([p[0] for p in pairs], [p[1] for p in pairs], lw=0.8, color="tab:orange", label="Welch PSD")
         axes[1].legend(loc="lower left", fontsize="x-small")
     axes[1].set(xlabel="frequency [Hz]", ylabel="PSD [N²/Hz]")
@@ -126,7 +129,7 @@ def texture(args):
         print(f"  {e['stem']}.png  ({e['description']})")
     cols = 3
     rows = (len(loaded) + cols - 1) // cols
-    fig, axes = plt.subplots(2 * rows, cols, figsize=(4.2 * cols, 3.6 * rows), dpi=80, layout="constrained",
+    fig, axes = plt.subplots(2 * rows, cols, figsize=(4.2 * cols, 3.6 * rows), dpi=args.gallery_dpi, layout="constrained",
                              squeeze=False)
     for k in range(rows * cols):
         r, c = 2 * (k // cols), k % cols
@@ -154,6 +157,7 @@ def main():
     s.add_argument("--out", required=True)
     t = sub.add_parser("texture", help="texture_gallery's trace and spectrum plots")
     t.add_argument("--dir", required=True)
+    t.add_argument("--gallery-dpi", type=float, default=80.0, help="resolution of gallery.png [dots per inch]")
     args = parser.parse_args()
     if plt is None:
         fail("matplotlib is not installed (Debian: python3-matplotlib)", 3)
@@ -166,6 +170,8 @@ def main():
             fail(f"--out: '{args.out}' is not a folder")
         servo(args)
     else:
+        if not (0 < args.gallery_dpi <= 600):
+            parser.error("--gallery-dpi must be in (0, 600]")
         if not os.path.isdir(args.dir):
             fail(f"--dir: '{args.dir}' is not a folder")
         texture(args)

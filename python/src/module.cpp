@@ -73,6 +73,9 @@ Field sum_of(const std::vector<Field>& fields) {
 /// F = Fc + parts: the constraint first, the parts see |Fc| and the normal.
 template <class C>
 Field contact_with(C constraint, const std::vector<Field>& parts, const std::string& name) {
+  if (parts.size() == 1)  // one part: no sum in between
+    return make_field(contact(std::move(constraint), SharedField{parts[0].impl}),
+                      "contact(" + name + " + " + parts[0].description + ")");
   FieldSum s;
   std::string d = name;
   for (const Field& f : parts) {
