@@ -8,13 +8,13 @@
 /// /usr/bin/python3, the first that imports matplotlib. The script:
 /// $HAPTICFIELD_PLOT_SCRIPT, else the copy in the source tree.
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
 
-#include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 
@@ -22,27 +22,25 @@ extern char** environ;
 
 namespace hapticfield::plots {
 
+/// The script's exit status when the interpreter has no matplotlib.
+inline constexpr int matplotlib_missing = 3;
+
 namespace detail {
 
 /// Runs argv (searched on the PATH) and returns its exit status; -1 when it
-/// could not start. quiet: stdout and stderr go to /dev/null.
-inline int run(const std::vector<std::string>& args, bool quiet) {
+/// could not start or was killed.
+inline int run(const std::vector<std::string>& args) {
   std::fflush(nullptr);  // our own output first
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  if (quiet) {
-    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-  }
   pid_t pid = 0;
-  const int started = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (started != 0) return -1;
+  if (posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
   int status = 0;
-  if (waitpid(pid, &status, 0) != pid) return -1;
+  pid_t done = 0;
+  do done = waitpid(pid, &status, 0);
+  while (done < 0 && errno == EINTR);
+  if (done != pid) return -1;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -72,11 +70,13 @@ inline bool matplotlib(const std::vector<std::string>& args, std::string& why) {
   pythons.emplace_back("python3");
   pythons.emplace_back("/usr/bin/python3");
   for (const std::string& python : pythons) {
-    if (detail::run({python, script, "--check"}, true) != 0) continue;
-    std::vector<std::string> command{python, script};
+    std::vector<std::string> command{python, script, "--quiet-missing"};
     command.insert(command.end(), args.begin(), args.end());
-    if (detail::run(command, false) == 0) return true;
-    why = "the plot script failed";
+    const int status = detail::run(command);
+    if (status == 0) return true;
+    // 3: this interpreter lacks matplotlib; -1 / 127: no such interpreter.
+    if (status == matplotlib_missing || status == -1 || status == 127) continue;
+    why = "the plot script failed (exit status " + std::to_string(status) + ")";
     return false;
   }
   why = "no python3 with matplotlib (Debian: python3-matplotlib)";

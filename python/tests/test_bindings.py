@@ -330,3 +330,13 @@ def test_no_leak_over_repeated_construction(coffee):
         cycle()
     grown = rss_kib() - before
     assert grown < 8 * 1024, f"resident memory grew by {grown} KiB over 300 constructions"
+
+
+def test_non_finite_probes_give_zero_force(coffee):
+    bad = np.array([[np.nan, 1.0], [1e300, -1e300], [np.inf, 0.0]])
+    np.testing.assert_array_equal(hf.tangible_forces(coffee, bad), 0.0)
+    scene = make_scene()
+    positions = np.array([[np.nan, 0.0, -1e-3], [0.0, 0.0, -1e-3], [0.0, np.inf, -1e-3]])
+    velocities = np.array([[0.05, 0.0, 0.0], [np.inf, 0.0, 0.0], [0.05, 0.0, 0.0]])
+    np.testing.assert_array_equal(scene.forces(positions, velocities), 0.0)
+    assert np.all(np.isfinite(hf.tangible_field(coffee).forces(positions)))
