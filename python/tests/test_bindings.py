@@ -309,7 +309,7 @@ def rss_kib():
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") // 1024
 
 
-def test_no_leak_over_repeated_construction(coffee):
+def test_no_leak_over_repeated_construction():
     positions, velocities = stroke(200)
     picture = np.random.default_rng(1).uniform(0, 255, (200, 300))  # 480 KB of gray levels a copy
 

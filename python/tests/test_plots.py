@@ -100,3 +100,12 @@ def test_python_examples_run(tmp_path, example):
     assert r.returncode == 0, r.stderr
     pngs = list(pathlib.Path(tmp_path).glob("*.png"))
     assert len(pngs) >= 2
+
+
+def test_without_matplotlib_the_script_exits_3(tmp_path):
+    # python -S leaves out site-packages, and so matplotlib
+    args = [sys.executable, "-S", str(SCRIPT)]
+    r = subprocess.run(args + ["texture", "--dir", str(tmp_path)], capture_output=True, text=True)
+    assert r.returncode == 3 and "matplotlib is not installed" in r.stderr
+    r = subprocess.run(args + ["--quiet-missing", "texture", "--dir", str(tmp_path)], capture_output=True, text=True)
+    assert r.returncode == 3 and r.stderr == ""
