@@ -25,6 +25,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
+#include "common/plots.hpp"
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -62,7 +63,8 @@ constexpr const char* usage_text =
     "  --realtime R          off, best_effort (default: ask for SCHED_FIFO, warn if refused)\n"
     "                        or enforce (refuse to start without real-time scheduling)\n"
     "  --trace OUT.csv       write t, position [m], force [N] and period [s] per tick\n"
-    "  --plots DIR           write force.png and periods.png into DIR (created if needed)\n"
+    "  --plots DIR           write force.png and periods.png into DIR (created if needed), drawn with\n"
+    "                        matplotlib when python3 has it, else simpler plots\n"
     "  --device D            sim (default), hid, hid:VID:PID (hexadecimal ids) or serial:PATH (a\n"
     "                        tty such as /dev/ttyACM0): our protocol; woody:GEN[:PRESET][:sim|:PATH]:\n"
     "                        a WoodenHaptics arm, GEN p1 or p2 (USB HID) or p4 (serial text, on the\n"
@@ -263,6 +265,18 @@ void plot_periods(const std::string& path, const DurationHistogram& periods, dou
                        std::to_string(above),
               {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
   cv::imwrite(path, img);
+}
+
+/// The tick-period histogram (nominal +-20 %, the loop's 1 us bins) as CSV
+/// for the plot script: period_ms,count.
+void write_period_histogram(const std::string& path, const DurationHistogram& periods, double nominal) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write " + path);
+  f << "period_ms,count\n";
+  const auto lo = static_cast<std::int64_t>(nominal * 0.8e9) / DurationHistogram::bin_ns;
+  const auto hi = static_cast<std::int64_t>(nominal * 1.2e9) / DurationHistogram::bin_ns;
+  for (std::int64_t i = lo; i <= hi && i < static_cast<std::int64_t>(DurationHistogram::bins); ++i)
+    f << static_cast<double>(i * DurationHistogram::bin_ns) * 1e-6 << ',' << periods.bin(static_cast<std::size_t>(i)) << '\n';
 }
 
 /// One status line, rewritten in place; a latch is shown with its reason
@@ -469,9 +483,20 @@ int run_demo(const Options& o, D& device, AnyField& field, SteadyClock& clock, b
   }
   if (!o.plots.empty()) {
     std::filesystem::create_directories(o.plots);
-    plot_force(o.plots + "/force.png", rows, device.info().max_force);
-    plot_periods(o.plots + "/periods.png", loop.detailed_statistics().periods(), loop.period());
-    std::printf("plots: %s/force.png, %s/periods.png\n", o.plots.c_str(), o.plots.c_str());
+    // matplotlib (axes, ticks, units, legends) when present; else drawn here.
+    const std::string trace = o.trace.empty() ? o.plots + "/trace.csv" : o.trace;
+    if (o.trace.empty()) write_trace(trace, rows);
+    write_period_histogram(o.plots + "/periods.csv", loop.detailed_statistics().periods(), loop.period());
+    std::string why;
+    if (!plots::matplotlib({"servo", "--trace", trace, "--periods", o.plots + "/periods.csv", "--nominal-ms",
+                            std::to_string(loop.period() * 1e3), "--limit", std::to_string(device.info().max_force),
+                            "--out", o.plots},
+                           why)) {
+      plot_force(o.plots + "/force.png", rows, device.info().max_force);
+      plot_periods(o.plots + "/periods.png", loop.detailed_statistics().periods(), loop.period());
+      std::printf("plots: %s/force.png, %s/periods.png (simple plots: %s)\n", o.plots.c_str(), o.plots.c_str(),
+                  why.c_str());
+    }
   }
   return 0;
 }

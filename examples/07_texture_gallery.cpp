@@ -23,6 +23,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
+#include "common/plots.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
 #include "hapticfield/texture/hatt.hpp"
@@ -146,7 +147,16 @@ cv::Mat plot(const Trace& t, double fs, const std::vector<double>& psd) {
   return img;
 }
 
-void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<cv::Mat>& tiles) {
+// index of the plotted traces for scripts/hapticfield_plots.py: stem,name,axis,description,rate_Hz
+void write_index_row(std::ofstream& index, const std::string& stem, const Trace& t, double fs) {
+  const auto quoted = [](std::string s) {
+    for (std::size_t i = s.find('"'); i != std::string::npos; i = s.find('"', i + 2)) s.insert(i, 1, '"');
+    return '"' + s + '"';
+  };
+  index << quoted(stem) << ',' << quoted(t.name) << ',' << t.axis << ',' << quoted(t.description) << ',' << fs << '\n';
+}
+
+void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<cv::Mat>& tiles, std::ofstream& index) {
   std::vector<double> x;
   for (const auto& f : t.force) x.push_back(f[t.axis]);
   const auto psd = welch(x, fs);
@@ -164,6 +174,7 @@ void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<c
     csv << "frequency_Hz,psd_N2_per_Hz\n";
     for (std::size_t k = 0; k < psd.size(); ++k) csv << k * fs / 256.0 << ',' << psd[k] << '\n';
   }
+  write_index_row(index, stem, t, fs);
   const cv::Mat img = plot(t, fs, psd);
   cv::imwrite((out / (stem + ".png")).string(), img);
   tiles.push_back(img);
@@ -231,7 +242,9 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
 
     std::cout << "writing to " << out.string() << ":\n";
     std::vector<cv::Mat> tiles;
-    for (const auto& t : traces) write_outputs(t, out, rate, tiles);
+    std::ofstream index(out / "gallery.csv");
+    index << "stem,name,axis,description,rate_Hz\n";
+    for (const auto& t : traces) write_outputs(t, out, rate, tiles, index);
 
     if (!hatt_dir.empty()) {
       for (const auto& file : hatt_model_files(hatt_dir)) {
@@ -241,7 +254,7 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
         Trace t = stroke("hatt " + set.name, std::string(set.ma_order > 0 ? "HaTT ARMA" : "HaTT AR") + " model at 50 mm/s, 1 N, " + std::to_string(int(set.sample_rate)) + " Hz",
                          tex, set.sample_rate);
         t.axis = 2;
-        write_outputs(t, out, set.sample_rate, tiles);
+        write_outputs(t, out, set.sample_rate, tiles, index);
       }
     }
 
@@ -257,6 +270,11 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
     if (!cv::imwrite((out / "gallery.png").string(), gallery))
       throw FileError("--out: cannot write '" + (out / "gallery.png").string() + "'");
     std::cout << "  gallery.png (" << tiles.size() << " plots)\n";
+    // Redrawn with axes, ticks, units and legends by matplotlib when present.
+    index.close();
+    std::string why;
+    if (!plots::matplotlib({"texture", "--dir", out.string()}, why))
+      std::cout << "(simple plots: " << why << ")\n";
   }
   return 0;
 }

@@ -3,7 +3,8 @@
 # Needs root (or sudo) only when something has to be installed.
 set -euo pipefail
 
-packages=(g++ clang libclang-rt-14-dev cmake make pkg-config libglm-dev libopencv-dev libhidapi-dev libpugixml-dev catch2)
+packages=(g++ clang libclang-rt-14-dev cmake make pkg-config libglm-dev libopencv-dev libhidapi-dev libpugixml-dev catch2
+          pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib)
 
 missing=()
 for p in "${packages[@]}"; do

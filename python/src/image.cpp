@@ -1,0 +1,238 @@
+// Pictures in: tangible images, force maps, normals from a picture.
+#include "field.hpp"
+
+#include <hapticfield/kernels.hpp>
+#include <hapticfield/normals.hpp>
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <map>
+
+namespace hapticfield::python {
+
+namespace {
+
+/// Largest picture accepted as an array [px] (int sizes, 8 bytes a pixel: 2 GiB).
+constexpr py::ssize_t max_array_pixels = py::ssize_t{1} << 28;
+
+template <class E>
+E choose(const std::string& what, const std::string& name, const std::map<std::string, E>& options) {
+  const auto it = options.find(name);
+  if (it != options.end()) return it->second;
+  std::string names;
+  for (const auto& [k, v] : options) names += (names.empty() ? "" : ", ") + k;
+  throw py::value_error(what + ": unknown '" + name + "' (choose " + names + ")");
+}
+
+MaskKind mask_kind(const std::string& name) {
+  return choose<MaskKind>("mask", name,
+                          {{"prewitt", MaskKind::prewitt}, {"sobel", MaskKind::sobel}, {"scharr", MaskKind::scharr},
+                           {"roberts", MaskKind::roberts}, {"gauss", MaskKind::gaussian}, {"emboss", MaskKind::emboss}});
+}
+
+Border border_kind(const std::string& name) {
+  return choose<Border>("border", name,
+                        {{"suspend", Border::suspend}, {"clamp", Border::clamp}, {"reflect", Border::reflect},
+                         {"fade", Border::fade}});
+}
+
+GrayWeights gray_weights(const std::string& name) {
+  return choose<GrayWeights>("gray", name, {{"paper", GrayWeights::paper}, {"bt601", GrayWeights::bt601}});
+}
+
+/// A picture from a path (any format OpenCV reads) or a numpy array: H x W
+/// gray levels [0, 255], or H x W x 3 / 4 in R, G, B (, A) order.
+GrayImage gray_from(const py::object& image, GrayWeights weights) {
+  if (py::isinstance<py::str>(image) || py::hasattr(image, "__fspath__")) {
+    const std::string path = py::str(py::module_::import("os").attr("fspath")(image));
+    return load_gray(path, weights);
+  }
+  const Array a = Array::ensure(image);
+  if (!a) throw py::type_error("image: expected a path or a numpy array");
+  if (a.ndim() != 2 && !(a.ndim() == 3 && (a.shape(2) == 3 || a.shape(2) == 4)))
+    throw py::value_error("image: expected an H x W gray array or an H x W x 3 (RGB) / x 4 (RGBA) array");
+  if (a.shape(0) < 1 || a.shape(1) < 1) throw py::value_error("image: the array is empty (0 x 0 px)");
+  if (a.shape(0) * a.shape(1) > max_array_pixels)
+    throw py::value_error("image: more than " + std::to_string(max_array_pixels) + " pixels");
+  GrayImage gray(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)));
+  const LumaWeights w = luma_weights(weights);
+  const py::ssize_t c = a.ndim() == 3 ? a.shape(2) : 1;
+  const double* src = a.data();
+  for (int y = 0; y < gray.height(); ++y)
+    for (int x = 0; x < gray.width(); ++x, src += c) {
+      const double v = c == 1 ? src[0] : w.r * src[0] + w.g * src[1] + w.b * src[2];
+      if (!(std::isfinite(v) && v >= 0.0 && v <= gray_full_scale))
+        throw py::value_error("image: gray levels must be finite and within [0, 255], got " + std::to_string(v) +
+                              " at (" + std::to_string(x) + ", " + std::to_string(y) + ")");
+      gray.at(x, y) = v;
+    }
+  return gray;
+}
+
+TangibleOptions tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
+                                 double sigma) {
+  TangibleOptions o;
+  o.mask = mask_kind(mask);
+  o.size = size ? *size : o.mask == MaskKind::roberts ? 2 : (o.mask == MaskKind::scharr || o.mask == MaskKind::sobel) ? 3 : 17;
+  o.border = border_kind(border);
+  if (!(std::isfinite(sigma) && sigma >= 0.0)) throw py::value_error("sigma: must be finite and >= 0 [px] (0: size / 6)");
+  o.sigma = sigma;
+  return o;
+}
+
+py::array_t<double> tangible_forces(const py::object& image, const Array& xy, const std::string& mask,
+                                    std::optional<int> size, const std::string& border, double sigma,
+                                    const std::string& gray) {
+  const py::ssize_t n = rows_of(xy, 2, "xy");
+  const TangibleImage tangible(gray_from(image, gray_weights(gray)), tangible_options(mask, size, border, sigma));
+  auto out = matrix(n, 2);
+  const double* p = xy.data();
+  double* f = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const glm::dvec2 r = tangible.at(p[2 * i], p[2 * i + 1]);
+      f[2 * i] = r.x, f[2 * i + 1] = r.y;
+    }
+  }
+  return out;
+}
+
+PlaneMapping mapping_for(int width, int height, std::optional<double> px_per_mm, std::optional<double> workspace_mm) {
+  if (px_per_mm && workspace_mm) throw py::value_error("give px_per_mm or workspace_mm, not both");
+  if (workspace_mm) return PlaneMapping::fit(width, height, *workspace_mm);
+  if (px_per_mm) return PlaneMapping(*px_per_mm, glm::dvec2{(width - 1) / 2.0, (height - 1) / 2.0});
+  return PlaneMapping::kim_kwon(width, height);
+}
+
+py::dict pose_dict(const FacePose& pose) {
+  py::dict d;
+  d["normal"] = std::array<double, 3>{pose.normal.x, pose.normal.y, pose.normal.z};
+  std::array<std::array<double, 3>, 3> R{}, H{};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) R[r][c] = pose.R(r, c), H[r][c] = pose.H(r, c);
+  d["R"] = py::array(py::cast(R));
+  d["H"] = py::array(py::cast(H));
+  d["t"] = std::array<double, 3>{pose.t[0], pose.t[1], pose.t[2]};
+  d["rms_reprojection_px"] = pose.rms_reprojection_px;
+  d["max_reprojection_px"] = pose.max_reprojection_px;
+  d["width"] = pose.width;
+  d["height"] = pose.height;
+  d["aspect_recovered"] = pose.aspect_recovered;
+  return d;
+}
+
+std::vector<glm::dvec2> points_of(const Array& a, const char* what) {
+  const py::ssize_t n = rows_of(a, 2, what);
+  std::vector<glm::dvec2> p;
+  for (py::ssize_t i = 0; i < n; ++i) p.emplace_back(a.at(i, 0), a.at(i, 1));
+  return p;
+}
+
+Camera camera_of(const Array& K) {
+  if (K.ndim() != 2 || K.shape(0) != 3 || K.shape(1) != 3) throw py::value_error("K: expected a 3 x 3 camera matrix [px]");
+  cv::Matx33d k;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) k(r, c) = K.at(r, c);
+  return Camera(k);
+}
+
+}  // namespace
+
+void bind_image(py::module_& m) {
+  m.def("tangible_forces", &tangible_forces, py::arg("image"), py::arg("xy"), py::arg("mask") = "prewitt",
+        py::arg("size") = py::none(), py::arg("border") = "suspend", py::arg("sigma") = 0.0, py::arg("gray") = "paper",
+        "Tangible-image forces (Vasudevan & Manivannan 2008) at N pixel positions: image a path or a numpy array "
+        "(H x W gray levels [0, 255], or H x W x 3 RGB); xy N x 2 [px] (x right, y down, integer = pixel centre). "
+        "Returns N x 2: the normalised force (1 = a black/white edge) before any gain, fy positive downward; the "
+        "same numbers as `tangible_image --probes`. mask prewitt|sobel|scharr|roberts|gauss|emboss, size [px] "
+        "(default 17; sobel/scharr 3, roberts 2), border suspend|clamp|reflect|fade, sigma [px] (gauss; 0: size/6), "
+        "gray paper|bt601.");
+  m.def(
+      "force_map",
+      [](const py::object& image, const std::string& mask, std::optional<int> size, const std::string& border,
+         double sigma, const std::string& gray) {
+        const TangibleOptions o = tangible_options(mask, size, border, sigma);
+        const GrayImage g = gray_from(image, gray_weights(gray));
+        ForceMap map;
+        {
+          py::gil_scoped_release release;
+          if (o.mask == MaskKind::prewitt) map = prewitt_force_map(g, o.size, o.border, o.fade_px);
+          else map = force_map(TangibleImage(g, o));
+        }
+        py::array_t<float> fx({map.height, map.width}), fy({map.height, map.width});
+        std::copy(map.fx.begin(), map.fx.end(), fx.mutable_data());
+        std::copy(map.fy.begin(), map.fy.end(), fy.mutable_data());
+        return py::make_tuple(fx, fy);
+      },
+      py::arg("image"), py::arg("mask") = "prewitt", py::arg("size") = py::none(), py::arg("border") = "suspend",
+      py::arg("sigma") = 0.0, py::arg("gray") = "paper",
+      "The tangible-image force at every pixel centre: (fx, fy), two H x W float32 arrays, normalised "
+      "(1 = a black/white edge), fy positive downward. Same options as tangible_forces().");
+  m.def(
+      "tangible_field",
+      [](const py::object& image, const std::string& mask, std::optional<int> size, const std::string& border,
+         double sigma, double gain, std::optional<double> px_per_mm, std::optional<double> workspace_mm,
+         const std::string& gray) {
+        const GrayImage g = gray_from(image, gray_weights(gray));
+        const PlaneMapping mapping = mapping_for(g.width(), g.height(), px_per_mm, workspace_mm);
+        return make_field(TangibleImageField(TangibleImage(g, tangible_options(mask, size, border, sigma)), mapping, gain),
+                          "tangible image " + std::to_string(g.width()) + " x " + std::to_string(g.height()) + " px");
+      },
+      py::arg("image"), py::arg("mask") = "prewitt", py::arg("size") = py::none(), py::arg("border") = "suspend",
+      py::arg("sigma") = 0.0, py::arg("gain") = 1.0, py::arg("px_per_mm") = py::none(),
+      py::arg("workspace_mm") = py::none(), py::arg("gray") = "paper",
+      "A tangible-image field in the device's x-y plane: the picture centred on the origin at px_per_mm [px/mm] "
+      "(default 6.4, Kim & Kwon's) or fitted so its longer side spans workspace_mm [mm]; gain [N] at a black/white "
+      "edge. Device frame x right, y up.");
+
+  m.def(
+      "estimate_normal",
+      [](const Array& corners, const Array& K, std::optional<std::array<double, 2>> size, bool refine) {
+        const std::vector<glm::dvec2> c = points_of(corners, "corners");
+        std::optional<glm::dvec2> s;
+        if (size) s = glm::dvec2{(*size)[0], (*size)[1]};
+        return pose_dict(estimate_rectangle_pose(camera_of(K), c, s, PoseOptions{refine}));
+      },
+      py::arg("corners"), py::arg("K"), py::arg("size") = py::none(), py::arg("refine") = true,
+      "Normal of a rectangular face from its 4 image corners (4 x 2 [px], in order around the face) and the 3 x 3 "
+      "camera matrix K [px] (Kim & Kwon 2013): the homography H = s K [r1 r2 t], the rotation R and "
+      "n = R [0 0 1]^T (camera frame, toward the camera). size (W, H) [mm] if known, else the aspect is recovered. "
+      "Returns a dict: normal, R, t, H, rms_reprojection_px, max_reprojection_px, width, height, aspect_recovered.");
+  m.def(
+      "estimate_plane_normal",
+      [](const Array& plane, const Array& pixels, const Array& K) {
+        return pose_dict(estimate_plane_pose(camera_of(K), points_of(plane, "plane"), points_of(pixels, "pixels")));
+      },
+      py::arg("plane"), py::arg("pixels"), py::arg("K"),
+      "Pose and normal of a planar face from N >= 4 correspondences: plane points N x 2 (any unit, e.g. [mm]) and "
+      "their pixels N x 2 [px]; K the 3 x 3 camera matrix [px]. Returns the same dict as estimate_normal().");
+  m.def(
+      "normal_field",
+      [](int width, int height, const std::vector<std::pair<Array, std::array<double, 3>>>& faces,
+         const std::string& mode, double max_force, double speed_threshold, double shading_cell_px,
+         std::optional<double> px_per_mm) {
+        std::vector<ImageFace> f;
+        for (const auto& [polygon, normal] : faces) f.push_back({points_of(polygon, "face polygon"), glm3(normal)});
+        NormalFieldOptions o;
+        o.mode = choose<NormalForceMode>("mode", mode, {{"along_motion", NormalForceMode::along_motion},
+                                                        {"gradient", NormalForceMode::gradient}});
+        o.max_force = max_force;
+        o.speed_threshold = speed_threshold;
+        o.shading_cell_px = shading_cell_px;
+        std::optional<PlaneMapping> mapping;
+        if (px_per_mm) mapping = mapping_for(width, height, px_per_mm, std::nullopt);
+        return make_field(NormalField(width, height, std::move(f), o, mapping),
+                          "normals " + std::to_string(faces.size()) + " faces");
+      },
+      py::arg("width"), py::arg("height"), py::arg("faces"), py::arg("mode") = "along_motion",
+      py::arg("max_force") = kim_kwon_max_force, py::arg("speed_threshold") = 0.005, py::arg("shading_cell_px") = 0.0,
+      py::arg("px_per_mm") = py::none(),
+      "Normals from a picture as a field (Kim & Kwon 2013): faces a list of (polygon K x 2 [px], unit normal "
+      "(camera frame, n_z <= 0)); F = max_force (n . m) m along the HIP's motion m (mode along_motion) or "
+      "max_force (n_x, n_y) (gradient). max_force [N], speed_threshold [m/s], shading_cell_px [px] (0: flat faces); "
+      "picture centred at px_per_mm [px/mm] (default 6.4).");
+}
+
+}  // namespace hapticfield::python

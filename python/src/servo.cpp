@@ -1,0 +1,170 @@
+// The servo loop from Python: a field built in Python, run in C++ on a
+// simulated or real arm, with the GIL released for the whole run.
+#include "field.hpp"
+
+#include <hapticfield/device.hpp>
+#include <hapticfield/servo.hpp>
+#if HAPTICFIELD_PYTHON_HID
+#include <hapticfield/device/hid_transport.hpp>
+#endif
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+namespace hapticfield::python {
+
+namespace {
+
+struct TraceRow {
+  double t{0.0};
+  glm::dvec3 position{0.0};
+  glm::dvec3 force{0.0};  ///< commanded after the safety chain [N]
+};
+
+HandPath hand_path(const std::string& kind, const V3& centre, double size, double speed) {
+  const glm::dvec3 c = glm3(centre);
+  if (kind == "raster") return HandPath::raster(c, size, size, 8, speed);
+  if (kind == "circle") return HandPath::circle(c, size / 2.0, speed);
+  if (kind == "hold") return HandPath::hold(c);
+  throw py::value_error("hand: unknown '" + kind + "' (choose raster, circle or hold)");
+}
+
+py::dict snapshot_dict(const LoopSnapshot& s) {
+  py::dict d;
+  d["ticks"] = s.ticks;
+  d["missed_deadlines"] = s.missed_deadlines;
+  d["overruns"] = s.overruns;
+  d["safety_events"] = s.safety_events;
+  d["latches"] = s.latches;
+  d["last_latch"] = safety_events::names(s.last_latch);
+  d["recoveries"] = s.recoveries;
+  d["rate_hz"] = s.rate;
+  d["period_mean_s"] = s.period_mean;
+  d["period_p50_s"] = s.period_p50;
+  d["period_p99_s"] = s.period_p99;
+  d["period_p999_s"] = s.period_p999;
+  d["period_max_s"] = s.period_max;
+  d["wake_p99_s"] = s.wake_p99;
+  d["compute_p50_s"] = s.compute_p50;
+  d["compute_p99_s"] = s.compute_p99;
+  d["compute_max_s"] = s.compute_max;
+  d["peak_force_n"] = s.peak_force;
+  return d;
+}
+
+template <Device D>
+py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, double rate, RealTime realtime) {
+  LoopConfig config;
+  config.rate = rate;
+  config.realtime = realtime;
+  config.recover_after = 0.5;  // [s] fresh states before re-arming after a latch
+  ServoLoop<D, SteadyClock> loop(device, clock, config);
+  const auto ticks = static_cast<std::uint64_t>(std::llround(seconds * rate));
+  std::vector<TraceRow> rows;
+  rows.reserve(ticks + 8);  // the tick only fills reserved rows
+  std::shared_ptr<AnyField> f = field.impl;
+  auto callback = [&](const TickInput& in) noexcept {
+    if (rows.size() < rows.capacity()) {
+      if (!rows.empty()) rows.back().force = loop.last_command();
+      rows.push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}});
+    }
+    return f->force(in.probe);
+  };
+  StopReason reason = StopReason::requested;
+  {
+    py::gil_scoped_release release;  // Python never runs inside a tick
+    reason = loop.run(callback, {.max_ticks = ticks});
+  }
+  if (!rows.empty()) rows.back().force = loop.last_command();
+  const py::ssize_t n = static_cast<py::ssize_t>(rows.size());
+  py::array_t<double> t(n);
+  auto position = matrix(n, 3), force = matrix(n, 3);
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const TraceRow& r = rows[static_cast<std::size_t>(i)];
+    t.mutable_at(i) = r.t;
+    for (int k = 0; k < 3; ++k) position.mutable_at(i, k) = r.position[k], force.mutable_at(i, k) = r.force[k];
+  }
+  // The tick period histogram in 1 us bins: counts from the loop's own statistics.
+  const DurationHistogram& periods = loop.detailed_statistics().periods();
+  py::array_t<std::uint64_t> hist(static_cast<py::ssize_t>(DurationHistogram::bins));
+  for (std::size_t i = 0; i < DurationHistogram::bins; ++i) hist.mutable_at(static_cast<py::ssize_t>(i)) = periods.bin(i);
+  py::dict trace;
+  trace["t"] = t;
+  trace["position"] = position;
+  trace["force"] = force;
+  py::dict result;
+  result["statistics"] = snapshot_dict(loop.statistics());
+  result["trace"] = trace;
+  result["period_histogram"] = hist;
+  result["histogram_bin_s"] = DurationHistogram::bin_ns * 1e-9;
+  result["nominal_period_s"] = loop.period();
+  result["max_force_n"] = device.info().max_force;
+  result["stop_reason"] = reason == StopReason::tick_limit ? "tick_limit"
+                          : reason == StopReason::disconnected ? "disconnected" : "requested";
+  return result;
+}
+
+py::dict run_servo(Field& field, double seconds, double rate, const std::string& device, const std::string& hand,
+                   const V3& hand_centre, double hand_size, double hand_speed, const std::string& realtime,
+                   bool confirm_hardware) {
+  if (!(std::isfinite(seconds) && seconds > 0.0 && seconds <= 3600.0))
+    throw py::value_error("seconds: must be within (0, 3600] [s]");
+  if (!(std::isfinite(rate) && rate >= 1.0 && rate <= 10000.0)) throw py::value_error("rate: must be within [1, 10000] [Hz]");
+  if (std::llround(seconds * rate) < 1) throw py::value_error("seconds: gives no tick at this rate");
+  RealTime rt = RealTime::off;
+  if (realtime == "best_effort") rt = RealTime::best_effort;
+  else if (realtime == "enforce") rt = RealTime::enforce;
+  else if (realtime != "off") throw py::value_error("realtime: unknown '" + realtime + "' (choose off, best_effort or enforce)");
+  SteadyClock clock;
+  const auto now = [&clock] { return clock.now(); };
+  if (device == "sim") {
+    SimulatedArmConfig c;
+    c.hand.path = hand_path(hand, hand_centre, hand_size, hand_speed);
+    c.validate();
+    SimulatedArm arm(c);
+    SimulatedTransport link(arm, now);
+    ForceArm arm_device(link);
+    return run_on(arm_device, clock, field, seconds, rate, rt);
+  }
+  if (device.rfind("hid", 0) == 0) {
+#if HAPTICFIELD_PYTHON_HID
+    if (!confirm_hardware)
+      throw py::value_error("device hid: a real arm will move and push; pass confirm_hardware=True once the "
+                            "handle is held and the workspace clear");
+    std::uint16_t vid = default_vendor_id, pid = default_product_id;
+    if (device.size() > 3) {
+      unsigned v = 0, p = 0;
+      if (std::sscanf(device.c_str(), "hid:%x:%x", &v, &p) != 2 || v > 0xFFFF || p > 0xFFFF)
+        throw py::value_error("device: hid:VID:PID takes hexadecimal ids, e.g. hid:1209:0001");
+      vid = static_cast<std::uint16_t>(v), pid = static_cast<std::uint16_t>(p);
+    }
+    HidTransport link(vid, pid);
+    ForceArm arm_device(link);
+    return run_on(arm_device, clock, field, seconds, rate, rt);
+#else
+    (void)confirm_hardware;
+    throw py::value_error("device hid: this build of the module has no hidapi");
+#endif
+  }
+  throw py::value_error("device: unknown '" + device + "' (choose sim or hid[:VID:PID])");
+}
+
+}  // namespace
+
+void bind_servo(py::module_& m) {
+  m.def("run_servo", &run_servo, py::arg("field"), py::arg("seconds") = 1.0, py::arg("rate") = 1000.0,
+        py::arg("device") = "sim", py::arg("hand") = "raster", py::arg("hand_centre") = V3{0.0, 0.0, -0.008},
+        py::arg("hand_size") = 0.06, py::arg("hand_speed") = 0.06, py::arg("realtime") = "off",
+        py::arg("confirm_hardware") = false,
+        "Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] "
+        "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace "
+        "(t [s], position N x 3 [m], force N x 3 [N] as commanded after the safety chain), period_histogram "
+        "(counts per histogram_bin_s) and stop_reason. device sim: the simulated arm, held by a scripted hand "
+        "(raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm "
+        "(needs confirm_hardware=True). The field is evaluated in C++; the GIL is released while the loop runs.");
+}
+
+}  // namespace hapticfield::python

@@ -1,0 +1,184 @@
+#!/usr/bin/env python3
+"""Plots with axes, ticks, units and legends for hapticfield's examples (matplotlib).
+
+    hapticfield_plots.py servo --trace T.csv --periods P.csv --nominal-ms MS --limit N --out DIR
+    hapticfield_plots.py texture --dir DIR
+    hapticfield_plots.py --check      exit 0 when matplotlib is present
+
+servo: T.csv is servo_demo's trace (t_s, x_m, y_m, z_m, fx_N, fy_N, fz_N,
+period_s); P.csv the loop's tick-period histogram (period_ms, count). Writes
+DIR/force.png and DIR/periods.png.
+
+texture: DIR holds texture_gallery's gallery.csv (stem, name, axis,
+description, rate_Hz) and per texture STEM_trace.csv and STEM_psd.csv.
+Writes DIR/STEM.png per texture and DIR/gallery.png.
+
+Exit status: 0 done, 1 bad input (missing or malformed files), 2 usage
+error, 3 matplotlib missing.
+"""
+import argparse
+import csv
+import math
+import os
+import sys
+
+try:
+    import matplotlib
+    matplotlib.use("Agg")  # files only, no display
+    import matplotlib.pyplot as plt
+except ImportError:
+    plt = None
+
+AXES = "xyz"
+
+
+def fail(message, status=1):
+    print(f"hapticfield_plots: {message}", file=sys.stderr)
+    sys.exit(status)
+
+
+def read_columns(path, names):
+    """The named columns of a CSV file with a header line, as lists of floats."""
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        fail(f"cannot read '{path}': {e.strerror}")
+    if not rows:
+        fail(f"'{path}' has no data rows")
+    missing = [n for n in names if n not in rows[0]]
+    if missing:
+        fail(f"'{path}' lacks the column(s) {', '.join(missing)}")
+    try:
+        return {n: [float(r[n]) for r in rows] for n in names}
+    except (TypeError, ValueError):
+        fail(f"'{path}' holds a value that is not a number")
+
+
+def servo(args):
+    trace = read_columns(args.trace, ["t_s", "fx_N", "fy_N", "fz_N"])
+    t = trace["t_s"]
+    magnitude = [math.sqrt(x * x + y * y + z * z) for x, y, z in zip(trace["fx_N"], trace["fy_N"], trace["fz_N"])]
+    fig, ax = plt.subplots(figsize=(9, 3.6), dpi=100, layout="constrained")
+    for key, label, colour in [("fx_N", "Fx", "tab:blue"), ("fy_N", "Fy", "tab:green"), ("fz_N", "Fz", "tab:red")]:
+        ax.plot(t, trace[key], lw=0.8, color=colour, label=label)
+    ax.plot(t, magnitude, lw=0.8, color="black", label="|F|")
+    ax.axhline(args.limit, color="grey", ls="--", lw=0.8, label=f"limit ±{args.limit:g} N")
+    ax.axhline(-args.limit, color="grey", ls="--", lw=0.8)
+    ax.set(xlabel="time [s]", ylabel="commanded force [N]", title="Force commanded after the safety chain")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", ncol=5, fontsize="small")
+    fig.savefig(os.path.join(args.out, "force.png"))
+    plt.close(fig)
+
+    hist = read_columns(args.periods, ["period_ms", "count"])
+    fig, ax = plt.subplots(figsize=(9, 3.6), dpi=100, layout="constrained")
+    widths = [hist["period_ms"][1] - hist["period_ms"][0] if len(hist["period_ms"]) > 1 else 1e-3] * len(hist["count"])
+    ax.bar(hist["period_ms"], hist["count"], width=widths, align="edge", color="tab:blue", label="ticks per 1 µs bin")
+    ax.axvline(args.nominal_ms, color="tab:red", lw=1.0, label=f"nominal {args.nominal_ms:g} ms")
+    ax.set_yscale("log")
+    ax.set(xlabel="tick period [ms]", ylabel="ticks (log scale)", title="Servo loop tick periods")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize="small")
+    fig.savefig(os.path.join(args.out, "periods.png"))
+    plt.close(fig)
+    print(f"plots: {os.path.join(args.out, 'force.png')}, {os.path.join(args.out, 'periods.png')} (matplotlib)")
+
+
+def texture_panels(axes, entry, trace, psd):
+    t, f = trace["time_s"], trace[f"f{AXES[entry['axis']]}_N"]
+    shown = [i for i, x in enumerate(t) if x <= 0.5]  # the first 0.5 s
+    axes[0].plot([t[i] for i in shown], [f[i] for i in shown], lw=0.7, color="tab:blue",
+                 label=f"F{AXES[entry['axis']]}")
+    axes[0].set(xlabel="time [s]", ylabel="force [N]")
+    axes[0].legend(loc="upper right", fontsize="x-small")
+    axes[0].grid(alpha=0.3)
+    pairs = [(fr, p) for fr, p in zip(psd["frequency_Hz"], psd["psd_N2_per_Hz"]) if fr > 0 and p > 0]
+    if max(f) - min(f) < 1e-9:  # a constant force [N]: its spectrum is rounding noise
+        axes[1].text(0.5, 0.5, f"constant {f[0]:.3g} N: no spectrum", ha="center", va="center",
+                     transform=axes[1].transAxes)
+    elif pairs:
+        axes[1].loglog([p[0] for p in pairs], [p[1] for p in pairs], lw=0.8, color="tab:orange", label="Welch PSD")
+        axes[1].legend(loc="lower left", fontsize="x-small")
+    axes[1].set(xlabel="frequency [Hz]", ylabel="PSD [N²/Hz]")
+    axes[1].grid(alpha=0.3, which="both")
+
+
+def texture(args):
+    index = os.path.join(args.dir, "gallery.csv")
+    try:
+        with open(index, newline="") as f:
+            entries = list(csv.DictReader(f))
+    except OSError as e:
+        fail(f"cannot read '{index}': {e.strerror}")
+    if not entries or any(k not in entries[0] for k in ("stem", "name", "axis", "description")):
+        fail(f"'{index}' lacks stem, name, axis or description")
+    loaded = []
+    for e in entries:
+        if e["axis"] not in ("0", "1", "2") or os.sep in e["stem"] or e["stem"] in ("", ".", ".."):
+            fail(f"'{index}': bad row for '{e['stem']}'")
+        e["axis"] = int(e["axis"])
+        trace = read_columns(os.path.join(args.dir, e["stem"] + "_trace.csv"), ["time_s", "fx_N", "fy_N", "fz_N"])
+        psd = read_columns(os.path.join(args.dir, e["stem"] + "_psd.csv"), ["frequency_Hz", "psd_N2_per_Hz"])
+        loaded.append((e, trace, psd))
+        fig, axes = plt.subplots(2, 1, figsize=(6.4, 4.8), dpi=100, layout="constrained")
+        fig.suptitle(f"{e['name']}: {e['description']}", fontsize="medium")
+        texture_panels(axes, e, trace, psd)
+        fig.savefig(os.path.join(args.dir, e["stem"] + ".png"))
+        plt.close(fig)
+        print(f"  {e['stem']}.png  ({e['description']})")
+    cols = 3
+    rows = (len(loaded) + cols - 1) // cols
+    fig, axes = plt.subplots(2 * rows, cols, figsize=(4.2 * cols, 3.6 * rows), dpi=args.gallery_dpi, layout="constrained",
+                             squeeze=False)
+    for k in range(rows * cols):
+        r, c = 2 * (k // cols), k % cols
+        if k < len(loaded):
+            e, trace, psd = loaded[k]
+            texture_panels([axes[r][c], axes[r + 1][c]], e, trace, psd)
+            axes[r][c].set_title(e["name"], fontsize="small")
+        else:
+            axes[r][c].axis("off")
+            axes[r + 1][c].axis("off")
+    fig.savefig(os.path.join(args.dir, "gallery.png"))
+    plt.close(fig)
+    print(f"  gallery.png ({len(loaded)} plots, matplotlib)")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--check", action="store_true", help="exit 0 when matplotlib is present, 3 when not")
+    parser.add_argument("--quiet-missing", action="store_true", help="exit 3 without a message when matplotlib is missing")
+    sub = parser.add_subparsers(dest="command")
+    s = sub.add_parser("servo", help="servo_demo's force and tick-period plots")
+    s.add_argument("--trace", required=True)
+    s.add_argument("--periods", required=True)
+    s.add_argument("--nominal-ms", type=float, required=True)
+    s.add_argument("--limit", type=float, required=True, help="the device's force limit [N]")
+    s.add_argument("--out", required=True)
+    t = sub.add_parser("texture", help="texture_gallery's trace and spectrum plots")
+    t.add_argument("--dir", required=True)
+    t.add_argument("--gallery-dpi", type=float, default=80.0, help="resolution of gallery.png [dots per inch]")
+    args = parser.parse_args()
+    if plt is None:
+        if args.quiet_missing:  # the examples then try another interpreter or draw their own plots
+            sys.exit(3)
+        fail("matplotlib is not installed (Debian: python3-matplotlib)", 3)
+    if args.check:
+        return
+    if args.command is None:
+        parser.error("choose servo or texture")
+    if args.command == "servo":
+        if not os.path.isdir(args.out):
+            fail(f"--out: '{args.out}' is not a folder")
+        servo(args)
+    else:
+        if not (0 < args.gallery_dpi <= 600):
+            parser.error("--gallery-dpi must be in (0, 600]")
+        if not os.path.isdir(args.dir):
+            fail(f"--dir: '{args.dir}' is not a folder")
+        texture(args)
+
+
+if __name__ == "__main__":
+    main()
