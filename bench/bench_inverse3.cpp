@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
   }
 
   ForceArmLoopback force_link;
-  ForceArmOptions fo;
+  ForceArmConfig fo;
   fo.query_device = false;
   ForceArm force_arm(force_link, fo);
   Inverse3Loopback inv_link;

@@ -122,14 +122,14 @@ int main() {
         measure(field, probes));
   }
   for (int n : {1, 1000}) {
-    NormalFieldOptions o;
+    NormalFieldConfig o;
     o.shading_cell_px = 8.0;
     NormalField field(640, 640, tiles(n), o);
     row("along motion + shading, " + std::to_string(n) + (n > 1 ? " faces" : " face"),
         measure(field, probes));
   }
   {
-    NormalFieldOptions o;
+    NormalFieldConfig o;
     o.mode = NormalForceMode::gradient;
     NormalField field(640, 640, tiles(1000), o);
     row("gradient, 1000 faces", measure(field, probes));

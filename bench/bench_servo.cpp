@@ -325,7 +325,7 @@ int main(int argc, char** argv) {
   const Cost empty = measure(n, [] {});
 
   Loopback loopback;
-  ForceArmOptions fo;
+  ForceArmConfig fo;
   fo.query_device = false;
   ForceArm device(loopback, fo);
   DeviceState state;

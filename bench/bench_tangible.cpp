@@ -130,7 +130,7 @@ int main(int argc, char** argv) {
   for (const bool trajectory : {true, false}) {
     const auto points = query_points(gray.width(), gray.height(), queries, trajectory);
     const std::vector<glm::dvec2> few(points.begin(), points.begin() + queries / 10);
-    hf::TangibleOptions o;
+    hf::TangibleConfig o;
     o.kernel = hf::KernelChoice::direct;
     o.size = 5;
     const hf::TangibleImage baseline_image(gray, o);

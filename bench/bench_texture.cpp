@@ -139,21 +139,21 @@ int main(int argc, char** argv) {
   run_filter("ARMA(4,2)", Arma<4, 2>({-0.5, 0.3, -0.2, 0.1}, {1.0, 0.4, 0.2}));
 
   // fields
-  field_row("friction (Coulomb + viscous + drag)", Friction(FrictionParams{0.3, 2.0, 1.0, 2e-3, true, glm::dvec3{0, 0, 1}}));
-  field_row("stick-slip friction (spring anchor)", StickSlipFriction(StickSlipParams{}));
+  field_row("friction (Coulomb + viscous + drag)", Friction(FrictionConfig{0.3, 2.0, 1.0, 2e-3, true, glm::dvec3{0, 0, 1}}));
+  field_row("stick-slip friction (spring anchor)", StickSlipFriction(StickSlipConfig{}));
   field_row("full texture tick: noise + 3 x Butterworth<4> LP + friction",
-            sum(TextureField(TemporalSource(gauss, 1), TextureParams{0.3, 1e-3, true, glm::dvec3{1.0}},
+            sum(TextureField(TemporalSource(gauss, 1), TextureConfig{0.3, 1e-3, true, glm::dvec3{1.0}},
                              Butterworth<4>::low_pass(100.0, 1000.0)),
-                Friction(FrictionParams{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
+                Friction(FrictionConfig{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
   field_row("full texture tick, band-pass (3 x 4 sections)",
-            sum(TextureField(TemporalSource(gauss, 1), TextureParams{0.3, 1e-3, true, glm::dvec3{1.0}},
+            sum(TextureField(TemporalSource(gauss, 1), TextureConfig{0.3, 1e-3, true, glm::dvec3{1.0}},
                              Butterworth<4>::band_pass(30.0, 120.0, 1000.0)),
-                Friction(FrictionParams{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
+                Friction(FrictionConfig{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
   field_row("spatial texture: 2D cubic lattice + friction",
-            sum(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(gauss, 1, grain, Interpolation::cubic)), TextureParams{}),
-                Friction(FrictionParams{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
+            sum(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(gauss, 1, grain, Interpolation::cubic)), TextureConfig{}),
+                Friction(FrictionConfig{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
   field_row("flow texture (3D cubic lattice)",
-            FlowTexture(NoiseLattice<GaussianNoise, 3>(gauss, 1, grain, Interpolation::cubic), FlowParams{}));
+            FlowTexture(NoiseLattice<GaussianNoise, 3>(gauss, 1, grain, Interpolation::cubic), FlowConfig{}));
 
   // HaTT: a synthetic AR(20) set with 3 models and 1 triangle (real HaTT
   // sets have more triangles; locating grows linearly with their number and
@@ -167,8 +167,8 @@ int main(int argc, char** argv) {
     <model><ARlsf>0.08 0.18 0.33 0.48 0.58 0.78 0.88 1.08 1.18 1.38 1.48 1.68 1.78 1.98 2.08 2.28 2.38 2.58 2.78 2.98</ARlsf><var>0.3</var><speedMod>200</speedMod><forceMod>4</forceMod></model>
     </modelSet>)",
                                                   "bench");
-  HattTexture<32> every_tick(set, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});
-  HattTexture<32> every_10(set, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 10, 1e-3, true});
+  HattTexture<32> every_tick(set, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});
+  HattTexture<32> every_10(set, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 10, 1e-3, true});
   field_row("HaTT AR(20) tick, update every tick", every_tick);
   field_row("HaTT AR(20) tick, update every 10 ticks", every_10);
   rows.push_back({"HaTT update(): locate + LSF interp + lsf_to_ar(20)",
@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
       big.triangles.push_back({v, v + 1, v + 9});
       big.triangles.push_back({v, v + 9, v + 8});
     }
-  HattTexture<40> big_tex(big, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});
+  HattTexture<40> big_tex(big, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});
   rows.push_back({"HaTT update(), 64 models, 98 triangles, AR(40)",
                   measure([&](int i) { big_tex.update(20.0 + (i % 380), 0.2 + 0.0095 * (i % 400)); keep(big_tex.variance()); }, n)});
   field_row("HaTT AR(40) tick, 98 triangles, update every tick", big_tex);

@@ -65,12 +65,12 @@ int main(int argc, char** argv) {
     auto scene = [&] {
       return hf::contact(
           hf::PlaneConstraint(hf::PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1500.0, 0.0}),
-          hf::TangibleImageField(hf::TangibleImage(gray, hf::TangibleOptions{}),
+          hf::TangibleImageField(hf::TangibleImage(gray, hf::TangibleConfig{}),
                                  hf::PlaneMapping::fit(gray.width(), gray.height(), 80.0), 1.0),
           TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.5), 3, glm::dvec3{1e-3},
                                                                     Interpolation::linear)),
-                       TextureParams{0.3, 1e-3, true, glm::dvec3{1, 1, 0}}),
-          Friction(FrictionParams{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}));
+                       TextureConfig{0.3, 1e-3, true, glm::dvec3{1, 1, 0}}),
+          Friction(FrictionConfig{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}));
     };
     // The probes of python/bench_forces.py: scattered over the picture, 1 mm into the plane [m], [m/s].
     std::vector<double> pos(3 * static_cast<std::size_t>(n)), vel(pos.size());
@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
     auto light_scene = [] {
       return hf::contact(
           hf::PlaneConstraint(hf::PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1500.0, 0.0}),
-          Friction(FrictionParams{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}));
+          Friction(FrictionConfig{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}));
     };
     std::vector<double> out(pos.size());
     std::vector<double> seconds;

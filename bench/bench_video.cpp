@@ -157,7 +157,7 @@ void bench_ticks(const std::string& clip, int ticks, hf::KernelChoice kernel) {
   cv::Mat frame;
   long index = 0;
   (void)first.read(frame, index);
-  hf::TangibleOptions options;
+  hf::TangibleConfig options;
   options.border = hf::Border::fade;
   options.kernel = kernel;
   const hf::PlaneMapping mapping = hf::PlaneMapping::fit(frame.cols, frame.rows, 80.0);

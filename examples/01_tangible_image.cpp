@@ -53,7 +53,7 @@ constexpr const char* usage =
 
 struct Arguments {
   std::string image;
-  hf::TangibleOptions options;
+  hf::TangibleConfig options;
   bool size_given = false;
   hf::GrayWeights gray = hf::GrayWeights::paper;
   std::uint64_t max_pixels = hf::default_max_pixels;  ///< largest picture loaded [px]

@@ -41,7 +41,7 @@ using namespace hapticfield;
 
 namespace {
 
-struct Options {
+struct Arguments {
   std::string image{std::string(HAPTICFIELD_EXAMPLE_DATA) + "/coffee.png"};
   std::string field{"tangible"};
   double seconds{5.0};
@@ -123,8 +123,8 @@ bool valid_device(const std::string& d) {
   return hex(ids.substr(0, colon)) && hex(ids.substr(colon + 1));
 }
 
-Options parse(cli::Parser& p) {
-  Options o;
+Arguments parse(cli::Parser& p) {
+  Arguments o;
   bool image_given = false;
   while (p.next()) {
     if (p.is("--field")) {
@@ -183,7 +183,7 @@ AnyField make_field(const std::string& name, const cv::Mat& image, const PlaneMa
     // The wall holds the hand on the plane (Fc); while it touches the plane
     // the hand feels the picture's forces (Prewitt 17 x 17, 1 N at a
     // black/white edge) on top: F = Fc + picture.
-    TangibleOptions options;
+    TangibleConfig options;
     options.border = Border::fade;
     return AnyField(contact(wall, TangibleImageField(TangibleImage(to_gray(image), options), mapping, 1.0)));
   }
@@ -313,9 +313,9 @@ void print_link(const WoodyArm& device) {
 }
 
 template <Device D>
-int run_demo(const Options& o, D& device, AnyField& field, SteadyClock& clock, bool hardware);
+int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock, bool hardware);
 
-int run(const Options& o) {
+int run(const Arguments& o) {
   const cv::Mat image = cv::imread(o.image, cv::IMREAD_COLOR);
   if (image.empty()) throw std::runtime_error("cannot read image " + o.image);
   const double workspace_mm = 80.0;  // the picture spans 80 mm of the device plane
@@ -399,7 +399,7 @@ int run(const Options& o) {
 }
 
 template <Device D>
-int run_demo(const Options& o, D& device, AnyField& field, SteadyClock& clock, bool hardware) {
+int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock, bool hardware) {
   LoopConfig config;
   config.rate = o.rate;
   config.realtime = o.realtime;

@@ -330,7 +330,7 @@ int run(const Args& a) {
   std::fflush(stdout);
   if (!a.overlay.empty()) draw_overlay(a.overlay, image, camera, a.faces, poses);
   if (!a.probes.empty() || !a.force_map.empty()) {
-    NormalFieldOptions options;
+    NormalFieldConfig options;
     if (a.gradient) options.mode = NormalForceMode::gradient;
     options.shading_cell_px = a.shading;
     NormalField field(image.cols, image.rows, faces, options);

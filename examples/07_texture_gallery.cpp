@@ -194,8 +194,8 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
   {
     fs::create_directories(out);
     std::vector<Trace> traces;
-    const TextureParams lateral{0.5, 1e-3, false, glm::dvec3{1.0, 1.0, 0.0}};
-    const TextureParams normal{0.5, 1e-3, false, glm::dvec3{0.0, 0.0, 1.0}};
+    const TextureConfig lateral{0.5, 1e-3, false, glm::dvec3{1.0, 1.0, 0.0}};
+    const TextureConfig normal{0.5, 1e-3, false, glm::dvec3{0.0, 0.0, 1.0}};
     const glm::dvec3 grain{1e-3, 1e-3, 1e-3};  // 1 mm: 50 Hz at 50 mm/s
 
     traces.push_back(stroke("uniform lattice", "uniform noise, 2D lattice 1 mm, linear",
@@ -209,7 +209,7 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
     glm::dmat3 cov{0.0};
     cov[0][0] = 0.3, cov[1][1] = 0.1, cov[0][1] = cov[1][0] = 0.12;  // lateral only (zero z variance)
     traces.push_back(stroke("multivariate gaussian", "full covariance, zero z variance, 3D lattice 1 mm",
-        TextureField(SpatialSource(NoiseLattice<MultivariateGaussianNoise, 3>(MultivariateGaussianNoise(glm::dvec3{0.0}, cov), 4, grain)), TextureParams{})));
+        TextureField(SpatialSource(NoiseLattice<MultivariateGaussianNoise, 3>(MultivariateGaussianNoise(glm::dvec3{0.0}, cov), 4, grain)), TextureConfig{})));
     traces.push_back(stroke("gaussian mixture", "two components (smooth / rough), 2D lattice 0.5 mm",
         TextureField(SpatialSource(NoiseLattice<GaussianMixtureNoise, 2>(GaussianMixtureNoise({{0.8, glm::dvec3{0.0}, glm::dmat3{0.02}}, {0.2, glm::dvec3{0.0}, glm::dmat3{1.0}}}), 5, grain * 0.5)), lateral)));
     traces.push_back(stroke("local sphere", "new Gaussian sample each 0.5 mm of travel",
@@ -235,10 +235,10 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
         TextureField(TemporalSource(GaussianNoise(0.1), 13), lateral,
                      Arma<2, 1>({-2.0 * 0.95 * std::cos(2 * std::numbers::pi * 80.0 / rate), 0.95 * 0.95}, {1.0, 0.5}))));
     traces.push_back(stroke("friction", "Coulomb mu = 0.3 (smoothed) + viscous 2 N s/m, opposing +x",
-        Friction(FrictionParams{0.3, 2.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
+        Friction(FrictionConfig{0.3, 2.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
     traces.push_back(stroke_free("flow", "3D vector lattice 2 mm, mean shift 0.2 N in -x, drag 1 N s/m",
         FlowTexture(NoiseLattice<GaussianNoise, 3>(GaussianNoise(0.2), 14, grain * 2.0, Interpolation::cubic),
-                    FlowParams{glm::dvec3{-0.2, 0, 0}, 1.0, 1.0})));
+                    FlowConfig{glm::dvec3{-0.2, 0, 0}, 1.0, 1.0})));
 
     std::cout << "writing to " << out.string() << ":\n";
     std::vector<cv::Mat> tiles;
@@ -249,7 +249,7 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
     if (!hatt_dir.empty()) {
       for (const auto& file : hatt_model_files(hatt_dir)) {
         const HattModelSet set = load_hatt_model_set(file);
-        HattTexture<128> tex(set, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, false});
+        HattTexture<128> tex(set, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, false});
         // run at the model's own sample rate (HaTT: 10 kHz)
         Trace t = stroke("hatt " + set.name, std::string(set.ma_order > 0 ? "HaTT ARMA" : "HaTT AR") + " model at 50 mm/s, 1 N, " + std::to_string(int(set.sample_rate)) + " Hz",
                          tex, set.sample_rate);

@@ -58,7 +58,7 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
     std::vector<std::string> names;
     for (int l = 0; l < levels; ++l) {
       const double t = levels == 1 ? 0.0 : double(l) / (levels - 1);  // 0 dark .. 1 bright
-      const TextureParams params{0.6 * (1.0 - t) + 0.05, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}};
+      const TextureConfig params{0.6 * (1.0 - t) + 0.05, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}};
       if (l == levels - 1) {
         textures.emplace_back();  // brightest: smooth
         names.push_back("smooth");
@@ -85,12 +85,12 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
     // data visualisation: brightness (0..1) raises friction from mu = 0.1 to
     // 0.6, and darkness raises the amplitude of a fine Gaussian texture
     const ScalarMap brightness = scalar_map_from_image(image, mapping);
-    auto friction = contact(picture, DataModulated(Friction(FrictionParams{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0.0}}),
+    auto friction = contact(picture, DataModulated(Friction(FrictionConfig{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0.0}}),
                                                    brightness, 0.1, 0.5));
     auto data_texture = contact(
         picture,
         DataModulated(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 99, glm::dvec3{0.4e-3})),
-                                   TextureParams{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
+                                   TextureConfig{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
                       brightness, 1.0, -1.0));  // amplitude 1 - brightness
 
     fs::create_directories(out);

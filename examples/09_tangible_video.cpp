@@ -74,7 +74,7 @@ constexpr const char* usage =
 
 struct Arguments {
   std::string video;
-  hf::TangibleOptions options;
+  hf::TangibleConfig options;
   bool size_given = false;
   hf::DenoiseMode denoise = hf::DenoiseMode::temporal;
   double fade_s = hf::default_cut_fade;

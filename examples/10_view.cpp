@@ -84,7 +84,7 @@ constexpr const char* usage_text =
     "[ ] seek (moving pictures), s screenshot, q or Esc quit.\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
 
-struct Options {
+struct Arguments {
   std::string source;
   SceneConfig scene;
   std::string device{"mouse"};
@@ -123,8 +123,8 @@ std::vector<glm::dvec2> parse_face(const std::string& text) {
   return corners;
 }
 
-Options parse(cli::Parser& p) {
-  Options o;
+Arguments parse(cli::Parser& p) {
+  Arguments o;
   bool size_given = false;
   while (p.next()) {
     if (p.is("--field")) {
@@ -236,7 +236,7 @@ constexpr const char* window_title = "hapticfield_view";
 
 /// Runs the loop on its own thread and the view on this one.
 template <Device D, HapticField F, class Source>
-int run_view(const Options& o, D& device, F& field, LiveField<AnyField>& live, Source& source, Scene& scene,
+int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live, Source& source, Scene& scene,
              SceneConfig cfg, const PlaneMapping& mapping, SteadyClock& clock, bool hardware,
              std::function<void(glm::dvec2)> mouse_moved) {
   LoopConfig config;
@@ -404,7 +404,7 @@ int run_view(const Options& o, D& device, F& field, LiveField<AnyField>& live, S
   return 0;
 }
 
-int run(const Options& o) {
+int run(const Arguments& o) {
   const cv::Mat picture = to_bgr8(cli::quiet_stderr([&] { return load_image(o.source); }));
   if (o.screenshot.empty() && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
     throw Error("no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "

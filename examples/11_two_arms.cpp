@@ -29,7 +29,7 @@ constexpr const char* usage_text =
     "  -h, --help       this text\n"
     "Exit status: 0 done, 1 failure, 2 usage error.\n";
 
-struct Options {
+struct Arguments {
   double seconds{3.0};
   double stiffness{150.0};
   ArmFaultPolicy policy{ArmFaultPolicy::isolate};
@@ -59,7 +59,7 @@ void print_arm(const char* name, const ServoLoop<ForceArm, SteadyClock>& arm) {
               s.latches ? (safety_events::names(s.last_latch) + ")").c_str() : "");
 }
 
-int run(const Options& o) {
+int run(const Arguments& o) {
   SteadyClock clock;
   const auto now = [&clock] { return clock.now(); };
   SimulatedArmConfig teacher_config;
@@ -110,7 +110,7 @@ int run(const Options& o) {
 
 int main(int argc, char** argv) {
   return cli::main("two_arms", usage_text, argc, argv, [](cli::Parser& p) {
-    Options o;
+    Arguments o;
     while (p.next()) {
       if (p.is("--seconds")) o.seconds = p.real(cli::closed(0.01, 60.0));
       else if (p.is("--stiffness")) o.stiffness = p.real(cli::open_closed(0.0, 500.0));

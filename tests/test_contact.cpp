@@ -37,7 +37,7 @@ Probe probe_at(glm::dvec3 position, glm::dvec3 velocity = glm::dvec3{0.0}, doubl
 
 // Coulomb friction mu [-] x |Fc| with a stick region far below any speed used here
 Friction coulomb(double mu, glm::dvec3 configured_normal = glm::dvec3{0.0}) {
-  return Friction(FrictionParams{mu, 0.0, 0.0, 1e-12, true, configured_normal});
+  return Friction(FrictionConfig{mu, 0.0, 0.0, 1e-12, true, configured_normal});
 }
 
 glm::dvec3 random_unit(std::mt19937& rng) {
@@ -169,9 +169,9 @@ TEST_CASE("doubling a texture's amplitude changes nothing in Fc or in the fricti
   const PlaneConstraint wall(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1500.0, 5.0});
   const NoiseLattice<GaussianNoise, 3> lat(GaussianNoise(1.0), 11, glm::dvec3{5e-4}, Interpolation::linear);
   const auto texture = [&](double gain) {
-    return TextureField(SpatialSource(lat), TextureParams{gain, 1e-3, true, glm::dvec3{1.0, 1.0, 1.0}});
+    return TextureField(SpatialSource(lat), TextureConfig{gain, 1e-3, true, glm::dvec3{1.0, 1.0, 1.0}});
   };
-  const Friction friction(FrictionParams{0.4, 0.8, 0.0, 2e-3, true, glm::dvec3{0.0}});
+  const Friction friction(FrictionConfig{0.4, 0.8, 0.0, 2e-3, true, glm::dvec3{0.0}});
   auto single = contact(wall, texture(0.3), friction);
   auto twice = contact(wall, texture(0.6), friction);
   auto bare = contact(wall, friction);
@@ -204,7 +204,7 @@ TEST_CASE("a HaTT texture selects its model by |Fc| of this tick") {
       load_hatt_model_set(std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / "tests/data/hatt/Models_Synthetic Grid.xml");
   // vertices (speed [mm/s], force [N]): 1 = (300, 0.5), 3 = (300, 3)
   auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
-                       HattTexture<>(s, HattParams{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true}));  // mass 0: friction only
+                       HattTexture<>(s, HattConfig{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true}));  // mass 0: friction only
   const auto uses_model = [&](std::size_t v) {
     const auto a = field.part<0>().ar_coefficients();
     REQUIRE(a.size() == s.models[v].ar_coeff.size() + 1);
@@ -229,8 +229,8 @@ TEST_CASE("a HaTT texture on a tilted plane vibrates along that plane's normal a
   const glm::dvec3 n = glm::normalize(glm::dvec3{0.3, -0.2, 1.0});
   const PlaneConstraint plane(PlaneConstraintConfig{glm::dvec3{0.0}, n, 1000.0, 0.0});
   // The configured normal (+z) is only a fallback: the touched plane's wins.
-  auto vibration = contact(plane, HattTexture<>(s, HattParams{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false}));
-  auto rubbing = contact(plane, HattTexture<>(s, HattParams{0.0, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, true}));
+  auto vibration = contact(plane, HattTexture<>(s, HattConfig{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false}));
+  auto rubbing = contact(plane, HattTexture<>(s, HattConfig{0.0, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, true}));
   const SurfaceFrame frame = surface_frame(n);
   double largest = 0.0;
   for (int i = 0; i < 500; ++i) {
@@ -251,8 +251,8 @@ TEST_CASE("a HaTT texture on a tilted plane vibrates along that plane's normal a
 TEST_CASE("no contact: no texture and no friction, and the parts are not called") {
   auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
                        TextureField(DistanceSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 3, glm::dvec3{1e-3})),
-                                    TextureParams{1.0, 0.0, false, glm::dvec3{1.0}}),  // not force-scaled: would act anywhere
-                       Friction(FrictionParams{0.5, 2.0, 0.0, 2e-3, false, glm::dvec3{0.0}}));
+                                    TextureConfig{1.0, 0.0, false, glm::dvec3{1.0}}),  // not force-scaled: would act anywhere
+                       Friction(FrictionConfig{0.5, 2.0, 0.0, 2e-3, false, glm::dvec3{0.0}}));
   for (int i = 0; i < 100; ++i) {
     const glm::dvec3 f = field.force(probe_at({i * 1e-4, 0.0, 1e-3}, {0.1, 0.0, 0.0}, 2.0));  // 1 mm above
     REQUIRE(f == glm::dvec3{0.0});
@@ -298,8 +298,8 @@ TEST_CASE("a texture with axes {1, 1, 0} acts only in the tangent plane; {0, 0, 
   for (int i = 0; i < 200; ++i) {
     const glm::dvec3 n = random_unit(rng);
     const PlaneConstraint plane(PlaneConstraintConfig{glm::dvec3{0.0}, n, 1000.0, 0.0});
-    auto lateral = contact(plane, TextureField(SpatialSource(lat), TextureParams{0.5, 1e-3, true, glm::dvec3{1, 1, 0}}));
-    auto bumps = contact(plane, TextureField(SpatialSource(lat), TextureParams{0.5, 1e-3, true, glm::dvec3{0, 0, 1}}));
+    auto lateral = contact(plane, TextureField(SpatialSource(lat), TextureConfig{0.5, 1e-3, true, glm::dvec3{1, 1, 0}}));
+    auto bumps = contact(plane, TextureField(SpatialSource(lat), TextureConfig{0.5, 1e-3, true, glm::dvec3{0, 0, 1}}));
     const SurfaceFrame frame = surface_frame(n);
     const glm::dvec3 pos = -1e-3 * n + 0.013 * frame.tangent1 - 0.007 * frame.tangent2;
     const glm::dvec3 v = 0.05 * frame.tangent1 + 0.02 * n;
@@ -314,7 +314,7 @@ TEST_CASE("a texture with axes {1, 1, 0} acts only in the tangent plane; {0, 0, 
   }
   // sliding is tangential speed: pressing straight in keeps the texture silent
   auto lateral = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
-                         TextureField(SpatialSource(lat), TextureParams{0.5, 1e-3, true, glm::dvec3{1, 1, 0}}));
+                         TextureField(SpatialSource(lat), TextureConfig{0.5, 1e-3, true, glm::dvec3{1, 1, 0}}));
   const glm::dvec3 f = lateral.force(probe_at({0.0, 0.0, -1e-3}, {0.0, 0.0, -0.05}));
   CHECK(f == lateral.last_contact().force);
 }
@@ -325,7 +325,7 @@ TEST_CASE("inside a contact the local circle works in the touched surface's tang
   // configured for a +z surface; the tilted plane's normal must win
   auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, n, 1000.0, 0.0}),
                        TextureField(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 4, 1e-3, glm::dvec3{0, 0, 1}),
-                                    TextureParams{1.0, 0.0, false, glm::dvec3{1.0}}));
+                                    TextureConfig{1.0, 0.0, false, glm::dvec3{1.0}}));
   for (int i = 1; i <= 50; ++i) (void)field.force(probe_at(-i * 1e-4 * n, -0.01 * n));  // 5 mm straight in
   CHECK(field.part<0>().source().samples_drawn() == 2);  // the first pair only
   for (int i = 1; i <= 50; ++i) (void)field.force(probe_at(-5e-3 * n + i * 1e-4 * frame.tangent1, 0.01 * frame.tangent1));
@@ -336,7 +336,7 @@ TEST_CASE("inside a contact the local circle works in the touched surface's tang
 
 TEST_CASE("non-finite probe data give zero force") {
   auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
-                       TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureParams{}), coulomb(0.4));
+                       TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureConfig{}), coulomb(0.4));
   CHECK(field.force(probe_at({not_a_number, 0.0, -1e-3}, {0.1, 0.0, 0.0})) == glm::dvec3{0.0});
   CHECK(field.force(probe_at({0.0, 0.0, -1e-3}, {infinity, 0.0, 0.0})) == glm::dvec3{0.0});
   CHECK_FALSE(field.last_contact().touching);
@@ -347,11 +347,11 @@ TEST_CASE("non-finite probe data give zero force") {
   // the parts alone: a non-finite surface normal gives zero
   odd.normal_force = 1.0;
   CHECK(coulomb(0.4).force(odd) == glm::dvec3{0.0});
-  TextureField tex(TemporalSource(GaussianNoise(1.0), 1), TextureParams{});
+  TextureField tex(TemporalSource(GaussianNoise(1.0), 1), TextureConfig{});
   CHECK(tex.force(odd) == glm::dvec3{0.0});
-  TextureField sphere(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 2, 5e-4), TextureParams{});
+  TextureField sphere(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 2, 5e-4), TextureConfig{});
   CHECK(sphere.force(odd) == glm::dvec3{0.0});
-  CHECK(StickSlipFriction(StickSlipParams{}).force(odd) == glm::dvec3{0.0});
+  CHECK(StickSlipFriction(StickSlipConfig{}).force(odd) == glm::dvec3{0.0});
   const PlaneConstraint plane(PlaneConstraintConfig{});
   CHECK_FALSE(plane.contact(probe_at({0.0, 0.0, -infinity})).touching);
   CHECK(plane.force(probe_at({0.0, 0.0, not_a_number})) == glm::dvec3{0.0});
@@ -363,13 +363,13 @@ TEST_CASE("a contact composition allocates nothing per tick") {
   const ScalarMap data(2, 2, {0.0f, 1.0f, 0.5f, 0.25f}, PlaneMapping::fit(2, 2, 100.0));
   auto field = contact(
       PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::normalize(glm::dvec3{0.2, 0.1, 1.0}), 1200.0, 3.0}),
-      TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureParams{0.3, 1e-3, true, glm::dvec3{1, 1, 0}},
+      TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureConfig{0.3, 1e-3, true, glm::dvec3{1, 1, 0}},
                    Butterworth<4>::band_pass(20.0, 200.0, 1000.0)),
-      TextureField(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 2, 5e-4), TextureParams{0.2, 1e-3, true, glm::dvec3{1.0}}),
-      Friction(FrictionParams{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}),
-      StickSlipFriction(StickSlipParams{}),
-      DataModulated(Friction(FrictionParams{0.2, 0.0, 0.0, 2e-3, true, glm::dvec3{0.0}}), data, 0.5, 1.0),
-      HattTexture<>(s, HattParams{}));
+      TextureField(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 2, 5e-4), TextureConfig{0.2, 1e-3, true, glm::dvec3{1.0}}),
+      Friction(FrictionConfig{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}),
+      StickSlipFriction(StickSlipConfig{}),
+      DataModulated(Friction(FrictionConfig{0.2, 0.0, 0.0, 2e-3, true, glm::dvec3{0.0}}), data, 0.5, 1.0),
+      HattTexture<>(s, HattConfig{}));
   AnyField erased(contact(SphereConstraint(SphereConstraintConfig{}), coulomb(0.3)));
   glm::dvec3 total{0.0};
   const long allocations = test::count_allocations([&] {

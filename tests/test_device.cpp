@@ -553,14 +553,14 @@ TEST_CASE("ForceArm rejects bad options and a device that does not describe itse
   std::int64_t now = 0;
   SimulatedArm arm(still_arm());
   SimulatedTransport link(arm, [&] { return now; });
-  ForceArmOptions o;
+  ForceArmConfig o;
   o.velocity_cutoff = std::nan("");
   CHECK_THROWS_AS(ForceArm(link, o), std::invalid_argument);
-  o = ForceArmOptions{};
+  o = ForceArmConfig{};
   o.query_device = false;  // else the device's own unit replaces it
   o.torque_unit = 0.0;
   CHECK_THROWS_AS(ForceArm(link, o), std::invalid_argument);
-  o = ForceArmOptions{};
+  o = ForceArmConfig{};
   o.query_device = false;
   o.info.max_force = -3.0;
   CHECK_THROWS_AS(ForceArm(link, o), std::invalid_argument);

@@ -244,7 +244,7 @@ TEST_CASE("forces are continuous between pixel centres") {
   for (MaskKind kind : {MaskKind::prewitt, MaskKind::sobel, MaskKind::roberts}) {
     for (Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
       CAPTURE(to_string(kind), to_string(border));
-      TangibleOptions o;
+      TangibleConfig o;
       o.mask = kind;
       o.size = kind == MaskKind::roberts ? 2 : (kind == MaskKind::sobel ? 5 : 9);
       o.border = border;
@@ -270,7 +270,7 @@ TEST_CASE("forces are continuous between pixel centres") {
 
 TEST_CASE("border policies") {
   const GrayImage gray = test_picture(60, 50, 2);
-  TangibleOptions o;
+  TangibleConfig o;
   o.size = 9;  // anchor 4: the mask fits for pixel centres 4 .. width - 5
 
   SECTION("suspend: the kernel's force where the mask fits, faded out over fade_px beyond") {
@@ -359,7 +359,7 @@ TEST_CASE("leaving a real photograph is never a step, for every border policy an
                                                      {MaskKind::sobel, 5},
                                                      {MaskKind::gaussian, 9}}) {
         CAPTURE(path, to_string(border), to_string(mc.kind), mc.size);
-        TangibleOptions o{mc.kind, mc.size, 0.0, border};
+        TangibleConfig o{mc.kind, mc.size, 0.0, border};
         const TangibleImage image(gray, o);
         o.border = border == Border::fade ? Border::suspend : border;  // same domain, no fade
         const TangibleImage raw(gray, o);
@@ -431,7 +431,7 @@ TEST_CASE("mirror symmetry: flipping the picture flips fx and keeps fy") {
   for (const MaskCase& mc : all_masks) {
     if (mc.kind == MaskKind::roberts) continue;  // even size: its anchor is not symmetric
     CAPTURE(to_string(mc.kind), mc.size);
-    TangibleOptions o{mc.kind, mc.size, 2.0, Border::reflect, 8.0, KernelChoice::automatic};
+    TangibleConfig o{mc.kind, mc.size, 2.0, Border::reflect, 8.0, KernelChoice::automatic};
     const TangibleImage a(gray, o);
     const TangibleImage b(mirrored, o);
     for (double x = 0.0; x <= 80.0; x += 3.7) {
@@ -448,7 +448,7 @@ TEST_CASE("the O(1) Prewitt map equals the per-pixel kernel map") {
   for (int size : {3, 17, 65}) {
     for (Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
       CAPTURE(size, to_string(border));
-      TangibleOptions o;
+      TangibleConfig o;
       o.size = size;
       o.border = border;
       o.kernel = KernelChoice::direct;
@@ -483,7 +483,7 @@ TEST_CASE("the integer Prewitt map is exact on 8-bit and colour pictures, and fa
       if (size > pictures[p].height()) continue;
       for (Border border : {Border::suspend, Border::clamp, Border::reflect, Border::fade}) {
         CAPTURE(p, size, to_string(border));
-        TangibleOptions o;
+        TangibleConfig o;
         o.size = size;
         o.border = border;
         o.kernel = KernelChoice::direct;
@@ -630,7 +630,7 @@ TEST_CASE("bad input: a clear error at setup, zero force at run time") {
     CHECK_THROWS_AS(GrayImage(0, 5), std::invalid_argument);
   }
   SECTION("bad fade width") {
-    TangibleOptions o;
+    TangibleConfig o;
     o.size = 3;
     o.fade_px = 0.0;
     CHECK_THROWS_AS(TangibleImage(gray, o), std::invalid_argument);

@@ -605,7 +605,7 @@ TEST_CASE("RANSAC rejects outliers among many noisy correspondences") {
   CHECK(rejected <= 20);
   CHECK(angle_between_deg(robust.normal, view.normals[0]) < 0.5);
   CHECK(robust.rms_reprojection_px < 1.0);
-  HomographyOptions plain;
+  HomographyConfig plain;
   plain.ransac = false;
   const FacePose naive = estimate_plane_pose(camera, plane, pixels, plain);
   CHECK(angle_between_deg(naive.normal, view.normals[0]) >

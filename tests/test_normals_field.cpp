@@ -143,7 +143,7 @@ TEST_CASE("signs agree with the 3D geometry of the box stimulus") {
 }
 
 TEST_CASE("speed threshold, velocity low-pass and reset") {
-  NormalFieldOptions options;
+  NormalFieldConfig options;
   options.speed_threshold = 0.01;  // [m/s] = 64 px/s at 6.4 px/mm
   options.velocity_cutoff_hz = 10.0;
   NormalField field(640, 640, {{rect(-1, -1, 641, 641), tilted(30.0, 0.0)}}, options);
@@ -205,7 +205,7 @@ TEST_CASE("non-finite probes give zero force and leave the state alone") {
 }
 
 TEST_CASE("gradient variant pushes downhill whatever the motion") {
-  NormalFieldOptions options;
+  NormalFieldConfig options;
   options.mode = NormalForceMode::gradient;
   const glm::dvec3 n = tilted(40.0, 135.0);
   NormalField field(640, 640, {{rect(-1, -1, 641, 641), n}}, options);
@@ -222,7 +222,7 @@ TEST_CASE("the force never exceeds the bound") {
   for (int k = 0; k < 200; ++k) {
     const glm::dvec3 n = tilted(89.9 * u(rng), 360.0 * u(rng));
     for (auto mode : {NormalForceMode::along_motion, NormalForceMode::gradient}) {
-      NormalFieldOptions options;
+      NormalFieldConfig options;
       options.mode = mode;
       NormalField field(64, 64, {{rect(-1, -1, 65, 65), n}}, options,
                         PlaneMapping(6.4, {32.0, 32.0}));
@@ -238,9 +238,9 @@ TEST_CASE("edges are felt; force shading makes the slope continuous") {
   // two faces meeting at x = 320 with different slopes (a roof ridge)
   const std::vector<ImageFace> faces{{rect(0, 0, 320, 640), tilted(40.0, 180.0)},
                                      {rect(320, 0, 640, 640), tilted(40.0, 0.0)}};
-  NormalFieldOptions flat;
+  NormalFieldConfig flat;
   flat.mode = NormalForceMode::gradient;
-  NormalFieldOptions shaded = flat;
+  NormalFieldConfig shaded = flat;
   shaded.shading_cell_px = 16.0;
   NormalField edged(640, 640, faces, flat);
   NormalField smooth(640, 640, faces, shaded);
@@ -282,7 +282,7 @@ TEST_CASE("explicit shading grid: bilinear interpolation of vertex normals") {
   CHECK(mid.x == Approx(expected.x));
   CHECK(mid.z == Approx(expected.z));
   CHECK(grid.normal_at({99.0, 120.0}) == glm::dvec3{0.0});
-  NormalFieldOptions options;
+  NormalFieldConfig options;
   options.mode = NormalForceMode::gradient;
   NormalField field(640, 640, {{rect(90, 90, 210, 160), glm::dvec3{0.0, 0.0, -1.0}}}, options,
                     std::nullopt, grid);
@@ -343,7 +343,7 @@ TEST_CASE("labels match point-in-polygon for 1, 10 and 1000 faces and non-convex
 TEST_CASE("a tick never allocates, with or without shading, whatever the face count") {
   for (int n : {1, 10, 1000}) {
     for (double cell : {0.0, 8.0}) {
-      NormalFieldOptions options;
+      NormalFieldConfig options;
       options.shading_cell_px = cell;
       NormalField field(640, 640, tiles(n), options);
       AnyField erased = NormalField(640, 640, tiles(n), options);
@@ -378,7 +378,7 @@ TEST_CASE("bad field setup is rejected with a clear error") {
                     Catch::Contains("non-zero normal"));
   CHECK_THROWS_WITH(NormalField(640, 640, face(rect(0, 0, 10, 10), {0.1, 0, 1})),
                     Catch::Contains("face the camera"));
-  NormalFieldOptions o;
+  NormalFieldConfig o;
   o.max_force = 0.0;
   CHECK_THROWS_WITH(NormalField(640, 640, {}, o), Catch::Contains("max_force"));
   o = {};

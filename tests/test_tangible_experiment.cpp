@@ -68,7 +68,7 @@ TEST_CASE("section 5: the smallest separation felt grows with the mask, shrinks 
     for (int d = 1; d <= 2 * h + 4; ++d) {
       CAPTURE(d);
       const GrayImage picture = two_lines(4 * h + d + 20, m + 2, 2 * h + 10, d);
-      TangibleOptions o;
+      TangibleConfig o;
       o.size = m;
       o.border = Border::clamp;
       const TangibleImage image(picture, o);

@@ -476,7 +476,7 @@ TEST_CASE("modulated texture Ft = S g + N") {
 // --- texture fields ----------------------------------------------------------------------
 
 TEST_CASE("texture is silent at rest and below the velocity threshold") {
-  TextureField field(TemporalSource(GaussianNoise(1.0), 3), TextureParams{0.5, 2e-3, false, glm::dvec3{1.0}});
+  TextureField field(TemporalSource(GaussianNoise(1.0), 3), TextureConfig{0.5, 2e-3, false, glm::dvec3{1.0}});
   REQUIRE(field.force(moving(glm::dvec3{0.0}, glm::dvec3{0.0})) == glm::dvec3{0.0});
   REQUIRE(field.force(moving(glm::dvec3{0.0}, glm::dvec3{1e-3, 1e-3, 0})) == glm::dvec3{0.0});
   REQUIRE(glm::length(field.force(moving(glm::dvec3{0.0}, glm::dvec3{0.01, 0, 0}))) > 0.0);
@@ -484,12 +484,12 @@ TEST_CASE("texture is silent at rest and below the velocity threshold") {
   REQUIRE(field.force(moving(glm::dvec3{std::numeric_limits<double>::quiet_NaN()})) == glm::dvec3{0.0});
   REQUIRE(field.force(moving(glm::dvec3{0.0}, glm::dvec3{std::numeric_limits<double>::infinity(), 0, 0})) ==
           glm::dvec3{0.0});
-  CHECK_THROWS_AS(TextureField(TemporalSource(GaussianNoise(1.0), 3), TextureParams{1.0, -1.0, false, glm::dvec3{1.0}}),
+  CHECK_THROWS_AS(TextureField(TemporalSource(GaussianNoise(1.0), 3), TextureConfig{1.0, -1.0, false, glm::dvec3{1.0}}),
                   std::invalid_argument);
 }
 
 TEST_CASE("temporal texture is repeatable per seed and scales with |Fc|") {
-  const TextureParams params{0.5, 0.0, true, glm::dvec3{1.0, 1.0, 0.0}};
+  const TextureConfig params{0.5, 0.0, true, glm::dvec3{1.0, 1.0, 0.0}};
   TextureField a(TemporalSource(GaussianNoise(1.0), 3), params);
   TextureField b(TemporalSource(GaussianNoise(1.0), 3), params);
   for (int i = 0; i < 50; ++i) {
@@ -505,13 +505,13 @@ TEST_CASE("temporal texture is repeatable per seed and scales with |Fc|") {
 
 TEST_CASE("spatial texture: the same spot feels the same; distance source follows the path") {
   const NoiseLattice<GaussianNoise, 2> lat(GaussianNoise(1.0), 9, glm::dvec3{5e-4}, Interpolation::cubic);
-  TextureField spatial{SpatialSource(lat), TextureParams{}};
+  TextureField spatial{SpatialSource(lat), TextureConfig{}};
   const glm::dvec3 p{1.23e-3, -4.5e-3, 0.0};
   const glm::dvec3 f1 = spatial.force(moving(p, glm::dvec3{0.02, 0, 0}));
   (void)spatial.force(moving(p + glm::dvec3{3e-3, 0, 0}));
   REQUIRE(spatial.force(moving(p, glm::dvec3{-0.02, 0.01, 0})) == f1);
 
-  TextureField along{DistanceSource(lat), TextureParams{}};
+  TextureField along{DistanceSource(lat), TextureConfig{}};
   (void)along.force(moving(glm::dvec3{0.0}));
   (void)along.force(moving(glm::dvec3{0.0, 3e-3, 0.0}));
   const glm::dvec3 f = along.force(moving(glm::dvec3{4e-3, 3e-3, 0.0}));
@@ -520,7 +520,7 @@ TEST_CASE("spatial texture: the same spot feels the same; distance source follow
 }
 
 TEST_CASE("friction opposes velocity and follows c s(|v|) + b|v| + d|v|^2") {
-  const FrictionParams p{0.4, 2.0, 10.0, 1e-3, false, glm::dvec3{0.0}};
+  const FrictionConfig p{0.4, 2.0, 10.0, 1e-3, false, glm::dvec3{0.0}};
   const Friction fr(p);
   for (int i = 0; i < 200; ++i) {
     const glm::dvec3 v{std::sin(i * 1.3) * 0.2, std::cos(i * 0.7) * 0.1, std::sin(i * 2.9) * 0.05};
@@ -536,7 +536,7 @@ TEST_CASE("friction opposes velocity and follows c s(|v|) + b|v| + d|v|^2") {
 }
 
 TEST_CASE("Coulomb friction does not chatter near zero speed") {
-  const Friction fr(FrictionParams{1.0, 0.0, 0.0, 1e-3, false, glm::dvec3{0.0}});
+  const Friction fr(FrictionConfig{1.0, 0.0, 0.0, 1e-3, false, glm::dvec3{0.0}});
   // a hand jittering at +-1 um/s: the force stays tiny instead of flipping +-1 N
   for (double v : {1e-6, -1e-6, 5e-7, -5e-7}) REQUIRE(std::fabs(fr.force(moving({}, {v, 0, 0})).x) < 1.1e-3);
   // continuous in v: the largest change between neighbouring speeds is small
@@ -552,17 +552,17 @@ TEST_CASE("Coulomb friction does not chatter near zero speed") {
 }
 
 TEST_CASE("friction scaled by |Fc| and restricted to the tangent plane") {
-  const Friction fr(FrictionParams{0.5, 0.0, 0.0, 1e-4, true, glm::dvec3{0, 0, 1}});
+  const Friction fr(FrictionConfig{0.5, 0.0, 0.0, 1e-4, true, glm::dvec3{0, 0, 1}});
   const glm::dvec3 f = fr.force(moving({}, {0.1, 0.0, -0.3}, 2.0));
   REQUIRE_THAT(f.x, WithinAbs(-1.0, 1e-5));
   REQUIRE(f.z == 0.0);
-  CHECK_THROWS_AS(Friction(FrictionParams{-0.1, 0, 0, 1e-3, false, glm::dvec3{0.0}}), std::invalid_argument);
-  CHECK_THROWS_AS(Friction(FrictionParams{0.1, 0, 0, 0.0, false, glm::dvec3{0.0}}), std::invalid_argument);
+  CHECK_THROWS_AS(Friction(FrictionConfig{-0.1, 0, 0, 1e-3, false, glm::dvec3{0.0}}), std::invalid_argument);
+  CHECK_THROWS_AS(Friction(FrictionConfig{0.1, 0, 0, 0.0, false, glm::dvec3{0.0}}), std::invalid_argument);
   REQUIRE(fr.force(moving({}, {std::numeric_limits<double>::quiet_NaN(), 0, 0})) == glm::dvec3{0.0});
 }
 
 TEST_CASE("stick-slip friction: spring while stuck, kinetic limit while sliding, quiet at rest") {
-  StickSlipFriction fr(StickSlipParams{2000.0, 0.5, 0.4, true, glm::dvec3{0, 0, 1}});
+  StickSlipFriction fr(StickSlipConfig{2000.0, 0.5, 0.4, true, glm::dvec3{0, 0, 1}});
   const auto at = [](double x, double fn = 1.0) { return moving(glm::dvec3{x, 0.0, 0.0}, glm::dvec3{0.0}, fn); };
   REQUIRE(fr.force(at(0.0)) == glm::dvec3{0.0});
   // stuck: 0.1 mm stretch -> 0.2 N back toward the anchor (below mu_s |Fc| = 0.5 N)
@@ -589,8 +589,8 @@ TEST_CASE("stick-slip friction: spring while stuck, kinetic limit while sliding,
   CHECK_THAT(f.x, WithinAbs(0.4, 1e-12));
   // no normal force: no friction
   CHECK_THAT(glm::length(fr.force(at(0.0, 0.0))), WithinAbs(0.0, 1e-15));
-  CHECK_THROWS_AS(StickSlipFriction(StickSlipParams{2000.0, 0.3, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
-  CHECK_THROWS_AS(StickSlipFriction(StickSlipParams{0.0, 0.5, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
+  CHECK_THROWS_AS(StickSlipFriction(StickSlipConfig{2000.0, 0.3, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
+  CHECK_THROWS_AS(StickSlipFriction(StickSlipConfig{0.0, 0.5, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
   CHECK(fr.force(moving(glm::dvec3{std::numeric_limits<double>::quiet_NaN()})) == glm::dvec3{0.0});
 }
 
@@ -601,12 +601,12 @@ TEST_CASE("F = Fc + Ft + Ff composes through sum()") {
     }
   };
   const NoiseLattice<GaussianNoise, 2> lat(GaussianNoise(1.0), 9, glm::dvec3{5e-4}, Interpolation::linear);
-  auto total = sum(Wall{}, TextureField(SpatialSource(lat), TextureParams{0.2, 1e-3, true, glm::dvec3{1, 1, 0}}),
-                   Friction(FrictionParams{0.3, 0, 0, 1e-3, true, glm::dvec3{0, 0, 1}}));
+  auto total = sum(Wall{}, TextureField(SpatialSource(lat), TextureConfig{0.2, 1e-3, true, glm::dvec3{1, 1, 0}}),
+                   Friction(FrictionConfig{0.3, 0, 0, 1e-3, true, glm::dvec3{0, 0, 1}}));
   Probe p = moving(glm::dvec3{1e-3, 2e-3, -2e-3}, glm::dvec3{0.05, 0, 0}, 1.0);
   const glm::dvec3 f = total.force(p);
   const glm::dvec3 expect = Wall{}.force(p) + 0.2 * glm::dvec3{lat(p.position).x, lat(p.position).y, 0.0} +
-                            Friction(FrictionParams{0.3, 0, 0, 1e-3, true, glm::dvec3{0, 0, 1}}).force(p);
+                            Friction(FrictionConfig{0.3, 0, 0, 1e-3, true, glm::dvec3{0, 0, 1}}).force(p);
   REQUIRE(glm::length(f - expect) < 1e-12);
   AnyField erased = std::move(total);
   REQUIRE(glm::length(erased.force(p) - expect) < 1e-12);
@@ -614,7 +614,7 @@ TEST_CASE("F = Fc + Ft + Ff composes through sum()") {
 
 TEST_CASE("flow texture: mean shift pushes, viscous drag resists") {
   const NoiseLattice<GaussianNoise, 3> lat(GaussianNoise(1.0), 2, glm::dvec3{2e-3}, Interpolation::cubic);
-  const FlowTexture flow(lat, FlowParams{glm::dvec3{0.2, 0, 0}, 0.1, 3.0});
+  const FlowTexture flow(lat, FlowConfig{glm::dvec3{0.2, 0, 0}, 0.1, 3.0});
   const glm::dvec3 p{1e-3, 2e-3, 3e-3};
   const glm::dvec3 at_rest = flow.force(moving(p, glm::dvec3{0.0}));
   REQUIRE(glm::length(at_rest - (glm::dvec3{0.2, 0, 0} + 0.1 * lat(p))) < 1e-15);
@@ -625,7 +625,7 @@ TEST_CASE("flow texture: mean shift pushes, viscous drag resists") {
   for (int i = 0; i < 20000; ++i) mean += flow.force(moving(glm::dvec3{i * 0.77e-3, i * 0.31e-3, i * 0.13e-3}, {}));
   mean /= 20000.0;
   REQUIRE_THAT(mean.x, WithinAbs(0.2, 0.01));
-  CHECK_THROWS_AS(FlowTexture(lat, FlowParams{glm::dvec3{0.0}, 1.0, -1.0}), std::invalid_argument);
+  CHECK_THROWS_AS(FlowTexture(lat, FlowConfig{glm::dvec3{0.0}, 1.0, -1.0}), std::invalid_argument);
 }
 
 // --- data visualisation and false texturing --------------------------------------------------
@@ -638,7 +638,7 @@ TEST_CASE("data value modulates texture amplitude and friction") {
   CHECK_THAT(map.value(glm::dvec3{1e-3, 0, 0}), WithinAbs(1.0, 1e-12));
   CHECK_THAT(map.value(glm::dvec3{0.25e-3, 0, 0}), WithinAbs(0.25, 1e-12));
   CHECK(map.value(glm::dvec3{5e-3, 0, 0}, -1.0) == -1.0);
-  DataModulated friction(Friction(FrictionParams{1.0, 0, 0, 1e-4, false, glm::dvec3{0.0}}), map, 0.2, 0.8);
+  DataModulated friction(Friction(FrictionConfig{1.0, 0, 0, 1e-4, false, glm::dvec3{0.0}}), map, 0.2, 0.8);
   const glm::dvec3 v{0.1, 0, 0};
   CHECK_THAT(friction.force(moving(glm::dvec3{0.0}, v)).x, WithinAbs(-0.2, 1e-5));
   CHECK_THAT(friction.force(moving(glm::dvec3{1e-3, 0, 0}, v)).x, WithinAbs(-1.0, 1e-5));

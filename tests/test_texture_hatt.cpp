@@ -341,11 +341,11 @@ TEST_CASE("toolkit <ARcoeff> lists (a_0 = 1 first) convert to the file's own LSF
 
 TEST_CASE("a 1 kHz toolkit model makes one step per 1 kHz tick and its spectrum is the model's") {
   const HattModelSet s = load_hatt_model_set(data_dir / "Models_Toolkit 1kHz ARMA.xml");
-  HattParams params;
+  HattConfig params;
   params.seed = 11;
   HattTexture<> tex(s, params);
   CHECK(tex.steps_per_tick(1e-3) == 1);
-  HattParams one = params;
+  HattConfig one = params;
   one.match_sample_rate = false;
   HattTexture<> reference(s, one);
   Probe p = stroke(0.2, 2.0);  // vertex 4: 200 mm/s, 2 N
@@ -371,7 +371,7 @@ TEST_CASE("a 1 kHz toolkit model makes one step per 1 kHz tick and its spectrum 
 
 TEST_CASE("a 10 kHz toolkit AR model in a 10 kHz loop: one step per tick, the model's spectrum") {
   const HattModelSet s = load_hatt_model_set(data_dir / "Models_Toolkit 10kHz AR.xml");
-  HattTexture<> tex(s, HattParams{});
+  HattTexture<> tex(s, HattConfig{});
   CHECK(tex.steps_per_tick(1e-4) == 1);
   CHECK(tex.steps_per_tick(1e-3) == 10);
   const std::size_t v = 3;
@@ -519,7 +519,7 @@ TEST_CASE("barycentric weights equal 1 at a vertex and reproduce the point insid
 
 TEST_CASE("at a model's vertex the texture uses exactly that model") {
   const HattModelSet s = grid();
-  HattTexture<> tex(s, HattParams{});
+  HattTexture<> tex(s, HattConfig{});
   for (std::size_t v = 0; v < s.models.size(); ++v) {
     tex.update(s.speeds[v], s.forces[v]);
     const auto a = tex.ar_coefficients();
@@ -535,7 +535,7 @@ TEST_CASE("at a model's vertex the texture uses exactly that model") {
       CHECK(is_stable(std::vector<double>(a.begin() + 1, a.end())));
     }
   const HattModelSet m = arma_set();
-  HattTexture<> arma(m, HattParams{});
+  HattTexture<> arma(m, HattConfig{});
   arma.update(m.speeds[2], m.forces[2]);
   const auto b = arma.ma_coefficients();
   REQUIRE(b.size() == 3);
@@ -547,7 +547,7 @@ TEST_CASE("at a model's vertex the texture uses exactly that model") {
 TEST_CASE("synthesised acceleration variance = model variance x sum of squared AR impulse response") {
   const HattModelSet s = grid();
   const std::size_t v = 3;  // (300 mm/s, 3 N)
-  HattTexture<> tex(s, HattParams{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false});
+  HattTexture<> tex(s, HattConfig{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false});
   const auto& c = s.models[v].ar_coeff;
   const Arma<6, 0> reference({c[0], c[1], c[2], c[3], c[4], c[5]}, {1.0});
   double sum_h2 = 0;
@@ -573,7 +573,7 @@ TEST_CASE("synthesised acceleration variance = model variance x sum of squared A
 TEST_CASE("ARMA model sets: variance = var x gain^2 x sum of squared ARMA impulse response, in m/s^2") {
   const HattModelSet s = arma_set();  // accelerations in g in this file
   const std::size_t v = 1;            // (400 mm/s, 0.2 N), gain 1.2
-  HattTexture<> tex(s, HattParams{0.05, glm::dvec3{0, 0, 1}, 3, 1, 1e-3, false});
+  HattTexture<> tex(s, HattConfig{0.05, glm::dvec3{0, 0, 1}, 3, 1, 1e-3, false});
   const auto& a = s.models[v].ar_coeff;
   const auto& b = s.models[v].ma_coeff;
   REQUIRE(a.size() == 4);
@@ -598,9 +598,9 @@ TEST_CASE("a 10 kHz model in a 1 kHz loop runs at its own rate: ten AR steps per
   HattModelSet s = grid();
   s.sample_rate = 10000.0;  // as the toolkit's models
   const std::size_t v = 3;
-  HattParams one_step{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false};
+  HattConfig one_step{0.05, glm::dvec3{0, 0, 1}, 7, 1, 1e-3, false};
   one_step.match_sample_rate = false;
-  HattParams matched = one_step;
+  HattConfig matched = one_step;
   matched.match_sample_rate = true;
   HattTexture<> reference(s, one_step);  // one step per call: the model's own 10 kHz sequence
   HattTexture<> tex(s, matched);
@@ -623,7 +623,7 @@ TEST_CASE("a 10 kHz model in a 1 kHz loop runs at its own rate: ten AR steps per
 
 TEST_CASE("HaTT friction mu |Fc| opposes the tangential velocity; silent at rest") {
   const HattModelSet s = grid();
-  HattTexture<> tex(s, HattParams{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});  // zero mass: friction only
+  HattTexture<> tex(s, HattConfig{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});  // zero mass: friction only
   Probe p = stroke(0.1, 2.0);
   p.velocity = glm::dvec3{0.06, -0.08, 0.5};  // normal component ignored
   const glm::dvec3 f = tex.force(p);
@@ -632,13 +632,13 @@ TEST_CASE("HaTT friction mu |Fc| opposes the tangential velocity; silent at rest
   CHECK(f.z == 0.0);
   CHECK(tex.force(stroke(0.0, 2.0)) == glm::dvec3{0.0});
   CHECK(tex.force(stroke(std::numeric_limits<double>::quiet_NaN(), 2.0)) == glm::dvec3{0.0});
-  CHECK_THROWS_AS(HattTexture<4>(s, HattParams{}), std::invalid_argument);  // order 6 > 4
-  CHECK_THROWS_AS(HattTexture<>(s, HattParams{-1.0}), std::invalid_argument);
+  CHECK_THROWS_AS(HattTexture<4>(s, HattConfig{}), std::invalid_argument);  // order 6 > 4
+  CHECK_THROWS_AS(HattTexture<>(s, HattConfig{-1.0}), std::invalid_argument);
 }
 
 TEST_CASE("coefficients can be refreshed every N ticks") {
   const HattModelSet s = grid();
-  HattTexture<> every10(s, HattParams{0.05, glm::dvec3{0, 0, 1}, 1, 10, 1e-3, false});
+  HattTexture<> every10(s, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 10, 1e-3, false});
   (void)every10.force(stroke(0.05, 0.5));  // first tick: no update yet (initial model at (0, 0))
   const auto first = std::vector<double>(every10.ar_coefficients().begin(), every10.ar_coefficients().end());
   for (int i = 0; i < 8; ++i) (void)every10.force(stroke(0.3, 3.0));
@@ -651,17 +651,17 @@ TEST_CASE("coefficients can be refreshed every N ticks") {
 
 TEST_CASE("a full texture tick allocates nothing") {
   // noise + three 4th-order Butterworth sections (one per component) + friction
-  auto field = sum(TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureParams{0.3, 1e-3, true, glm::dvec3{1.0}},
+  auto field = sum(TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureConfig{0.3, 1e-3, true, glm::dvec3{1.0}},
                                 Butterworth<4>::band_pass(20.0, 200.0, 1000.0)),
-                   Friction(FrictionParams{0.4, 0.5, 0.0, 1e-3, true, glm::dvec3{0, 0, 1}}));
+                   Friction(FrictionConfig{0.4, 0.5, 0.0, 1e-3, true, glm::dvec3{0, 0, 1}}));
   const HattModelSet s = grid();
-  HattTexture<> hatt(s, HattParams{});
+  HattTexture<> hatt(s, HattConfig{});
   const NoiseLattice<GaussianNoise, 3> lat(GaussianNoise(1.0), 2, glm::dvec3{1e-3}, Interpolation::cubic);
-  auto spatial = TextureField(SpatialSource(Fbm<GaussianNoise, 3>(lat, 0.5, 4)), TextureParams{},
+  auto spatial = TextureField(SpatialSource(Fbm<GaussianNoise, 3>(lat, 0.5, 4)), TextureConfig{},
                               Butterworth<2>::low_pass(100.0, 1000.0));
   auto sphere = TextureField(LocalSphere<GaussianMixtureNoise>(
                                  GaussianMixtureNoise({{1.0, glm::dvec3{0.0}, glm::dmat3{1.0}}}), 3, 5e-4),
-                             TextureParams{});
+                             TextureConfig{});
   glm::dvec3 total{0.0};
   const long allocations = test::count_allocations([&] {
     for (int i = 0; i < 5000; ++i) {
@@ -687,7 +687,7 @@ TEST_CASE("HaTT model files from $HATT_MODELS_DIR load and render (skipped when 
   for (const auto& file : files) {
     INFO(file.string());
     const HattModelSet s = load_hatt_model_set(file);
-    HattTexture<128> tex(s, HattParams{});  // room for any order the toolkit uses
+    HattTexture<128> tex(s, HattConfig{});  // room for any order the toolkit uses
     double peak = 0;
     for (int i = 0; i < 2000; ++i) {
       const glm::dvec3 f = tex.force(stroke(0.02 + 0.2 * (i % 100) / 100.0, 0.2 + 2.0 * (i % 37) / 37.0));

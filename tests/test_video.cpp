@@ -94,7 +94,7 @@ PrepareConfig plain_config(int size = 5) {
 }
 
 /// The force of one still picture, through the still-picture API (the oracle).
-TangibleImage still(const cv::Mat& bgr, const TangibleOptions& o) { return TangibleImage(to_gray(bgr), o); }
+TangibleImage still(const cv::Mat& bgr, const TangibleConfig& o) { return TangibleImage(to_gray(bgr), o); }
 
 struct Quiet {
   Quiet() {

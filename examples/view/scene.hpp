@@ -127,7 +127,7 @@ inline AnyField tangible(const cv::Mat& frame, const SceneConfig& c, const Plane
   cv::Mat source;  // a new buffer: the frame itself is never blurred in place
   if (c.denoise_px > 0.0) cv::GaussianBlur(frame, source, cv::Size(), c.denoise_px);
   else source = frame;
-  TangibleOptions options;
+  TangibleConfig options;
   options.mask = c.mask;
   options.size = c.size;
   options.border = c.border;
@@ -160,7 +160,7 @@ inline AnyField normals(const cv::Mat& frame, const SceneConfig& c, const PlaneM
     cv::fillPoly(tint, std::vector<std::vector<cv::Point>>{polygon}, normal_colour(pose.normal));
   }
   cv::addWeighted(frame, 0.45, tint, 0.55, 0.0, underlay);
-  NormalFieldOptions options;
+  NormalFieldConfig options;
   options.max_force = c.normals_max_force;
   return AnyField(NormalField(frame.cols, frame.rows, std::move(faces), options, mapping));
 }
@@ -178,7 +178,7 @@ inline AnyField texture_field(const cv::Mat& frame, const SceneConfig& c, const 
       underlay.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(128.0 + 110.0 * g.x),
                                                cv::saturate_cast<uchar>(128.0 + 110.0 * g.y), 110);
     }
-  TextureParams params;
+  TextureConfig params;
   params.gain = c.texture_gain;
   params.axes = {1.0, 1.0, 0.0};
   return AnyField(TextureField(SpatialSource(lattice), params));

@@ -70,9 +70,9 @@ GrayImage gray_from(const py::object& image, GrayWeights weights) {
   return gray;
 }
 
-TangibleOptions tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
+TangibleConfig tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
                                  double sigma) {
-  TangibleOptions o;
+  TangibleConfig o;
   o.mask = mask_kind(mask);
   o.size = size ? *size : o.mask == MaskKind::roberts ? 2 : (o.mask == MaskKind::scharr || o.mask == MaskKind::sobel) ? 3 : 17;
   o.border = border_kind(border);
@@ -153,7 +153,7 @@ void bind_image(py::module_& m) {
       "force_map",
       [](const py::object& image, const std::string& mask, std::optional<int> size, const std::string& border,
          double sigma, const std::string& gray) {
-        const TangibleOptions o = tangible_options(mask, size, border, sigma);
+        const TangibleConfig o = tangible_options(mask, size, border, sigma);
         const GrayImage g = gray_from(image, gray_weights(gray));
         ForceMap map;
         {
@@ -193,7 +193,7 @@ void bind_image(py::module_& m) {
         const std::vector<glm::dvec2> c = points_of(corners, "corners");
         std::optional<glm::dvec2> s;
         if (size) s = glm::dvec2{(*size)[0], (*size)[1]};
-        return pose_dict(estimate_rectangle_pose(camera_of(K), c, s, PoseOptions{refine}));
+        return pose_dict(estimate_rectangle_pose(camera_of(K), c, s, PoseConfig{refine}));
       },
       py::arg("corners"), py::arg("K"), py::arg("size") = py::none(), py::arg("refine") = true,
       "Normal of a rectangular face from its 4 image corners (4 x 2 [px], in order around the face) and the 3 x 3 "
@@ -215,7 +215,7 @@ void bind_image(py::module_& m) {
          std::optional<double> px_per_mm) {
         std::vector<ImageFace> f;
         for (const auto& [polygon, normal] : faces) f.push_back({points_of(polygon, "face polygon"), glm3(normal)});
-        NormalFieldOptions o;
+        NormalFieldConfig o;
         o.mode = choose<NormalForceMode>("mode", mode, {{"along_motion", NormalForceMode::along_motion},
                                                         {"gradient", NormalForceMode::gradient}});
         o.max_force = max_force;

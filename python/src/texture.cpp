@@ -22,8 +22,8 @@ Interpolation interpolation_of(const std::string& name) {
   throw py::value_error("interpolation: unknown '" + name + "' (choose nearest, linear or cubic)");
 }
 
-TextureParams params_of(double gain, double velocity_threshold, bool scale_with_normal_force, const V3& axes) {
-  return TextureParams{gain, velocity_threshold, scale_with_normal_force, glm3(axes)};
+TextureConfig params_of(double gain, double velocity_threshold, bool scale_with_normal_force, const V3& axes) {
+  return TextureConfig{gain, velocity_threshold, scale_with_normal_force, glm3(axes)};
 }
 
 /// Calls f with the noise named by kind: uniform in [-sigma sqrt 3, sigma sqrt 3), Gaussian or Laplacian, all
@@ -90,7 +90,7 @@ void bind_texture(py::module_& m) {
       [](const std::string& noise, double sigma, std::uint32_t seed, const V3& grain, int dim,
          const std::string& interpolation, int octaves, double h, double gain, double velocity_threshold,
          bool scale_with_normal_force, const V3& axes) {
-        const TextureParams p = params_of(gain, velocity_threshold, scale_with_normal_force, axes);
+        const TextureConfig p = params_of(gain, velocity_threshold, scale_with_normal_force, axes);
         if (dim != 2 && dim != 3) throw py::value_error("dim: must be 2 (x, y) or 3");
         if (octaves < 0) throw py::value_error("octaves: must be >= 0 (0: no fBm)");
         return with_noise(noise, sigma, [&](auto n) {
@@ -120,7 +120,7 @@ void bind_texture(py::module_& m) {
       "local_sphere_texture",
       [](const std::string& noise, double sigma, std::uint32_t seed, double radius, const V3& surface_normal,
          double gain, double velocity_threshold, bool scale_with_normal_force, const V3& axes) {
-        const TextureParams p = params_of(gain, velocity_threshold, scale_with_normal_force, axes);
+        const TextureConfig p = params_of(gain, velocity_threshold, scale_with_normal_force, axes);
         return with_noise(noise, sigma, [&](auto n) {
           using N = decltype(n);
           return make_field(TextureField(LocalSphere<N>(n, seed, radius, glm3(surface_normal)), p),
@@ -138,7 +138,7 @@ void bind_texture(py::module_& m) {
       "temporal_texture",
       [](const std::string& noise, double sigma, std::uint32_t seed, int order, const std::string& band, double f1,
          double f2, double rate, double gain, double velocity_threshold, bool scale_with_normal_force, const V3& axes) {
-        const TextureParams p = params_of(gain, velocity_threshold, scale_with_normal_force, axes);
+        const TextureConfig p = params_of(gain, velocity_threshold, scale_with_normal_force, axes);
         return with_noise(noise, sigma, [&](auto n) {
           if (order == 0) return make_field(TextureField(TemporalSource(n, seed), p), noise + " temporal texture");
           return with_butterworth(order, band, f1, f2, rate, [&](auto filter) {
@@ -160,7 +160,7 @@ void bind_texture(py::module_& m) {
       "friction",
       [](double coulomb, double viscous, double drag, double smoothing_speed, bool scale_with_normal_force,
          const V3& surface_normal) {
-        return make_field(Friction(FrictionParams{coulomb, viscous, drag, smoothing_speed, scale_with_normal_force,
+        return make_field(Friction(FrictionConfig{coulomb, viscous, drag, smoothing_speed, scale_with_normal_force,
                                                   glm3(surface_normal)}),
                           "friction");
       },
@@ -174,7 +174,7 @@ void bind_texture(py::module_& m) {
       [](const std::string& path, double effective_mass, const V3& surface_normal, std::uint32_t seed,
          double velocity_threshold, bool friction) {
         const HattModelSet set = load_hatt_model_set(path);
-        HattParams p;
+        HattConfig p;
         p.effective_mass = effective_mass;
         p.surface_normal = glm3(surface_normal);
         p.seed = seed;

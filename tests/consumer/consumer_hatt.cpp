@@ -8,7 +8,7 @@ int main(int argc, char** argv) {
   namespace tx = hapticfield::texture;
   if (argc != 2) return 2;
   const tx::HattModelSet set = tx::load_hatt_model_set(argv[1]);
-  tx::HattTexture<> texture(set, tx::HattParams{});
+  tx::HattTexture<> texture(set, tx::HattConfig{});
   hapticfield::Probe probe;
   probe.velocity = {0.1, 0.0, 0.0};  // [m/s]
   probe.normal_force = 1.0;          // [N]

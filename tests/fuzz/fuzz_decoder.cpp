@@ -67,7 +67,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::free(copy);
 
   ChunkTransport transport(data, size);
-  ForceArmOptions options;
+  ForceArmConfig options;
   options.query_device = false;
   ForceArm arm(transport, options);
   DeviceState state;

@@ -25,7 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   // a set the reader accepts must be one the renderer accepts (orders are
   // capped at max_hatt_order), and its forces must stay finite
-  HattTexture<max_hatt_order> tex(set, HattParams{});
+  HattTexture<max_hatt_order> tex(set, HattConfig{});
   Probe p;
   p.period = 1e-3;
   for (int i = 0; i < 64; ++i) {

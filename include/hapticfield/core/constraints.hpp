@@ -53,7 +53,7 @@ class PlaneConstraint {
  public:
   /// @throws std::invalid_argument for a non-finite point, a normal that is
   ///         not unit length, a stiffness <= 0 or a negative damping.
-  explicit PlaneConstraint(const PlaneConstraintConfig& config) : c_(config) {
+  explicit PlaneConstraint(const PlaneConstraintConfig& config) : config_(config) {
     if (!is_finite(config.point)) throw std::invalid_argument("PlaneConstraint: point must be finite [m]");
     const double n = glm::length(config.normal);
     if (!std::isfinite(n) || std::fabs(n - 1.0) > 1e-9)
@@ -63,18 +63,18 @@ class PlaneConstraint {
 
   [[nodiscard]] Contact contact(const Probe& probe) const noexcept {
     if (!is_finite(probe.position) || !is_finite(probe.velocity)) return Contact{};
-    const double height = glm::dot(probe.position - c_.point, c_.normal);  // [m], < 0 inside
+    const double height = glm::dot(probe.position - config_.point, config_.normal);  // [m], < 0 inside
     if (!(height < 0.0)) return Contact{};
-    return detail::penalty_contact(-height, c_.normal, probe.velocity, c_.stiffness, c_.damping);
+    return detail::penalty_contact(-height, config_.normal, probe.velocity, config_.stiffness, config_.damping);
   }
 
   /// Fc alone [N].
   [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept { return contact(probe).force; }
 
-  [[nodiscard]] const PlaneConstraintConfig& config() const noexcept { return c_; }
+  [[nodiscard]] const PlaneConstraintConfig& config() const noexcept { return config_; }
 
  private:
-  PlaneConstraintConfig c_;
+  PlaneConstraintConfig config_;
 };
 
 struct SphereConstraintConfig {
@@ -90,7 +90,7 @@ class SphereConstraint {
  public:
   /// @throws std::invalid_argument for a non-finite centre, a radius <= 0,
   ///         a stiffness <= 0 or a negative damping.
-  explicit SphereConstraint(const SphereConstraintConfig& config) : c_(config) {
+  explicit SphereConstraint(const SphereConstraintConfig& config) : config_(config) {
     if (!is_finite(config.centre)) throw std::invalid_argument("SphereConstraint: centre must be finite [m]");
     if (!std::isfinite(config.radius) || config.radius <= 0.0)
       throw std::invalid_argument("SphereConstraint: radius must be finite and > 0 [m]");
@@ -99,20 +99,20 @@ class SphereConstraint {
 
   [[nodiscard]] Contact contact(const Probe& probe) const noexcept {
     if (!is_finite(probe.position) || !is_finite(probe.velocity)) return Contact{};
-    const glm::dvec3 r = probe.position - c_.centre;
+    const glm::dvec3 r = probe.position - config_.centre;
     const double distance = glm::length(r);  // [m]
-    if (!(distance < c_.radius)) return Contact{};
+    if (!(distance < config_.radius)) return Contact{};
     const glm::dvec3 n = distance > 0.0 ? r / distance : glm::dvec3{0.0, 0.0, 1.0};
-    return detail::penalty_contact(c_.radius - distance, n, probe.velocity, c_.stiffness, c_.damping);
+    return detail::penalty_contact(config_.radius - distance, n, probe.velocity, config_.stiffness, config_.damping);
   }
 
   /// Fc alone [N].
   [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept { return contact(probe).force; }
 
-  [[nodiscard]] const SphereConstraintConfig& config() const noexcept { return c_; }
+  [[nodiscard]] const SphereConstraintConfig& config() const noexcept { return config_; }
 
  private:
-  SphereConstraintConfig c_;
+  SphereConstraintConfig config_;
 };
 
 static_assert(Constraint<PlaneConstraint> && HapticField<PlaneConstraint>);

@@ -45,7 +45,7 @@ struct LinkCounters {
   std::uint64_t resyncs{0};     ///< times a new stream was taken up (device restart, long loss)
 };
 
-struct ForceArmOptions {
+struct ForceArmConfig {
   /// Read the device-info feature report at construction and take geometry,
   /// encoder resolution and limits from it (else use kinematics and info).
   bool query_device{true};
@@ -65,7 +65,7 @@ class ForceArm {
  public:
   /// @throws std::invalid_argument for bad options, std::runtime_error when
   ///         the device-info feature report cannot be read or is invalid.
-  explicit ForceArm(Transport& transport, ForceArmOptions options = {}) : transport_(&transport), config_(std::move(options)) {
+  explicit ForceArm(Transport& transport, ForceArmConfig options = {}) : transport_(&transport), config_(std::move(options)) {
     if (config_.query_device) {
       std::array<std::uint8_t, protocol::max_report_size> buf{};
       buf[0] = static_cast<std::uint8_t>(protocol::ReportId::device_info);
@@ -78,13 +78,13 @@ class ForceArm {
       apply(r);
     }
     if (!std::isfinite(config_.velocity_cutoff) || config_.velocity_cutoff <= 0.0)
-      throw std::invalid_argument("ForceArmOptions: velocity_cutoff must be finite and > 0 [Hz]");
+      throw std::invalid_argument("ForceArmConfig: velocity_cutoff must be finite and > 0 [Hz]");
     if (!std::isfinite(config_.torque_unit) || config_.torque_unit <= 0.0)
-      throw std::invalid_argument("ForceArmOptions: torque_unit must be finite and > 0 [N m]");
+      throw std::invalid_argument("ForceArmConfig: torque_unit must be finite and > 0 [N m]");
     if (config_.max_sequence_gap < 1 || config_.max_sequence_gap > 30000)
-      throw std::invalid_argument("ForceArmOptions: max_sequence_gap must be within 1..30000 [reports]");
+      throw std::invalid_argument("ForceArmConfig: max_sequence_gap must be within 1..30000 [reports]");
     if (config_.resync_reports < 1 || config_.resync_reports > 100)
-      throw std::invalid_argument("ForceArmOptions: resync_reports must be within 1..100 [reports]");
+      throw std::invalid_argument("ForceArmConfig: resync_reports must be within 1..100 [reports]");
     config_.info.validate();
     kin_ = PhantomKinematics(config_.kinematics);
   }
@@ -275,7 +275,7 @@ class ForceArm {
   }
 
   Transport* transport_;
-  ForceArmOptions config_;
+  ForceArmConfig config_;
   PhantomKinematics kin_{};
   LinkCounters counters_{};
   std::array<std::uint8_t, protocol::max_report_size> buf_{};

@@ -26,7 +26,7 @@ enum class KernelChoice {
   integral,   ///< O(1); prewitt and emboss only
 };
 
-struct TangibleOptions {
+struct TangibleConfig {
   MaskKind mask = MaskKind::prewitt;
   int size = 17;               ///< mask size [px]; 2 for Roberts, 3 for Scharr
   double sigma = 0.0;          ///< Gaussian-derivative sigma [px]; <= 0 picks size / 6
@@ -44,7 +44,7 @@ class TangibleImage {
   /// @throws std::invalid_argument for a bad mask, sigma, fade width, an
   ///         integral kernel asked for a mask that has none, or an image
   ///         that is empty or smaller than the mask.
-  TangibleImage(const GrayImage& gray, const TangibleOptions& options)
+  TangibleImage(const GrayImage& gray, const TangibleConfig& options)
       : options_(options), force_(build(inverted_checked(gray, options), options)) {}
 
   /// Normalised force at image position (x, y) [px]; see ImageForce::at().
@@ -63,25 +63,25 @@ class TangibleImage {
   [[nodiscard]] int height() const noexcept {
     return std::visit([](const auto& f) noexcept { return f.height(); }, force_);
   }
-  [[nodiscard]] const TangibleOptions& options() const noexcept { return options_; }
+  [[nodiscard]] const TangibleConfig& options() const noexcept { return options_; }
   /// True when the O(1) integral kernel is in use.
   [[nodiscard]] bool uses_integral_kernel() const noexcept { return std::holds_alternative<Integral>(force_); }
 
  private:
-  static GrayImage inverted_checked(const GrayImage& gray, const TangibleOptions& options) {
+  static GrayImage inverted_checked(const GrayImage& gray, const TangibleConfig& options) {
     validate_mask_size(options.mask, options.size);
     validate_image_for_mask(gray, options.size);
     return inverted(gray);
   }
 
-  static std::variant<Direct, Integral> build(const GrayImage& inv, const TangibleOptions& o) {
+  static std::variant<Direct, Integral> build(const GrayImage& inv, const TangibleConfig& o) {
     const bool integral = o.kernel == KernelChoice::integral ||
                           (o.kernel == KernelChoice::automatic && has_integral_kernel(o.mask));
     if (integral) return Integral(IntegralKernel(inv, o.mask, o.size, o.border), o.fade_px);
     return Direct(DirectKernel<>(inv, Mask<>::make(o.mask, o.size, o.sigma), o.border), o.fade_px);
   }
 
-  TangibleOptions options_;
+  TangibleConfig options_;
   std::variant<Direct, Integral> force_;
 };
 

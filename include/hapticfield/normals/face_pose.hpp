@@ -47,7 +47,7 @@ struct FacePose {
 };
 
 /// How pose_from_homography() finishes the closed form.
-struct PoseOptions {
+struct PoseConfig {
   /// Refine R, t by Levenberg-Marquardt on the reprojection error
   /// (cv::solvePnPRefineLM) starting from the closed form, as Zhang's
   /// calibration does; kept only when it lowers the error.
@@ -73,7 +73,7 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 [[nodiscard]] inline FacePose pose_from_homography(const Camera& camera, const cv::Matx33d& H,
                                                    std::span<const glm::dvec2> plane,
                                                    std::span<const glm::dvec2> pixels,
-                                                   const PoseOptions& options = {}) {
+                                                   const PoseConfig& options = {}) {
   if (plane.size() != pixels.size() || plane.empty())
     throw std::invalid_argument("pose_from_homography: plane and image point counts differ");
   const cv::Matx33d A = camera.matrix().inv() * H;
@@ -178,8 +178,8 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 [[nodiscard]] inline FacePose estimate_plane_pose(const Camera& camera,
                                                   std::span<const glm::dvec2> plane,
                                                   std::span<const glm::dvec2> pixels,
-                                                  const HomographyOptions& options = {},
-                                                  const PoseOptions& pose_options = {}) {
+                                                  const HomographyConfig& options = {},
+                                                  const PoseConfig& pose_options = {}) {
   if (plane.size() != pixels.size())
     throw std::invalid_argument("estimate_plane_pose: plane and image point counts differ");
   if (plane.size() < 4)
@@ -218,7 +218,7 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 [[nodiscard]] inline FacePose estimate_rectangle_pose(const Camera& camera,
                                                       std::span<const glm::dvec2> corners,
                                                       std::optional<glm::dvec2> size = std::nullopt,
-                                                      const PoseOptions& pose_options = {}) {
+                                                      const PoseConfig& pose_options = {}) {
   if (corners.size() != 4)
     throw std::invalid_argument(
         "estimate_rectangle_pose: a rectangle needs exactly 4 corners, got " +

@@ -20,7 +20,7 @@
 namespace hapticfield {
 
 /// How estimate_homography() treats more than four correspondences.
-struct HomographyOptions {
+struct HomographyConfig {
   bool ransac = true;                ///< RANSAC when more than 4 points are given
   double ransac_threshold_px = 3.0;  ///< inlier threshold on the transfer error [px]
   int ransac_iterations = 2000;      ///< RANSAC iteration limit
@@ -192,7 +192,7 @@ inline cv::Matx33d normalise_homography(cv::Matx33d H) noexcept {
 ///         when RANSAC finds fewer than 4 inliers.
 [[nodiscard]] inline HomographyEstimate estimate_homography(std::span<const glm::dvec2> plane,
                                                             std::span<const glm::dvec2> image,
-                                                            const HomographyOptions& options = {}) {
+                                                            const HomographyConfig& options = {}) {
   if (plane.size() != image.size())
     throw std::invalid_argument("estimate_homography: plane and image point counts differ");
   if (plane.size() < 4)

@@ -64,7 +64,7 @@ enum class NormalForceMode {
 };
 
 /// Parameters of NormalField.
-struct NormalFieldOptions {
+struct NormalFieldConfig {
   NormalForceMode mode = NormalForceMode::along_motion;
   double max_force = kim_kwon_max_force;  ///< force bound F_max [N]
   double speed_threshold = 0.005;    ///< below this filtered HIP speed no direction, no force [m/s]
@@ -270,7 +270,7 @@ class NormalField {
   ///        options.shading_cell_px > 0 the grid is built from the faces
   /// @throws std::invalid_argument for a bad size, polygon, normal (non-finite,
   ///         zero, or facing away: n_z > 0) or option.
-  NormalField(int width, int height, std::vector<ImageFace> faces, NormalFieldOptions options = {},
+  NormalField(int width, int height, std::vector<ImageFace> faces, NormalFieldConfig options = {},
               std::optional<PlaneMapping> mapping = std::nullopt, ShadingGrid shading = {})
       : options_(options),
         mapping_(mapping ? *mapping : PlaneMapping::kim_kwon(width, height)),
@@ -369,7 +369,7 @@ class NormalField {
   [[nodiscard]] const FaceLabels& labels() const noexcept { return labels_; }
   [[nodiscard]] const ShadingGrid& shading() const noexcept { return shading_; }
   [[nodiscard]] const PlaneMapping& mapping() const noexcept { return mapping_; }
-  [[nodiscard]] const NormalFieldOptions& options() const noexcept { return options_; }
+  [[nodiscard]] const NormalFieldConfig& options() const noexcept { return options_; }
   [[nodiscard]] std::span<const glm::dvec3> normals() const noexcept { return normals_; }
   /// Filtered image velocity [px/s].
   [[nodiscard]] glm::dvec2 filtered_velocity() const noexcept { return velocity_; }
@@ -384,7 +384,7 @@ class NormalField {
                  : 1.0;
   }
 
-  NormalFieldOptions options_;
+  NormalFieldConfig options_;
   PlaneMapping mapping_;
   FaceLabels labels_;
   ShadingGrid shading_;

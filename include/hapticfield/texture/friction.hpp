@@ -29,7 +29,7 @@
 
 namespace hapticfield::texture {
 
-struct FrictionParams {
+struct FrictionConfig {
   double coulomb{0.0};          ///< c: Coulomb force [N], or mu [-] when scaled by |Fc|
   double viscous{0.0};          ///< b [N s/m]
   double drag{0.0};             ///< d [N s^2/m^2]
@@ -42,7 +42,7 @@ class Friction {
  public:
   /// @throws std::invalid_argument for a negative or non-finite coefficient,
   ///         a non-positive smoothing speed, or a normal neither zero nor unit.
-  explicit Friction(const FrictionParams& p) : p_(p) {
+  explicit Friction(const FrictionConfig& p) : config_(p) {
     const double v[] = {p.coulomb, p.viscous, p.drag};
     for (double x : v)
       if (!std::isfinite(x) || x < 0.0)
@@ -57,26 +57,26 @@ class Friction {
   [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept {
     if (!is_finite(probe.velocity) || !std::isfinite(probe.normal_force) || !is_finite(probe.surface_normal))
       return glm::dvec3{0.0};
-    const glm::dvec3 n = surface_normal_of(probe, p_.surface_normal);
+    const glm::dvec3 n = surface_normal_of(probe, config_.surface_normal);
     const glm::dvec3 v = probe.velocity - glm::dot(probe.velocity, n) * n;  // tangential velocity [m/s]
     const double speed = glm::length(v);
     if (speed == 0.0) return glm::dvec3{0.0};
-    const double c = p_.scale_with_normal_force ? p_.coulomb * std::fabs(probe.normal_force) : p_.coulomb;
-    const double u0 = p_.smoothing_speed;
+    const double c = config_.scale_with_normal_force ? config_.coulomb * std::fabs(probe.normal_force) : config_.coulomb;
+    const double u0 = config_.smoothing_speed;
     // c s(u)/u = c / sqrt(u^2 + u0^2): finite as u -> 0, so no division by 0
-    const double per_speed = c / std::sqrt(speed * speed + u0 * u0) + p_.viscous + p_.drag * speed;
+    const double per_speed = c / std::sqrt(speed * speed + u0 * u0) + config_.viscous + config_.drag * speed;
     return -per_speed * v;
   }
 
-  [[nodiscard]] const FrictionParams& params() const noexcept { return p_; }
+  [[nodiscard]] const FrictionConfig& params() const noexcept { return config_; }
 
  private:
-  FrictionParams p_;
+  FrictionConfig config_;
 };
 
 
 /// Parameters of the stick-slip (spring-anchor) friction model.
-struct StickSlipParams {
+struct StickSlipConfig {
   double stiffness{2000.0};           ///< k of the stick spring [N/m]
   double static_coefficient{0.5};     ///< breakaway: mu_s [-] (x |Fc|) or force [N]
   double kinetic_coefficient{0.4};    ///< sliding: mu_k [-] (x |Fc|) or force [N], <= static
@@ -98,7 +98,7 @@ class StickSlipFriction {
  public:
   /// @throws std::invalid_argument for a non-positive stiffness, negative
   ///         coefficients, kinetic above static, or a bad normal.
-  explicit StickSlipFriction(const StickSlipParams& p) : p_(p) {
+  explicit StickSlipFriction(const StickSlipConfig& p) : config_(p) {
     if (!std::isfinite(p.stiffness) || p.stiffness <= 0.0)
       throw std::invalid_argument("StickSlipFriction: stiffness must be finite and > 0 [N/m]");
     if (!std::isfinite(p.static_coefficient) || !std::isfinite(p.kinetic_coefficient) || p.kinetic_coefficient < 0.0 ||
@@ -120,25 +120,25 @@ class StickSlipFriction {
       return glm::dvec3{0.0};
     }
     glm::dvec3 d = probe.position - anchor_;
-    const glm::dvec3 n = surface_normal_of(probe, p_.surface_normal);
+    const glm::dvec3 n = surface_normal_of(probe, config_.surface_normal);
     d -= glm::dot(d, n) * n;  // tangent plane of the touched surface
-    const double fn = p_.scale_with_normal_force ? std::fabs(probe.normal_force) : 1.0;
-    const double static_limit = p_.static_coefficient * fn;
-    const double kinetic_limit = p_.kinetic_coefficient * fn;
+    const double fn = config_.scale_with_normal_force ? std::fabs(probe.normal_force) : 1.0;
+    const double static_limit = config_.static_coefficient * fn;
+    const double kinetic_limit = config_.kinetic_coefficient * fn;
     const double stretch = glm::length(d);
-    const double spring = p_.stiffness * stretch;
+    const double spring = config_.stiffness * stretch;
     if (!sliding_ && spring > static_limit) sliding_ = true;
     if (sliding_) {
       if (spring > kinetic_limit) {
         // drag the anchor so that the spring force is exactly the kinetic limit
         const glm::dvec3 dir = d / stretch;
-        const double keep = kinetic_limit / p_.stiffness;
+        const double keep = kinetic_limit / config_.stiffness;
         anchor_ += (stretch - keep) * dir;
         return -kinetic_limit * dir;
       }
       sliding_ = false;  // the spring relaxed below the kinetic limit: stuck again
     }
-    return -p_.stiffness * d;
+    return -config_.stiffness * d;
   }
 
   void reset() noexcept {
@@ -149,7 +149,7 @@ class StickSlipFriction {
   [[nodiscard]] const glm::dvec3& anchor() const noexcept { return anchor_; }
 
  private:
-  StickSlipParams p_;
+  StickSlipConfig config_;
   glm::dvec3 anchor_{0.0};
   bool started_{false};
   bool sliding_{false};

@@ -32,7 +32,7 @@
 
 namespace hapticfield::texture {
 
-struct HattParams {
+struct HattConfig {
   double effective_mass{0.05};            ///< acceleration [m/s^2] -> force [N] (stylus + hand) [kg]
   glm::dvec3 surface_normal{0.0, 0.0, 1.0};  ///< unit; vibration along it, speed and friction in the tangent plane
   std::uint32_t seed{1};                  ///< noise seed
@@ -61,7 +61,7 @@ class HattTexture {
  public:
   /// @throws std::invalid_argument for orders above MaxOrder, a bad
   ///         effective mass, normal or update period, or an invalid set.
-  HattTexture(const HattModelSet& set, const HattParams& params)
+  HattTexture(const HattModelSet& set, const HattConfig& params)
       : tri_(set.speeds, set.forces, set.triangles), config_(params), p_order_(set.ar_order), q_order_(set.ma_order),
         mu_(set.mu), speed_to_file_(set.speed_to_file), accel_to_si_(set.acceleration_to_si),
         sample_rate_(set.sample_rate) {
@@ -108,7 +108,7 @@ class HattTexture {
     return is_finite(f) ? f : glm::dvec3{0.0};
   }
 
-  /// AR steps one tick of `period` [s] runs (see HattParams::match_sample_rate).
+  /// AR steps one tick of `period` [s] runs (see HattConfig::match_sample_rate).
   [[nodiscard]] int steps_per_tick(double period) const noexcept {
     if (!config_.match_sample_rate) return 1;
     const double steps = std::round(sample_rate_ * period);
@@ -180,7 +180,7 @@ class HattTexture {
   }
 
   HattTriangulation tri_;
-  HattParams config_;
+  HattConfig config_;
   std::size_t p_order_;
   std::size_t q_order_;
   double mu_;

@@ -131,7 +131,7 @@ class PerComponent {
 
 // --- texture field ------------------------------------------------------------
 
-struct TextureParams {
+struct TextureConfig {
   double gain{1.0};                  ///< force per texture unit [N] (or [N/N] when scaled by |Fc|)
   double velocity_threshold{1e-3};   ///< below this speed the texture is silent [m/s]
   bool scale_with_normal_force{false};  ///< Ft proportional to |Fc| (Probe::normal_force)
@@ -153,8 +153,8 @@ class TextureField {
  public:
   /// @throws std::invalid_argument for a non-finite gain or axes, or a
   ///         negative or non-finite velocity threshold.
-  TextureField(Source source, const TextureParams& params, Filter filter = Filter{})
-      : source_(std::move(source)), filter_(filter), p_(params) {
+  TextureField(Source source, const TextureConfig& params, Filter filter = Filter{})
+      : source_(std::move(source)), filter_(filter), config_(params) {
     if (!std::isfinite(params.gain)) throw std::invalid_argument("TextureField: gain must be finite [N]");
     if (!std::isfinite(params.velocity_threshold) || params.velocity_threshold < 0.0)
       throw std::invalid_argument("TextureField: velocity_threshold must be finite and >= 0 [m/s]");
@@ -169,11 +169,11 @@ class TextureField {
     const bool on_surface = n != glm::dvec3{0.0};
     const SurfaceFrame frame = on_surface ? surface_frame(n) : SurfaceFrame{};
     const glm::dvec3 v = on_surface ? frame.tangential(probe.velocity) : probe.velocity;  // [m/s]
-    if (glm::length(v) < p_.velocity_threshold) return glm::dvec3{0.0};
+    if (glm::length(v) < config_.velocity_threshold) return glm::dvec3{0.0};
     const glm::dvec3 raw = source_.sample(probe);
     const glm::dvec3 shaped = filter_.process(raw);
-    const double scale = p_.scale_with_normal_force ? p_.gain * std::fabs(probe.normal_force) : p_.gain;
-    const glm::dvec3 weighted = p_.axes * shaped;
+    const double scale = config_.scale_with_normal_force ? config_.gain * std::fabs(probe.normal_force) : config_.gain;
+    const glm::dvec3 weighted = config_.axes * shaped;
     const glm::dvec3 f = scale * (on_surface ? frame.to_device(weighted) : weighted);
     return is_finite(f) ? f : glm::dvec3{0.0};
   }
@@ -194,16 +194,12 @@ class TextureField {
 
   Source source_;
   PerComponent<Filter> filter_;
-  TextureParams p_;
+  TextureConfig config_;
 };
-
-/// Friction as a HapticField (Friction already has force(); this alias
-/// documents the intent in compositions).
-using FrictionField = Friction;
 
 // --- flow textures --------------------------------------------------------------
 
-struct FlowParams {
+struct FlowConfig {
   glm::dvec3 mean_shift{0.0};  ///< constant "active" force pushing the hand [N]
   double gain{1.0};            ///< force per unit of the vector lattice [N]
   double viscous{0.0};         ///< drag in the fluid [N s/m]
@@ -219,7 +215,7 @@ class FlowTexture {
  public:
   /// @throws std::invalid_argument for non-finite parameters or a negative
   ///         viscous coefficient.
-  FlowTexture(Lattice lattice, const FlowParams& p) : lattice_(std::move(lattice)), p_(p) {
+  FlowTexture(Lattice lattice, const FlowConfig& p) : lattice_(std::move(lattice)), config_(p) {
     if (!is_finite(p.mean_shift) || !std::isfinite(p.gain))
       throw std::invalid_argument("FlowTexture: mean_shift [N] and gain [N] must be finite");
     if (!std::isfinite(p.viscous) || p.viscous < 0.0)
@@ -227,12 +223,12 @@ class FlowTexture {
   }
   [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept {
     if (!is_finite(probe.position) || !is_finite(probe.velocity)) return glm::dvec3{0.0};
-    return p_.mean_shift + p_.gain * glm::dvec3(lattice_(probe.position)) - p_.viscous * probe.velocity;
+    return config_.mean_shift + config_.gain * glm::dvec3(lattice_(probe.position)) - config_.viscous * probe.velocity;
   }
 
  private:
   Lattice lattice_;
-  FlowParams p_;
+  FlowConfig config_;
 };
 
 static_assert(HapticField<Friction>);

@@ -22,7 +22,7 @@
 namespace hapticfield {
 
 struct PrepareConfig {
-  TangibleOptions tangible{};  ///< mask, size, border: as for a still picture
+  TangibleConfig tangible{};  ///< mask, size, border: as for a still picture
   DenoiseConfig denoise{};
   SceneCutConfig cuts{};
 };
