@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hapticfield/device.hpp"
+#include "hapticfield/offline/crc16_reference.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;

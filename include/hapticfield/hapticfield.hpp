@@ -10,3 +10,4 @@
 #include "hapticfield/normals.hpp"
 #include "hapticfield/texture.hpp"
 #include "hapticfield/texture/hatt.hpp"
+#include "hapticfield/offline.hpp"

@@ -5,7 +5,7 @@
 /// Needs OpenCV (link hapticfield::image).
 
 #include "hapticfield/core.hpp"
-#include "hapticfield/normals/box_stimulus.hpp"
+#include "hapticfield/offline/box_stimulus.hpp"
 #include "hapticfield/normals/camera.hpp"
 #include "hapticfield/normals/face_pose.hpp"
 #include "hapticfield/normals/homography.hpp"

@@ -115,17 +115,6 @@ inline constexpr std::array<std::uint16_t, 256> crc16_table = [] {
   return crc;
 }
 
-/// The same CRC computed bit by bit (the reference the table is checked against).
-[[nodiscard]] constexpr std::uint16_t crc16_bitwise(std::span<const std::uint8_t> data) noexcept {
-  std::uint16_t crc = 0xFFFF;
-  for (const std::uint8_t byte : data) {
-    crc = static_cast<std::uint16_t>(crc ^ (static_cast<std::uint16_t>(byte) << 8));
-    for (int bit = 0; bit < 8; ++bit)
-      crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u) : static_cast<std::uint16_t>(crc << 1);
-  }
-  return crc;
-}
-
 namespace detail {
 inline void put_u8(std::span<std::uint8_t> b, std::size_t at, std::uint8_t v) noexcept { b[at] = v; }
 inline void put_u16(std::span<std::uint8_t> b, std::size_t at, std::uint16_t v) noexcept {
