@@ -91,7 +91,8 @@ template <class Tick>
 Cost measure(long n, Tick&& tick) {
   SteadyClock clock;
   const std::int64_t t0 = clock.now();
-  for (long i = 0; i < n; ++i) tick();
+  for (long i = 0; i < n; ++i)
+    tick();
   Cost c;
   c.mean_ns = static_cast<double>(clock.now() - t0) / static_cast<double>(n);
   std::vector<std::int64_t> d(static_cast<std::size_t>(n));
@@ -113,8 +114,9 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
-      std::printf("usage: bench_inverse3 [--ticks N]\n"
-                  "  --ticks N   ticks timed per path, 1000..100000000 (default 1000000)\n");
+      std::printf(
+          "usage: bench_inverse3 [--ticks N]\n"
+          "  --ticks N   ticks timed per path, 1000..100000000 (default 1000000)\n");
       return 0;
     }
     if (a == "--ticks" && i + 1 < argc) {
@@ -168,15 +170,17 @@ int main(int argc, char** argv) {
   }
 
   std::printf("## Inverse3 read + write per tick (%ld ticks per path, %d interleaved rounds)\n\n", n, rounds);
-  std::printf("| path | mean [ns] | p99 [ns] | worst [ns] | mean / baseline | p99 / baseline | mean / 1 ms |\n"
-              "|---|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "| path | mean [ns] | p99 [ns] | worst [ns] | mean / baseline | p99 / baseline | mean / 1 ms |\n"
+      "|---|---:|---:|---:|---:|---:|---:|\n");
   const auto row = [&](const char* name, const Cost& c) {
     std::printf("| %s | %.0f | %.0f | %.0f | %.2fx | %.2fx | %.4f %% |\n", name, c.mean_ns, c.p99_ns, c.worst_ns,
                 c.mean_ns / base.mean_ns, c.p99_ns / base.p99_ns, c.mean_ns / 1e6 * 100.0);
   };
   row("ForceArm read + write, loopback (baseline)", base);
   row("Inverse3 read + write, loopback", adapter);
-  std::printf("\np99 and worst are the largest over the rounds and include the clock reads around each\n"
-              "tick and any preemption by other processes.\n");
+  std::printf(
+      "\np99 and worst are the largest over the rounds and include the clock reads around each\n"
+      "tick and any preemption by other processes.\n");
   return 0;
 }

@@ -29,9 +29,8 @@ std::vector<ImageFace> tiles(int n) {
     const double y0 = (k / per_row) * side;
     const double slant = (10.0 + k % 50) * 3.14159265358979 / 180.0;
     const double az = 0.7 * k;
-    faces.push_back(
-        {{{x0, y0}, {x0 + side, y0}, {x0 + side, y0 + side}, {x0, y0 + side}},
-         {std::sin(slant) * std::cos(az), std::sin(slant) * std::sin(az), -std::cos(slant)}});
+    faces.push_back({{{x0, y0}, {x0 + side, y0}, {x0 + side, y0 + side}, {x0, y0 + side}},
+                     {std::sin(slant) * std::cos(az), std::sin(slant) * std::sin(az), -std::cos(slant)}});
   }
   return faces;
 }
@@ -53,8 +52,7 @@ std::vector<Probe> trajectory(std::size_t n) {
     const double t = i * servo_period;
     Probe& p = probes[i];
     p.position = glm::dvec3{0.048 * std::sin(3.1 * t), 0.048 * std::sin(2.3 * t + 0.5), 0.0};
-    p.velocity =
-        glm::dvec3{0.048 * 3.1 * std::cos(3.1 * t), 0.048 * 2.3 * std::cos(2.3 * t + 0.5), 0.0};
+    p.velocity = glm::dvec3{0.048 * 3.1 * std::cos(3.1 * t), 0.048 * 2.3 * std::cos(2.3 * t + 0.5), 0.0};
     p.time = t;
   }
   return probes;
@@ -68,10 +66,12 @@ template <class Field>
 Result measure(Field& field, const std::vector<Probe>& probes) {
   constexpr int batches = 60;
   double acc = 0.0;
-  for (const auto& p : probes) acc += field.force(p).x;  // warm-up
+  for (const auto& p : probes)
+    acc += field.force(p).x;  // warm-up
   const auto t0 = Clock::now();
   for (int b = 0; b < batches; ++b)
-    for (const auto& p : probes) acc += field.force(p).x;
+    for (const auto& p : probes)
+      acc += field.force(p).x;
   const auto t1 = Clock::now();
   std::vector<double> single;
   single.reserve(probes.size() * 4);
@@ -84,8 +84,7 @@ Result measure(Field& field, const std::vector<Probe>& probes) {
     }
   sink = sink + acc;
   std::sort(single.begin(), single.end());
-  const double mean =
-      std::chrono::duration<double, std::nano>(t1 - t0).count() / (batches * double(probes.size()));
+  const double mean = std::chrono::duration<double, std::nano>(t1 - t0).count() / (batches * double(probes.size()));
   return {mean, single[static_cast<std::size_t>(0.999 * (single.size() - 1))], single.back()};
 }
 
@@ -103,30 +102,26 @@ int main() {
   }
   std::sort(timer.begin(), timer.end());
 
-  std::printf(
-      "Normal field per-tick cost, 640 x 640 px picture (100 mm at 6.4 px/mm), %zu-tick sweep\n",
-      probes.size());
-  std::printf("timer overhead per single-tick measurement: median %.0f ns, worst %.0f ns\n\n",
-              timer[timer.size() / 2], timer.back());
-  std::printf("%-38s %8s %7s %9s %7s %9s %7s\n", "field", "mean ns", "x base", "p99.9 ns", "x base",
-              "worst ns", "x base");
+  std::printf("Normal field per-tick cost, 640 x 640 px picture (100 mm at 6.4 px/mm), %zu-tick sweep\n",
+              probes.size());
+  std::printf("timer overhead per single-tick measurement: median %.0f ns, worst %.0f ns\n\n", timer[timer.size() / 2],
+              timer.back());
+  std::printf("%-38s %8s %7s %9s %7s %9s %7s\n", "field", "mean ns", "x base", "p99.9 ns", "x base", "worst ns",
+              "x base");
   const auto row = [&](const std::string& name, const Result& r) {
-    std::printf("%-38s %8.1f %7.2f %9.0f %7.2f %9.0f %7.2f\n", name.c_str(), r.mean_ns,
-                r.mean_ns / base.mean_ns, r.p999_ns, r.p999_ns / base.p999_ns, r.worst_ns,
-                r.worst_ns / base.worst_ns);
+    std::printf("%-38s %8.1f %7.2f %9.0f %7.2f %9.0f %7.2f\n", name.c_str(), r.mean_ns, r.mean_ns / base.mean_ns,
+                r.p999_ns, r.p999_ns / base.p999_ns, r.worst_ns, r.worst_ns / base.worst_ns);
   };
   row("baseline: plane mapping only", base);
   for (int n : {1, 10, 1000}) {
     NormalField field(640, 640, tiles(n));
-    row("along motion, " + std::to_string(n) + " face" + (n > 1 ? "s" : ""),
-        measure(field, probes));
+    row("along motion, " + std::to_string(n) + " face" + (n > 1 ? "s" : ""), measure(field, probes));
   }
   for (int n : {1, 1000}) {
     NormalFieldConfig o;
     o.shading_cell_px = 8.0;
     NormalField field(640, 640, tiles(n), o);
-    row("along motion + shading, " + std::to_string(n) + (n > 1 ? " faces" : " face"),
-        measure(field, probes));
+    row("along motion + shading, " + std::to_string(n) + (n > 1 ? " faces" : " face"), measure(field, probes));
   }
   {
     NormalFieldConfig o;

@@ -112,7 +112,8 @@ double steal_seconds() {
 /// Periods longer than 4 ms in a loop's histogram: stalls.
 std::uint64_t stalls(const DurationHistogram& periods) {
   std::uint64_t n = 0;
-  for (std::size_t i = 4000; i < DurationHistogram::bins; ++i) n += periods.bin(i);
+  for (std::size_t i = 4000; i < DurationHistogram::bins; ++i)
+    n += periods.bin(i);
   return n;
 }
 
@@ -124,14 +125,17 @@ struct BusyLoad {
       const pid_t pid = fork();
       if (pid == 0) {
         volatile unsigned long x = 0;
-        for (;;) x = x + 1;
+        for (;;)
+          x = x + 1;
       }
       if (pid > 0) pids.push_back(pid);
     }
   }
   ~BusyLoad() {
-    for (const pid_t pid : pids) kill(pid, SIGKILL);
-    for (const pid_t pid : pids) waitpid(pid, nullptr, 0);
+    for (const pid_t pid : pids)
+      kill(pid, SIGKILL);
+    for (const pid_t pid : pids)
+      waitpid(pid, nullptr, 0);
   }
 };
 
@@ -202,7 +206,7 @@ class Loopback final : public Transport {
 };
 
 struct Cost {
-  double mean_ns{0.0};  ///< from one untimed pass: total / n
+  double mean_ns{0.0};                                           ///< from one untimed pass: total / n
   double p50_ns{0.0}, p99_ns{0.0}, p999_ns{0.0}, worst_ns{0.0};  ///< per tick, timed one by one
 };
 
@@ -213,7 +217,8 @@ template <class Tick>
 Cost measure(long n, Tick&& tick) {
   SteadyClock clock;
   const std::int64_t t0 = clock.now();
-  for (long i = 0; i < n; ++i) tick();
+  for (long i = 0; i < n; ++i)
+    tick();
   Cost c;
   c.mean_ns = static_cast<double>(clock.now() - t0) / static_cast<double>(n);
   std::vector<std::int64_t> d(static_cast<std::size_t>(n));
@@ -223,7 +228,9 @@ Cost measure(long n, Tick&& tick) {
     d[static_cast<std::size_t>(i)] = clock.now() - a;
   }
   std::sort(d.begin(), d.end());
-  const auto at = [&](double q) { return static_cast<double>(d[static_cast<std::size_t>(q * static_cast<double>(n - 1))]); };
+  const auto at = [&](double q) {
+    return static_cast<double>(d[static_cast<std::size_t>(q * static_cast<double>(n - 1))]);
+  };
   c.p50_ns = at(0.5);
   c.p99_ns = at(0.99);
   c.p999_ns = at(0.999);
@@ -237,8 +244,9 @@ Cost measure(long n, Tick&& tick) {
 void loaded_table(double seconds, int load) {
   std::printf("\n## Loop timing under load: %d busy processes on %ld CPUs, %.0f s per loop at 1 kHz\n\n", load,
               sysconf(_SC_NPROCESSORS_ONLN), seconds);
-  std::printf("| loop | mean rate [Hz] | vs nominal | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | missed | short |"
-              " stalls > 4 ms | steal [ms] | latches |\n");
+  std::printf(
+      "| loop | mean rate [Hz] | vs nominal | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | missed | short |"
+      " stalls > 4 ms | steal [ms] | latches |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   const auto extra = [](std::uint64_t stall_count, double steal, const std::string& latches) {
     char text[96];
@@ -263,35 +271,41 @@ void loaded_table(double seconds, int load) {
       const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
       const std::uint64_t latches = loop.statistics().latches;
       const char* name = rt ? "ServoLoop, best_effort (SCHED_FIFO)" : "ServoLoop, real time off";
-      print_timing({name, loop.statistics().ticks, elapsed, loop.statistics(), 1000.0},
-                   extra(stalls(loop.detailed_statistics().periods()), steal_seconds() - steal0, std::to_string(latches)));
+      print_timing(
+          {name, loop.statistics().ticks, elapsed, loop.statistics(), 1000.0},
+          extra(stalls(loop.detailed_statistics().periods()), steal_seconds() - steal0, std::to_string(latches)));
     }
     {
       BusyLoad busy(load);
       const double steal0 = steal_seconds();
       const bool granted = rt && fifo(80);
       auto statistics = std::make_unique<LoopStatistics>();  // 240 KB of histograms: not on the stack
-      const TimingRow r = run_relative_sleep(seconds, 1000.0,
-                                             rt ? (granted ? "relative sleep, SCHED_FIFO" : "relative sleep (FIFO refused)")
-                                                : "relative sleep, real time off",
-                                             statistics.get());
+      const TimingRow r =
+          run_relative_sleep(seconds, 1000.0,
+                             rt ? (granted ? "relative sleep, SCHED_FIFO" : "relative sleep (FIFO refused)")
+                                : "relative sleep, real time off",
+                             statistics.get());
       if (granted) restore_other();
       print_timing(r, extra(stalls(statistics->periods()), steal_seconds() - steal0, "n/a"));
     }
   }
-  std::printf("\n(stalls: periods longer than 4 ms; steal: CPU time the hypervisor took from this virtual machine\n"
-              "during the run, all CPUs; latches: times the watchdog zeroed the force and disarmed)\n");
+  std::printf(
+      "\n(stalls: periods longer than 4 ms; steal: CPU time the hypervisor took from this virtual machine\n"
+      "during the run, all CPUs; latches: times the watchdog zeroed the force and disarmed)\n");
 }
 
 int main(int argc, char** argv) {
   double seconds = 10.0;
   int load = 0;
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) seconds = std::atof(argv[++i]);
-    else if (std::strcmp(argv[i], "--load") == 0 && i + 1 < argc) load = std::atoi(argv[++i]);
+    if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc)
+      seconds = std::atof(argv[++i]);
+    else if (std::strcmp(argv[i], "--load") == 0 && i + 1 < argc)
+      load = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
-      std::printf("usage: bench_servo [--seconds S] [--load N]\n  --seconds S  time per loop [s] (default 10)\n"
-                  "  --load N     also time the loops under N busy processes (default 0: skip)\n");
+      std::printf(
+          "usage: bench_servo [--seconds S] [--load N]\n  --seconds S  time per loop [s] (default 10)\n"
+          "  --load N     also time the loops under N busy processes (default 0: skip)\n");
       return 0;
     } else {
       std::fprintf(stderr, "bench_servo: unknown or incomplete option '%s' (--help shows the usage)\n", argv[i]);
@@ -308,14 +322,17 @@ int main(int argc, char** argv) {
   }
 
   std::printf("## Loop timing: %.0f s per loop at 1 kHz (simulated arm, wall field)\n\n", seconds);
-  std::printf("| loop | mean rate [Hz] | vs nominal | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | missed | short |\n");
+  std::printf(
+      "| loop | mean rate [Hz] | vs nominal | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | missed | short |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   print_timing(run_servo_loop(seconds, 1000.0));
   print_timing(run_relative_sleep(seconds, 1000.0));
-  std::printf("\n(missed: periods ServoLoop skipped after an overrun; short: ticks fewer than rate x elapsed time)\n\n");
+  std::printf(
+      "\n(missed: periods ServoLoop skipped after an overrun; short: ticks fewer than rate x elapsed time)\n\n");
 
   std::printf("\n## Loop timing: %.1f s per loop at 10 kHz\n\n", seconds / 5.0);
-  std::printf("| loop | mean rate [Hz] | vs nominal | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | missed | short |\n");
+  std::printf(
+      "| loop | mean rate [Hz] | vs nominal | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | missed | short |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   print_timing(run_servo_loop(seconds / 5.0, 10000.0));
   print_timing(run_relative_sleep(seconds / 5.0, 10000.0));
@@ -364,8 +381,9 @@ int main(int argc, char** argv) {
   });
 
   std::printf("\n## Per-tick cost (%ld ticks each)\n\n", n);
-  std::printf("| path | mean [ns] | p50 [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | mean / 1 ms budget |\n"
-              "|---|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "| path | mean [ns] | p50 [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | mean / 1 ms budget |\n"
+      "|---|---:|---:|---:|---:|---:|---:|\n");
   const double overhead = empty.p50_ns;  // clock reads around one tick
   const auto row = [&](const char* name, const Cost& c, double sub) {
     std::printf("| %-50s | %6.0f | %6.0f | %6.0f | %7.0f | %9.0f | %.4f %% |\n", name, c.mean_ns, c.p50_ns - sub,
@@ -375,7 +393,8 @@ int main(int argc, char** argv) {
   row("SafetyChain::process (passivity on)", safety_cost, overhead);
   row("whole tick: device + safety + wall + simulated arm", full_cost, overhead);
   row("(empty body: clock-read overhead, not subtracted)", empty, 0.0);
-  std::printf("\nPercentiles and worst have the empty body's median clock-read overhead subtracted; the worst\n"
-              "case includes preemption by other processes (no real-time priority for this part).\n");
+  std::printf(
+      "\nPercentiles and worst have the empty body's median clock-read overhead subtracted; the worst\n"
+      "case includes preemption by other processes (no real-time priority for this part).\n");
   return 0;
 }

@@ -94,7 +94,8 @@ double clock_cost() {
 /// so that load from elsewhere on the machine falls on all of them alike.
 std::vector<Stats> time_rounds(int rounds, const std::vector<std::function<void()>>& contenders) {
   std::vector<std::vector<double>> samples(contenders.size());
-  for (const auto& contender : contenders) contender();  // warm-up: first-touch page faults, caches
+  for (const auto& contender : contenders)
+    contender();  // warm-up: first-touch page faults, caches
   for (int round = 0; round < rounds; ++round)
     for (std::size_t i = 0; i < contenders.size(); ++i) {
       const auto t0 = Clock::now();
@@ -102,7 +103,8 @@ std::vector<Stats> time_rounds(int rounds, const std::vector<std::function<void(
       samples[i].push_back(std::chrono::duration<double, std::nano>(Clock::now() - t0).count());
     }
   std::vector<Stats> out;
-  for (auto& s : samples) out.push_back(summarise(std::move(s)));
+  for (auto& s : samples)
+    out.push_back(summarise(std::move(s)));
   return out;
 }
 
@@ -114,9 +116,12 @@ int main(int argc, char** argv) {
   int map_runs = 30;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--queries" && i + 1 < argc) queries = std::atoi(argv[++i]);
-    else if (a == "--maps" && i + 1 < argc) map_runs = std::atoi(argv[++i]);
-    else path = a;
+    if (a == "--queries" && i + 1 < argc)
+      queries = std::atoi(argv[++i]);
+    else if (a == "--maps" && i + 1 < argc)
+      map_runs = std::atoi(argv[++i]);
+    else
+      path = a;
   }
   // The paper's picture size: 1000 x 1504 px.
   cv::Mat photo;
@@ -138,8 +143,9 @@ int main(int argc, char** argv) {
     const Stats baseline = time_queries(baseline_image, points, clock_ns);
     std::printf("Per-query cost, %s (bilinear: up to 4 pixel kernels); baseline = direct m=5, %.0f ns mean\n",
                 trajectory ? "HIP tracing a circle at 0.64 px/tick" : "random positions (cold caches)", baseline.mean);
-    std::printf("| m | direct mean / p99 / worst [ns] | O(1) mean / p99 / worst [ns] | direct / O(1) (mean) | "
-                "O(1) / direct m=5 (mean) | O(1) worst, share of 1 ms |\n|---|---|---|---|---|---|\n");
+    std::printf(
+        "| m | direct mean / p99 / worst [ns] | O(1) mean / p99 / worst [ns] | direct / O(1) (mean) | "
+        "O(1) / direct m=5 (mean) | O(1) worst, share of 1 ms |\n|---|---|---|---|---|---|\n");
     for (int m : {3, 5, 17, 33, 65, 129}) {
       o.size = m;
       o.kernel = hf::KernelChoice::direct;
@@ -166,7 +172,8 @@ int main(int argc, char** argv) {
     }
   cv::Mat ramp(1, m, CV_32F);
   cv::Mat ones(1, m, CV_32F, cv::Scalar(1.0f));
-  for (int c = 0; c < m; ++c) ramp.at<float>(c) = static_cast<float>(c - m / 2);
+  for (int c = 0; c < m; ++c)
+    ramp.at<float>(c) = static_cast<float>(c - m / 2);
   cv::Mat inv;
   cv::Mat fx;
   cv::Mat fy;
@@ -184,57 +191,63 @@ int main(int argc, char** argv) {
   // fixed point, so prewitt_force_map takes its double route.
   hf::GrayImage fractional = gray;
   for (int y = 0; y < fractional.height(); ++y)
-    for (int x = 0; x < fractional.width(); ++x) fractional.at(x, y) = std::min(255.0, gray.at(x, y) + 1.0 / 3.0);
+    for (int x = 0; x < fractional.width(); ++x)
+      fractional.at(x, y) = std::min(255.0, gray.at(x, y) + 1.0 / 3.0);
   const auto opencv_threads = cv::getNumThreads();
   const int hardware_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const std::vector<Stats> r = time_rounds(map_runs, {
-      [&] {
-        hf::prewitt_force_map(gray, m, hf::Border::reflect, map);  // into a reused map, as OpenCV reuses fx, fy
-        sink = map.fx[map.fx.size() / 2];
-      },
-      [&] {
-        hf::prewitt_force_map(gray, m, hf::Border::reflect, map, hf::default_fade_px, hardware_threads);
-        sink = map.fx[map.fx.size() / 2];
-      },
-      [&] {
-        hf::prewitt_force_map(fractional, m, hf::Border::reflect, map);
-        sink = map.fx[map.fx.size() / 2];
-      },
-      [&] {
-        cv::setNumThreads(1);
-        cv::subtract(cv::Scalar::all(255.0), gray32, inv);
-        cv::filter2D(inv, fx, CV_32F, kx);
-        cv::filter2D(inv, fy, CV_32F, ky);
-      },
-      [&] {
-        cv::setNumThreads(1);
-        cv::subtract(cv::Scalar::all(255.0), gray32, inv);
-        cv::sepFilter2D(inv, fx, CV_32F, ramp, ones);
-        cv::sepFilter2D(inv, fy, CV_32F, ones, ramp);
-      },
-      [&] {
-        cv::setNumThreads(1);
-        cv::subtract(cv::Scalar::all(255.0), gray64, inv64);
-        cv::sepFilter2D(inv64, fx64, CV_64F, ramp64, ones64);
-        cv::sepFilter2D(inv64, fy64, CV_64F, ones64, ramp64);
-        fx64.convertTo(fx, CV_32F);
-        fy64.convertTo(fy, CV_32F);
-      },
-      [&] {
-        cv::setNumThreads(opencv_threads);
-        cv::subtract(cv::Scalar::all(255.0), gray32, inv);
-        cv::sepFilter2D(inv, fx, CV_32F, ramp, ones);
-        cv::sepFilter2D(inv, fy, CV_32F, ones, ramp);
-      },
-  });
+  const std::vector<Stats> r = time_rounds(
+      map_runs, {
+                    [&] {
+                      hf::prewitt_force_map(gray, m, hf::Border::reflect,
+                                            map);  // into a reused map, as OpenCV reuses fx, fy
+                      sink = map.fx[map.fx.size() / 2];
+                    },
+                    [&] {
+                      hf::prewitt_force_map(gray, m, hf::Border::reflect, map, hf::default_fade_px, hardware_threads);
+                      sink = map.fx[map.fx.size() / 2];
+                    },
+                    [&] {
+                      hf::prewitt_force_map(fractional, m, hf::Border::reflect, map);
+                      sink = map.fx[map.fx.size() / 2];
+                    },
+                    [&] {
+                      cv::setNumThreads(1);
+                      cv::subtract(cv::Scalar::all(255.0), gray32, inv);
+                      cv::filter2D(inv, fx, CV_32F, kx);
+                      cv::filter2D(inv, fy, CV_32F, ky);
+                    },
+                    [&] {
+                      cv::setNumThreads(1);
+                      cv::subtract(cv::Scalar::all(255.0), gray32, inv);
+                      cv::sepFilter2D(inv, fx, CV_32F, ramp, ones);
+                      cv::sepFilter2D(inv, fy, CV_32F, ones, ramp);
+                    },
+                    [&] {
+                      cv::setNumThreads(1);
+                      cv::subtract(cv::Scalar::all(255.0), gray64, inv64);
+                      cv::sepFilter2D(inv64, fx64, CV_64F, ramp64, ones64);
+                      cv::sepFilter2D(inv64, fy64, CV_64F, ones64, ramp64);
+                      fx64.convertTo(fx, CV_32F);
+                      fy64.convertTo(fy, CV_32F);
+                    },
+                    [&] {
+                      cv::setNumThreads(opencv_threads);
+                      cv::subtract(cv::Scalar::all(255.0), gray32, inv);
+                      cv::sepFilter2D(inv, fx, CV_32F, ramp, ones);
+                      cv::sepFilter2D(inv, fy, CV_32F, ones, ramp);
+                    },
+                });
   const Stats& ours = r[0];
   std::printf("Full force map (fx and fy planes), m = %d, reflect border, %d interleaved rounds\n", m, map_runs);
-  std::printf("| route | mean [ms] | worst [ms] | speed-up of ours (mean) | speed-up of ours (worst) |\n|---|---|---|---|---|\n");
+  std::printf(
+      "| route | mean [ms] | worst [ms] | speed-up of ours (mean) | speed-up of ours (worst) "
+      "|\n|---|---|---|---|---|\n");
   const auto row = [&](const char* name, const Stats& s) {
     std::printf("| %s | %.2f | %.2f | %.1fx | %.1fx |\n", name, s.mean / 1e6, s.worst / 1e6, s.mean / ours.mean,
                 s.worst / ours.worst);
   };
-  std::printf("| prewitt_force_map, 1 thread (ours) | %.2f | %.2f | 1.0x | 1.0x |\n", ours.mean / 1e6, ours.worst / 1e6);
+  std::printf("| prewitt_force_map, 1 thread (ours) | %.2f | %.2f | 1.0x | 1.0x |\n", ours.mean / 1e6,
+              ours.worst / 1e6);
   row("prewitt_force_map, all threads (ours)", r[1]);
   row("prewitt_force_map, 1 thread, non-integer levels (double route)", r[2]);
   row("2 x cv::filter2D (CV_32F, 1 thread)", r[3]);

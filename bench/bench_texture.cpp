@@ -47,9 +47,11 @@ Probe probe_at(int i) {
 
 template <class Fn>
 Stats measure(Fn&& fn, int n) {
-  for (int i = 0; i < 2000; ++i) fn(i);  // warm caches and branch predictors
+  for (int i = 0; i < 2000; ++i)
+    fn(i);  // warm caches and branch predictors
   const auto t0 = clock_type::now();
-  for (int i = 0; i < n; ++i) fn(i);
+  for (int i = 0; i < n; ++i)
+    fn(i);
   const auto t1 = clock_type::now();
   Stats s;
   s.mean_ns = std::chrono::duration<double, std::nano>(t1 - t0).count() / n;
@@ -96,7 +98,8 @@ int main(int argc, char** argv) {
   rows.push_back({"uniform01 (1 value)", measure([&](int i) { keep(uniform01(1, cell(i))); }, n)});
   rows.push_back({"UniformNoise (3 values)", measure([&](int i) { keep(UniformNoise().sample(1, cell(i))); }, n)});
   rows.push_back({"GaussianNoise (3 values)", measure([&](int i) { keep(gauss.sample(1, cell(i))); }, n)});
-  rows.push_back({"LaplacianNoise (3 values)", measure([&](int i) { keep(LaplacianNoise(1.0).sample(1, cell(i))); }, n)});
+  rows.push_back(
+      {"LaplacianNoise (3 values)", measure([&](int i) { keep(LaplacianNoise(1.0).sample(1, cell(i))); }, n)});
   rows.push_back({"MultivariateGaussianNoise", measure([&](int i) { keep(mvn.sample(1, cell(i))); }, n)});
   rows.push_back({"GaussianMixtureNoise (2 comp.)", measure([&](int i) { keep(mix.sample(1, cell(i))); }, n)});
 
@@ -133,13 +136,15 @@ int main(int argc, char** argv) {
   run_filter("Butterworth<4> low-pass", Butterworth<4>::low_pass(100.0, 1000.0));
   run_filter("Butterworth<4> band-pass (4 sections)", Butterworth<4>::band_pass(30.0, 120.0, 1000.0));
   run_filter("Butterworth<8> low-pass", Butterworth<8>::low_pass(100.0, 1000.0));
-  run_filter("Equaliser<3>", Equaliser<3>({EqualiserBand{40, 1, 6}, EqualiserBand{120, 1, -6}, EqualiserBand{300, 1, 3}}, 1000.0));
+  run_filter("Equaliser<3>",
+             Equaliser<3>({EqualiserBand{40, 1, 6}, EqualiserBand{120, 1, -6}, EqualiserBand{300, 1, 3}}, 1000.0));
   run_filter("FIR 31 taps", FirFilter<31>::low_pass(100.0, 1000.0));
   run_filter("FIR 63 taps", FirFilter<63>::low_pass(100.0, 1000.0));
   run_filter("ARMA(4,2)", Arma<4, 2>({-0.5, 0.3, -0.2, 0.1}, {1.0, 0.4, 0.2}));
 
   // fields
-  field_row("friction (Coulomb + viscous + drag)", Friction(FrictionConfig{0.3, 2.0, 1.0, 2e-3, true, glm::dvec3{0, 0, 1}}));
+  field_row("friction (Coulomb + viscous + drag)",
+            Friction(FrictionConfig{0.3, 2.0, 1.0, 2e-3, true, glm::dvec3{0, 0, 1}}));
   field_row("stick-slip friction (spring anchor)", StickSlipFriction(StickSlipConfig{}));
   field_row("full texture tick: noise + 3 x Butterworth<4> LP + friction",
             sum(TextureField(TemporalSource(gauss, 1), TextureConfig{0.3, 1e-3, true, glm::dvec3{1.0}},
@@ -150,7 +155,8 @@ int main(int argc, char** argv) {
                              Butterworth<4>::band_pass(30.0, 120.0, 1000.0)),
                 Friction(FrictionConfig{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
   field_row("spatial texture: 2D cubic lattice + friction",
-            sum(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(gauss, 1, grain, Interpolation::cubic)), TextureConfig{}),
+            sum(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(gauss, 1, grain, Interpolation::cubic)),
+                             TextureConfig{}),
                 Friction(FrictionConfig{0.3, 0.5, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
   field_row("flow texture (3D cubic lattice)",
             FlowTexture(NoiseLattice<GaussianNoise, 3>(gauss, 1, grain, Interpolation::cubic), FlowConfig{}));
@@ -166,13 +172,18 @@ int main(int argc, char** argv) {
     <model><ARlsf>0.12 0.22 0.37 0.52 0.62 0.82 0.92 1.12 1.22 1.42 1.52 1.72 1.82 2.02 2.12 2.32 2.42 2.62 2.82 3.02</ARlsf><var>0.2</var><speedMod>400</speedMod><forceMod>0.2</forceMod></model>
     <model><ARlsf>0.08 0.18 0.33 0.48 0.58 0.78 0.88 1.08 1.18 1.38 1.48 1.68 1.78 1.98 2.08 2.28 2.38 2.58 2.78 2.98</ARlsf><var>0.3</var><speedMod>200</speedMod><forceMod>4</forceMod></model>
     </modelSet>)",
-                                                  "bench");
+                                                "bench");
   HattTexture<32> every_tick(set, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});
   HattTexture<32> every_10(set, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 10, 1e-3, true});
   field_row("HaTT AR(20) tick, update every tick", every_tick);
   field_row("HaTT AR(20) tick, update every 10 ticks", every_10);
-  rows.push_back({"HaTT update(): locate + LSF interp + lsf_to_ar(20)",
-                  measure([&](int i) { every_tick.update(50.0 + (i % 300), 0.5 + 0.01 * (i % 300)); keep(every_tick.variance()); }, n)});
+  rows.push_back({"HaTT update(): locate + LSF interp + lsf_to_ar(20)", measure(
+                                                                            [&](int i) {
+                                                                              every_tick.update(50.0 + (i % 300),
+                                                                                                0.5 + 0.01 * (i % 300));
+                                                                              keep(every_tick.variance());
+                                                                            },
+                                                                            n)});
 
   // a set the size of the larger real ones: 8 x 8 (speed, force) grid, 98
   // triangles, AR(40); the point moves across the grid so locating scans
@@ -187,7 +198,8 @@ int main(int argc, char** argv) {
       m.speed = big.speeds.back();
       m.force = big.forces.back();
       m.variance = 0.1 + 0.01 * (i + j);
-      for (int k = 0; k < 40; ++k) m.ar_lsf.push_back(std::numbers::pi * (k + 0.5 + 0.3 * std::sin(i + 2.0 * j + k)) / 41.0);
+      for (int k = 0; k < 40; ++k)
+        m.ar_lsf.push_back(std::numbers::pi * (k + 0.5 + 0.3 * std::sin(i + 2.0 * j + k)) / 41.0);
       big.models.push_back(m);
     }
   for (int j = 0; j < 7; ++j)
@@ -197,8 +209,13 @@ int main(int argc, char** argv) {
       big.triangles.push_back({v, v + 9, v + 8});
     }
   HattTexture<40> big_tex(big, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true});
-  rows.push_back({"HaTT update(), 64 models, 98 triangles, AR(40)",
-                  measure([&](int i) { big_tex.update(20.0 + (i % 380), 0.2 + 0.0095 * (i % 400)); keep(big_tex.variance()); }, n)});
+  rows.push_back({"HaTT update(), 64 models, 98 triangles, AR(40)", measure(
+                                                                        [&](int i) {
+                                                                          big_tex.update(20.0 + (i % 380),
+                                                                                         0.2 + 0.0095 * (i % 400));
+                                                                          keep(big_tex.variance());
+                                                                        },
+                                                                        n)});
   field_row("HaTT AR(40) tick, 98 triangles, update every tick", big_tex);
 
   // setup code (not per tick): reading model files and converting <ARcoeff>
@@ -212,17 +229,22 @@ int main(int argc, char** argv) {
   const int setup_n = std::max(50, n / 1000);
   rows.push_back({"setup: ar_to_lsf, order 20", measure([&](int) { keep(ar_to_lsf(a20)[0]); }, setup_n)});
   rows.push_back({"setup: ar_to_lsf, order 64", measure([&](int) { keep(ar_to_lsf(a64)[0]); }, setup_n)});
-  const std::string toolkit = hapticfield::read_file(HAPTICFIELD_SOURCE_DIR "/tests/data/hatt/Models_Toolkit 1kHz ARMA.xml");
+  const std::string toolkit =
+      hapticfield::read_file(HAPTICFIELD_SOURCE_DIR "/tests/data/hatt/Models_Toolkit 1kHz ARMA.xml");
   rows.push_back({"setup: parse a toolkit 1 kHz ARMA file (6 KB, 4 models)",
                   measure([&](int) { keep(parse_hatt_model_set(toolkit, "bench").mu); }, setup_n)});
-  const std::string hostile = hapticfield::read_file(HAPTICFIELD_SOURCE_DIR "/tests/fuzz/corpus_hatt/hostile_2000_coefficients.xml");
-  rows.push_back({"setup: reject the 4.5 KB file with 2000 <ARcoeff> values", measure([&](int) {
-                    try {
-                      (void)parse_hatt_model_set(hostile, "bench");
-                    } catch (const HattFileError& e) {
-                      keep(static_cast<double>(e.what()[0]));
-                    }
-                  }, setup_n)});
+  const std::string hostile =
+      hapticfield::read_file(HAPTICFIELD_SOURCE_DIR "/tests/fuzz/corpus_hatt/hostile_2000_coefficients.xml");
+  rows.push_back(
+      {"setup: reject the 4.5 KB file with 2000 <ARcoeff> values", measure(
+                                                                       [&](int) {
+                                                                         try {
+                                                                           (void)parse_hatt_model_set(hostile, "bench");
+                                                                         } catch (const HattFileError& e) {
+                                                                           keep(static_cast<double>(e.what()[0]));
+                                                                         }
+                                                                       },
+                                                                       setup_n)});
 
   const Stats& base = rows.front().s;
   std::printf("Texture benchmark: %d samples per row; ratios against the baseline row.\n\n", n);

@@ -33,8 +33,9 @@ int main(int argc, char** argv) {
   bool erased = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::printf("usage: bench_vectorised [IMAGE] [--probes N] [--repeats R] [--scene full|light] [--erased]\n"
-                  "Times a C++ loop over N probes of the scene python/bench_forces.py evaluates from Python.\n");
+      std::printf(
+          "usage: bench_vectorised [IMAGE] [--probes N] [--repeats R] [--scene full|light] [--erased]\n"
+          "Times a C++ loop over N probes of the scene python/bench_forces.py evaluates from Python.\n");
       return 0;
     } else if (!std::strcmp(argv[i], "--probes") && i + 1 < argc) {
       n = std::atol(argv[++i]);
@@ -100,15 +101,21 @@ int main(int argc, char** argv) {
       seconds.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
     };
     for (int r = 0; r < repeats; ++r) {
-      if (light && erased) time_once(hf::AnyField(light_scene()));
-      else if (light) time_once(light_scene());
-      else if (erased) time_once(hf::AnyField(scene()));
-      else time_once(scene());
+      if (light && erased)
+        time_once(hf::AnyField(light_scene()));
+      else if (light)
+        time_once(light_scene());
+      else if (erased)
+        time_once(hf::AnyField(scene()));
+      else
+        time_once(scene());
     }
     double checksum = 0.0;
-    for (double v : out) checksum += v;
+    for (double v : out)
+      checksum += v;
     double mean = 0.0;
-    for (double s : seconds) mean += s;
+    for (double s : seconds)
+      mean += s;
     mean /= static_cast<double>(seconds.size());
     std::printf("probes %ld repeats %d mean_s %.9g worst_s %.9g checksum %.17g\n", n, repeats, mean,
                 *std::max_element(seconds.begin(), seconds.end()), checksum);

@@ -42,7 +42,9 @@ Stats summarise(std::vector<double> v) {
           v[static_cast<std::size_t>(0.99 * static_cast<double>(v.size() - 1))], v.back()};
 }
 
-double since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 volatile double sink = 0.0;
 
@@ -66,7 +68,8 @@ cv::Mat synthetic_frame(cv::Size size, int k) {
 
 void bench_prepare(cv::Size size, int frames) {
   std::vector<cv::Mat> input;
-  for (int k = 0; k < 8; ++k) input.push_back(synthetic_frame(size, k));
+  for (int k = 0; k < 8; ++k)
+    input.push_back(synthetic_frame(size, k));
   const int m = 17;
   struct Route {
     const char* name;
@@ -96,7 +99,8 @@ void bench_prepare(cv::Size size, int frames) {
   }
   // The same planes through OpenCV: the Prewitt x mask (column - centre) on the inverted gray.
   cv::Mat ramp(m, 1, CV_32F), ones(m, 1, CV_32F, cv::Scalar(1.0f));
-  for (int i = 0; i < m; ++i) ramp.at<float>(i) = static_cast<float>(i - m / 2);
+  for (int i = 0; i < m; ++i)
+    ramp.at<float>(i) = static_cast<float>(i - m / 2);
   cv::Mat kx = ones * ramp.t(), ky = ramp * ones.t();
   cv::Mat gray, inv, fx, fy;
   for (int round = 0; round < frames + 2; ++round) {  // two warm-up rounds, interleaved routes
@@ -121,10 +125,11 @@ void bench_prepare(cv::Size size, int frames) {
       if (round >= 2) routes[r].ms.push_back(since(t0));
     }
   }
-  std::printf("\n### Preparing a frame, %d x %d px, Prewitt %d x %d, 1 thread, %d frames\n\n", size.width,
-              size.height, m, m, frames);
+  std::printf("\n### Preparing a frame, %d x %d px, Prewitt %d x %d, 1 thread, %d frames\n\n", size.width, size.height,
+              m, m, frames);
   const Stats temporal = summarise(routes[1].ms);
-  std::printf("| route | mean [ms] | p99 [ms] | worst [ms] | share of a 30 fps period (mean / p99) | vs temporal (ours) |\n");
+  std::printf(
+      "| route | mean [ms] | p99 [ms] | worst [ms] | share of a 30 fps period (mean / p99) | vs temporal (ours) |\n");
   std::printf("|---|---|---|---|---|---|\n");
   for (const Route& r : routes) {
     const Stats s = summarise(r.ms);
@@ -192,9 +197,10 @@ void bench_ticks(const std::string& clip, int ticks, hf::KernelChoice kernel) {
   }
   const Stats a = summarise(a_ns), b = summarise(b_ns);
   const char* name = kernel == hf::KernelChoice::direct ? "direct kernel" : "O(1) kernel";
-  std::printf("\n### Per tick, %d x %d px, Prewitt 17 (%s), %d ticks each, interleaved\n\n", frame.cols,
-              frame.rows, name, ticks);
-  std::printf("| field | mean [ns] | p99 [ns] | worst [ns] | mean / still | p99 / still |\n|---|---|---|---|---|---|\n");
+  std::printf("\n### Per tick, %d x %d px, Prewitt 17 (%s), %d ticks each, interleaved\n\n", frame.cols, frame.rows,
+              name, ticks);
+  std::printf(
+      "| field | mean [ns] | p99 [ns] | worst [ns] | mean / still | p99 / still |\n|---|---|---|---|---|---|\n");
   std::printf("| TangibleImageField (still picture, baseline) | %.0f | %.0f | %.0f | 1.00x | 1.00x |\n", a.mean, a.p99,
               a.worst);
   std::printf("| VideoField (clock, live window, blend of 2 frames) | %.0f | %.0f | %.0f | %.2fx | %.2fx |\n", b.mean,
@@ -205,9 +211,10 @@ void bench_ticks(const std::string& clip, int ticks, hf::KernelChoice kernel) {
 /// change of the normalised force; the median over points (moving people
 /// in a street scene do not dominate it).
 void bench_flicker(const std::string& clip, const std::string& plots) {
-  std::printf("\n### Force flicker on %s (frame-to-frame RMS change of the normalised force, median over a "
-              "24 x 18 grid)\n\n| denoise | m = 9 | m = 17 | m = 33 |\n|---|---|---|---|\n",
-              clip.c_str());
+  std::printf(
+      "\n### Force flicker on %s (frame-to-frame RMS change of the normalised force, median over a "
+      "24 x 18 grid)\n\n| denoise | m = 9 | m = 17 | m = 33 |\n|---|---|---|---|\n",
+      clip.c_str());
   // fx over time at every grid point, per mode, m = 17
   std::vector<std::vector<std::vector<double>>> traces;
   std::vector<double> none_rms;  // m = 17, per grid point
@@ -240,7 +247,8 @@ void bench_flicker(const std::string& clip, const std::string& plots) {
         if (timeline.ended()) break;
       }
       std::vector<double> rms;
-      for (double s : sum2) rms.push_back(std::sqrt(s / n));
+      for (double s : sum2)
+        rms.push_back(std::sqrt(s / n));
       if (m == 17 && mode == hf::DenoiseMode::none) none_rms = rms;
       std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
       std::printf(" %.5f |", rms[rms.size() / 2]);
@@ -257,12 +265,14 @@ void bench_flicker(const std::string& clip, const std::string& plots) {
                    [&](std::size_t a, std::size_t b) { return none_rms[a] < none_rms[b]; });
   const std::size_t point = order[order.size() / 2];
   std::vector<std::vector<double>> shown;
-  for (const auto& mode_traces : traces) shown.push_back(mode_traces[point]);
+  for (const auto& mode_traces : traces)
+    shown.push_back(mode_traces[point]);
   const int w = 900, h = 300, mg = 40;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   double lo = 1e9, hi = -1e9;
   for (const auto& t : shown)
-    for (double v : t) lo = std::min(lo, v), hi = std::max(hi, v);
+    for (double v : t)
+      lo = std::min(lo, v), hi = std::max(hi, v);
   if (hi <= lo) hi = lo + 1e-6;
   const cv::Scalar colours[4] = {{0, 0, 220}, {200, 0, 0}, {0, 150, 0}, {0, 0, 0}};
   for (std::size_t c = 0; c < shown.size(); ++c)
@@ -274,8 +284,10 @@ void bench_flicker(const std::string& clip, const std::string& plots) {
       cv::line(img, pt(i - 1), pt(i), colours[c], 1, cv::LINE_AA);
     }
   char title[200];
-  std::snprintf(title, sizeof title, "fx at a static point of the clip, 200 frames, m = 17 (range %.4f..%.4f): none red, "
-                "temporal blue, spatial green, both black", lo, hi);
+  std::snprintf(title, sizeof title,
+                "fx at a static point of the clip, 200 frames, m = 17 (range %.4f..%.4f): none red, "
+                "temporal blue, spatial green, both black",
+                lo, hi);
   cv::putText(img, title, {mg, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0}, 1, cv::LINE_AA);
   cv::imwrite(plots + "/flicker.png", img);
   std::printf("\nwrote %s/flicker.png\n", plots.c_str());
@@ -292,10 +304,14 @@ int main(int argc, char** argv) {
   std::string plots;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--frames") frames = std::max(1, std::atoi(argv[i + 1]));
-    else if (a == "--ticks") ticks = std::max(1000, std::atoi(argv[i + 1]));
-    else if (a == "--clip") clip = argv[i + 1];
-    else if (a == "--plots") plots = argv[i + 1];
+    if (a == "--frames")
+      frames = std::max(1, std::atoi(argv[i + 1]));
+    else if (a == "--ticks")
+      ticks = std::max(1000, std::atoi(argv[i + 1]));
+    else if (a == "--clip")
+      clip = argv[i + 1];
+    else if (a == "--plots")
+      plots = argv[i + 1];
   }
   std::printf("bench_video: 1 OpenCV thread; a 30 fps frame period is 33.3 ms, 60 fps 16.7 ms\n");
   bench_prepare({1280, 720}, frames);
@@ -304,7 +320,8 @@ int main(int argc, char** argv) {
   const std::string hd = (std::filesystem::temp_directory_path() / "bench_video_720p.avi").string();
   {
     cv::VideoWriter w(hd, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 30.0, {1280, 720});
-    for (int k = 0; k < 40; ++k) w.write(synthetic_frame({1280, 720}, k));
+    for (int k = 0; k < 40; ++k)
+      w.write(synthetic_frame({1280, 720}, k));
   }
   bench_decode(hd, 40);
   bench_ticks(hd, ticks, hf::KernelChoice::automatic);

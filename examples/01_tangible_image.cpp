@@ -67,11 +67,11 @@ Arguments parse(hf::cli::Parser& p) {
   while (p.next()) {
     if (p.is("--mask")) {
       a.options.mask = p.choice<hf::MaskKind>("mask", {{"prewitt", hf::MaskKind::prewitt},
-                                               {"sobel", hf::MaskKind::sobel},
-                                               {"scharr", hf::MaskKind::scharr},
-                                               {"roberts", hf::MaskKind::roberts},
-                                               {"gauss", hf::MaskKind::gaussian},
-                                               {"emboss", hf::MaskKind::emboss}});
+                                                       {"sobel", hf::MaskKind::sobel},
+                                                       {"scharr", hf::MaskKind::scharr},
+                                                       {"roberts", hf::MaskKind::roberts},
+                                                       {"gauss", hf::MaskKind::gaussian},
+                                                       {"emboss", hf::MaskKind::emboss}});
     } else if (p.is("--size")) {
       a.options.size = static_cast<int>(p.integer(1, 1000));
       a.size_given = true;
@@ -79,11 +79,12 @@ Arguments parse(hf::cli::Parser& p) {
       a.options.sigma = p.real(hf::cli::open_closed(0.0, 1000.0));
     } else if (p.is("--border")) {
       a.options.border = p.choice<hf::Border>("border", {{"suspend", hf::Border::suspend},
-                                               {"clamp", hf::Border::clamp},
-                                               {"reflect", hf::Border::reflect},
-                                               {"fade", hf::Border::fade}});
+                                                         {"clamp", hf::Border::clamp},
+                                                         {"reflect", hf::Border::reflect},
+                                                         {"fade", hf::Border::fade}});
     } else if (p.is("--gray")) {
-      a.gray = p.choice<hf::GrayWeights>("gray weights", {{"paper", hf::GrayWeights::paper}, {"bt601", hf::GrayWeights::bt601}});
+      a.gray = p.choice<hf::GrayWeights>("gray weights",
+                                         {{"paper", hf::GrayWeights::paper}, {"bt601", hf::GrayWeights::bt601}});
     } else if (p.is("--max-mpx")) {
       a.max_pixels = static_cast<std::uint64_t>(p.real(hf::cli::open_closed(0.0, 1e6)) * 1e6);
     } else if (p.is("--maps")) {
@@ -144,10 +145,10 @@ int run(const Arguments& args) {
   }
   if (args.maps) {
     const auto t0 = std::chrono::steady_clock::now();
-    const hf::ForceMap map = args.options.mask == hf::MaskKind::prewitt
-                                 ? hf::prewitt_force_map(gray, args.options.size, args.options.border,
-                                                         args.options.fade_px)
-                                 : hf::force_map(image);
+    const hf::ForceMap map =
+        args.options.mask == hf::MaskKind::prewitt
+            ? hf::prewitt_force_map(gray, args.options.size, args.options.border, args.options.fade_px)
+            : hf::force_map(image);
     const double map_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     std::printf("force map in %.1f ms, largest magnitude %.3f (1 = black/white edge)\n", map_ms, map.max_magnitude());
     for (const std::string& path : hf::write_force_pictures(*args.maps, photo, map))
@@ -160,6 +161,5 @@ int run(const Arguments& args) {
 
 int main(int argc, char** argv) {
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
-  return hf::cli::main("tangible_image", usage, argc, argv,
-                       [](hf::cli::Parser& p) { return run(parse(p)); });
+  return hf::cli::main("tangible_image", usage, argc, argv, [](hf::cli::Parser& p) { return run(parse(p)); });
 }

@@ -32,7 +32,8 @@ int run(int n) {
   std::uniform_real_distribution<double> level(0.0, 255.0);
   hf::GrayImage noise(n, n);
   for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) noise.at(x, y) = level(rng);
+    for (int x = 0; x < n; ++x)
+      noise.at(x, y) = level(rng);
   const double sigma = 255.0 / std::sqrt(12.0);  // uniform over [0, 255]
 
   std::printf("1. Force noise on a %d x %d uniform-noise picture (sigma = %.1f gray levels)\n\n", n, n, sigma);
@@ -50,8 +51,8 @@ int run(int n) {
   std::printf("| resolution [px/mm] | separation [px] | largest m | smallest separation felt by m = 17 [mm] |\n");
   std::printf("|---|---|---|---|\n");
   for (double rho : {2.0, 4.0, 6.4, 8.0, 16.0}) {
-    std::printf("| %.1f | %.0f | %d | %.2f |\n", rho, std::floor(2.0 * rho + 1e-9), hf::largest_separating_prewitt(2.0, rho),
-                hf::prewitt_min_separation_px(17) / rho);
+    std::printf("| %.1f | %.0f | %d | %.2f |\n", rho, std::floor(2.0 * rho + 1e-9),
+                hf::largest_separating_prewitt(2.0, rho), hf::prewitt_min_separation_px(17) / rho);
   }
 
   std::printf("\n3. Force at a gray edge (levels 127.5 +- 127.5 c) against contrast c, m = 17\n\n");
@@ -59,7 +60,8 @@ int run(int n) {
   for (double c = 0.2; c <= 1.0001; c += 0.2) {
     hf::GrayImage edge(64, 64, 127.5 + 127.5 * c);
     for (int y = 0; y < 64; ++y)
-      for (int x = 32; x < 64; ++x) edge.at(x, y) = 127.5 - 127.5 * c;
+      for (int x = 32; x < 64; ++x)
+        edge.at(x, y) = 127.5 - 127.5 * c;
     const hf::TangibleImage image(edge, {hf::MaskKind::prewitt, 17});
     std::printf("| %.1f | %.6f |\n", c, image.at(32.0, 32.0).x);
   }
@@ -72,8 +74,10 @@ int main(int argc, char** argv) {
   return hf::cli::main("tangible_experiment", usage, argc, argv, [](hf::cli::Parser& p) {
     int n = 2048;
     while (p.next()) {
-      if (p.is("--size")) n = static_cast<int>(p.integer(256, 8192));
-      else p.unknown();
+      if (p.is("--size"))
+        n = static_cast<int>(p.integer(256, 8192));
+      else
+        p.unknown();
     }
     p.finish();
     return run(n);

@@ -29,9 +29,9 @@
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
-#include "hapticfield/kernels.hpp"
 #include "hapticfield/device/inverse3.hpp"
 #include "hapticfield/device/serial_transport.hpp"
+#include "hapticfield/kernels.hpp"
 #include "hapticfield/servo.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
 #include "hapticfield/device/hid_transport.hpp"
@@ -75,7 +75,9 @@ constexpr const char* usage_text =
     "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
 
 /// A usage error found while setting up (an unknown field or device).
-[[noreturn]] void usage(const std::string& error) { throw cli::UsageError(error); }
+[[noreturn]] void usage(const std::string& error) {
+  throw cli::UsageError(error);
+}
 
 /// A WoodenHaptics device string: woody:p1|p2|p4[:preset][:sim].
 struct WoodySpec {
@@ -96,10 +98,14 @@ bool parse_woody(const std::string& d, WoodySpec& spec) {
   }
   const std::string gen = rest.substr(0, rest.find(':'));
   if (rest.find(':') != std::string::npos) spec.preset = rest.substr(rest.find(':') + 1);
-  if (gen == "p1") spec.generation = woody::Generation::p1_hid8;
-  else if (gen == "p2") spec.generation = woody::Generation::p2_hid14;
-  else if (gen == "p4") spec.generation = woody::Generation::p4_text;
-  else return false;
+  if (gen == "p1")
+    spec.generation = woody::Generation::p1_hid8;
+  else if (gen == "p2")
+    spec.generation = woody::Generation::p2_hid14;
+  else if (gen == "p4")
+    spec.generation = woody::Generation::p4_text;
+  else
+    return false;
   if (!spec.port.empty() && spec.generation != woody::Generation::p4_text) return false;  // P1/P2 are HID
   for (const char* known : {"woody_v2015", "woodenhaptics_v2019", "aluhaptics_v2", "vintage"})
     if (spec.preset == known) return true;
@@ -136,7 +142,8 @@ Arguments parse(cli::Parser& p) {
       o.rate = p.real(cli::closed(min_servo_rate, max_servo_rate));
     } else if (p.is("--realtime")) {
       o.realtime = p.choice<RealTime>(
-          "real-time mode", {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
+          "real-time mode",
+          {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
     } else if (p.is("--trace")) {
       o.trace = p.output_file();
     } else if (p.is("--plots")) {
@@ -144,8 +151,10 @@ Arguments parse(cli::Parser& p) {
     } else if (p.is("--device")) {
       o.device = p.value();
       if (!valid_device(o.device))
-        usage("--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), serial:PATH, "
-              "woody:p1|p2|p4[:PRESET][:sim|:PATH] or inverse3:PATH, got '" + o.device + "'");
+        usage(
+            "--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), serial:PATH, "
+            "woody:p1|p2|p4[:PRESET][:sim|:PATH] or inverse3:PATH, got '" +
+            o.device + "'");
     } else if (p.positional() && !image_given) {
       o.image = p.token();
       image_given = true;
@@ -178,7 +187,8 @@ struct CentreSpring {
 /// The one place fields are chosen by name.
 AnyField make_field(const std::string& name, const cv::Mat& image, const PlaneMapping& mapping) {
   // A stiff virtual wall: the picture's plane z = 0, solid behind it (z < 0).
-  const PlaneConstraint wall(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});  // [m], [N/m]
+  const PlaneConstraint wall(
+      PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});  // [m], [N/m]
   if (name == "tangible") {
     // The wall holds the hand on the plane (Fc); while it touches the plane
     // the hand feels the picture's forces (Prewitt 17 x 17, 1 N at a
@@ -216,8 +226,7 @@ void plot_force(const std::string& path, const std::vector<Row>& rows, double li
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   const double t_end = rows.empty() ? 1.0 : std::max(rows.back().t, 1e-3);
   const auto px = [&](double t, double f) {
-    return cv::Point(m + static_cast<int>((w - 2 * m) * t / t_end),
-                     h / 2 - static_cast<int>((h / 2 - m) * f / limit));
+    return cv::Point(m + static_cast<int>((w - 2 * m) * t / t_end), h / 2 - static_cast<int>((h / 2 - m) * f / limit));
   };
   cv::line(img, px(0, 0), px(t_end, 0), cv::Scalar(180, 180, 180));
   cv::line(img, px(0, limit), px(t_end, limit), cv::Scalar(200, 200, 255));
@@ -233,7 +242,8 @@ void plot_force(const std::string& path, const std::vector<Row>& rows, double li
   cv::putText(img, "force [N] over time [s]: Fx blue, Fy green, Fz red, |F| black; limit +-" + std::to_string(limit),
               {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
   cv::putText(img, "0 s", {m, h - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
-  cv::putText(img, std::to_string(t_end).substr(0, 5) + " s", {w - m - 40, h - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
+  cv::putText(img, std::to_string(t_end).substr(0, 5) + " s", {w - m - 40, h - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+              {0, 0, 0});
   cv::imwrite(path, img);
 }
 
@@ -248,21 +258,25 @@ void plot_periods(const std::string& path, const DurationHistogram& periods, dou
   std::uint64_t below = 0, above = 0;
   for (std::int64_t i = 0; i < static_cast<std::int64_t>(DurationHistogram::bins); ++i) {
     const std::uint64_t c = periods.bin(static_cast<std::size_t>(i));
-    if (i < lo) below += c;
-    else if (i > hi) above += c;
-    else peak = std::max(peak, counts[static_cast<std::size_t>(i - lo)] = static_cast<double>(c));
+    if (i < lo)
+      below += c;
+    else if (i > hi)
+      above += c;
+    else
+      peak = std::max(peak, counts[static_cast<std::size_t>(i - lo)] = static_cast<double>(c));
   }
   const double bar = static_cast<double>(w - 2 * m) / static_cast<double>(counts.size());
   for (std::size_t i = 0; i < counts.size(); ++i) {
     const int top = h - m - static_cast<int>((h - 2 * m) * std::log1p(counts[i]) / std::log1p(peak));
-    cv::rectangle(img, cv::Point(m + static_cast<int>(i * bar), top), cv::Point(m + static_cast<int>((i + 1) * bar), h - m),
-                  cv::Scalar(160, 90, 20), cv::FILLED);
+    cv::rectangle(img, cv::Point(m + static_cast<int>(i * bar), top),
+                  cv::Point(m + static_cast<int>((i + 1) * bar), h - m), cv::Scalar(160, 90, 20), cv::FILLED);
   }
   const int centre = m + (w - 2 * m) / 2;
   cv::line(img, {centre, m}, {centre, h - m}, cv::Scalar(0, 0, 220));
-  cv::putText(img, "tick period histogram (log count), nominal " + std::to_string(nominal * 1e3).substr(0, 5) +
-                       " ms at the red line, window +-20 %; below " + std::to_string(below) + ", above " +
-                       std::to_string(above),
+  cv::putText(img,
+              "tick period histogram (log count), nominal " + std::to_string(nominal * 1e3).substr(0, 5) +
+                  " ms at the red line, window +-20 %; below " + std::to_string(below) + ", above " +
+                  std::to_string(above),
               {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
   cv::imwrite(path, img);
 }
@@ -276,17 +290,19 @@ void write_period_histogram(const std::string& path, const DurationHistogram& pe
   const auto lo = static_cast<std::int64_t>(nominal * 0.8e9) / DurationHistogram::bin_ns;
   const auto hi = static_cast<std::int64_t>(nominal * 1.2e9) / DurationHistogram::bin_ns;
   for (std::int64_t i = lo; i <= hi && i < static_cast<std::int64_t>(DurationHistogram::bins); ++i)
-    f << static_cast<double>(i * DurationHistogram::bin_ns) * 1e-6 << ',' << periods.bin(static_cast<std::size_t>(i)) << '\n';
+    f << static_cast<double>(i * DurationHistogram::bin_ns) * 1e-6 << ',' << periods.bin(static_cast<std::size_t>(i))
+      << '\n';
 }
 
 /// One status line, rewritten in place; a latch is shown with its reason
 /// for as long as it holds.
 void print_status(const LoopSnapshot& s, std::uint32_t latched, double t) {
-  std::printf("\r t %6.2f s | rate %8.2f Hz | period p50 %6.3f p99 %6.3f max %6.3f ms | late %3llu | peak %5.2f N | "
-              "latches %llu%s%s   ",
-              t, s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
-              static_cast<unsigned long long>(s.overruns), s.peak_force, static_cast<unsigned long long>(s.latches),
-              latched ? " | ZERO FORCE: " : "", latched ? safety_events::names(latched).c_str() : "");
+  std::printf(
+      "\r t %6.2f s | rate %8.2f Hz | period p50 %6.3f p99 %6.3f max %6.3f ms | late %3llu | peak %5.2f N | "
+      "latches %llu%s%s   ",
+      t, s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
+      static_cast<unsigned long long>(s.overruns), s.peak_force, static_cast<unsigned long long>(s.latches),
+      latched ? " | ZERO FORCE: " : "", latched ? safety_events::names(latched).c_str() : "");
   std::fflush(stdout);
 }
 
@@ -339,7 +355,8 @@ int run(const Arguments& o) {
 
   WoodySpec woody_spec;
   if (parse_woody(o.device, woody_spec)) {
-    const WoodyArmConfig wc = WoodyArmConfig::defaults(woody_spec.generation, woody_presets::by_name(woody_spec.preset));
+    const WoodyArmConfig wc =
+        WoodyArmConfig::defaults(woody_spec.generation, woody_presets::by_name(woody_spec.preset));
     std::unique_ptr<SimulatedWoody> woody_arm;
     std::unique_ptr<Transport> woody_link;
     if (woody_spec.simulated) {
@@ -409,8 +426,9 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
   ServoLoop<D, SteadyClock> loop(device, clock, config);
 
   if (hardware) {
-    std::printf("WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
-                "Press Enter to start (Ctrl-C to abort)... ");
+    std::printf(
+        "WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
+        "Press Enter to start (Ctrl-C to abort)... ");
     std::fflush(stdout);
     std::string line;
     std::getline(std::cin, line);
@@ -448,9 +466,10 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
     const LoopSnapshot s = loop.statistics();
     if (s.latches > latches_shown) {  // every latch gets a line of its own
       latches_shown = s.latches;
-      std::printf("\n t %6.2f s: the safety chain latched (%s): zero force, disarmed; re-arming once states are "
-                  "fresh for %.1f s\n",
-                  elapsed(), safety_events::names(s.last_latch).c_str(), config.recover_after);
+      std::printf(
+          "\n t %6.2f s: the safety chain latched (%s): zero force, disarmed; re-arming once states are "
+          "fresh for %.1f s\n",
+          elapsed(), safety_events::names(s.last_latch).c_str(), config.recover_after);
     }
     print_status(s, loop.safety().latched(), elapsed());
   }
@@ -461,13 +480,13 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
   if (reason == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
 
   const LoopSnapshot s = loop.statistics();
-  std::printf("%llu ticks at %.3f Hz (nominal %.0f), period p50 %.4f / p99 %.4f / p99.9 %.4f / max %.4f ms, "
-              "late ticks %llu (%llu periods skipped), wake latency p99 %.1f us, compute p99 %.1f us, peak force "
-              "%.2f N\n",
-              static_cast<unsigned long long>(s.ticks), s.rate, o.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
-              s.period_p999 * 1e3, s.period_max * 1e3, static_cast<unsigned long long>(s.overruns),
-              static_cast<unsigned long long>(s.missed_deadlines), s.wake_p99 * 1e6, s.compute_p99 * 1e6,
-              s.peak_force);
+  std::printf(
+      "%llu ticks at %.3f Hz (nominal %.0f), period p50 %.4f / p99 %.4f / p99.9 %.4f / max %.4f ms, "
+      "late ticks %llu (%llu periods skipped), wake latency p99 %.1f us, compute p99 %.1f us, peak force "
+      "%.2f N\n",
+      static_cast<unsigned long long>(s.ticks), s.rate, o.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
+      s.period_p999 * 1e3, s.period_max * 1e3, static_cast<unsigned long long>(s.overruns),
+      static_cast<unsigned long long>(s.missed_deadlines), s.wake_p99 * 1e6, s.compute_p99 * 1e6, s.peak_force);
   if (s.latches == 0) {
     std::printf("safety: no latch\n");
   } else {
@@ -488,10 +507,10 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
     if (o.trace.empty()) write_trace(trace, rows);
     write_period_histogram(o.plots + "/periods.csv", loop.detailed_statistics().periods(), loop.period());
     std::string why;
-    if (!plots::matplotlib({"servo", "--trace", trace, "--periods", o.plots + "/periods.csv", "--nominal-ms",
-                            std::to_string(loop.period() * 1e3), "--limit", std::to_string(device.info().max_force),
-                            "--out", o.plots},
-                           why)) {
+    if (!plots::matplotlib(
+            {"servo", "--trace", trace, "--periods", o.plots + "/periods.csv", "--nominal-ms",
+             std::to_string(loop.period() * 1e3), "--limit", std::to_string(device.info().max_force), "--out", o.plots},
+            why)) {
       plot_force(o.plots + "/force.png", rows, device.info().max_force);
       plot_periods(o.plots + "/periods.png", loop.detailed_statistics().periods(), loop.period());
       std::printf("plots: %s/force.png, %s/periods.png (simple plots: %s)\n", o.plots.c_str(), o.plots.c_str(),

@@ -48,9 +48,8 @@ int run() {
     loop.read_once(in);
     loop.write_once(-40.0 * in.probe.position);
   }
-  std::printf("read_once/write_once: handle at (%.1f, %.1f, %.1f) mm, last force %.2f N\n",
-              in.probe.position.x * 1e3, in.probe.position.y * 1e3, in.probe.position.z * 1e3,
-              glm::length(loop.last_command()));
+  std::printf("read_once/write_once: handle at (%.1f, %.1f, %.1f) mm, last force %.2f N\n", in.probe.position.x * 1e3,
+              in.probe.position.y * 1e3, in.probe.position.z * 1e3, glm::length(loop.last_command()));
   loop.write_once(glm::dvec3{0.0});
   return 0;
 }
@@ -59,7 +58,8 @@ int run() {
 
 int main(int argc, char** argv) {
   return cli::main("servo_callback", usage, argc, argv, [](cli::Parser& p) {
-    while (p.next()) p.unknown();
+    while (p.next())
+      p.unknown();
     return run();
   });
 }

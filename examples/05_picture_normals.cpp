@@ -167,8 +167,7 @@ Camera make_camera(const Args& a, int width, int height, std::ostringstream& not
       const double sy = static_cast<double>(height) / c.height();
       if (std::abs(sx / sy - 1.0) < 0.01) {
         notes << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
-              << " px; K scaled by " << sx << " for the " << width << "x" << height
-              << " px picture\n";
+              << " px; K scaled by " << sx << " for the " << width << "x" << height << " px picture\n";
         return c.scaled(sx, sy);
       }
       notes << "picture_normals: note: calibration was made at " << c.width() << "x" << c.height()
@@ -192,8 +191,7 @@ Camera make_camera(const Args& a, int width, int height, std::ostringstream& not
     if (focal && *focal > 0.3 * longest && *focal < 10.0 * longest) focals.push_back(*focal);
   }
   if (!focals.empty()) {
-    std::nth_element(focals.begin(), focals.begin() + static_cast<long>(focals.size() / 2),
-                     focals.end());
+    std::nth_element(focals.begin(), focals.begin() + static_cast<long>(focals.size() / 2), focals.end());
     const double f = focals[focals.size() / 2];
     notes << "picture_normals: note: no --intrinsics or --focal; focal length estimated from "
              "the faces' "
@@ -201,61 +199,51 @@ Camera make_camera(const Args& a, int width, int height, std::ostringstream& not
           << f << " px\n";
     return Camera::from_focal(f, centre);
   }
-  notes
-      << "picture_normals: note: no --intrinsics or --focal; focal length guessed from a 60 degree "
-         "horizontal field of view\n";
+  notes << "picture_normals: note: no --intrinsics or --focal; focal length guessed from a 60 degree "
+           "horizontal field of view\n";
   return Camera::from_field_of_view(60.0, width, height);
 }
 
 void draw_overlay(const std::string& path, const cv::Mat& image, const Camera& camera,
-                  const std::vector<std::vector<glm::dvec2>>& faces,
-                  const std::vector<FacePose>& poses) {
+                  const std::vector<std::vector<glm::dvec2>>& faces, const std::vector<FacePose>& poses) {
   cv::Mat out = image.clone();
-  const std::vector<cv::Scalar> tints{
-      {60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}};
+  const std::vector<cv::Scalar> tints{{60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}};
   cv::Mat tinted = out.clone();
   for (std::size_t f = 0; f < faces.size(); ++f) {
     std::vector<cv::Point> poly;
-    for (auto p : faces[f]) poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
-    cv::fillPoly(tinted, std::vector<std::vector<cv::Point>>{poly}, tints[f % tints.size()],
-                 cv::LINE_AA, 4);
+    for (auto p : faces[f])
+      poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
+    cv::fillPoly(tinted, std::vector<std::vector<cv::Point>>{poly}, tints[f % tints.size()], cv::LINE_AA, 4);
   }
   cv::addWeighted(out, 0.6, tinted, 0.4, 0.0, out);
   const int thick = std::max(2, image.cols / 400);
   for (std::size_t f = 0; f < faces.size(); ++f) {
     std::vector<cv::Point> poly;
-    for (auto p : faces[f]) poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
-    cv::polylines(out, std::vector<std::vector<cv::Point>>{poly}, true, tints[f % tints.size()],
-                  thick, cv::LINE_AA, 4);
+    for (auto p : faces[f])
+      poly.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
+    cv::polylines(out, std::vector<std::vector<cv::Point>>{poly}, true, tints[f % tints.size()], thick, cv::LINE_AA, 4);
     // the normal as a 3D arrow from the face centre, half the face's size long
     const FacePose& pose = poses[f];
     const double length = 0.5 * std::sqrt(pose.width * pose.height);
     const cv::Vec3d centre = pose.R * cv::Vec3d(pose.width / 2, pose.height / 2, 0.0) + pose.t;
     const cv::Vec3d tip = centre + length * cv::Vec3d(pose.normal.x, pose.normal.y, pose.normal.z);
     std::vector<cv::Point2d> projected;
-    cv::projectPoints(
-        std::vector<cv::Point3d>{{centre[0], centre[1], centre[2]}, {tip[0], tip[1], tip[2]}},
-        cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(camera.matrix()),
-        camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), projected);
-    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(255, 255, 255), thick + 3,
-                    cv::LINE_AA, 0, 0.2);
-    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(20, 20, 20), thick, cv::LINE_AA, 0,
-                    0.2);
+    cv::projectPoints(std::vector<cv::Point3d>{{centre[0], centre[1], centre[2]}, {tip[0], tip[1], tip[2]}},
+                      cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(camera.matrix()),
+                      camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), projected);
+    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(255, 255, 255), thick + 3, cv::LINE_AA, 0, 0.2);
+    cv::arrowedLine(out, projected[0], projected[1], cv::Scalar(20, 20, 20), thick, cv::LINE_AA, 0, 0.2);
     char label[96];
-    std::snprintf(label, sizeof label, "(%.2f, %.2f, %.2f)", pose.normal.x + 0.0,
-                  pose.normal.y + 0.0, pose.normal.z + 0.0);
+    std::snprintf(label, sizeof label, "(%.2f, %.2f, %.2f)", pose.normal.x + 0.0, pose.normal.y + 0.0,
+                  pose.normal.z + 0.0);
     const double scale = std::max(0.45, image.cols / 2000.0);
     int baseline = 0;
     const cv::Size text = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, scale, thick, &baseline);
-    const cv::Point at(cvRound(projected[0].x) - text.width / 2,
-                       cvRound(projected[0].y) + 2 * text.height + 8);
-    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255),
-                thick + 2, cv::LINE_AA);
-    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(20, 20, 20), thick,
-                cv::LINE_AA);
+    const cv::Point at(cvRound(projected[0].x) - text.width / 2, cvRound(projected[0].y) + 2 * text.height + 8);
+    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), thick + 2, cv::LINE_AA);
+    cv::putText(out, label, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(20, 20, 20), thick, cv::LINE_AA);
   }
-  if (!cv::imwrite(path, out))
-    throw FileError("--overlay: cannot write '" + path + "'");
+  if (!cv::imwrite(path, out)) throw FileError("--overlay: cannot write '" + path + "'");
 }
 
 void draw_force_map(const std::string& path, const cv::Mat& image, const NormalField& field) {
@@ -263,8 +251,7 @@ void draw_force_map(const std::string& path, const cv::Mat& image, const NormalF
   cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
   cv::Mat out;
   cv::cvtColor(gray, out, cv::COLOR_GRAY2BGR);
-  const glm::dvec2 velocity{100.0 * field.mapping().px_per_mm(),
-                            0.0};  // 100 mm/s to the right [px/s]
+  const glm::dvec2 velocity{100.0 * field.mapping().px_per_mm(), 0.0};  // 100 mm/s to the right [px/s]
   const double limit = field.options().max_force;
   for (int y = 0; y < out.rows; ++y)
     for (int x = 0; x < out.cols; ++x) {
@@ -276,13 +263,11 @@ void draw_force_map(const std::string& path, const cv::Mat& image, const NormalF
       for (int c = 0; c < 3; ++c)
         px[c] = cv::saturate_cast<uchar>((1.0 - 0.8 * a) * px[c] + 0.8 * a * tint[c]);
     }
-  if (!cv::imwrite(path, out))
-    throw FileError("--force-map: cannot write '" + path + "'");
+  if (!cv::imwrite(path, out)) throw FileError("--force-map: cannot write '" + path + "'");
 }
 
 void evaluate_probes(const Args& a, NormalField& field) {
-  const auto rows =
-      cli::read_csv<4>(a.probes, {.columns = "x,y,vx,vy", .what = "probes", .finite_only = true});
+  const auto rows = cli::read_csv<4>(a.probes, {.columns = "x,y,vx,vy", .what = "probes", .finite_only = true});
   std::ofstream out(a.forces);
   if (!out) throw FileError("--forces: cannot write '" + a.forces + "'");
   for (const auto& r : rows) {
@@ -300,8 +285,7 @@ void evaluate_probes(const Args& a, NormalField& field) {
 int run(const Args& a) {
   check_file(a.image, std::uintmax_t{1} << 34);
   const cv::Mat image = cli::quiet_stderr([&] { return cv::imread(a.image, cv::IMREAD_COLOR); });
-  if (image.empty())
-    throw FileError("cannot decode '" + a.image + "': not a picture OpenCV can read, or corrupt");
+  if (image.empty()) throw FileError("cannot decode '" + a.image + "': not a picture OpenCV can read, or corrupt");
   std::ostringstream notes;
   const Camera camera = make_camera(a, image.cols, image.rows, notes);
   std::vector<FacePose> poses;
@@ -323,9 +307,9 @@ int run(const Args& a) {
       std::fprintf(stderr,
                    "face %zu: reprojection rms %.3f px (closed form %.3f px), size %.4g x %.4g%s, "
                    "distance %.4g, |cos(r1,r2)| before orthogonalisation %.2e\n",
-                   f + 1, poses[f].rms_reprojection_px, poses[f].closed_form_rms_px, poses[f].width,
-                   poses[f].height, poses[f].aspect_recovered ? " (aspect recovered)" : " mm",
-                   cv::norm(poses[f].t), poses[f].orthogonality);
+                   f + 1, poses[f].rms_reprojection_px, poses[f].closed_form_rms_px, poses[f].width, poses[f].height,
+                   poses[f].aspect_recovered ? " (aspect recovered)" : " mm", cv::norm(poses[f].t),
+                   poses[f].orthogonality);
   }
   std::fflush(stdout);
   if (!a.overlay.empty()) draw_overlay(a.overlay, image, camera, a.faces, poses);
@@ -344,8 +328,6 @@ int run(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  cv::utils::logging::setLogLevel(
-      cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
-  return cli::main("picture_normals", usage, argc, argv,
-                   [](cli::Parser& p) { return run(parse(p)); });
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
+  return cli::main("picture_normals", usage, argc, argv, [](cli::Parser& p) { return run(parse(p)); });
 }

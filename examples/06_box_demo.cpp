@@ -103,22 +103,19 @@ int check(const Args& a, const BoxScene& scene) {
     if (!(s >> tag >> n.x >> n.y >> n.z) || tag != "normal:") continue;
     if (f >= 2) throw FileError("--check: more than two normals in '" + a.check + "'");
     const double err = angle_between_deg(n, view.normals[f]);
-    std::printf("face %zu: %.6f %.6f %.6f vs true %.6f %.6f %.6f: %.4f deg\n", f, n.x, n.y, n.z,
-                view.normals[f].x, view.normals[f].y, view.normals[f].z, err);
+    std::printf("face %zu: %.6f %.6f %.6f vs true %.6f %.6f %.6f: %.4f deg\n", f, n.x, n.y, n.z, view.normals[f].x,
+                view.normals[f].y, view.normals[f].z, err);
     if (!(err <= 0.5) || std::abs(glm::length(n) - 1.0) > 1e-5) ++failures;
     ++f;
   }
   if (f != 2)
-    throw FileError("--check: expected two 'normal: nx ny nz' lines in '" + a.check + "', got " +
-                    std::to_string(f));
+    throw FileError("--check: expected two 'normal: nx ny nz' lines in '" + a.check + "', got " + std::to_string(f));
   return failures == 0 ? 0 : 1;
 }
 
 void write_files(const Args& a, const BoxScene& scene, const BoxView& view) {
-  const std::string base =
-      a.out + "/box_" + std::to_string(static_cast<int>(std::lround(view.rotation_deg)));
-  if (!cv::imwrite(base + ".png", view.picture))
-    throw FileError("--out: cannot write '" + base + ".png'");
+  const std::string base = a.out + "/box_" + std::to_string(static_cast<int>(std::lround(view.rotation_deg)));
+  if (!cv::imwrite(base + ".png", view.picture)) throw FileError("--out: cannot write '" + base + ".png'");
   std::ofstream args(base + ".args");
   for (const auto& face : view.corners) {
     args << "--face\n";
@@ -129,16 +126,12 @@ void write_files(const Args& a, const BoxScene& scene, const BoxView& view) {
     }
     args << "\n";
   }
-  args << "--size\n"
-       << scene.edge_mm << "," << scene.edge_mm << "\n--focal\n"
-       << scene.focal_px << "\n";
+  args << "--size\n" << scene.edge_mm << "," << scene.edge_mm << "\n--focal\n" << scene.focal_px << "\n";
   std::ofstream probes(base + "_probes.csv");
   probes << "x,y,vx,vy\n";
   for (const auto& face : view.corners) {
     const glm::dvec2 c = 0.25 * (face[0] + face[1] + face[2] + face[3]);
-    probes << c.x << "," << c.y << ",200,0\n"
-           << c.x << "," << c.y << ",-200,0\n"
-           << c.x << "," << c.y << ",0,200\n";
+    probes << c.x << "," << c.y << ",200,0\n" << c.x << "," << c.y << ",-200,0\n" << c.x << "," << c.y << ",0,200\n";
   }
   if (!args || !probes) throw FileError("--out: cannot write '" + base + ".args' or '" + base + "_probes.csv'");
 }
@@ -152,16 +145,13 @@ int run(const Args& a) {
   std::mt19937 rng(a.seed);
   std::uniform_real_distribution<double> direction(0.0, 2.0 * std::numbers::pi);
 
-  std::printf(
-      "Synthetic box: %.0f mm edge, %d x %d px, f = %.0f px, %.0f mm away, %.0f deg above.\n",
-      scene.edge_mm, scene.width, scene.height, scene.focal_px, scene.distance_mm,
-      scene.elevation_deg);
-  std::printf(
-      "Noise: each corner displaced by %.2f px in a random direction, %d trials (seed %u).\n\n",
-      a.noise, a.trials, a.seed);
+  std::printf("Synthetic box: %.0f mm edge, %d x %d px, f = %.0f px, %.0f mm away, %.0f deg above.\n", scene.edge_mm,
+              scene.width, scene.height, scene.focal_px, scene.distance_mm, scene.elevation_deg);
+  std::printf("Noise: each corner displaced by %.2f px in a random direction, %d trials (seed %u).\n\n", a.noise,
+              a.trials, a.seed);
   std::printf("Accuracy: angle between estimated and true normal [deg]\n");
-  std::printf("%5s %-5s %-26s %9s %19s %19s %9s\n", "rot", "face", "true normal", "exact",
-              "noisy mean / max", "closed-form m / max", "rms [px]");
+  std::printf("%5s %-5s %-26s %9s %19s %19s %9s\n", "rot", "face", "true normal", "exact", "noisy mean / max",
+              "closed-form m / max", "rms [px]");
   struct Ratio {
     double rotation;
     int face;
@@ -215,15 +205,13 @@ int run(const Args& a) {
       const double err = angle_between_deg(exact, truth);
       worst_exact = std::max(worst_exact, err);
       worst_noisy = std::max(worst_noisy, max);
-      std::printf("%5.0f %-5s (%7.4f %7.4f %7.4f) %9.2e %9.3f / %7.3f %9.3f / %7.3f %9.3f\n",
-                  rotation, f == 0 ? "front" : "side", truth.x, truth.y, truth.z, err, mean, max,
-                  cf_mean, cf_max, rms);
+      std::printf("%5.0f %-5s (%7.4f %7.4f %7.4f) %9.2e %9.3f / %7.3f %9.3f / %7.3f %9.3f\n", rotation,
+                  f == 0 ? "front" : "side", truth.x, truth.y, truth.z, err, mean, max, cf_mean, cf_max, rms);
       ratios.push_back({rotation, f, truth, exact, noisy});
     }
   }
-  std::printf(
-      "\nworst: %.2e deg from exact corners (bound 0.5), %.3f deg with %.2f px noise (bound 2)\n\n",
-      worst_exact, worst_noisy, a.noise);
+  std::printf("\nworst: %.2e deg from exact corners (bound 0.5), %.3f deg with %.2f px noise (bound 2)\n\n",
+              worst_exact, worst_noisy, a.noise);
   std::sort(focals.begin(), focals.end());
   std::printf(
       "unknown size (aspect recovered with K), same noisy corners: mean %.3f deg, worst %.3f deg, "
@@ -233,13 +221,12 @@ int run(const Args& a) {
     std::printf(
         "focal length from one face's right angles, noisy corners: median %.0f px, 10-90%% "
         "range %.0f-%.0f px (true %.0f px)\n\n",
-        focals[focals.size() / 2], focals[focals.size() / 10], focals[focals.size() * 9 / 10],
-        scene.focal_px);
+        focals[focals.size() / 2], focals[focals.size() / 10], focals[focals.size() * 9 / 10], scene.focal_px);
   std::printf(
       "Ratios estimated / true normal component (the paper reports 0.99-1.03); '-' where |true| < "
       "0.05\n");
-  std::printf("%5s %-5s %8s %8s %8s   %8s %8s %8s\n", "rot", "face", "x exact", "y exact",
-              "z exact", "x noisy", "y noisy", "z noisy");
+  std::printf("%5s %-5s %8s %8s %8s   %8s %8s %8s\n", "rot", "face", "x exact", "y exact", "z exact", "x noisy",
+              "y noisy", "z noisy");
   const auto ratio = [](double est, double truth) {
     char buf[16];
     if (std::abs(truth) < 0.05)

@@ -34,9 +34,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double rate = 1000.0;     // servo rate [Hz]
-constexpr double speed = 0.05;      // stroke speed [m/s]
-constexpr double duration = 2.0;    // [s]
+constexpr double rate = 1000.0;       // servo rate [Hz]
+constexpr double speed = 0.05;        // stroke speed [m/s]
+constexpr double duration = 2.0;      // [s]
 constexpr double normal_force = 1.0;  // |Fc| [N]
 constexpr double stiffness = 1000.0;  // of the stroked plane [N/m]
 
@@ -63,9 +63,11 @@ Trace stroke_field(const std::string& name, const std::string& description, Fiel
   double best = -1;
   for (int k = 0; k < 3; ++k) {
     double m = 0, v = 0;
-    for (const auto& f : t.force) m += f[k];
+    for (const auto& f : t.force)
+      m += f[k];
     m /= double(t.force.size());
-    for (const auto& f : t.force) v += (f[k] - m) * (f[k] - m);
+    for (const auto& f : t.force)
+      v += (f[k] - m) * (f[k] - m);
     if (v > best) best = v, t.axis = k;
   }
   return t;
@@ -91,7 +93,8 @@ std::vector<double> welch(const std::vector<double>& x, double fs) {
   const std::size_t seg = 256;
   std::vector<double> psd(seg / 2 + 1, 0.0);
   double mean = 0;
-  for (double v : x) mean += v;
+  for (double v : x)
+    mean += v;
   mean /= double(x.size());
   double wsum = 0;
   for (std::size_t i = 0; i < seg; ++i) {
@@ -104,9 +107,11 @@ std::vector<double> welch(const std::vector<double>& x, double fs) {
     for (std::size_t i = 0; i < seg; ++i)
       a[i] = (x[start + i] - mean) * (0.5 - 0.5 * std::cos(2 * std::numbers::pi * double(i) / double(seg)));
     fft(a);
-    for (std::size_t k = 0; k <= seg / 2; ++k) psd[k] += std::norm(a[k]) * (k == 0 || k == seg / 2 ? 1.0 : 2.0) / (fs * wsum);
+    for (std::size_t k = 0; k <= seg / 2; ++k)
+      psd[k] += std::norm(a[k]) * (k == 0 || k == seg / 2 ? 1.0 : 2.0) / (fs * wsum);
   }
-  for (double& p : psd) p /= std::max(count, 1);
+  for (double& p : psd)
+    p /= std::max(count, 1);
   return psd;
 }
 
@@ -124,8 +129,10 @@ void draw_panel(cv::Mat& img, cv::Rect box, const std::vector<double>& xs, const
                      box.y + box.height - 1 - static_cast<int>((ys[i] - lo) / (hi - lo) * (box.height - 1)));
   cv::polylines(img, pts, false, colour, 1, cv::LINE_AA);
   char buf[160];
-  if (flat) std::snprintf(buf, sizeof buf, "%s   constant %.3g %s", xlabel.c_str(), lo + 1.0, ylabel.c_str());
-  else std::snprintf(buf, sizeof buf, "%s   [%.3g .. %.3g] %s", xlabel.c_str(), lo, hi, ylabel.c_str());
+  if (flat)
+    std::snprintf(buf, sizeof buf, "%s   constant %.3g %s", xlabel.c_str(), lo + 1.0, ylabel.c_str());
+  else
+    std::snprintf(buf, sizeof buf, "%s   [%.3g .. %.3g] %s", xlabel.c_str(), lo, hi, ylabel.c_str());
   cv::putText(img, buf, {box.x + 4, box.y + box.height + 14}, cv::FONT_HERSHEY_SIMPLEX, 0.38, cv::Scalar(60, 60, 60), 1,
               cv::LINE_AA);
 }
@@ -136,21 +143,24 @@ cv::Mat plot(const Trace& t, double fs, const std::vector<double>& psd) {
   cv::putText(img, t.description, {10, 42}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(80, 80, 80), 1, cv::LINE_AA);
   std::vector<double> xs, ys;
   const std::size_t shown = std::min<std::size_t>(t.force.size(), 500);  // first 0.5 s
-  for (std::size_t i = 0; i < shown; ++i) xs.push_back(i / fs), ys.push_back(t.force[i][t.axis]);
+  for (std::size_t i = 0; i < shown; ++i)
+    xs.push_back(i / fs), ys.push_back(t.force[i][t.axis]);
   const char* axes = "xyz";
   draw_panel(img, {40, 55, 580, 140}, xs, ys, "time 0..0.5 s", std::string("F") + axes[t.axis] + " [N]",
              cv::Scalar(160, 60, 0));
   std::vector<double> lf, lp;
   for (std::size_t k = 1; k < psd.size(); ++k)
     lf.push_back(std::log10(k * fs / 256.0)), lp.push_back(10.0 * std::log10(std::max(psd[k], 1e-20)));
-  draw_panel(img, {40, 235, 580, 150}, lf, lp, "log10 f: 3.9 .. 500 Hz", "PSD [dB re 1 N^2/Hz]", cv::Scalar(0, 100, 200));
+  draw_panel(img, {40, 235, 580, 150}, lf, lp, "log10 f: 3.9 .. 500 Hz", "PSD [dB re 1 N^2/Hz]",
+             cv::Scalar(0, 100, 200));
   return img;
 }
 
 // index of the plotted traces for scripts/hapticfield_plots.py: stem,name,axis,description,rate_Hz
 void write_index_row(std::ofstream& index, const std::string& stem, const Trace& t, double fs) {
   const auto quoted = [](std::string s) {
-    for (std::size_t i = s.find('"'); i != std::string::npos; i = s.find('"', i + 2)) s.insert(i, 1, '"');
+    for (std::size_t i = s.find('"'); i != std::string::npos; i = s.find('"', i + 2))
+      s.insert(i, 1, '"');
     return '"' + s + '"';
   };
   index << quoted(stem) << ',' << quoted(t.name) << ',' << t.axis << ',' << quoted(t.description) << ',' << fs << '\n';
@@ -158,7 +168,8 @@ void write_index_row(std::ofstream& index, const std::string& stem, const Trace&
 
 void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<cv::Mat>& tiles, std::ofstream& index) {
   std::vector<double> x;
-  for (const auto& f : t.force) x.push_back(f[t.axis]);
+  for (const auto& f : t.force)
+    x.push_back(f[t.axis]);
   const auto psd = welch(x, fs);
   std::string stem = t.name;
   for (char& c : stem)
@@ -172,7 +183,8 @@ void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<c
   {
     std::ofstream csv(out / (stem + "_psd.csv"));
     csv << "frequency_Hz,psd_N2_per_Hz\n";
-    for (std::size_t k = 0; k < psd.size(); ++k) csv << k * fs / 256.0 << ',' << psd[k] << '\n';
+    for (std::size_t k = 0; k < psd.size(); ++k)
+      csv << k * fs / 256.0 << ',' << psd[k] << '\n';
   }
   write_index_row(index, stem, t, fs);
   const cv::Mat img = plot(t, fs, psd);
@@ -198,45 +210,74 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
     const TextureConfig normal{0.5, 1e-3, false, glm::dvec3{0.0, 0.0, 1.0}};
     const glm::dvec3 grain{1e-3, 1e-3, 1e-3};  // 1 mm: 50 Hz at 50 mm/s
 
-    traces.push_back(stroke("uniform lattice", "uniform noise, 2D lattice 1 mm, linear",
-        TextureField(SpatialSource(NoiseLattice<UniformNoise, 2>(UniformNoise(-1, 1), 1, grain, Interpolation::linear)), lateral)));
+    traces.push_back(stroke(
+        "uniform lattice", "uniform noise, 2D lattice 1 mm, linear",
+        TextureField(SpatialSource(NoiseLattice<UniformNoise, 2>(UniformNoise(-1, 1), 1, grain, Interpolation::linear)),
+                     lateral)));
     traces.push_back(stroke("gaussian nearest", "Gaussian, 2D lattice 1 mm, nearest",
-        TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.5), 2, grain, Interpolation::nearest)), lateral)));
-    traces.push_back(stroke("gaussian cubic", "Gaussian, 2D lattice 1 mm, Catmull-Rom cubic",
-        TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.5), 2, grain, Interpolation::cubic)), lateral)));
+                            TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.5), 2, grain,
+                                                                                      Interpolation::nearest)),
+                                         lateral)));
+    traces.push_back(stroke(
+        "gaussian cubic", "Gaussian, 2D lattice 1 mm, Catmull-Rom cubic",
+        TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.5), 2, grain, Interpolation::cubic)),
+                     lateral)));
     traces.push_back(stroke("laplacian", "Laplacian, 2D lattice 0.5 mm, linear",
-        TextureField(SpatialSource(NoiseLattice<LaplacianNoise, 2>(LaplacianNoise(0.5), 3, grain * 0.5, Interpolation::linear)), lateral)));
+                            TextureField(SpatialSource(NoiseLattice<LaplacianNoise, 2>(
+                                             LaplacianNoise(0.5), 3, grain * 0.5, Interpolation::linear)),
+                                         lateral)));
     glm::dmat3 cov{0.0};
     cov[0][0] = 0.3, cov[1][1] = 0.1, cov[0][1] = cov[1][0] = 0.12;  // lateral only (zero z variance)
     traces.push_back(stroke("multivariate gaussian", "full covariance, zero z variance, 3D lattice 1 mm",
-        TextureField(SpatialSource(NoiseLattice<MultivariateGaussianNoise, 3>(MultivariateGaussianNoise(glm::dvec3{0.0}, cov), 4, grain)), TextureConfig{})));
+                            TextureField(SpatialSource(NoiseLattice<MultivariateGaussianNoise, 3>(
+                                             MultivariateGaussianNoise(glm::dvec3{0.0}, cov), 4, grain)),
+                                         TextureConfig{})));
     traces.push_back(stroke("gaussian mixture", "two components (smooth / rough), 2D lattice 0.5 mm",
-        TextureField(SpatialSource(NoiseLattice<GaussianMixtureNoise, 2>(GaussianMixtureNoise({{0.8, glm::dvec3{0.0}, glm::dmat3{0.02}}, {0.2, glm::dvec3{0.0}, glm::dmat3{1.0}}}), 5, grain * 0.5)), lateral)));
-    traces.push_back(stroke("local sphere", "new Gaussian sample each 0.5 mm of travel",
-        TextureField(LocalSphere<GaussianNoise>(GaussianNoise(0.5), 6, 5e-4, glm::dvec3{0, 0, 1}), lateral)));
-    traces.push_back(stroke("fbm h=0.5", "fBm, 6 octaves from 4 mm, PSD ~ f^-2",
-        TextureField(SpatialSource(Fbm<GaussianNoise, 2>(NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.5), 7, grain * 4.0), 0.5, 6)), lateral)));
-    traces.push_back(stroke("fourier synthesis", "sine 25 Hz + square 60 Hz + sawtooth 110 Hz (at 50 mm/s)",
+                            TextureField(SpatialSource(NoiseLattice<GaussianMixtureNoise, 2>(
+                                             GaussianMixtureNoise({{0.8, glm::dvec3{0.0}, glm::dmat3{0.02}},
+                                                                   {0.2, glm::dvec3{0.0}, glm::dmat3{1.0}}}),
+                                             5, grain * 0.5)),
+                                         lateral)));
+    traces.push_back(
+        stroke("local sphere", "new Gaussian sample each 0.5 mm of travel",
+               TextureField(LocalSphere<GaussianNoise>(GaussianNoise(0.5), 6, 5e-4, glm::dvec3{0, 0, 1}), lateral)));
+    traces.push_back(
+        stroke("fbm h=0.5", "fBm, 6 octaves from 4 mm, PSD ~ f^-2",
+               TextureField(SpatialSource(Fbm<GaussianNoise, 2>(
+                                NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.5), 7, grain * 4.0), 0.5, 6)),
+                            lateral)));
+    traces.push_back(stroke(
+        "fourier synthesis", "sine 25 Hz + square 60 Hz + sawtooth 110 Hz (at 50 mm/s)",
         TextureField(SpatialSource(FourierSynthesis({{Waveform::sine, 0.3, 500.0, 0.0, glm::dvec3{1, 0, 0}},
                                                      {Waveform::square, 0.15, 1200.0, 0.0, glm::dvec3{1, 0, 0}},
-                                                     {Waveform::sawtooth, 0.1, 2200.0, 0.0, glm::dvec3{1, 0, 0}}})), normal)));
-    traces.push_back(stroke("modulated grating", "Ft = (1 + m) sine 100 Hz + n, Gaussian lattices",
-        TextureField(SpatialSource(ModulatedTexture(FourierSynthesis({{Waveform::sine, 0.3, 2000.0, 0.0, glm::dvec3{1, 0, 0}}}), 1.0,
-                                                    NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.4), 8, grain * 3.0),
-                                                    NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.03), 9, grain * 0.2))), normal)));
-    traces.push_back(stroke("temporal butterworth", "white Gaussian per tick, band-pass 4th order 30..120 Hz",
+                                                     {Waveform::sawtooth, 0.1, 2200.0, 0.0, glm::dvec3{1, 0, 0}}})),
+                     normal)));
+    traces.push_back(stroke(
+        "modulated grating", "Ft = (1 + m) sine 100 Hz + n, Gaussian lattices",
+        TextureField(
+            SpatialSource(ModulatedTexture(FourierSynthesis({{Waveform::sine, 0.3, 2000.0, 0.0, glm::dvec3{1, 0, 0}}}),
+                                           1.0, NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.4), 8, grain * 3.0),
+                                           NoiseLattice<GaussianNoise, 2>(GaussianNoise(0.03), 9, grain * 0.2))),
+            normal)));
+    traces.push_back(stroke(
+        "temporal butterworth", "white Gaussian per tick, band-pass 4th order 30..120 Hz",
         TextureField(TemporalSource(GaussianNoise(1.0), 10), lateral, Butterworth<4>::band_pass(30.0, 120.0, rate))));
-    traces.push_back(stroke("temporal fir", "white Gaussian per tick, FIR 63 taps low-pass 60 Hz",
-        TextureField(TemporalSource(GaussianNoise(1.0), 11), lateral, FirFilter<63>::low_pass(60.0, rate))));
-    traces.push_back(stroke("temporal equaliser", "white Gaussian per tick, +12 dB at 40 Hz, +6 dB at 200 Hz",
-        TextureField(TemporalSource(GaussianNoise(0.2), 12), lateral,
-                     Equaliser<2>({EqualiserBand{40.0, 0.5, 12.0}, EqualiserBand{200.0, 1.0, 6.0}}, rate))));
-    traces.push_back(stroke("temporal arma", "ARMA(2,1): resonance near 80 Hz",
-        TextureField(TemporalSource(GaussianNoise(0.1), 13), lateral,
-                     Arma<2, 1>({-2.0 * 0.95 * std::cos(2 * std::numbers::pi * 80.0 / rate), 0.95 * 0.95}, {1.0, 0.5}))));
+    traces.push_back(
+        stroke("temporal fir", "white Gaussian per tick, FIR 63 taps low-pass 60 Hz",
+               TextureField(TemporalSource(GaussianNoise(1.0), 11), lateral, FirFilter<63>::low_pass(60.0, rate))));
+    traces.push_back(
+        stroke("temporal equaliser", "white Gaussian per tick, +12 dB at 40 Hz, +6 dB at 200 Hz",
+               TextureField(TemporalSource(GaussianNoise(0.2), 12), lateral,
+                            Equaliser<2>({EqualiserBand{40.0, 0.5, 12.0}, EqualiserBand{200.0, 1.0, 6.0}}, rate))));
+    traces.push_back(
+        stroke("temporal arma", "ARMA(2,1): resonance near 80 Hz",
+               TextureField(
+                   TemporalSource(GaussianNoise(0.1), 13), lateral,
+                   Arma<2, 1>({-2.0 * 0.95 * std::cos(2 * std::numbers::pi * 80.0 / rate), 0.95 * 0.95}, {1.0, 0.5}))));
     traces.push_back(stroke("friction", "Coulomb mu = 0.3 (smoothed) + viscous 2 N s/m, opposing +x",
-        Friction(FrictionConfig{0.3, 2.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
-    traces.push_back(stroke_free("flow", "3D vector lattice 2 mm, mean shift 0.2 N in -x, drag 1 N s/m",
+                            Friction(FrictionConfig{0.3, 2.0, 0.0, 2e-3, true, glm::dvec3{0, 0, 1}})));
+    traces.push_back(stroke_free(
+        "flow", "3D vector lattice 2 mm, mean shift 0.2 N in -x, drag 1 N s/m",
         FlowTexture(NoiseLattice<GaussianNoise, 3>(GaussianNoise(0.2), 14, grain * 2.0, Interpolation::cubic),
                     FlowConfig{glm::dvec3{-0.2, 0, 0}, 1.0, 1.0})));
 
@@ -244,14 +285,17 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
     std::vector<cv::Mat> tiles;
     std::ofstream index(out / "gallery.csv");
     index << "stem,name,axis,description,rate_Hz\n";
-    for (const auto& t : traces) write_outputs(t, out, rate, tiles, index);
+    for (const auto& t : traces)
+      write_outputs(t, out, rate, tiles, index);
 
     if (!hatt_dir.empty()) {
       for (const auto& file : hatt_model_files(hatt_dir)) {
         const HattModelSet set = load_hatt_model_set(file);
         HattTexture<128> tex(set, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, false});
         // run at the model's own sample rate (HaTT: 10 kHz)
-        Trace t = stroke("hatt " + set.name, std::string(set.ma_order > 0 ? "HaTT ARMA" : "HaTT AR") + " model at 50 mm/s, 1 N, " + std::to_string(int(set.sample_rate)) + " Hz",
+        Trace t = stroke("hatt " + set.name,
+                         std::string(set.ma_order > 0 ? "HaTT ARMA" : "HaTT AR") + " model at 50 mm/s, 1 N, " +
+                             std::to_string(int(set.sample_rate)) + " Hz",
                          tex, set.sample_rate);
         t.axis = 2;
         write_outputs(t, out, set.sample_rate, tiles, index);
@@ -273,8 +317,7 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
     // Redrawn with axes, ticks, units and legends by matplotlib when present.
     index.close();
     std::string why;
-    if (!plots::matplotlib({"texture", "--dir", out.string()}, why))
-      std::cout << "(simple plots: " << why << ")\n";
+    if (!plots::matplotlib({"texture", "--dir", out.string()}, why)) std::cout << "(simple plots: " << why << ")\n";
   }
   return 0;
 }
@@ -287,13 +330,15 @@ int main(int argc, char** argv) {
     std::string hatt_dir;
     bool out_given = false;
     while (p.next()) {
-      if (p.is("--out")) out = p.output_dir(), out_given = true;
-      else if (p.is("--hatt")) hatt_dir = p.value();
-      else p.unknown();
+      if (p.is("--out"))
+        out = p.output_dir(), out_given = true;
+      else if (p.is("--hatt"))
+        hatt_dir = p.value();
+      else
+        p.unknown();
     }
     if (!out_given) p.default_output_dir("--out", out);
-    if (!hatt_dir.empty() && !fs::is_directory(hatt_dir))
-      throw FileError("--hatt: '" + hatt_dir + "' is not a folder");
+    if (!hatt_dir.empty() && !fs::is_directory(hatt_dir)) throw FileError("--hatt: '" + hatt_dir + "' is not a folder");
     p.finish();
     return run(out, hatt_dir);
   });

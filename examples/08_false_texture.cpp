@@ -48,8 +48,7 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
   {
     check_file(image_path, std::uintmax_t{1} << 34);
     const cv::Mat image = cli::quiet_stderr([&] { return cv::imread(image_path, cv::IMREAD_COLOR); });
-    if (image.empty())
-      throw FileError("cannot decode '" + image_path + "': not a picture OpenCV can read, or corrupt");
+    if (image.empty()) throw FileError("cannot decode '" + image_path + "': not a picture OpenCV can read, or corrupt");
     const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, 100.0);
     const LabelMap labels = label_map_from_gray_levels(image, levels, mapping);
 
@@ -71,10 +70,10 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
         names.push_back("Gaussian lattice " + std::to_string(grain * 1e3).substr(0, 4) + " mm");
       } else {
         const double period = 0.5e-3 + 1.5e-3 * (1.0 - t);
-        textures.emplace_back(TextureField(
-            SpatialSource(FourierSynthesis({{Waveform::square, 1.0, 1.0 / period, 0.0, glm::dvec3{1, 0, 0}}},
-                                           glm::dvec3{1, 0, 0})),
-            params));
+        textures.emplace_back(
+            TextureField(SpatialSource(FourierSynthesis(
+                             {{Waveform::square, 1.0, 1.0 / period, 0.0, glm::dvec3{1, 0, 0}}}, glm::dvec3{1, 0, 0})),
+                         params));
         names.push_back("square grating " + std::to_string(period * 1e3).substr(0, 4) + " mm");
       }
     }
@@ -87,11 +86,11 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
     const ScalarMap brightness = scalar_map_from_image(image, mapping);
     auto friction = contact(picture, DataModulated(Friction(FrictionConfig{1.0, 0.0, 0.0, 2e-3, true, glm::dvec3{0.0}}),
                                                    brightness, 0.1, 0.5));
-    auto data_texture = contact(
-        picture,
-        DataModulated(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 99, glm::dvec3{0.4e-3})),
-                                   TextureConfig{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
-                      brightness, 1.0, -1.0));  // amplitude 1 - brightness
+    auto data_texture =
+        contact(picture, DataModulated(TextureField(SpatialSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 99,
+                                                                                                 glm::dvec3{0.4e-3})),
+                                                    TextureConfig{0.3, 1e-3, true, glm::dvec3{1.0, 1.0, 0.0}}),
+                                       brightness, 1.0, -1.0));  // amplitude 1 - brightness
 
     fs::create_directories(out);
     std::ofstream csv(out / "strokes.csv");
@@ -118,8 +117,8 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
     }
 
     // picture: gray image tinted by region, legend, middle-stroke trace
-    const cv::Scalar palette[] = {{40, 40, 220}, {40, 180, 40}, {220, 120, 30}, {200, 200, 200},
-                                  {200, 40, 200}, {30, 200, 220}, {120, 80, 20}, {90, 90, 90}};
+    const cv::Scalar palette[] = {{40, 40, 220},  {40, 180, 40},  {220, 120, 30}, {200, 200, 200},
+                                  {200, 40, 200}, {30, 200, 220}, {120, 80, 20},  {90, 90, 90}};
     cv::Mat gray;
     cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
     cv::Mat tinted(image.rows, image.cols, CV_8UC3);
@@ -138,13 +137,14 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
     for (int s = 0; s < 3; ++s) {  // the strokes
       const glm::dvec2 a = mapping.to_image(glm::dvec3{-0.05, (-25.0 + 25.0 * s) * 1e-3, 0.0});
       const glm::dvec2 b = mapping.to_image(glm::dvec3{0.05, (-25.0 + 25.0 * s) * 1e-3, 0.0});
-      cv::line(canvas, cv::Point(int(a.x), int(a.y)), cv::Point(int(b.x), int(b.y)), cv::Scalar(0, 0, 0), s == 1 ? 2 : 1);
+      cv::line(canvas, cv::Point(int(a.x), int(a.y)), cv::Point(int(b.x), int(b.y)), cv::Scalar(0, 0, 0),
+               s == 1 ? 2 : 1);
     }
     for (int l = 0; l < levels; ++l) {
       const int y = image.rows + 8 + 22 * l;
       cv::rectangle(canvas, cv::Rect(8, y, 16, 16), palette[l], cv::FILLED);
-      const std::string text = "gray " + std::to_string(l * 256 / levels) + ".." + std::to_string((l + 1) * 256 / levels - 1) +
-                               ": " + names[static_cast<std::size_t>(l)];
+      const std::string text = "gray " + std::to_string(l * 256 / levels) + ".." +
+                               std::to_string((l + 1) * 256 / levels - 1) + ": " + names[static_cast<std::size_t>(l)];
       cv::putText(canvas, text, {32, y + 13}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     }
     const int top = image.rows + legend_h;
@@ -152,13 +152,17 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
                 cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     const int n = static_cast<int>(middle_ft.size());
     double peak = 1e-9;
-    for (int i = 0; i < n; ++i) peak = std::max({peak, std::fabs(middle_ft[static_cast<std::size_t>(i)]), std::fabs(middle_ff[static_cast<std::size_t>(i)])});
+    for (int i = 0; i < n; ++i)
+      peak = std::max(
+          {peak, std::fabs(middle_ft[static_cast<std::size_t>(i)]), std::fabs(middle_ff[static_cast<std::size_t>(i)])});
     const int mid = top + 90;
     for (int i = 0; i + 1 < n; ++i) {
       const int x0 = i * (image.cols - 1) / n, x1 = (i + 1) * (image.cols - 1) / n;
       const auto yv = [&](double v) { return mid - static_cast<int>(v / peak * 60.0); };
-      cv::line(canvas, {x0, yv(middle_ft[static_cast<std::size_t>(i)])}, {x1, yv(middle_ft[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-      cv::line(canvas, {x0, yv(middle_ff[static_cast<std::size_t>(i)])}, {x1, yv(middle_ff[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 220), 1, cv::LINE_AA);
+      cv::line(canvas, {x0, yv(middle_ft[static_cast<std::size_t>(i)])},
+               {x1, yv(middle_ft[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+      cv::line(canvas, {x0, yv(middle_ff[static_cast<std::size_t>(i)])},
+               {x1, yv(middle_ff[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 220), 1, cv::LINE_AA);
       const int r = middle_region[static_cast<std::size_t>(i)];
       if (r >= 0) cv::line(canvas, {x0, top + 22}, {x1, top + 22}, palette[r], 5);
     }
@@ -180,10 +184,14 @@ int main(int argc, char** argv) {
     bool out_given = false;
     int levels = 4;
     while (p.next()) {
-      if (p.is("--out")) out = p.output_dir(), out_given = true;
-      else if (p.is("--levels")) levels = static_cast<int>(p.integer(2, 8));  // 8 colours in the legend
-      else if (p.positional() && image.empty()) image = p.token();
-      else p.unknown();
+      if (p.is("--out"))
+        out = p.output_dir(), out_given = true;
+      else if (p.is("--levels"))
+        levels = static_cast<int>(p.integer(2, 8));  // 8 colours in the legend
+      else if (p.positional() && image.empty())
+        image = p.token();
+      else
+        p.unknown();
     }
     if (image.empty()) throw cli::UsageError("no IMAGE given");
     if (!out_given) p.default_output_dir("--out", out);

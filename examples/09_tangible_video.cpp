@@ -149,7 +149,8 @@ Arguments parse(hf::cli::Parser& p) {
   }
   if (a.video.empty()) throw hf::cli::UsageError("no VIDEO given");
   if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
-  if (a.probes && (a.trace || a.seconds)) throw hf::cli::UsageError("--trace and --seconds are for play mode, not --probes");
+  if (a.probes && (a.trace || a.seconds))
+    throw hf::cli::UsageError("--trace and --seconds are for play mode, not --probes");
   if (!a.size_given && a.options.mask == hf::MaskKind::roberts) a.options.size = 2;
   if (!a.size_given && (a.options.mask == hf::MaskKind::scharr || a.options.mask == hf::MaskKind::sobel))
     a.options.size = 3;
@@ -180,7 +181,8 @@ void write_cuts(const std::string& path, const std::vector<hf::SceneCut>& cuts) 
   std::FILE* out = std::fopen(path.c_str(), "w");
   if (!out) throw std::runtime_error("cannot write cuts file '" + path + "'");
   std::fprintf(out, "frame,time\n");
-  for (const hf::SceneCut& c : cuts) std::fprintf(out, "%ld,%.9g\n", c.frame, c.time);
+  for (const hf::SceneCut& c : cuts)
+    std::fprintf(out, "%ld,%.9g\n", c.frame, c.time);
   if (std::fclose(out) != 0) throw std::runtime_error("cannot write cuts file '" + path + "'");
 }
 
@@ -190,7 +192,8 @@ void plot_forces(const std::string& path, const std::vector<std::array<double, 5
   const int w = 1000, h = 400, m = 50;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   double t0 = rows.front()[0], t1 = rows.back()[0], peak = 1e-9;
-  for (const auto& r : rows) peak = std::max({peak, std::abs(r[3]), std::abs(r[4]), std::hypot(r[3], r[4])});
+  for (const auto& r : rows)
+    peak = std::max({peak, std::abs(r[3]), std::abs(r[4]), std::hypot(r[3], r[4])});
   if (t1 <= t0) t1 = t0 + 1e-3;
   const auto px = [&](double t, double f) {
     return cv::Point(m + static_cast<int>((w - 2 * m) * (t - t0) / (t1 - t0)),
@@ -206,8 +209,10 @@ void plot_forces(const std::string& path, const std::vector<std::array<double, 5
       cv::line(img, px(rows[i - 1][0], value(rows[i - 1])), px(rows[i][0], value(rows[i])), colours[c], 1, cv::LINE_AA);
     }
   char text[160];
-  std::snprintf(text, sizeof text, "normalised force over video time %.2f..%.2f s: fx blue, fy green, |F| black; "
-                "cuts orange; peak %.3f", t0, t1, peak);
+  std::snprintf(text, sizeof text,
+                "normalised force over video time %.2f..%.2f s: fx blue, fy green, |F| black; "
+                "cuts orange; peak %.3f",
+                t0, t1, peak);
   cv::putText(img, text, {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
   cv::imwrite(path, img);
 }
@@ -220,7 +225,8 @@ int run_probes(const Arguments& a) {
       throw hf::FileError(*a.probes + ": probe " + std::to_string(i + 1) + ": t must be in [0, 1e6] s");
   std::vector<std::size_t> order(probes.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return probes[i][0] < probes[j][0]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t i, std::size_t j) { return probes[i][0] < probes[j][0]; });
   hf::VideoTimeline timeline(*source, prepare_config(a), a.fade_s);
   std::vector<std::array<double, 5>> rows(probes.size());
   const auto start = std::chrono::steady_clock::now();
@@ -234,7 +240,8 @@ int run_probes(const Arguments& a) {
   std::FILE* out = std::fopen(a.forces->c_str(), "w");
   if (!out) throw std::runtime_error("cannot write forces file '" + *a.forces + "'");
   std::fprintf(out, "t,x,y,fx,fy\n");
-  for (const auto& r : rows) std::fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", r[0], r[1], r[2], r[3], r[4]);
+  for (const auto& r : rows)
+    std::fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", r[0], r[1], r[2], r[3], r[4]);
   if (std::fclose(out) != 0) throw std::runtime_error("cannot write forces file '" + *a.forces + "'");
   std::printf("%s: %d x %d px at %.3f fps, %ld frames prepared in %.2f s, %zu cuts, %ld undecodable frames\n",
               a.video.c_str(), source->width(), source->height(), source->fps(), timeline.prepared(), seconds,
@@ -247,7 +254,8 @@ int run_probes(const Arguments& a) {
   if (a.plots && !rows.empty()) {
     std::filesystem::create_directories(*a.plots);
     std::vector<std::array<double, 5>> sorted;
-    for (std::size_t i : order) sorted.push_back(rows[i]);
+    for (std::size_t i : order)
+      sorted.push_back(rows[i]);
     plot_forces(*a.plots + "/forces.png", sorted, timeline.cuts());
     std::printf("plots: %s/forces.png\n", a.plots->c_str());
   }
@@ -310,15 +318,16 @@ int run_play(const Arguments& a) {
   loop_config.recover_after = 0.5;
   hf::ServoLoop<hf::ForceArm, hf::SteadyClock> loop(device, clock, loop_config);
   if (hardware) {
-    std::printf("WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
-                "Press Enter to start (Ctrl-C to abort)... ");
+    std::printf(
+        "WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
+        "Press Enter to start (Ctrl-C to abort)... ");
     std::fflush(stdout);
     std::string line;
     std::getline(std::cin, line);
   }
-  std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s\n", name.c_str(),
-              width, height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise),
-              a.fade_s * 1e3, seconds);
+  std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s\n", name.c_str(), width,
+              height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise), a.fade_s * 1e3,
+              seconds);
 
   const auto ticks = static_cast<std::uint64_t>(std::max(1L, std::lround(seconds * loop_config.rate)));
   std::vector<Row> rows;
@@ -343,10 +352,11 @@ int run_play(const Arguments& a) {
   const auto status = [&] {
     const hf::LoopSnapshot s = loop.statistics();
     const hf::VideoStatistics v = video_ptr->statistics();
-    std::printf("\r video %7.2f s | frames %5ld dropped %4ld bad %3ld | cuts %3ld | rate %8.2f Hz | p99 %6.3f ms | "
-                "peak %5.2f N%s   ",
-                v.video_time, v.prepared, v.dropped, v.bad, v.cuts, s.rate, s.period_p99 * 1e3, s.peak_force,
-                loop.safety().latched() ? " | ZERO FORCE" : "");
+    std::printf(
+        "\r video %7.2f s | frames %5ld dropped %4ld bad %3ld | cuts %3ld | rate %8.2f Hz | p99 %6.3f ms | "
+        "peak %5.2f N%s   ",
+        v.video_time, v.prepared, v.dropped, v.bad, v.cuts, s.rate, s.period_p99 * 1e3, s.peak_force,
+        loop.safety().latched() ? " | ZERO FORCE" : "");
     std::fflush(stdout);
   };
   while (!done.load()) {
@@ -362,7 +372,8 @@ int run_play(const Arguments& a) {
   video_ptr->stop();
   std::printf("%ld frames prepared, %ld dropped (preparation lagged), %ld undecodable, %zu cuts:", v.prepared,
               v.dropped, v.bad, cuts.size());
-  for (const hf::SceneCut& c : cuts) std::printf(" %ld (%.3f s)", c.frame, c.time);
+  for (const hf::SceneCut& c : cuts)
+    std::printf(" %ld (%.3f s)", c.frame, c.time);
   std::printf("\n");
   if (const std::string e = video_ptr->error(); !e.empty()) std::printf("the video stopped early: %s\n", e.c_str());
   if (a.cuts) {
@@ -382,7 +393,8 @@ int run_play(const Arguments& a) {
     std::filesystem::create_directories(*a.plots);
     std::vector<std::array<double, 5>> plot;
     const double t_start = rows.front().t;
-    for (const Row& r : rows) plot.push_back({r.t - t_start, r.position.x, r.position.y, r.force.x, r.force.y});
+    for (const Row& r : rows)
+      plot.push_back({r.t - t_start, r.position.x, r.position.y, r.force.x, r.force.y});
     plot_forces(*a.plots + "/force.png", plot, {});
     std::printf("plots: %s/force.png\n", a.plots->c_str());
   }
@@ -400,7 +412,8 @@ int run(const Arguments& a) {
 
 int main(int argc, char** argv) {
   bool verbose = false;
-  for (int i = 1; i < argc; ++i) verbose = verbose || std::string(argv[i]) == "--verbose";
+  for (int i = 1; i < argc; ++i)
+    verbose = verbose || std::string(argv[i]) == "--verbose";
   hf::quiet_video_logs(verbose);
   if (!verbose) cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   return hf::cli::main("tangible_video", usage, argc, argv, [](hf::cli::Parser& p) { return run(parse(p)); });

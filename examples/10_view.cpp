@@ -96,7 +96,9 @@ struct Arguments {
   std::string shots{"."};
 };
 
-[[noreturn]] void usage(const std::string& error) { throw cli::UsageError(error); }
+[[noreturn]] void usage(const std::string& error) {
+  throw cli::UsageError(error);
+}
 
 bool valid_device(const std::string& d) {
   if (d == "mouse" || d == "sim" || d == "hid") return true;
@@ -119,7 +121,8 @@ std::vector<glm::dvec2> parse_face(const std::string& text) {
     const auto [x, y] = cli::parse_pair(pair, "--face", cli::closed(-1e6, 1e6));
     corners.emplace_back(x, y);
   }
-  if (corners.size() != 4) usage("--face expects 4 corners \"x1,y1 x2,y2 x3,y3 x4,y4\", got " + std::to_string(corners.size()));
+  if (corners.size() != 4)
+    usage("--face expects 4 corners \"x1,y1 x2,y2 x3,y3 x4,y4\", got " + std::to_string(corners.size()));
   return corners;
 }
 
@@ -129,17 +132,23 @@ Arguments parse(cli::Parser& p) {
   while (p.next()) {
     if (p.is("--field")) {
       o.scene.kind = p.choice<FieldKind>(
-          "field", {{"tangible", FieldKind::tangible}, {"normals", FieldKind::normals}, {"texture", FieldKind::texture}});
+          "field",
+          {{"tangible", FieldKind::tangible}, {"normals", FieldKind::normals}, {"texture", FieldKind::texture}});
     } else if (p.is("--mask")) {
-      o.scene.mask = p.choice<MaskKind>("mask", {{"prewitt", MaskKind::prewitt}, {"sobel", MaskKind::sobel},
-                                                 {"scharr", MaskKind::scharr}, {"roberts", MaskKind::roberts},
-                                                 {"gauss", MaskKind::gaussian}, {"emboss", MaskKind::emboss}});
+      o.scene.mask = p.choice<MaskKind>("mask", {{"prewitt", MaskKind::prewitt},
+                                                 {"sobel", MaskKind::sobel},
+                                                 {"scharr", MaskKind::scharr},
+                                                 {"roberts", MaskKind::roberts},
+                                                 {"gauss", MaskKind::gaussian},
+                                                 {"emboss", MaskKind::emboss}});
     } else if (p.is("--size")) {
       o.scene.size = static_cast<int>(p.integer(2, 129));
       size_given = true;
     } else if (p.is("--border")) {
-      o.scene.border = p.choice<Border>("border", {{"suspend", Border::suspend}, {"clamp", Border::clamp},
-                                                   {"reflect", Border::reflect}, {"fade", Border::fade}});
+      o.scene.border = p.choice<Border>("border", {{"suspend", Border::suspend},
+                                                   {"clamp", Border::clamp},
+                                                   {"reflect", Border::reflect},
+                                                   {"fade", Border::fade}});
     } else if (p.is("--denoise")) {
       o.scene.denoise_px = p.real(cli::closed(0.0, 20.0));
     } else if (p.is("--gain")) {
@@ -163,7 +172,8 @@ Arguments parse(cli::Parser& p) {
       o.rate = p.real(cli::closed(min_servo_rate, max_servo_rate));
     } else if (p.is("--realtime")) {
       o.realtime = p.choice<RealTime>(
-          "real-time mode", {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
+          "real-time mode",
+          {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
     } else if (p.is("--seconds")) {
       o.seconds = p.real(cli::open_closed(0.0, 3600.0));
     } else if (p.is("--screenshot")) {
@@ -185,7 +195,8 @@ Arguments parse(cli::Parser& p) {
     usage(text);
   }
   const SizeRange r = size_range(o.scene.mask);
-  if (!size_given) o.scene.size = std::clamp(o.scene.size, r.lo, r.hi);
+  if (!size_given)
+    o.scene.size = std::clamp(o.scene.size, r.lo, r.hi);
   else if (o.scene.size < r.lo || o.scene.size > r.hi || (r.step == 2 && o.scene.size % 2 == 0))
     usage(std::string("--size ") + std::to_string(o.scene.size) + " does not suit mask " + mask_name(o.scene.mask) +
           " (" + (r.lo == r.hi ? std::to_string(r.lo) : "odd " + std::to_string(r.lo) + ".." + std::to_string(r.hi)) +
@@ -198,14 +209,22 @@ Arguments parse(cli::Parser& p) {
 /// Any picture as 8-bit BGR.
 cv::Mat to_bgr8(const cv::Mat& in) {
   cv::Mat eight;
-  if (in.depth() == CV_8U) eight = in;
-  else if (in.depth() == CV_16U) in.convertTo(eight, CV_8U, 1.0 / 257.0);
-  else in.convertTo(eight, CV_8U, 255.0);  // float pictures in [0, 1]
+  if (in.depth() == CV_8U)
+    eight = in;
+  else if (in.depth() == CV_16U)
+    in.convertTo(eight, CV_8U, 1.0 / 257.0);
+  else
+    in.convertTo(eight, CV_8U, 255.0);  // float pictures in [0, 1]
   cv::Mat out;
-  if (eight.channels() == 1) cv::cvtColor(eight, out, cv::COLOR_GRAY2BGR);
-  else if (eight.channels() == 4) cv::cvtColor(eight, out, cv::COLOR_BGRA2BGR);
-  else if (eight.channels() == 3) out = eight;
-  else throw FileError("'" + std::string("picture") + "' has " + std::to_string(in.channels()) + " channels (1, 3 or 4 expected)");
+  if (eight.channels() == 1)
+    cv::cvtColor(eight, out, cv::COLOR_GRAY2BGR);
+  else if (eight.channels() == 4)
+    cv::cvtColor(eight, out, cv::COLOR_BGRA2BGR);
+  else if (eight.channels() == 3)
+    out = eight;
+  else
+    throw FileError("'" + std::string("picture") + "' has " + std::to_string(in.channels()) +
+                    " channels (1, 3 or 4 expected)");
   return out;
 }
 
@@ -247,8 +266,9 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   SampleRing<8192> ring;
 
   if (hardware) {
-    std::printf("WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
-                "Press Enter to start (Ctrl-C to abort)... ");
+    std::printf(
+        "WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
+        "Press Enter to start (Ctrl-C to abort)... ");
     std::fflush(stdout);
     std::string line;
     std::getline(std::cin, line);
@@ -337,10 +357,14 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     if (cv::getWindowProperty(window_title, cv::WND_PROP_VISIBLE) < 1.0) break;  // closed by the user
     SceneConfig next = cfg;
     switch (key) {
-      case 'q': case 27: loop.request_stop(); break;
+      case 'q':
+      case 27:
+        loop.request_stop();
+        break;
       case 'f': {
-        next.kind = next.kind == FieldKind::tangible ? FieldKind::normals
-                    : next.kind == FieldKind::normals ? FieldKind::texture : FieldKind::tangible;
+        next.kind = next.kind == FieldKind::tangible  ? FieldKind::normals
+                    : next.kind == FieldKind::normals ? FieldKind::texture
+                                                      : FieldKind::tangible;
         if (next.kind == FieldKind::normals && next.faces.empty()) next.kind = FieldKind::texture;
         rebuild(next);
         break;
@@ -352,31 +376,46 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
         rebuild(next);
         break;
       }
-      case '+': case '=': case '-': {
+      case '+':
+      case '=':
+      case '-': {
         const int steps = key == '-' ? -1 : 1;
-        if (next.kind == FieldKind::texture) next.grain_mm = std::clamp(next.grain_mm * (steps > 0 ? 1.5 : 1 / 1.5), 0.1, 50.0);
-        else next.size = step_size(next.mask, next.size, steps * std::max(1, next.size / 8));
+        if (next.kind == FieldKind::texture)
+          next.grain_mm = std::clamp(next.grain_mm * (steps > 0 ? 1.5 : 1 / 1.5), 0.1, 50.0);
+        else
+          next.size = step_size(next.mask, next.size, steps * std::max(1, next.size / 8));
         rebuild(next);
         break;
       }
-      case 'b': next.border = static_cast<Border>((static_cast<int>(next.border) + 1) % 4); rebuild(next); break;
-      case 'd': next.denoise_px = next.denoise_px == 0.0 ? 1.0 : next.denoise_px >= 4.0 ? 0.0 : next.denoise_px * 2.0;
+      case 'b':
+        next.border = static_cast<Border>((static_cast<int>(next.border) + 1) % 4);
+        rebuild(next);
+        break;
+      case 'd':
+        next.denoise_px = next.denoise_px == 0.0 ? 1.0 : next.denoise_px >= 4.0 ? 0.0 : next.denoise_px * 2.0;
         rebuild(next);
         break;
       case ' ':
-        if (!source.moving()) say("a still picture: nothing to pause");
-        else source.pause(paused = !paused);
+        if (!source.moving())
+          say("a still picture: nothing to pause");
+        else
+          source.pause(paused = !paused);
         break;
-      case '[': case ']':
-        if (!source.moving()) say("a still picture: nothing to seek");
-        else source.seek(key == '[' ? -1.0 : 1.0);
+      case '[':
+      case ']':
+        if (!source.moving())
+          say("a still picture: nothing to seek");
+        else
+          source.seek(key == '[' ? -1.0 : 1.0);
         break;
       case 's': {
-        const std::string path = (std::filesystem::path(o.shots) / ("hapticfield_view_" + std::to_string(++shot) + ".png")).string();
+        const std::string path =
+            (std::filesystem::path(o.shots) / ("hapticfield_view_" + std::to_string(++shot) + ".png")).string();
         say(cv::imwrite(path, canvas) ? "saved " + path : "cannot write " + path);
         break;
       }
-      default: break;
+      default:
+        break;
     }
   }
   loop.request_stop();
@@ -387,12 +426,12 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   if (reason == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
 
   const LoopSnapshot& s = status.loop;
-  std::printf("%llu ticks at %.2f Hz, period p50 %.4f / p99 %.4f / max %.4f ms, late ticks %llu, missed deadlines "
-              "%llu, safety events %llu, latches %llu\n",
-              static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
-              s.period_max * 1e3, static_cast<unsigned long long>(s.overruns),
-              static_cast<unsigned long long>(s.missed_deadlines), static_cast<unsigned long long>(s.safety_events),
-              static_cast<unsigned long long>(s.latches));
+  std::printf(
+      "%llu ticks at %.2f Hz, period p50 %.4f / p99 %.4f / max %.4f ms, late ticks %llu, missed deadlines "
+      "%llu, safety events %llu, latches %llu\n",
+      static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
+      static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines),
+      static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
   if (!o.screenshot.empty()) {
     status.note.clear();
     draw_view(canvas, layout, scene.underlay, scope, now, status);
@@ -407,8 +446,9 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
 int run(const Arguments& o) {
   const cv::Mat picture = to_bgr8(cli::quiet_stderr([&] { return load_image(o.source); }));
   if (o.screenshot.empty() && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
-    throw Error("no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "
-                "--seconds S");
+    throw Error(
+        "no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "
+        "--seconds S");
   const PlaneMapping mapping = PlaneMapping::fit(picture.cols, picture.rows, 80.0);  // the picture spans 80 mm
   StillPicture source(picture);
   Scene scene = build_scene(source.frame(), o.scene, mapping);
@@ -427,7 +467,8 @@ int run(const Arguments& o) {
 
   // An arm: a stiff wall holds the handle on the picture's plane z = 0 (Fc)
   // and the field adds its forces while the handle touches it.
-  const PlaneConstraint wall(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});  // [m], [N/m]
+  const PlaneConstraint wall(
+      PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});  // [m], [N/m]
   auto felt = contact(wall, live_ref);
   std::unique_ptr<SimulatedArm> arm;
   std::unique_ptr<Transport> transport;

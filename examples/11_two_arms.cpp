@@ -112,13 +112,17 @@ int main(int argc, char** argv) {
   return cli::main("two_arms", usage_text, argc, argv, [](cli::Parser& p) {
     Arguments o;
     while (p.next()) {
-      if (p.is("--seconds")) o.seconds = p.real(cli::closed(0.01, 60.0));
-      else if (p.is("--stiffness")) o.stiffness = p.real(cli::open_closed(0.0, 500.0));
+      if (p.is("--seconds"))
+        o.seconds = p.real(cli::closed(0.01, 60.0));
+      else if (p.is("--stiffness"))
+        o.stiffness = p.real(cli::open_closed(0.0, 500.0));
       else if (p.is("--policy"))
         o.policy = p.choice<ArmFaultPolicy>(
             "fault policy", {{"isolate", ArmFaultPolicy::isolate}, {"stop_all", ArmFaultPolicy::stop_all}});
-      else if (p.is("--fault")) o.fault = true;
-      else p.unknown();
+      else if (p.is("--fault"))
+        o.fault = true;
+      else
+        p.unknown();
     }
     p.finish();
     return run(o);

@@ -37,12 +37,17 @@ NullBoard board;
 
 }  // namespace
 
-extern "C" bool hapticfield_firmware_step_hid() { return hapticfield::firmware::step_hid(core, board); }
-extern "C" bool hapticfield_firmware_step_serial() { return hapticfield::firmware::step_stream(core, port, board); }
+extern "C" bool hapticfield_firmware_step_hid() {
+  return hapticfield::firmware::step_hid(core, board);
+}
+extern "C" bool hapticfield_firmware_step_serial() {
+  return hapticfield::firmware::step_stream(core, port, board);
+}
 extern "C" int hapticfield_firmware_get_feature(std::uint8_t id, std::uint8_t* out, std::size_t capacity) {
   std::size_t size = 0;
   return core.get_feature(id, std::span<std::uint8_t>(out, capacity), size) == hapticfield::Status::ok
-             ? static_cast<int>(size) : -1;
+             ? static_cast<int>(size)
+             : -1;
 }
 extern "C" int hapticfield_firmware_set_feature(const std::uint8_t* in, std::size_t size) {
   return static_cast<int>(core.set_feature(std::span<const std::uint8_t>(in, size)));

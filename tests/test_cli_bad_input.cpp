@@ -60,7 +60,9 @@ constexpr auto time_limit = std::chrono::seconds(20);  // a hung tool is killed 
 
 const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / "cli_bad_input";
 
-std::string in_tmp(const std::string& name) { return (tmp / name).string(); }
+std::string in_tmp(const std::string& name) {
+  return (tmp / name).string();
+}
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -92,7 +94,8 @@ Result run(const std::string& tool, const std::vector<std::string>& args) {
   std::vector<std::string> argv_text{tools.at(tool)};
   argv_text.insert(argv_text.end(), args.begin(), args.end());
   std::vector<char*> argv;
-  for (std::string& a : argv_text) argv.push_back(a.data());
+  for (std::string& a : argv_text)
+    argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
   const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
@@ -127,7 +130,8 @@ struct Case {
 /// Checks one error case: status, one stderr line naming the tool.
 void check_error(const Case& c) {
   std::string shown = c.tool;
-  for (const auto& a : c.args) shown += " '" + a + "'";
+  for (const auto& a : c.args)
+    shown += " '" + a + "'";
   CAPTURE(shown);
   const Result r = run(c.tool, c.args);
   CAPTURE(r.err);
@@ -183,8 +187,8 @@ const std::vector<std::string> bad_numbers = {"nan", "inf", "-inf", "1e400", "0"
 /// Adds a case per bad value of a numeric flag (values the flag accepts
 /// are left out).
 void add_numeric(std::vector<Case>& cases, const std::string& tool, std::vector<std::string> before,
-                 const std::string& flag, const std::vector<std::string>& accepted = {},
-                 const std::string& prefix = "", const std::string& suffix = "", std::vector<std::string> after = {}) {
+                 const std::string& flag, const std::vector<std::string>& accepted = {}, const std::string& prefix = "",
+                 const std::string& suffix = "", std::vector<std::string> after = {}) {
   for (const std::string& v : bad_numbers) {
     if (std::find(accepted.begin(), accepted.end(), v) != accepted.end()) continue;
     std::vector<std::string> args = before;
@@ -260,7 +264,8 @@ TEST_CASE("unknown flags, flags without a value, stray arguments: exit 2") {
       {"false_texture", {picture, "--levels"}, usage, "needs a value"},
       {"false_texture", {picture, "--bogus"}, usage, "unknown option"},
   };
-  for (const Case& c : cases) check_error(c);
+  for (const Case& c : cases)
+    check_error(c);
 }
 
 TEST_CASE("every numeric flag: NaN, Inf, huge, zero, negative, garbage: exit 2 naming the flag") {
@@ -278,8 +283,8 @@ TEST_CASE("every numeric flag: NaN, Inf, huge, zero, negative, garbage: exit 2 n
   // pairs allow spaces around the comma ("x, y"), so " 3" is fine there
   add_numeric(cases, "picture_normals", {picture, "--face", face}, "--size", {" 3"}, "", ",100");
   add_numeric(cases, "picture_normals", {picture, "--face", face}, "--size", {" 3"}, "100,");
-  add_numeric(cases, "picture_normals", {picture, "--face", face, "--focal", "500"}, "--center", {"0", "-1", " 3"},
-              "", ",20");
+  add_numeric(cases, "picture_normals", {picture, "--face", face, "--focal", "500"}, "--center", {"0", "-1", " 3"}, "",
+              ",20");
   add_numeric(cases, "picture_normals", {picture}, "--face", {"0", "-1", " 3"}, "", ",10 50,10 50,30 10,30");
   add_numeric(cases, "box_demo", {}, "--rotation");
   add_numeric(cases, "box_demo", {}, "--noise", {"0"});
@@ -305,7 +310,8 @@ TEST_CASE("every numeric flag: NaN, Inf, huge, zero, negative, garbage: exit 2 n
   cases.push_back({"box_demo", {"--noise", "100.5"}, usage, "[0, 100]"});
   cases.push_back({"false_texture", {picture, "--levels", "9"}, usage, "2..8"});
   cases.push_back({"false_texture", {picture, "--levels", "99999999999"}, usage, "2..8"});
-  for (const Case& c : cases) check_error(c);
+  for (const Case& c : cases)
+    check_error(c);
 }
 
 TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
@@ -319,31 +325,38 @@ TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
     cases.push_back({"false_texture", {file, "--out", in_tmp("false_texture")}, bad_input, file});
   }
   for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_csv, b.garbage_csv, b.text_png}) {
-    cases.push_back({"tangible_image", {picture, "--size", "3", "--probes", file, "--forces", in_tmp("f.csv")},
-                     bad_input, file});
-    cases.push_back({"picture_normals",
-                     {picture, "--face", face, "--probes", file, "--forces", in_tmp("f.csv")}, bad_input, file});
+    cases.push_back(
+        {"tangible_image", {picture, "--size", "3", "--probes", file, "--forces", in_tmp("f.csv")}, bad_input, file});
+    cases.push_back(
+        {"picture_normals", {picture, "--face", face, "--probes", file, "--forces", in_tmp("f.csv")}, bad_input, file});
     cases.push_back({"box_demo", {"--rotation", "45", "--check", file}, bad_input, "--check"});
     cases.push_back({"picture_normals", {picture, "--face", face, "--intrinsics", file}, bad_input, file});
   }
   // the truncated CSV names its line; NaN in picture_normals' probes is bad input
   cases.push_back({"tangible_image",
                    {picture, "--size", "3", "--probes", b.truncated_csv, "--forces", in_tmp("f.csv")},
-                   bad_input, "truncated.csv:2: expected 'x,y'"});
+                   bad_input,
+                   "truncated.csv:2: expected 'x,y'"});
   write(in_tmp("nan4.csv"), "1,2,nan,4\n");
   cases.push_back({"picture_normals",
                    {picture, "--face", face, "--probes", in_tmp("nan4.csv"), "--forces", in_tmp("f.csv")},
-                   bad_input, "nan4.csv:1: values must be finite"});
+                   bad_input,
+                   "nan4.csv:1: values must be finite"});
   // devices that are not there, or are not serial ports: one line, exit 1
-  cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.missing}, bad_input, "no serial port"});
-  cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.plain_file}, bad_input, "not a serial port"});
+  cases.push_back(
+      {"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.missing}, bad_input, "no serial port"});
+  cases.push_back(
+      {"servo_demo", {"--seconds", "0.001", "--device", "serial:" + b.plain_file}, bad_input, "not a serial port"});
   cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "woody:p4:" + b.folder}, bad_input, "cannot open"});
-  cases.push_back({"servo_demo", {"--seconds", "0.001", "--device", "inverse3:" + b.missing}, bad_input, "no serial port"});
+  cases.push_back(
+      {"servo_demo", {"--seconds", "0.001", "--device", "inverse3:" + b.missing}, bad_input, "no serial port"});
   // output paths, checked before any work
   const std::string no_dir = in_tmp("no/such/dir/out.csv");
   const std::string under_file = b.plain_file + "/sub";
-  cases.push_back({"tangible_image", {picture, "--probes", b.truncated_csv, "--forces", no_dir}, bad_input, "--forces"});
-  cases.push_back({"tangible_image", {picture, "--probes", b.truncated_csv, "--forces", b.folder}, bad_input, "--forces"});
+  cases.push_back(
+      {"tangible_image", {picture, "--probes", b.truncated_csv, "--forces", no_dir}, bad_input, "--forces"});
+  cases.push_back(
+      {"tangible_image", {picture, "--probes", b.truncated_csv, "--forces", b.folder}, bad_input, "--forces"});
   cases.push_back({"tangible_image", {picture, "--maps", b.plain_file}, bad_input, "--maps"});
   cases.push_back({"tangible_image", {picture, "--maps", under_file}, bad_input, "--maps"});
   cases.push_back({"servo_demo", {"--seconds", "0.001", "--trace", no_dir}, bad_input, "--trace"});
@@ -355,7 +368,8 @@ TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
   cases.push_back({"texture_gallery", {"--out", in_tmp("gallery"), "--hatt", b.missing}, bad_input, "--hatt"});
   cases.push_back({"texture_gallery", {"--out", in_tmp("gallery"), "--hatt", b.plain_file}, bad_input, "--hatt"});
   cases.push_back({"false_texture", {picture, "--out", b.plain_file}, bad_input, "--out"});
-  for (const Case& c : cases) check_error(c);
+  for (const Case& c : cases)
+    check_error(c);
   CHECK_FALSE(fs::exists(in_tmp("no")));  // nothing was created on the way
 }
 
@@ -369,8 +383,8 @@ TEST_CASE("good input at the edges of the ranges gives the right result") {
       CAPTURE(seconds, rate);
       const std::string trace = in_tmp("trace.csv");
       fs::remove(trace);
-      const Result r = run("servo_demo", {"--field", "none", "--realtime", "off", "--seconds", seconds, "--rate",
-                                          rate, "--trace", trace, "--plots", in_tmp("plots/new")});
+      const Result r = run("servo_demo", {"--field", "none", "--realtime", "off", "--seconds", seconds, "--rate", rate,
+                                          "--trace", trace, "--plots", in_tmp("plots/new")});
       REQUIRE_FALSE(r.timed_out);
       CAPTURE(r.err);
       REQUIRE(r.status == ok);
@@ -401,8 +415,8 @@ TEST_CASE("good input at the edges of the ranges gives the right result") {
     CHECK(v[6] == 0.0);  // flat white
   }
   SECTION("box_demo: one view, one trial, a fresh output folder") {
-    const Result r = run("box_demo", {"--rotation", "45", "--trials", "1", "--noise", "0", "--seed", "0", "--out",
-                                      in_tmp("box/new")});
+    const Result r = run(
+        "box_demo", {"--rotation", "45", "--trials", "1", "--noise", "0", "--seed", "0", "--out", in_tmp("box/new")});
     CAPTURE(r.err);
     REQUIRE(r.status == ok);
     CHECK(fs::exists(in_tmp("box/new/box_45.png")));
@@ -475,16 +489,20 @@ TEST_CASE("hapticfield_view: bad command lines exit 2, bad pictures and paths ex
     args.insert(args.end(), offscreen.begin(), offscreen.end());
     cases.push_back({"hapticfield_view", args, bad_input, file});
   }
-  cases.push_back({"hapticfield_view", {picture, "--seconds", "0.01", "--screenshot", in_tmp("no/such/dir/v.png")},
-                   bad_input, "--screenshot"});
-  cases.push_back({"hapticfield_view", {picture, "--seconds", "0.01", "--screenshot", b.folder}, bad_input,
-                   "--screenshot"});
-  cases.push_back({"hapticfield_view", {picture, "--shots", b.plain_file + "/sub"}, bad_input, "--shots"});
   cases.push_back({"hapticfield_view",
-                   {picture, "--field", "normals", "--face", "10,10 20,20 30,30 40,40", "--seconds", "0.01",
-                    "--screenshot", shot},
-                   bad_input, "face 1"});
-  for (const Case& c : cases) check_error(c);
+                   {picture, "--seconds", "0.01", "--screenshot", in_tmp("no/such/dir/v.png")},
+                   bad_input,
+                   "--screenshot"});
+  cases.push_back(
+      {"hapticfield_view", {picture, "--seconds", "0.01", "--screenshot", b.folder}, bad_input, "--screenshot"});
+  cases.push_back({"hapticfield_view", {picture, "--shots", b.plain_file + "/sub"}, bad_input, "--shots"});
+  cases.push_back(
+      {"hapticfield_view",
+       {picture, "--field", "normals", "--face", "10,10 20,20 30,30 40,40", "--seconds", "0.01", "--screenshot", shot},
+       bad_input,
+       "face 1"});
+  for (const Case& c : cases)
+    check_error(c);
   CHECK_FALSE(fs::exists(shot));  // no case drew anything
 }
 #endif
@@ -542,8 +560,8 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
   // probes: missing, empty, folder, truncated, garbage, NaN, negative time
   write(in_tmp("vnan.csv"), "0.1,nan,3\n");
   write(in_tmp("vneg.csv"), "-0.5,3,3\n");
-  for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_csv, b.garbage_csv, in_tmp("vnan.csv"),
-                                   in_tmp("vneg.csv")})
+  for (const std::string& file :
+       {b.missing, b.empty, b.folder, b.truncated_csv, b.garbage_csv, in_tmp("vnan.csv"), in_tmp("vneg.csv")})
     cases.push_back({"tangible_video", {clip, "--probes", file, "--forces", forces}, bad_input, file});
   // outputs, checked before any work
   const std::string no_dir = in_tmp("no/such/dir/out.csv");
@@ -552,7 +570,8 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
   cases.push_back({"tangible_video", {clip, "--cuts", no_dir}, bad_input, "--cuts"});
   cases.push_back({"tangible_video", {clip, "--trace", no_dir}, bad_input, "--trace"});
   cases.push_back({"tangible_video", {clip, "--plots", b.plain_file + "/sub"}, bad_input, "--plots"});
-  for (const Case& c : cases) check_error(c);
+  for (const Case& c : cases)
+    check_error(c);
 
   SECTION("offline forces: the edge, the held frame before the cut, the fade, the new scene") {
     const std::string cuts = in_tmp("vcuts.csv");
@@ -571,15 +590,16 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
     REQUIRE(v.size() == 25);  // five probes, in the order given
     // x = 31.5 is midway between pixel 31 (white) and 32 (black): an edge
     // pixel's force through a 3 x 3 mask is 1, toward black (+x).
-    CHECK(v[3] == Approx(1.0).margin(0.03));      // t = 0.2: scene 1
-    CHECK(v[8] == Approx(1.0).margin(0.03));      // t = 0.25
-    CHECK(v[13] == Approx(1.0).margin(0.03));     // t = 0.5: the cut, the old scene held at full force
-    CHECK(v[18] == Approx(-0.2).margin(0.03));    // t = 0.56: fading in at 0.2 the new scene (toward -x)
-    CHECK(v[23] == Approx(0.0).margin(0.03));     // t = 0: white, and fading in from 0
+    CHECK(v[3] == Approx(1.0).margin(0.03));    // t = 0.2: scene 1
+    CHECK(v[8] == Approx(1.0).margin(0.03));    // t = 0.25
+    CHECK(v[13] == Approx(1.0).margin(0.03));   // t = 0.5: the cut, the old scene held at full force
+    CHECK(v[18] == Approx(-0.2).margin(0.03));  // t = 0.56: fading in at 0.2 the new scene (toward -x)
+    CHECK(v[23] == Approx(0.0).margin(0.03));   // t = 0: white, and fading in from 0
   }
   SECTION("a damaged stream plays what decodes, without decoder chatter") {
     std::string bytes = slurp(clip);
-    for (std::size_t i = bytes.size() / 3; i < bytes.size() / 2; i += 7) bytes[i] = static_cast<char>(i * 31);
+    for (std::size_t i = bytes.size() / 3; i < bytes.size() / 2; i += 7)
+      bytes[i] = static_cast<char>(i * 31);
     const std::string damaged = in_tmp("damaged.avi");
     write(damaged, bytes);
     const Result r = run("tangible_video", {damaged, "--probes", probes, "--forces", forces});

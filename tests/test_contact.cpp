@@ -115,7 +115,8 @@ TEST_CASE("bad constraint parameters throw at setup") {
   using C = PlaneConstraintConfig;
   CHECK_THROWS_AS(PlaneConstraint(C{glm::dvec3{0.0}, glm::dvec3{0, 0, 2}, 1000.0, 0.0}), std::invalid_argument);
   CHECK_THROWS_AS(PlaneConstraint(C{glm::dvec3{0.0}, glm::dvec3{0.0}, 1000.0, 0.0}), std::invalid_argument);
-  CHECK_THROWS_AS(PlaneConstraint(C{glm::dvec3{not_a_number}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}), std::invalid_argument);
+  CHECK_THROWS_AS(PlaneConstraint(C{glm::dvec3{not_a_number}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
+                  std::invalid_argument);
   CHECK_THROWS_AS(PlaneConstraint(C{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 0.0, 0.0}), std::invalid_argument);
   CHECK_THROWS_AS(PlaneConstraint(C{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, infinity, 0.0}), std::invalid_argument);
   CHECK_THROWS_AS(PlaneConstraint(C{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, -1.0}), std::invalid_argument);
@@ -133,8 +134,10 @@ TEST_CASE("the surface frame is orthonormal and right-handed; +z gives the devic
   CHECK(z.tangent2 == glm::dvec3{0, 1, 0});
   CHECK(z.normal == glm::dvec3{0, 0, 1});
   std::mt19937 rng(7);
-  std::vector<glm::dvec3> normals{{0, 0, -1}, glm::normalize(glm::dvec3{1e-9, 0, -1}), glm::normalize(glm::dvec3{0, 1e-5, -1})};
-  for (int i = 0; i < 1000; ++i) normals.push_back(random_unit(rng));
+  std::vector<glm::dvec3> normals{
+      {0, 0, -1}, glm::normalize(glm::dvec3{1e-9, 0, -1}), glm::normalize(glm::dvec3{0, 1e-5, -1})};
+  for (int i = 0; i < 1000; ++i)
+    normals.push_back(random_unit(rng));
   for (const glm::dvec3& n : normals) {
     const SurfaceFrame f = surface_frame(n);
     REQUIRE_THAT(glm::length(f.tangent1), WithinAbs(1.0, 1e-12));
@@ -148,9 +151,10 @@ TEST_CASE("the surface frame is orthonormal and right-handed; +z gives the devic
 
 // --- the composition: closed forms ---------------------------------------------------------
 
-TEST_CASE("pressing a wall with 2 N while sliding: Coulomb mu = 0.4 gives 0.8 N against the tangential velocity, same tick") {
-  auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
-                       coulomb(0.4));
+TEST_CASE(
+    "pressing a wall with 2 N while sliding: Coulomb mu = 0.4 gives 0.8 N against the tangential velocity, same tick") {
+  auto field =
+      contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}), coulomb(0.4));
   // 2 mm deep at 1000 N/m: |Fc| = 2 N; sliding at 0.1 m/s in (0.6, -0.8), pressing in at 0.01 m/s
   for (double stale : {0.0, 50.0}) {  // the incoming normal_force (e.g. last tick's |F|) is ignored
     const glm::dvec3 f = field.force(probe_at({0.01, 0.02, -2e-3}, {0.06, -0.08, -0.01}, stale));
@@ -203,8 +207,9 @@ TEST_CASE("a HaTT texture selects its model by |Fc| of this tick") {
   const HattModelSet s =
       load_hatt_model_set(std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / "tests/data/hatt/Models_Synthetic Grid.xml");
   // vertices (speed [mm/s], force [N]): 1 = (300, 0.5), 3 = (300, 3)
-  auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
-                       HattTexture<>(s, HattConfig{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true}));  // mass 0: friction only
+  auto field =
+      contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
+              HattTexture<>(s, HattConfig{0.0, glm::dvec3{0, 0, 1}, 1, 1, 1e-3, true}));  // mass 0: friction only
   const auto uses_model = [&](std::size_t v) {
     const auto a = field.part<0>().ar_coefficients();
     REQUIRE(a.size() == s.models[v].ar_coeff.size() + 1);
@@ -249,10 +254,11 @@ TEST_CASE("a HaTT texture on a tilted plane vibrates along that plane's normal a
 }
 
 TEST_CASE("no contact: no texture and no friction, and the parts are not called") {
-  auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
-                       TextureField(DistanceSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 3, glm::dvec3{1e-3})),
-                                    TextureConfig{1.0, 0.0, false, glm::dvec3{1.0}}),  // not force-scaled: would act anywhere
-                       Friction(FrictionConfig{0.5, 2.0, 0.0, 2e-3, false, glm::dvec3{0.0}}));
+  auto field =
+      contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
+              TextureField(DistanceSource(NoiseLattice<GaussianNoise, 2>(GaussianNoise(1.0), 3, glm::dvec3{1e-3})),
+                           TextureConfig{1.0, 0.0, false, glm::dvec3{1.0}}),  // not force-scaled: would act anywhere
+              Friction(FrictionConfig{0.5, 2.0, 0.0, 2e-3, false, glm::dvec3{0.0}}));
   for (int i = 0; i < 100; ++i) {
     const glm::dvec3 f = field.force(probe_at({i * 1e-4, 0.0, 1e-3}, {0.1, 0.0, 0.0}, 2.0));  // 1 mm above
     REQUIRE(f == glm::dvec3{0.0});
@@ -279,7 +285,8 @@ TEST_CASE("friction on a tilted plane lies in its tangent plane and opposes the 
     if (i == 0) n = glm::normalize(glm::dvec3{1.0, 0.0, 1.0});  // 45 degrees about y
     const glm::dvec3 origin{0.01, -0.02, 0.005};
     // configured normal +z: the touched plane's normal must win
-    auto field = contact(PlaneConstraint(PlaneConstraintConfig{origin, n, 1000.0, 0.0}), coulomb(0.4, glm::dvec3{0, 0, 1}));
+    auto field =
+        contact(PlaneConstraint(PlaneConstraintConfig{origin, n, 1000.0, 0.0}), coulomb(0.4, glm::dvec3{0, 0, 1}));
     const glm::dvec3 v{vel(rng), vel(rng), vel(rng)};
     const glm::dvec3 vt = v - glm::dot(v, n) * n;
     if (glm::length(vt) < 1e-3) continue;
@@ -298,7 +305,8 @@ TEST_CASE("a texture with axes {1, 1, 0} acts only in the tangent plane; {0, 0, 
   for (int i = 0; i < 200; ++i) {
     const glm::dvec3 n = random_unit(rng);
     const PlaneConstraint plane(PlaneConstraintConfig{glm::dvec3{0.0}, n, 1000.0, 0.0});
-    auto lateral = contact(plane, TextureField(SpatialSource(lat), TextureConfig{0.5, 1e-3, true, glm::dvec3{1, 1, 0}}));
+    auto lateral =
+        contact(plane, TextureField(SpatialSource(lat), TextureConfig{0.5, 1e-3, true, glm::dvec3{1, 1, 0}}));
     auto bumps = contact(plane, TextureField(SpatialSource(lat), TextureConfig{0.5, 1e-3, true, glm::dvec3{0, 0, 1}}));
     const SurfaceFrame frame = surface_frame(n);
     const glm::dvec3 pos = -1e-3 * n + 0.013 * frame.tangent1 - 0.007 * frame.tangent2;
@@ -326,9 +334,11 @@ TEST_CASE("inside a contact the local circle works in the touched surface's tang
   auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, n, 1000.0, 0.0}),
                        TextureField(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 4, 1e-3, glm::dvec3{0, 0, 1}),
                                     TextureConfig{1.0, 0.0, false, glm::dvec3{1.0}}));
-  for (int i = 1; i <= 50; ++i) (void)field.force(probe_at(-i * 1e-4 * n, -0.01 * n));  // 5 mm straight in
-  CHECK(field.part<0>().source().samples_drawn() == 2);  // the first pair only
-  for (int i = 1; i <= 50; ++i) (void)field.force(probe_at(-5e-3 * n + i * 1e-4 * frame.tangent1, 0.01 * frame.tangent1));
+  for (int i = 1; i <= 50; ++i)
+    (void)field.force(probe_at(-i * 1e-4 * n, -0.01 * n));  // 5 mm straight in
+  CHECK(field.part<0>().source().samples_drawn() == 2);     // the first pair only
+  for (int i = 1; i <= 50; ++i)
+    (void)field.force(probe_at(-5e-3 * n + i * 1e-4 * frame.tangent1, 0.01 * frame.tangent1));
   CHECK(field.part<0>().source().samples_drawn() >= 6);  // 5 mm along the surface: a sample per mm
 }
 
@@ -365,9 +375,9 @@ TEST_CASE("a contact composition allocates nothing per tick") {
       PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::normalize(glm::dvec3{0.2, 0.1, 1.0}), 1200.0, 3.0}),
       TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureConfig{0.3, 1e-3, true, glm::dvec3{1, 1, 0}},
                    Butterworth<4>::band_pass(20.0, 200.0, 1000.0)),
-      TextureField(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 2, 5e-4), TextureConfig{0.2, 1e-3, true, glm::dvec3{1.0}}),
-      Friction(FrictionConfig{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}),
-      StickSlipFriction(StickSlipConfig{}),
+      TextureField(LocalSphere<GaussianNoise>(GaussianNoise(1.0), 2, 5e-4),
+                   TextureConfig{0.2, 1e-3, true, glm::dvec3{1.0}}),
+      Friction(FrictionConfig{0.4, 0.5, 0.0, 2e-3, true, glm::dvec3{0.0}}), StickSlipFriction(StickSlipConfig{}),
       DataModulated(Friction(FrictionConfig{0.2, 0.0, 0.0, 2e-3, true, glm::dvec3{0.0}}), data, 0.5, 1.0),
       HattTexture<>(s, HattConfig{}));
   AnyField erased(contact(SphereConstraint(SphereConstraintConfig{}), coulomb(0.3)));

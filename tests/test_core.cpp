@@ -85,7 +85,7 @@ TEST_CASE("sum, scale and clamp compose fields") {
   auto clamped = clamp(Spring{}, 1.5);
   const glm::dvec3 f = clamped.force(at({0.03, 0.04, 0.0}));  // 10 N before the clamp
   CHECK(glm::length(f) == Approx(1.5));
-  CHECK(f.x / f.y == Approx(0.75));  // direction kept
+  CHECK(f.x / f.y == Approx(0.75));                               // direction kept
   CHECK(clamped.force(at({0.001, 0.0, 0.0})).x == Approx(-0.2));  // below the limit: unchanged
 
   auto stateful = sum(Counter{}, scale(Counter{}, 10.0));
@@ -191,8 +191,10 @@ TEST_CASE("LiveField: a writer replaces the field while the reader ticks, lock- 
   std::atomic<bool> done{false};
   std::atomic<bool> reading{false};
   std::thread writer([&] {
-    while (!reading.load()) std::this_thread::yield();  // overlap the two threads
-    for (int i = 4; i <= published; ++i) live.publish(Constant{static_cast<double>(i)});
+    while (!reading.load())
+      std::this_thread::yield();  // overlap the two threads
+    for (int i = 4; i <= published; ++i)
+      live.publish(Constant{static_cast<double>(i)});
     done = true;
   });
   double last = 3.0;
@@ -213,7 +215,8 @@ TEST_CASE("LiveField: a writer replaces the field while the reader ticks, lock- 
   // the reader's side alone never allocates
   live.publish(Constant{7.0});
   const long reader_allocations = test::count_allocations([&] {
-    for (int i = 0; i < 1000; ++i) (void)live.force(Probe{});
+    for (int i = 0; i < 1000; ++i)
+      (void)live.force(Probe{});
   });
   CHECK(reader_allocations == 0);
   CHECK(live.force(Probe{}).x == 7.0);

@@ -53,8 +53,8 @@ TEST_CASE("forward kinematics matches hand-computed poses") {
   c.l1 = 0.2;
   c.l2 = 0.1;
   const PhantomKinematics k2(c);
-  const double r = 0.2 * std::cos(pi / 4) + 0.1 * std::sin(pi / 3);   // 0.2280239
-  const double h = 0.2 * std::sin(pi / 4) - 0.1 * std::cos(pi / 3);   // 0.0914214
+  const double r = 0.2 * std::cos(pi / 4) + 0.1 * std::sin(pi / 3);  // 0.2280239
+  const double h = 0.2 * std::sin(pi / 4) - 0.1 * std::cos(pi / 3);  // 0.0914214
   check_vec(k2.forward({pi / 6, pi / 4, pi / 3}), {r * 0.5, h + 0.1, r * std::sqrt(3.0) / 2 - 0.2}, 1e-12);
   CHECK_THAT(r, WithinAbs(0.2280239, 1e-7));
 }
@@ -131,7 +131,8 @@ TEST_CASE("CRC-16/CCITT-FALSE gives the published check value") {
   std::mt19937 rng(5);
   std::vector<std::uint8_t> data(300);
   for (int trial = 0; trial < 200; ++trial) {
-    for (auto& b : data) b = static_cast<std::uint8_t>(rng());
+    for (auto& b : data)
+      b = static_cast<std::uint8_t>(rng());
     const std::span<const std::uint8_t> part(data.data(), static_cast<std::size_t>(trial));
     CHECK(protocol::crc16(part) == protocol::crc16_bitwise(part));
   }
@@ -302,10 +303,12 @@ TEST_CASE("the simulated arm homes before it arms and reports encoder-derived po
   CHECK(rig.step({0, 0, 0}, s) == Status::ok);
   CHECK_FALSE(s.homed());
   CHECK(rig.device.set_armed(true) == Status::not_homed);
-  for (int i = 0; i < 5; ++i) rig.step({0, 0, 0}, s);
+  for (int i = 0; i < 5; ++i)
+    rig.step({0, 0, 0}, s);
   CHECK_FALSE(rig.arm.armed());  // arm requested but not homed: refused
   rig.device.request_home();
-  for (int i = 0; i < 60 && !s.homed(); ++i) rig.step({0, 0, 0}, s);
+  for (int i = 0; i < 60 && !s.homed(); ++i)
+    rig.step({0, 0, 0}, s);
   REQUIRE(s.homed());
   rig.step({0, 0, 0}, s);
   rig.step({0, 0, 0}, s);
@@ -319,7 +322,8 @@ TEST_CASE("a commanded force reaches the handle as tau = J^T F, quantised and sa
   DeviceState s;
   rig.device.request_home();
   rig.device.set_armed(true);
-  for (int i = 0; i < 60; ++i) rig.step({0, 0, 0}, s);
+  for (int i = 0; i < 60; ++i)
+    rig.step({0, 0, 0}, s);
   REQUIRE(s.armed());
   rig.step({0.0, 1.0, 0.0}, s);
   rig.step({0.0, 1.0, 0.0}, s);
@@ -339,17 +343,20 @@ TEST_CASE("the firmware watchdog zeroes torque and latches until cleared while d
   DeviceState s;
   rig.device.request_home();
   rig.device.set_armed(true);
-  for (int i = 0; i < 60; ++i) rig.step({0, 0.5, 0}, s);
+  for (int i = 0; i < 60; ++i)
+    rig.step({0, 0.5, 0}, s);
   REQUIRE(rig.arm.armed());
   rig.now += 25'000'000;  // 25 ms without a command (watchdog 20 ms)
   rig.device.read(s);
   CHECK_FALSE(rig.arm.armed());
   CHECK(rig.arm.applied_torque() == glm::dvec3{0.0});
   CHECK((s.flags & status_bits::watchdog_tripped) != 0);
-  for (int i = 0; i < 5; ++i) rig.step({0, 0.5, 0}, s);  // arm requested again: refused while latched
+  for (int i = 0; i < 5; ++i)
+    rig.step({0, 0.5, 0}, s);  // arm requested again: refused while latched
   CHECK_FALSE(rig.arm.armed());
   CHECK(rig.device.clear_fault() == Status::ok);
-  for (int i = 0; i < 3; ++i) rig.step({0, 0.5, 0}, s);
+  for (int i = 0; i < 3; ++i)
+    rig.step({0, 0.5, 0}, s);
   CHECK(rig.arm.armed());
   CHECK(rig.arm.send_feature(std::array<std::uint8_t, 4>{0x12, 3, 0, 0}) == Status::bad_crc);
   // Clearing while armed is refused.
@@ -407,7 +414,8 @@ TEST_CASE("ForceArm resynchronises after a device restart or a long loss within 
     rig.link.inject(LinkFault::reboot, 100);
     DeviceState s;
     std::vector<Status> reads;
-    for (int i = 0; i < 110; ++i) reads.push_back(rig.step({0, 0, 0}, s));
+    for (int i = 0; i < 110; ++i)
+      reads.push_back(rig.step({0, 0, 0}, s));
     // Before the fix every report of the new stream counted as reordered
     // (behind the last sequence) for up to 65535 reports.
     const auto first = std::find(reads.begin(), reads.end(), Status::resync);
@@ -440,7 +448,8 @@ TEST_CASE("ForceArm resynchronises after a device restart or a long loss within 
     SimRig rig(still_arm());
     rig.link.inject(LinkFault::reorder, 30);
     DeviceState s;
-    for (int i = 0; i < 60; ++i) CHECK(rig.step({0, 0, 0}, s) != Status::resync);
+    for (int i = 0; i < 60; ++i)
+      CHECK(rig.step({0, 0, 0}, s) != Status::resync);
     CHECK(rig.device.counters().reordered == 1);
     CHECK(rig.device.counters().resyncs == 0);
   }
@@ -449,9 +458,9 @@ TEST_CASE("ForceArm resynchronises after a device restart or a long loss within 
 TEST_CASE("the scripted hand follows its paths") {
   const HandPath line = HandPath::line({0, 0, 0}, {0.1, 0, 0}, 0.05);
   check_vec(line.at(1.0), {0.05, 0, 0}, 1e-12);
-  check_vec(line.at(3.0), {0.05, 0, 0}, 1e-12);  // ping-pong: back at the middle
+  check_vec(line.at(3.0), {0.05, 0, 0}, 1e-12);                              // ping-pong: back at the middle
   const HandPath circle = HandPath::circle({0, 0, 0}, 0.02, 0.02 * pi / 2);  // quarter turn per second
-  check_vec(circle.at(1.0), {0, -0.02, 0}, 1e-12);  // along v = -y
+  check_vec(circle.at(1.0), {0, -0.02, 0}, 1e-12);                           // along v = -y
   const HandPath raster = HandPath::raster({0, 0, 0}, 0.04, 0.02, 3, 0.01);
   check_vec(raster.at(0.0), {-0.02, 0.01, 0}, 1e-12);  // first row at v = -height/2 -> y = +0.01
   check_vec(raster.at(4.0), {0.02, 0.01, 0}, 1e-12);   // end of row 0
@@ -470,7 +479,8 @@ TEST_CASE("the simulated hand drags the free arm toward its target") {
   c.hand.path = HandPath::hold({0.01, 0.0, 0.0});
   SimRig rig(c);
   DeviceState s;
-  for (int i = 0; i < 2000; ++i) rig.step({0, 0, 0}, s);
+  for (int i = 0; i < 2000; ++i)
+    rig.step({0, 0, 0}, s);
   // Equilibrium: hand spring vs Coulomb friction; within a millimetre.
   check_vec(rig.arm.position(), {0.01, 0.0, 0.0}, 1e-3);
   CHECK(glm::length(rig.arm.velocity()) < 1e-3);
@@ -498,7 +508,8 @@ TEST_CASE("a recorded session replays the same states at the same times") {
   c.hand.path = HandPath::circle({0.0, 0.0, 0.0}, 0.01, 0.05);
   SimulatedArm arm(c);
   SimulatedTransport link(arm, [&] { return now; });
-  RecordingTransport recorder(link, [&] { return now; }, 10000);
+  RecordingTransport recorder(
+      link, [&] { return now; }, 10000);
   ForceArm device(recorder);
   std::vector<DeviceState> original;
   DeviceState s;

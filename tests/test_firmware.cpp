@@ -52,10 +52,13 @@ struct Bench {
     in.now_us += us;
     core.tick(in);
   }
-  void send(std::uint8_t flags, std::array<std::int16_t, 3> torque = {}) { core.receive(command(++seq, flags, torque)); }
+  void send(std::uint8_t flags, std::array<std::int16_t, 3> torque = {}) {
+    core.receive(command(++seq, flags, torque));
+  }
   void home_and_arm() {
     send(protocol::command_flags::home);
-    for (int i = 0; i < 52; ++i) tick();
+    for (int i = 0; i < 52; ++i)
+      tick();
     REQUIRE(core.homed());
     send(protocol::command_flags::arm);
     tick();
@@ -82,10 +85,12 @@ TEST_CASE("firmware: homing before arming; encoders are zero at the home pose on
   CHECK(b.core.outputs().torque == std::array<std::int16_t, 3>{0, 0, 0});
   b.in.at_home = false;  // homing waits for the arm to rest at home
   CHECK(b.core.set_feature(control(protocol::ControlOp::home)) == Status::ok);
-  for (int i = 0; i < 100; ++i) b.tick();
+  for (int i = 0; i < 100; ++i)
+    b.tick();
   CHECK_FALSE(b.core.homed());
   b.in.at_home = true;
-  for (int i = 0; i < 50; ++i) b.tick();
+  for (int i = 0; i < 50; ++i)
+    b.tick();
   CHECK_FALSE(b.core.homed());
   b.tick();
   CHECK(b.core.homed());
@@ -106,7 +111,8 @@ TEST_CASE("firmware: the watchdog disarms and latches after its period; clear_fa
   b.tick();
   CHECK(b.core.outputs().torque[0] == 200);
   CHECK(b.core.outputs().enable);
-  for (int i = 0; i < 5; ++i) b.tick();  // 5 ms since the last command: still within the period
+  for (int i = 0; i < 5; ++i)
+    b.tick();  // 5 ms since the last command: still within the period
   CHECK(b.core.armed());
   b.tick();  // 6 ms: tripped
   CHECK_FALSE(b.core.armed());
@@ -131,7 +137,8 @@ TEST_CASE("firmware: the watchdog disarms and latches after its period; clear_fa
   protocol::encode(cfg, bytes);
   CHECK(b.core.set_feature(bytes) == Status::ok);
   CHECK(b.core.watchdog_us() == 2000);
-  for (int i = 0; i < 3; ++i) b.tick();
+  for (int i = 0; i < 3; ++i)
+    b.tick();
   CHECK_FALSE(b.core.armed());
   cfg.watchdog_us = 500;
   protocol::encode(cfg, bytes);
@@ -142,16 +149,16 @@ TEST_CASE("firmware: the watchdog disarms and latches after its period; clear_fa
 TEST_CASE("firmware: torque saturation and the current limit; the report returns what was applied") {
   FirmwareConfig c;
   c.max_torque_mnm = {450, 450, 450};
-  c.torque_constant = {100, 50, 100};    // [uN m/mA]
+  c.torque_constant = {100, 50, 100};     // [uN m/mA]
   c.max_current_ma = {4500, 4500, 1000};  // joint 3: 1 A -> 100 mN m
   Bench b(c);
   b.home_and_arm();
   b.send(arm_flag, {-900, 300, 250});
   b.tick();
   const auto& out = b.core.outputs();
-  CHECK(out.torque[0] == -450);        // saturation
-  CHECK(out.current_ma[0] == -4500);   // 450 mN m / 0.1 N m/A
-  CHECK(out.torque[1] == 225);         // 300 -> 6 A > 4.5 A: 4.5 A x 0.05 N m/A
+  CHECK(out.torque[0] == -450);       // saturation
+  CHECK(out.current_ma[0] == -4500);  // 450 mN m / 0.1 N m/A
+  CHECK(out.torque[1] == 225);        // 300 -> 6 A > 4.5 A: 4.5 A x 0.05 N m/A
   CHECK(out.current_ma[1] == 4500);
   CHECK(out.torque[2] == 100);
   CHECK(out.current_ma[2] == 1000);
@@ -211,7 +218,8 @@ TEST_CASE("firmware: bad CRC, short, unknown and bad-version reports are ignored
   CHECK(b.core.counters().bad_version == 1);
   CHECK(b.core.counters().bad_value == 1);
   // None of them fed the watchdog: 6 ms later it trips.
-  for (int i = 0; i < 7; ++i) b.tick();
+  for (int i = 0; i < 7; ++i)
+    b.tick();
   CHECK_FALSE(b.core.armed());
   std::size_t n = 0;
   std::array<std::uint8_t, 64> out{};
@@ -227,7 +235,10 @@ TEST_CASE("firmware: a configuration that makes no sense never homes, arms or de
   CHECK(std::string(core.config_error()).find("torque_constant") != std::string::npos);
   CHECK(core.set_feature(control(protocol::ControlOp::home)) == Status::ok);
   BoardInputs in;
-  for (int i = 0; i < 100; ++i) { in.now_us += 1000; core.tick(in); }
+  for (int i = 0; i < 100; ++i) {
+    in.now_us += 1000;
+    core.tick(in);
+  }
   CHECK_FALSE(core.homed());
   std::array<std::uint8_t, 64> out{};
   std::size_t n = 0;
@@ -366,7 +377,10 @@ TEST_CASE("loopback: unplug stops the loop with zero force") {
   CHECK((rig.loop.safety().latched() & safety_events::disconnected) != 0);
   CHECK(rig.loop.last_command() == glm::dvec3{0.0});
   // Nothing reaches the firmware any more: its watchdog zeroes the motors.
-  for (int i = 0; i < 10; ++i) { rig.clock.advance(1'000'000); rig.link.advance(); }
+  for (int i = 0; i < 10; ++i) {
+    rig.clock.advance(1'000'000);
+    rig.link.advance();
+  }
   CHECK(rig.arm.applied_torque() == glm::dvec3{0.0});
 }
 
@@ -382,7 +396,8 @@ TEST_CASE("loopback: e-stop on the board zeroes the force; after release the for
   };
   rig.loop.run(cb, {.max_ticks = 1200});
   CHECK_THAT(command[499], Catch::Matchers::WithinAbs(0.6, 1e-12));
-  for (std::size_t i = 503; i < 700; ++i) CHECK(command[i] == 0.0);
+  for (std::size_t i = 503; i < 700; ++i)
+    CHECK(command[i] == 0.0);
   CHECK_THAT(command[1199], Catch::Matchers::WithinAbs(0.6, 1e-12));
 }
 
@@ -404,7 +419,8 @@ TEST_CASE("loopback: a firmware reboot is taken up again, force zero until it ho
   const auto first = std::find(reads.begin(), reads.end(), Status::resync);
   REQUIRE(first != reads.end());
   const auto k = static_cast<std::size_t>(first - reads.begin());
-  for (std::size_t i = k + 1; i < k + 50; ++i) CHECK(commands[i] == glm::dvec3{0.0});
+  for (std::size_t i = k + 1; i < k + 50; ++i)
+    CHECK(commands[i] == glm::dvec3{0.0});
   CHECK(rig.arm.core().homed());
   CHECK_THAT(commands.back().y, Catch::Matchers::WithinAbs(0.6, 1e-12));
 }

@@ -47,7 +47,8 @@ TEST_CASE("BT.601 weights agree with cv::cvtColor to its rounding") {
   cv::cvtColor(bgr, reference, cv::COLOR_BGR2GRAY);
   const GrayImage g = to_gray(bgr, GrayWeights::bt601);
   for (int y = 0; y < 48; ++y)
-    for (int x = 0; x < 64; ++x) REQUIRE(std::abs(g.at(x, y) - reference.at<unsigned char>(y, x)) <= 0.5 + 0.013);
+    for (int x = 0; x < 64; ++x)
+      REQUIRE(std::abs(g.at(x, y) - reference.at<unsigned char>(y, x)) <= 0.5 + 0.013);
 }
 
 TEST_CASE("1-, 3- and 4-channel, 8- and 16-bit pictures convert alike") {
@@ -99,7 +100,8 @@ TEST_CASE("loading keeps 16-bit depth and alpha") {
   const GrayImage a = load_gray(p16);
   const GrayImage b = to_gray(bgr);
   for (int y = 0; y < 10; ++y)
-    for (int x = 0; x < 20; ++x) REQUIRE(a.at(x, y) == Approx(b.at(x, y)).epsilon(1e-12));
+    for (int x = 0; x < 20; ++x)
+      REQUIRE(a.at(x, y) == Approx(b.at(x, y)).epsilon(1e-12));
 
   cv::Mat bgra;
   cv::cvtColor(bgr, bgra, cv::COLOR_BGR2BGRA);
@@ -146,7 +148,8 @@ std::string crafted_png(const std::string& name, std::uint32_t width, std::uint3
   const std::string path = tmp_path(name);
   std::ofstream out(path, std::ios::binary);
   const auto be32 = [&out](std::uint32_t v) {
-    for (int s = 24; s >= 0; s -= 8) out.put(static_cast<char>((v >> s) & 0xFF));
+    for (int s = 24; s >= 0; s -= 8)
+      out.put(static_cast<char>((v >> s) & 0xFF));
   };
   out.write("\x89PNG\r\n\x1a\n", 8);
   be32(13);
@@ -171,7 +174,7 @@ TEST_CASE("the picture size is read from the header, every format OpenCV writes"
     std::string name;
     cv::Mat mat;
   };
-  const std::vector<Case> cases = {{"size.png", picture}, {"size.jpg", picture}, {"size.bmp", picture},
+  const std::vector<Case> cases = {{"size.png", picture},  {"size.jpg", picture}, {"size.bmp", picture},
                                    {"size.tiff", picture}, {"size.ppm", picture}, {"size.pgm", gray},
                                    {"size.pbm", gray},     {"size.pam", picture}};
   for (const Case& c : cases) {
@@ -185,8 +188,7 @@ TEST_CASE("the picture size is read from the header, every format OpenCV writes"
     // the limit is inclusive: exactly 123 x 45 px loads, one pixel less refuses
     CHECK(load_image(path, 123 * 45).cols == 123);
     CHECK_THROWS_WITH(load_image(path, 123 * 45 - 1),
-                      Catch::Contains("123 x 45 px") && Catch::Contains("limit of 5534 px") &&
-                          Catch::Contains(c.name));
+                      Catch::Contains("123 x 45 px") && Catch::Contains("limit of 5534 px") && Catch::Contains(c.name));
     CHECK_THROWS_AS(load_gray(path, GrayWeights::paper, 100), ImageError);
   }
   // a format the header reader does not parse is checked after decoding

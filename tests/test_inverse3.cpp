@@ -86,19 +86,23 @@ class PtyInverse3 {
     const auto give_up = std::chrono::steady_clock::now() + 4 * hard_timeout;
     while (!stop_.load() && std::chrono::steady_clock::now() < give_up) {
       if (unplug_.load()) {
-        if (pty_.master >= 0) { ::close(pty_.master); pty_.master = -1; }
+        if (pty_.master >= 0) {
+          ::close(pty_.master);
+          pty_.master = -1;
+        }
         return;
       }
       pollfd p{pty_.master, POLLIN, 0};
       if (::poll(&p, 1, 5) <= 0) continue;
       const ssize_t n = ::read(pty_.master, rx.data(), rx.size());
       if (n <= 0) continue;
-      sim_.feed(std::span<const std::uint8_t>(rx.data(), static_cast<std::size_t>(n)), [this](std::span<const std::uint8_t> r) {
-        if (stall_after_ >= 0 && replies_ >= stall_after_) return;
-        if (replies_ == garbage_before_reply_) (void)!::write(pty_.master, garbage.data(), garbage.size());
-        ++replies_;
-        (void)!::write(pty_.master, r.data(), r.size());
-      });
+      sim_.feed(std::span<const std::uint8_t>(rx.data(), static_cast<std::size_t>(n)),
+                [this](std::span<const std::uint8_t> r) {
+                  if (stall_after_ >= 0 && replies_ >= stall_after_) return;
+                  if (replies_ == garbage_before_reply_) (void)!::write(pty_.master, garbage.data(), garbage.size());
+                  ++replies_;
+                  (void)!::write(pty_.master, r.data(), r.size());
+                });
     }
   }
 
@@ -148,7 +152,9 @@ SerialConfig fixed_framing() {
 }
 
 /// The frame these tests use: our y is the device's z, our z is minus its y.
-Inverse3Frame test_frame() { return Inverse3Frame::axes({1, 3, -2}, glm::dvec3{0.0, 0.1, 0.05}); }
+Inverse3Frame test_frame() {
+  return Inverse3Frame::axes({1, 3, -2}, glm::dvec3{0.0, 0.1, 0.05});
+}
 
 struct Constant {
   glm::dvec3 f{0.0};
@@ -193,11 +199,13 @@ TEST_CASE("inverse3 codec: requests and replies, byte by byte") {
   CHECK(Bytes(out.begin(), out.begin() + 13) ==
         Bytes{0x1A, 0x00, 0x00, 0xA0, 0x41, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0xBE});
   CHECK(inverse3::encode_command(0x3A, {0.0f, 0.0f, 0.0f}, out) == 0);
-  CHECK(inverse3::encode_command(inverse3::code::force, {0.0f, 0.0f, 0.0f}, std::span<std::uint8_t>(out.data(), 12)) == 0);
+  CHECK(inverse3::encode_command(inverse3::code::force, {0.0f, 0.0f, 0.0f}, std::span<std::uint8_t>(out.data(), 12)) ==
+        0);
 
   // Wake-up reply: header 0x55, id 0x1234, model 3, hardware 2, firmware 7, 16 bytes 0xA0..0xAF.
   Bytes wake{0x55, 0x34, 0x12, 0x03, 0x02, 0x07};
-  for (std::uint8_t i = 0; i < 16; ++i) wake.push_back(static_cast<std::uint8_t>(0xA0 + i));
+  for (std::uint8_t i = 0; i < 16; ++i)
+    wake.push_back(static_cast<std::uint8_t>(0xA0 + i));
   inverse3::Identity id;
   REQUIRE(inverse3::decode_wake_reply(wake, id) == Status::ok);
   CHECK(id.header == 0x55);
@@ -345,8 +353,8 @@ TEST_CASE("inverse3: ServoLoop through a pty against the simulated device, in th
   CHECK(sim.peak_force().x == 0.0);
   CHECK(sim.peak_force().y == 0.0);
   CHECK_THAT(sim.peak_force().z, WithinAbs(0.8, 1e-6));  // ours -> device through R^T
-  CHECK(sim.force() == glm::dvec3{0.0});                  // the loop's stop sent zero last
-  CHECK(sim.position().z > 0.06);                    // the force moved the handle along device +z
+  CHECK(sim.force() == glm::dvec3{0.0});                 // the loop's stop sent zero last
+  CHECK(sim.position().z > 0.06);                        // the force moved the handle along device +z
   const glm::dvec3 expected = test_frame().position_to_ours(glm::dvec3(glm::vec3(sim.position())));
   CHECK(glm::length(last.position - expected) < 1e-9);
   CHECK(last.position.y > 0.01);  // ours: up
@@ -356,8 +364,8 @@ TEST_CASE("inverse3: ServoLoop through a pty against the simulated device, in th
   CHECK(c.resyncs == 0);
   CHECK(c.unexpected == 0);
   CHECK(c.lost_replies == 0);
-  CHECK(c.headers[0x0B] == 1);            // the wake-up reply's header, counted by value
-  CHECK(c.headers[0x2B] == c.replies);    // every state reply's
+  CHECK(c.headers[0x0B] == 1);          // the wake-up reply's header, counted by value
+  CHECK(c.headers[0x2B] == c.replies);  // every state reply's
   CHECK(c.replies == sim.counters().forces);
   CHECK(rig.loop.safety().latched() == 0);
   CHECK_THAT(rig.loop.statistics().peak_force, WithinAbs(0.8, 1e-12));
@@ -389,7 +397,8 @@ TEST_CASE("inverse3: zero force when disarmed, for a non-finite force, and the c
   CHECK(rig.arm.set_armed(false) == Status::ok);  // sends a zero at once
   CHECK(rig.arm.last_device_force() == glm::dvec3{0.0});
   CHECK(sent({0.0, 1.0, 0.0}) == glm::dvec3{0.0});
-  for (int i = 0; i < 50 && rig.arm.outstanding() > 0; ++i) (void)rig.arm.read(s);
+  for (int i = 0; i < 50 && rig.arm.outstanding() > 0; ++i)
+    (void)rig.arm.read(s);
   CHECK(rig.arm.outstanding() == 0);
   rig.device_thread.stop();
   CHECK(rig.device_thread.sim().force() == glm::dvec3{0.0});  // the last request the device served
@@ -408,16 +417,19 @@ TEST_CASE("inverse3: joint torques (0x1A) come back as joint angles, in radians"
     CHECK((st == Status::no_data || st == Status::ok));
   }
   CHECK(rig.arm.write_joint_torques({NAN, 1.0, 1.0}) == Status::ok);  // a non-finite torque: all zero
-  for (int i = 0; i < 50 && rig.arm.outstanding() > 0; ++i) (void)rig.arm.read(s);
+  for (int i = 0; i < 50 && rig.arm.outstanding() > 0; ++i)
+    (void)rig.arm.read(s);
   rig.arm.set_armed(false);
-  for (int i = 0; i < 50 && rig.arm.outstanding() > 0; ++i) (void)rig.arm.read(s);
+  for (int i = 0; i < 50 && rig.arm.outstanding() > 0; ++i)
+    (void)rig.arm.read(s);
   rig.device_thread.stop();
   const SimulatedInverse3& sim = rig.device_thread.sim();
   CHECK(sim.counters().torques == 21);
   CHECK(sim.torque() == glm::dvec3{0.0});
   constexpr double rad = 3.14159265358979323846 / 180.0;
   for (int i = 0; i < 3; ++i) {
-    CHECK_THAT(s.joint_angles[i], WithinAbs(static_cast<double>(static_cast<float>(sim.joint_angles_deg()[i])) * rad, 1e-9));
+    CHECK_THAT(s.joint_angles[i],
+               WithinAbs(static_cast<double>(static_cast<float>(sim.joint_angles_deg()[i])) * rad, 1e-9));
   }
   CHECK(s.joint_angles.x > 0.0);
   CHECK(s.joint_angles.y < 0.0);
@@ -481,7 +493,8 @@ TEST_CASE("inverse3: a short wake-up reply is dropped when the wait ends mid-fra
     for (int answered = 0; answered < 2;) {
       if (::poll(&p, 1, 2000) <= 0) return;
       const ssize_t n = ::read(pty.master, rx.data(), rx.size());
-      for (ssize_t i = 0; i < n; ++i, ++answered) (void)!::write(pty.master, partial.data(), partial.size());
+      for (ssize_t i = 0; i < n; ++i, ++answered)
+        (void)!::write(pty.master, partial.data(), partial.size());
     }
   });
   Inverse3Config c;
@@ -521,9 +534,9 @@ TEST_CASE("inverse3: garbage bytes before a reply cost one state, then the strea
   REQUIRE(rig.arm.read(last) == Status::ok);
   rig.device_thread.stop();
   const Inverse3Counters& c = rig.arm.counters();
-  CHECK(c.implausible == 1);      // the misaligned frame: it starts with 0xFF x 4, a NaN
+  CHECK(c.implausible == 1);  // the misaligned frame: it starts with 0xFF x 4, a NaN
   CHECK(c.resyncs == 1);
-  CHECK(c.dropped_bytes == 7);    // the tail of the reply it swallowed
+  CHECK(c.dropped_bytes == 7);  // the tail of the reply it swallowed
   CHECK(c.replies + c.implausible == rig.device_thread.sim().counters().forces);
   const SimulatedInverse3& sim = rig.device_thread.sim();
   CHECK(glm::length(last.position - test_frame().position_to_ours(glm::dvec3(glm::vec3(sim.position())))) < 1e-9);

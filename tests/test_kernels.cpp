@@ -4,9 +4,9 @@
 
 #include <cmath>
 #include <filesystem>
-#include <string>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -36,14 +36,16 @@ GrayImage test_picture(int width, int height, unsigned seed) {
 GrayImage step_picture(int width, int height, int edge) {
   GrayImage g(width, height, 255.0);
   for (int y = 0; y < height; ++y)
-    for (int x = edge; x < width; ++x) g.at(x, y) = 0.0;
+    for (int x = edge; x < width; ++x)
+      g.at(x, y) = 0.0;
   return g;
 }
 
 cv::Mat weights_mat(const Mask<>& mask, bool y) {
   cv::Mat k(mask.size(), mask.size(), CV_64FC1);
   for (int r = 0; r < mask.size(); ++r)
-    for (int c = 0; c < mask.size(); ++c) k.at<double>(r, c) = y ? mask.y(r, c) : mask.x(r, c);
+    for (int c = 0; c < mask.size(); ++c)
+      k.at<double>(r, c) = y ? mask.y(r, c) : mask.x(r, c);
   return k;
 }
 
@@ -57,10 +59,10 @@ struct MaskCase {
 };
 
 const std::vector<MaskCase> all_masks = {
-    {MaskKind::prewitt, 3},  {MaskKind::prewitt, 5},  {MaskKind::prewitt, 17}, {MaskKind::prewitt, 33},
-    {MaskKind::sobel, 3},    {MaskKind::sobel, 5},    {MaskKind::sobel, 7},    {MaskKind::scharr, 3},
-    {MaskKind::roberts, 2},  {MaskKind::gaussian, 5}, {MaskKind::gaussian, 17}, {MaskKind::emboss, 3},
-    {MaskKind::emboss, 9},   {MaskKind::emboss, 33},
+    {MaskKind::prewitt, 3}, {MaskKind::prewitt, 5},  {MaskKind::prewitt, 17},  {MaskKind::prewitt, 33},
+    {MaskKind::sobel, 3},   {MaskKind::sobel, 5},    {MaskKind::sobel, 7},     {MaskKind::scharr, 3},
+    {MaskKind::roberts, 2}, {MaskKind::gaussian, 5}, {MaskKind::gaussian, 17}, {MaskKind::emboss, 3},
+    {MaskKind::emboss, 9},  {MaskKind::emboss, 33},
 };
 
 constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
@@ -88,14 +90,16 @@ TEST_CASE("Sobel weights equal OpenCV's getDerivKernels") {
     cv::getDerivKernels(kx, ky, 1, 0, size, false, CV_64F);
     const auto m = Mask<>::sobel(size);
     for (int r = 0; r < size; ++r)
-      for (int c = 0; c < size; ++c) REQUIRE(m.x(r, c) == Approx(kx.at<double>(c) * ky.at<double>(r)));
+      for (int c = 0; c < size; ++c)
+        REQUIRE(m.x(r, c) == Approx(kx.at<double>(c) * ky.at<double>(r)));
   }
   const auto scharr = Mask<3>::scharr();
   cv::Mat kx;
   cv::Mat ky;
   cv::getDerivKernels(kx, ky, 1, 0, cv::FILTER_SCHARR, false, CV_64F);
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) CHECK(scharr.x(r, c) == Approx(kx.at<double>(c) * ky.at<double>(r)));
+    for (int c = 0; c < 3; ++c)
+      CHECK(scharr.x(r, c) == Approx(kx.at<double>(c) * ky.at<double>(r)));
 }
 
 TEST_CASE("the direct kernel equals cv::filter2D on the inverted image") {
@@ -130,7 +134,8 @@ TEST_CASE("compile-time and run-time mask sizes give the same kernel") {
   const DirectKernel<7> fixed(inv, Mask<7>::sobel(), Border::clamp);
   const DirectKernel<> dynamic(inv, Mask<>::sobel(7), Border::clamp);
   for (int y = 0; y < 40; y += 3)
-    for (int x = 0; x < 40; x += 3) REQUIRE(fixed.at_pixel(x, y) == dynamic.at_pixel(x, y));
+    for (int x = 0; x < 40; x += 3)
+      REQUIRE(fixed.at_pixel(x, y) == dynamic.at_pixel(x, y));
 }
 
 TEST_CASE("the O(1) integral kernel equals the direct kernel to 1e-9 of full scale") {
@@ -215,7 +220,8 @@ TEST_CASE("a black/white step edge gives magnitude 1 toward black, for every mas
     // The edge turned by 90 degrees: black below row 24 points down (+y).
     GrayImage turned(48, 64, 255.0);
     for (int y = 24; y < 64; ++y)
-      for (int x = 0; x < 48; ++x) turned.at(x, y) = 0.0;
+      for (int x = 0; x < 48; ++x)
+        turned.at(x, y) = 0.0;
     const TangibleImage down(turned, {mc.kind, mc.size, 3.0, Border::suspend, 8.0, KernelChoice::direct});
     CHECK(down.at(20.0, 24.0).y == Approx(1.0).epsilon(1e-12));
     CHECK(down.at(20.0, 24.0).x == Approx(0.0).margin(1e-12));
@@ -228,7 +234,8 @@ TEST_CASE("contrast scales the force linearly") {
   for (double contrast : {0.25, 0.5, 0.8}) {
     GrayImage low(gray.width(), gray.height());
     for (int y = 0; y < gray.height(); ++y)
-      for (int x = 0; x < gray.width(); ++x) low.at(x, y) = 128.0 + contrast * (gray.at(x, y) - 128.0);
+      for (int x = 0; x < gray.width(); ++x)
+        low.at(x, y) = 128.0 + contrast * (gray.at(x, y) - 128.0);
     const TangibleImage scaled(low, {});
     for (double x = 10.3; x < 110.0; x += 7.9) {
       const glm::dvec2 a = full.at(x, 45.6);
@@ -281,7 +288,7 @@ TEST_CASE("border policies") {
     CHECK(last != glm::dvec2{0.0});
     CHECK(image.at(3.0, 20.0) == last * 0.75);  // 1 px beyond: 1 - 1/4 of the edge force
     CHECK(image.at(2.0, 20.0) == last * 0.5);
-    CHECK(image.at(0.0, 20.0) == glm::dvec2{0.0});  // 4 px beyond: nothing
+    CHECK(image.at(0.0, 20.0) == glm::dvec2{0.0});   // 4 px beyond: nothing
     CHECK(image.at(59.0, 20.0) == glm::dvec2{0.0});  // last full-mask column 55, row 45
     CHECK(image.at(20.0, 49.0) == glm::dvec2{0.0});
     CHECK(image.at(20.0, 47.0) == image.at(20.0, 45.0) * 0.5);
@@ -380,10 +387,10 @@ TEST_CASE("leaving a real photograph is never a step, for every border policy an
         const double inset = mc.size + 2.0 * default_fade_px;  // start inside every band
         for (int k = 1; k <= 5; ++k) {
           const double fx = k / 6.0;
-          strokes.push_back({w - 1 - inset, fx * h, 1, 0, true});   // out through the right edge
-          strokes.push_back({inset, fx * h, -1, 0, true});          // left
-          strokes.push_back({fx * w, h - 1 - inset, 0, 1, true});   // bottom
-          strokes.push_back({fx * w, inset, 0, -1, true});          // top
+          strokes.push_back({w - 1 - inset, fx * h, 1, 0, true});  // out through the right edge
+          strokes.push_back({inset, fx * h, -1, 0, true});         // left
+          strokes.push_back({fx * w, h - 1 - inset, 0, 1, true});  // bottom
+          strokes.push_back({fx * w, inset, 0, -1, true});         // top
         }
         for (const double sx : {-1.0, 1.0})
           for (const double sy : {-1.0, 1.0}) {
@@ -427,7 +434,8 @@ TEST_CASE("mirror symmetry: flipping the picture flips fx and keeps fy") {
   const GrayImage gray = test_picture(81, 61, 17);
   GrayImage mirrored(81, 61);
   for (int y = 0; y < 61; ++y)
-    for (int x = 0; x < 81; ++x) mirrored.at(80 - x, y) = gray.at(x, y);
+    for (int x = 0; x < 81; ++x)
+      mirrored.at(80 - x, y) = gray.at(x, y);
   for (const MaskCase& mc : all_masks) {
     if (mc.kind == MaskKind::roberts) continue;  // even size: its anchor is not symmetric
     CAPTURE(to_string(mc.kind), mc.size);
@@ -493,11 +501,13 @@ TEST_CASE("the integer Prewitt map is exact on 8-bit and colour pictures, and fa
         for (std::size_t i = 0; i < fast.fx.size(); ++i) {
           const double tol_x = 1.2e-7 * std::abs(reference.fx[i]);  // float rounding (twice in suspend's margin)
           const double tol_y = 1.2e-7 * std::abs(reference.fy[i]);
-          worst = std::max({worst, std::abs(fast.fx[i] - reference.fx[i]) - tol_x,
-                            std::abs(fast.fy[i] - reference.fy[i]) - tol_y});
+          worst = std::max(
+              {worst, std::abs(fast.fx[i] - reference.fx[i]) - tol_x, std::abs(fast.fy[i] - reference.fy[i]) - tol_y});
         }
-        if (p < 2) CHECK(worst <= 1e-12);  // exact up to float rounding
-        else CHECK(worst <= 1e-6);         // the double route, as for any picture
+        if (p < 2)
+          CHECK(worst <= 1e-12);  // exact up to float rounding
+        else
+          CHECK(worst <= 1e-6);  // the double route, as for any picture
       }
     }
   }
@@ -511,14 +521,16 @@ TEST_CASE("the AVX2 and baseline builds of a map band give the same planes") {
   const GrayImage gray = test_picture(200, 90, 3);
   GrayImage levels = gray;
   for (int y = 0; y < levels.height(); ++y)
-    for (int x = 0; x < levels.width(); ++x) levels.at(x, y) = std::round(gray.at(x, y));
+    for (int x = 0; x < levels.width(); ++x)
+      levels.at(x, y) = std::round(gray.at(x, y));
   for (const GrayImage* g : {&gray, static_cast<const GrayImage*>(&levels)}) {
     for (double d : {0.0, 1.0}) {
       if (d > 0.0 && g == &gray) continue;  // the integer route needs integer levels
-      ForceMap a{g->width(), g->height(), std::vector<float>(g->pixels().size()), std::vector<float>(g->pixels().size())};
+      ForceMap a{g->width(), g->height(), std::vector<float>(g->pixels().size()),
+                 std::vector<float>(g->pixels().size())};
       ForceMap b = a;
-      const detail::PrewittBand band{g, 8, Border::reflect, 10.0, 1e-3, d, 0, g->width() - 1, g->height() - 1,
-                                     0, g->height() - 1, &a};
+      const detail::PrewittBand band{
+          g, 8, Border::reflect, 10.0, 1e-3, d, 0, g->width() - 1, g->height() - 1, 0, g->height() - 1, &a};
       REQUIRE(detail::prewitt_band_baseline(band));
       detail::PrewittBand other = band;
       other.map = &b;
@@ -578,7 +590,7 @@ TEST_CASE("degenerate masks are refused at construction, every factory is normal
   const Mask<> thin = Mask<>::gaussian(min_gaussian_sigma, 5);
   CHECK(std::isnormal(thin.step_response()));
   const TangibleImage image(step_picture(40, 30, 20), {MaskKind::gaussian, 5, min_gaussian_sigma, Border::clamp,
-                                                      default_fade_px, KernelChoice::direct});
+                                                       default_fade_px, KernelChoice::direct});
   CHECK(image.at_pixel(20, 15).x == Approx(1.0).epsilon(1e-12));
   // Huge sigmas are flat Gaussians (Prewitt-like), never degenerate.
   CHECK(std::isnormal(Mask<>::gaussian(1e200, 129).step_response()));
@@ -598,7 +610,8 @@ TEST_CASE("degenerate masks are refused at construction, every factory is normal
       CHECK(std::isnormal(mask.step_response()));
       CHECK(mask.step_response() > 0.0);
       bool finite = true;
-      for (double w : mask.x_weights()) finite = finite && std::isfinite(w);
+      for (double w : mask.x_weights())
+        finite = finite && std::isfinite(w);
       CHECK(finite);
     }
   }
@@ -671,8 +684,10 @@ TEST_CASE("TangibleImageField maps the picture into the device frame") {
   // image +y (down) is device -y
   GrayImage turned(48, 64, 255.0);
   for (int y = 32; y < 64; ++y)
-    for (int x = 0; x < 48; ++x) turned.at(x, y) = 0.0;
-  AnyField any = TangibleImageField<>(TangibleImage(turned, {MaskKind::sobel, 3}), PlaneMapping(1.0, {24.0, 32.0}), 1.0);
+    for (int x = 0; x < 48; ++x)
+      turned.at(x, y) = 0.0;
+  AnyField any =
+      TangibleImageField<>(TangibleImage(turned, {MaskKind::sobel, 3}), PlaneMapping(1.0, {24.0, 32.0}), 1.0);
   CHECK(any.force(Probe{}).y == Approx(-1.0));
   // composition: clamp to 0.4 N keeps the direction
   auto clamped = clamp(std::move(any), 0.4);

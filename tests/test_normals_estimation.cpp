@@ -37,8 +37,8 @@ glm::dvec3 ippe_normal(const Camera& camera, const std::vector<glm::dvec2>& plan
   cv::Vec3d rvec;
   cv::Vec3d tvec;
   REQUIRE(cv::solvePnP(object, image, cv::Mat(camera.matrix()),
-                       camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), rvec,
-                       tvec, false, cv::SOLVEPNP_IPPE));
+                       camera.has_distortion() ? cv::Mat(camera.distortion()) : cv::Mat(), rvec, tvec, false,
+                       cv::SOLVEPNP_IPPE));
   cv::Matx33d R;
   cv::Rodrigues(rvec, R);
   glm::dvec3 n{R(0, 2), R(1, 2), R(2, 2)};
@@ -62,7 +62,8 @@ TEST_CASE("normalised DLT reproduces a known homography") {
   SECTION("four points: same as cv::getPerspectiveTransform") {
     const auto plane = square(200.0, 150.0);
     std::vector<glm::dvec2> image;
-    for (auto p : plane) image.push_back(apply(p));
+    for (auto p : plane)
+      image.push_back(apply(p));
     const cv::Matx33d ours = homography_dlt(plane, image);
     std::vector<cv::Point2f> s;
     std::vector<cv::Point2f> d;
@@ -98,12 +99,10 @@ TEST_CASE("degenerate correspondences are rejected with a clear error") {
   CHECK_NOTHROW(estimate_plane_pose(camera, plane, good));
 
   const std::vector<glm::dvec2> three{good.begin(), good.begin() + 3};
-  CHECK_THROWS_WITH(
-      estimate_plane_pose(camera, std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
-      Catch::Contains("at least 4"));
-  CHECK_THROWS_WITH(
-      homography_dlt(std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
-      Catch::Contains("at least 4"));
+  CHECK_THROWS_WITH(estimate_plane_pose(camera, std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
+                    Catch::Contains("at least 4"));
+  CHECK_THROWS_WITH(homography_dlt(std::vector<glm::dvec2>(plane.begin(), plane.begin() + 3), three),
+                    Catch::Contains("at least 4"));
   CHECK_THROWS_WITH(estimate_rectangle_pose(camera, three), Catch::Contains("exactly 4"));
 
   auto repeated = good;
@@ -116,14 +115,12 @@ TEST_CASE("degenerate correspondences are rejected with a clear error") {
   const std::vector<glm::dvec2> all_on_a_line{{0, 0}, {1, 1}, {2, 2}, {3, 3}, {4, 4}, {5, 5}};
   CHECK_THROWS_WITH(homography_dlt(all_on_a_line, all_on_a_line), Catch::Contains("collinear"));
   const std::vector<glm::dvec2> plane_collinear{{0, 0}, {50, 0}, {100, 0}, {0, 100}};
-  CHECK_THROWS_WITH(estimate_plane_pose(camera, plane_collinear, good),
-                    Catch::Contains("collinear"));
+  CHECK_THROWS_WITH(estimate_plane_pose(camera, plane_collinear, good), Catch::Contains("collinear"));
 
   // corners not in order around the face: a crossed (bow-tie) quadrilateral
   const std::vector<glm::dvec2> crossed{{100, 100}, {310, 300}, {300, 110}, {90, 290}};
   CHECK_THROWS_WITH(estimate_rectangle_pose(camera, crossed), Catch::Contains("in order"));
-  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, crossed, glm::dvec2{100.0, 100.0}),
-                    Catch::Contains("in order"));
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, crossed, glm::dvec2{100.0, 100.0}), Catch::Contains("in order"));
   const std::vector<glm::dvec2> dart{{100, 100}, {300, 110}, {150, 150}, {90, 290}};
   CHECK_THROWS_WITH(estimate_rectangle_pose(camera, dart), Catch::Contains("in order"));
 
@@ -135,10 +132,8 @@ TEST_CASE("degenerate correspondences are rejected with a clear error") {
   inf[0].x = std::numeric_limits<double>::infinity();
   CHECK_THROWS_WITH(homography_dlt(plane, inf), Catch::Contains("finite"));
 
-  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{0.0, 100.0}),
-                    Catch::Contains("size"));
-  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{std::nan(""), 100.0}),
-                    Catch::Contains("size"));
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{0.0, 100.0}), Catch::Contains("size"));
+  CHECK_THROWS_WITH(estimate_rectangle_pose(camera, good, glm::dvec2{std::nan(""), 100.0}), Catch::Contains("size"));
   CHECK_THROWS_WITH(estimate_plane_pose(camera, plane, std::vector<glm::dvec2>(5, {1.0, 2.0})),
                     Catch::Contains("differ"));
 }
@@ -148,10 +143,8 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
   CHECK_THROWS_WITH(Camera::from_focal(-500.0, {320, 240}), Catch::Contains("focal length"));
   CHECK_THROWS_WITH(Camera::from_focal(std::nan(""), {320, 240}), Catch::Contains("focal length"));
   CHECK_THROWS_WITH(Camera(800.0, -1.0, {320, 240}), Catch::Contains("focal length"));
-  CHECK_THROWS_WITH(Camera::from_focal(800.0, {std::nan(""), 240}),
-                    Catch::Contains("principal point"));
-  CHECK_THROWS_WITH(Camera(800.0, 800.0, {320, 240}, {0.1, 0.2, 0.3}),
-                    Catch::Contains("distortion"));
+  CHECK_THROWS_WITH(Camera::from_focal(800.0, {std::nan(""), 240}), Catch::Contains("principal point"));
+  CHECK_THROWS_WITH(Camera(800.0, 800.0, {320, 240}, {0.1, 0.2, 0.3}), Catch::Contains("distortion"));
 
   // 60 degrees across 640 px: f = 320 / tan(30 deg)
   const Camera fov = Camera::from_field_of_view(60.0, 640, 480);
@@ -160,8 +153,7 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
   CHECK_THROWS(Camera::from_field_of_view(180.0, 640, 480));
 
   SECTION("the checked-in calibration file (cv::calibrateCamera layout)") {
-    const Camera c = Camera::from_file(std::string(HAPTICFIELD_SOURCE_DIR) +
-                                       "/tests/data/normals/calibration.yml");
+    const Camera c = Camera::from_file(std::string(HAPTICFIELD_SOURCE_DIR) + "/tests/data/normals/calibration.yml");
     CHECK(c.matrix()(0, 0) == Approx(1000.0));
     CHECK(c.matrix()(1, 1) == Approx(1000.0));
     CHECK(c.matrix()(0, 2) == Approx(511.5));
@@ -177,8 +169,7 @@ TEST_CASE("camera intrinsics: focal length, field of view, calibration files") {
       {
         cv::FileStorage fs(path, cv::FileStorage::WRITE);
         fs << "camera_matrix" << cv::Mat(cv::Matx33d(812.5, 0, 330.25, 0, 808.0, 241.0, 0, 0, 1));
-        fs << "distortion_coefficients"
-           << cv::Mat(std::vector<double>{0.05, -0.1, 0.001, 0.002, 0.0});
+        fs << "distortion_coefficients" << cv::Mat(std::vector<double>{0.05, -0.1, 0.001, 0.002, 0.0});
       }
       const Camera c = Camera::from_file(path);
       CHECK(c.matrix()(0, 0) == 812.5);
@@ -248,13 +239,17 @@ TEST_CASE("calibrations written by cv::FileStorage (YAML and XML) read back exac
       const cv::Matx33d k(900.0 + 100 * u(rng), 0.25 * u(rng), 320.0 + 10 * u(rng), 0.0, 880.0 + 100 * u(rng),
                           240.0 + 10 * u(rng), 0.0, 0.0, 1.0);
       std::vector<double> d(static_cast<std::size_t>(n));
-      for (double& x : d) x = 0.3 * u(rng) * std::pow(10.0, -6.0 * (u(rng) + 1.0));  // down to 1e-13
+      for (double& x : d)
+        x = 0.3 * u(rng) * std::pow(10.0, -6.0 * (u(rng) + 1.0));  // down to 1e-13
       const std::string path = tmp_path("opencv_" + std::to_string(n) + ext);
       {
         cv::FileStorage fs(path, cv::FileStorage::WRITE);
-        fs << "calibration_time" << "Sun Nov 22 12:00:00 2026";  // nodes we do not read are skipped
+        fs << "calibration_time"
+           << "Sun Nov 22 12:00:00 2026";  // nodes we do not read are skipped
         fs << "image_width" << 1280 << "image_height" << 960;
-        fs << "board" << "{" << "width" << 9 << "height" << 6 << "square_size" << 0.025 << "}";
+        fs << "board"
+           << "{"
+           << "width" << 9 << "height" << 6 << "square_size" << 0.025 << "}";
         fs << "flags" << 0;
         fs << "camera_matrix" << cv::Mat(k);
         cv::Mat dist(d);
@@ -267,9 +262,11 @@ TEST_CASE("calibrations written by cv::FileStorage (YAML and XML) read back exac
       }
       const Camera c = Camera::from_file(path);
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) CHECK_THAT(c.matrix()(i, j), Catch::Matchers::WithinAbs(k(i, j), 1e-12));
+        for (int j = 0; j < 3; ++j)
+          CHECK_THAT(c.matrix()(i, j), Catch::Matchers::WithinAbs(k(i, j), 1e-12));
       REQUIRE(c.distortion().size() == d.size());
-      for (std::size_t i = 0; i < d.size(); ++i) CHECK_THAT(c.distortion()[i], Catch::Matchers::WithinAbs(d[i], 1e-12));
+      for (std::size_t i = 0; i < d.size(); ++i)
+        CHECK_THAT(c.distortion()[i], Catch::Matchers::WithinAbs(d[i], 1e-12));
       CHECK(c.width() == 1280);
       CHECK(c.height() == 960);
     }
@@ -292,8 +289,9 @@ TEST_CASE("hostile calibration files are clear errors, never a crash, hang or hu
   REQUIRE(std::filesystem::file_size(tmp_path("truncated_decl.xml")) == 14);
   rejects(write_tmp("short.yml", "%YAML:1.\n{ :"), "%YAML:1.0");
   REQUIRE(std::filesystem::file_size(tmp_path("short.yml")) == 12);
-  const std::string good = "%YAML:1.0\n---\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
-                           "   data: [ 800., 0., 320., 0., 800., 240., 0., 0., 1. ]\n";
+  const std::string good =
+      "%YAML:1.0\n---\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+      "   data: [ 800., 0., 320., 0., 800., 240., 0., 0., 1. ]\n";
   REQUIRE(Camera::from_file(write_tmp("good.yml", good)).matrix()(0, 0) == 800.0);
   std::string typo = good;
   typo.replace(typo.find("cols: 3"), 7, "cols:k 3");
@@ -321,7 +319,7 @@ TEST_CASE("hostile calibration files are clear errors, never a crash, hang or hu
   multi.replace(multi.find("dt: d"), 5, "dt: \"3d\"");
   rejects(write_tmp("channels.yml", multi), "'dt' must be one of");
   rejects(write_tmp("seven.yml", good + "distortion_coefficients: !!opencv-matrix\n   rows: 7\n   cols: 1\n   dt: d\n"
-                                          "   data: [ 0., 0., 0., 0., 0., 0., 0. ]\n"),
+                                        "   data: [ 0., 0., 0., 0., 0., 0., 0. ]\n"),
           "4, 5, 8, 12 or 14 coefficients, not 7x1");
   rejects(write_tmp("twice.yml", good + good.substr(good.find("camera_matrix"))), "a second 'camera_matrix'");
   rejects(write_tmp("bad_k.yml", std::string(good).replace(good.find("0., 0., 1."), 10, "0., 0., 2.")),
@@ -331,19 +329,25 @@ TEST_CASE("hostile calibration files are clear errors, never a crash, hang or hu
   rejects(write_tmp("empty.yml", ""), "empty file");
   rejects(write_tmp("binary.yml", std::string("\x89PNG\r\n\x1a\n\0\0", 10)), "not an OpenCV calibration file");
   rejects(write_tmp("no_root.xml", "<?xml version=\"1.0\"?>\n<storage/>"), "<opencv_storage>");
-  const std::string xml = "<?xml version=\"1.0\"?>\n<opencv_storage>\n<camera_matrix type_id=\"opencv-matrix\">"
-                          "<rows>3</rows><cols>3</cols><dt>d</dt><data>800. 0. 320. 0. 800. 240. 0. 0. 1.</data>"
-                          "</camera_matrix>\n</opencv_storage>\n";
+  const std::string xml =
+      "<?xml version=\"1.0\"?>\n<opencv_storage>\n<camera_matrix type_id=\"opencv-matrix\">"
+      "<rows>3</rows><cols>3</cols><dt>d</dt><data>800. 0. 320. 0. 800. 240. 0. 0. 1.</data>"
+      "</camera_matrix>\n</opencv_storage>\n";
   REQUIRE(Camera::from_file(write_tmp("good.xml", xml)).matrix()(1, 2) == 240.0);
-  rejects(write_tmp("big.xml", std::string(xml).replace(xml.find("<rows>3"), 7, "<rows>99999999")), "<camera_matrix><rows>");
-  rejects(write_tmp("nodata.xml", std::string(xml).replace(xml.find("<data>"), 6, "<date>").replace(xml.find("</data>"), 7, "</date>")),
-          "missing <data>");
+  rejects(write_tmp("big.xml", std::string(xml).replace(xml.find("<rows>3"), 7, "<rows>99999999")),
+          "<camera_matrix><rows>");
+  rejects(
+      write_tmp("nodata.xml",
+                std::string(xml).replace(xml.find("<data>"), 6, "<date>").replace(xml.find("</data>"), 7, "</date>")),
+      "missing <data>");
   // entities are not expanded
-  rejects(write_tmp("laughs.xml", "<?xml version=\"1.0\"?><!DOCTYPE opencv_storage [<!ENTITY a \"1\">]>"
-                                  "<opencv_storage><image_width>&a;</image_width></opencv_storage>"),
+  rejects(write_tmp("laughs.xml",
+                    "<?xml version=\"1.0\"?><!DOCTYPE opencv_storage [<!ENTITY a \"1\">]>"
+                    "<opencv_storage><image_width>&a;</image_width></opencv_storage>"),
           "'image_width'");
   // files: missing, a directory, too large (the same FileError as everywhere)
-  CHECK_THROWS_WITH(Camera::from_file(tmp_path("none.yml")), "cannot open '" + tmp_path("none.yml") + "': no such file");
+  CHECK_THROWS_WITH(Camera::from_file(tmp_path("none.yml")),
+                    "cannot open '" + tmp_path("none.yml") + "': no such file");
   CHECK_THROWS_AS(Camera::from_file(tmp_path("")), FileError);
   const std::string huge = write_tmp("huge.yml", good + std::string(max_calibration_file_bytes, '#'));
   CHECK_THROWS_WITH(Camera::from_file(huge), Catch::Contains("larger than the limit"));
@@ -378,7 +382,8 @@ TEST_CASE("a camera scaled for a resized picture gives the same normals") {
   const BoxView view = render_box(scene, 40.0, false);
   for (std::size_t f = 0; f < 2; ++f) {
     std::vector<glm::dvec2> corners;
-    for (auto c : view.corners[f]) corners.push_back((c + 0.5) * 0.5 - 0.5);
+    for (auto c : view.corners[f])
+      corners.push_back((c + 0.5) * 0.5 - 0.5);
     CHECK(angle_between_deg(estimate_rectangle_pose(half, corners).normal, view.normals[f]) < 1e-6);
   }
   CHECK_THROWS_WITH(scene.camera().scaled(0.0, 1.0), Catch::Contains("scale"));
@@ -407,8 +412,7 @@ TEST_CASE("box stimulus: exact corners give the true normals") {
     const BoxView view = render_box(scene, rotation, false);
     for (std::size_t f = 0; f < 2; ++f) {
       const auto corners = corners_of(view, f);
-      const FacePose pose =
-          estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
+      const FacePose pose = estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
       const double err = angle_between_deg(pose.normal, view.normals[f]);
       worst = std::max(worst, err);
       CHECK(err <= 0.5);
@@ -416,13 +420,11 @@ TEST_CASE("box stimulus: exact corners give the true normals") {
       CHECK(pose.rms_reprojection_px < 1e-6);
       // the true box position: centre of the face at distance_mm
       CHECK(cv::norm(pose.t) ==
-            Approx(cv::norm(cv::Vec3d(0, 0, scene.distance_mm) +
-                            detail::box_rotation(rotation, scene.elevation_deg) *
-                                cv::Vec3d(f == 0 ? -100 : 100, -100, -100)))
+            Approx(cv::norm(cv::Vec3d(0, 0, scene.distance_mm) + detail::box_rotation(rotation, scene.elevation_deg) *
+                                                                     cv::Vec3d(f == 0 ? -100 : 100, -100, -100)))
                 .epsilon(1e-6));
       // independent oracle: OpenCV's IPPE planar pose
-      CHECK(angle_between_deg(pose.normal, ippe_normal(camera, square(scene.edge_mm, scene.edge_mm),
-                                                       corners)) < 1e-4);
+      CHECK(angle_between_deg(pose.normal, ippe_normal(camera, square(scene.edge_mm, scene.edge_mm), corners)) < 1e-4);
     }
   }
   CHECK(worst < 1e-6);
@@ -444,8 +446,7 @@ TEST_CASE("box stimulus: 1 px corner noise keeps the normal within 2 degrees") {
           const double a = angle(rng);
           c += glm::dvec2{std::cos(a), std::sin(a)};
         }
-        const FacePose pose =
-            estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
+        const FacePose pose = estimate_rectangle_pose(camera, corners, glm::dvec2{scene.edge_mm, scene.edge_mm});
         const double err = angle_between_deg(pose.normal, view.normals[f]);
         worst = std::max(worst, err);
         CHECK(err <= 2.0);
@@ -469,15 +470,14 @@ TEST_CASE("box stimulus: ratio table estimated / true components") {
     const BoxView view = render_box(scene, rotation, false);
     for (std::size_t f = 0; f < 2; ++f) {
       const glm::dvec3 truth = view.normals[f];
-      const glm::dvec3 exact =
-          estimate_rectangle_pose(camera, corners_of(view, f), glm::dvec2{200.0, 200.0}).normal;
+      const glm::dvec3 exact = estimate_rectangle_pose(camera, corners_of(view, f), glm::dvec2{200.0, 200.0}).normal;
       glm::dvec3 mean{0.0};
       constexpr int trials = 40;
       for (int k = 0; k < trials; ++k) {
         auto corners = corners_of(view, f);
-        for (auto& c : corners) c += glm::dvec2{noise(rng), noise(rng)};
-        mean += estimate_rectangle_pose(camera, corners, glm::dvec2{200.0, 200.0}).normal /
-                double(trials);
+        for (auto& c : corners)
+          c += glm::dvec2{noise(rng), noise(rng)};
+        mean += estimate_rectangle_pose(camera, corners, glm::dvec2{200.0, 200.0}).normal / double(trials);
       }
       for (int c = 0; c < 3; ++c) {
         if (std::abs(truth[c]) < 0.25) continue;  // ratios of small components are meaningless
@@ -520,8 +520,7 @@ TEST_CASE("rectangle of unknown aspect ratio: aspect recovered with K") {
     if (truth.z > 0.0) truth = -truth;
     CHECK(angle_between_deg(pose.normal, truth) < 1e-4);
     // a wrong K leaves the rectangle inconsistent: r1 . r2 != 0
-    const FacePose wrong = estimate_rectangle_pose(
-        Camera::from_focal(500.0, Camera::image_centre(1024, 768)), corners);
+    const FacePose wrong = estimate_rectangle_pose(Camera::from_focal(500.0, Camera::image_centre(1024, 768)), corners);
     CHECK(wrong.orthogonality > 10.0 * pose.orthogonality + 1e-3);
   }
 }
@@ -531,8 +530,7 @@ TEST_CASE("focal length from the orthogonality of a rectangle's sides") {
   for (double rotation : {20.0, 45.0, 70.0}) {
     const BoxView view = render_box(scene, rotation, false);
     for (std::size_t f = 0; f < 2; ++f) {
-      const auto focal = focal_from_rectangle(corners_of(view, f),
-                                              Camera::image_centre(scene.width, scene.height));
+      const auto focal = focal_from_rectangle(corners_of(view, f), Camera::image_centre(scene.width, scene.height));
       REQUIRE(focal.has_value());
       CHECK(*focal == Approx(scene.focal_px).epsilon(1e-6));
     }
@@ -556,19 +554,16 @@ TEST_CASE("lens distortion: the corners are undistorted first") {
     cam.emplace_back(q[0], q[1], q[2]);
   }
   std::vector<cv::Point2d> projected;
-  cv::projectPoints(cam, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(distorted.matrix()),
-                    cv::Mat(dist), projected);
+  cv::projectPoints(cam, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(distorted.matrix()), cv::Mat(dist), projected);
   std::vector<glm::dvec2> corners;
-  for (auto p : projected) corners.push_back({p.x, p.y});
+  for (auto p : projected)
+    corners.push_back({p.x, p.y});
   const FacePose with = estimate_rectangle_pose(distorted, corners, glm::dvec2{200.0, 200.0});
-  const FacePose without =
-      estimate_rectangle_pose(scene.camera(), corners, glm::dvec2{200.0, 200.0});
+  const FacePose without = estimate_rectangle_pose(scene.camera(), corners, glm::dvec2{200.0, 200.0});
   CHECK(angle_between_deg(with.normal, view.normals[0]) < 0.01);
   CHECK(with.rms_reprojection_px < 0.01);
-  CHECK(angle_between_deg(without.normal, view.normals[0]) >
-        10.0 * angle_between_deg(with.normal, view.normals[0]));
-  CHECK(angle_between_deg(with.normal, ippe_normal(distorted, square(200.0, 200.0), corners)) <
-        0.01);
+  CHECK(angle_between_deg(without.normal, view.normals[0]) > 10.0 * angle_between_deg(with.normal, view.normals[0]));
+  CHECK(angle_between_deg(with.normal, ippe_normal(distorted, square(200.0, 200.0), corners)) < 0.01);
 }
 
 TEST_CASE("RANSAC rejects outliers among many noisy correspondences") {
@@ -586,8 +581,8 @@ TEST_CASE("RANSAC rejects outliers among many noisy correspondences") {
   for (int j = 0; j < 9; ++j)
     for (int i = 0; i < 9; ++i) {
       const glm::dvec2 p{25.0 * i, 25.0 * j};
-      const cv::Vec3d q = camera.matrix() * (R * cv::Vec3d(p.x - 100.0, p.y - 100.0, -100.0) +
-                                             cv::Vec3d(0, 0, scene.distance_mm));
+      const cv::Vec3d q =
+          camera.matrix() * (R * cv::Vec3d(p.x - 100.0, p.y - 100.0, -100.0) + cv::Vec3d(0, 0, scene.distance_mm));
       glm::dvec2 px{q[0] / q[2] + noise(rng), q[1] / q[2] + noise(rng)};
       const bool bad = (i * 9 + j) % 5 == 2 && plane.size() < 80;
       if (bad) px += glm::dvec2{jump(rng), -jump(rng)};
@@ -608,8 +603,7 @@ TEST_CASE("RANSAC rejects outliers among many noisy correspondences") {
   HomographyConfig plain;
   plain.ransac = false;
   const FacePose naive = estimate_plane_pose(camera, plane, pixels, plain);
-  CHECK(angle_between_deg(naive.normal, view.normals[0]) >
-        2.0 * angle_between_deg(robust.normal, view.normals[0]));
+  CHECK(angle_between_deg(naive.normal, view.normals[0]) > 2.0 * angle_between_deg(robust.normal, view.normals[0]));
 }
 
 TEST_CASE("the renderer draws a textured picture") {
@@ -621,7 +615,8 @@ TEST_CASE("the renderer draws a textured picture") {
   // inside each face the texture varies; the background far from the box is smooth
   for (std::size_t f = 0; f < 2; ++f) {
     std::vector<cv::Point> poly;
-    for (auto c : view.corners[f]) poly.emplace_back(cvRound(c.x), cvRound(c.y));
+    for (auto c : view.corners[f])
+      poly.emplace_back(cvRound(c.x), cvRound(c.y));
     cv::Mat mask = cv::Mat::zeros(view.picture.size(), CV_8U);
     cv::fillConvexPoly(mask, poly, cv::Scalar(255));
     cv::erode(mask, mask, cv::Mat(), cv::Point(-1, -1), 3);

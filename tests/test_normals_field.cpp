@@ -35,8 +35,8 @@ std::vector<glm::dvec2> rect(double x0, double y0, double x1, double y1) {
 /// A unit normal tilted by slant [deg] so that downhill points along the
 /// image direction azimuth [deg] (x right, y down).
 glm::dvec3 tilted(double slant, double azimuth) {
-  return {std::sin(slant * deg) * std::cos(azimuth * deg),
-          std::sin(slant * deg) * std::sin(azimuth * deg), -std::cos(slant * deg)};
+  return {std::sin(slant * deg) * std::cos(azimuth * deg), std::sin(slant * deg) * std::sin(azimuth * deg),
+          -std::cos(slant * deg)};
 }
 
 /// Force in image axes [N] at pixel p moving with image velocity v [px/s], fresh filter.
@@ -53,8 +53,7 @@ std::vector<ImageFace> tiles(int n) {
   for (int k = 0; k < n; ++k) {
     const double x0 = (k % per_row) * side;
     const double y0 = (k / per_row) * side;
-    faces.push_back({rect(x0 + 1.0, y0 + 1.0, x0 + side - 2.0, y0 + side - 2.0),
-                     tilted(10.0 + k % 50, 7.0 * k)});
+    faces.push_back({rect(x0 + 1.0, y0 + 1.0, x0 + side - 2.0, y0 + side - 2.0), tilted(10.0 + k % 50, 7.0 * k)});
   }
   return faces;
 }
@@ -81,8 +80,7 @@ TEST_CASE("force along the motion: climbing resists, descending assists, level i
   CHECK(oblique.y == Approx(expected * 0.5 * m.y));
 
   // device frame with the default Kim & Kwon mapping: image y down = device -y
-  NormalField down(640, 640,
-                   {{rect(-1, -1, 641, 641), tilted(45.0, 90.0)}});  // downhill toward image +y
+  NormalField down(640, 640, {{rect(-1, -1, 641, 641), tilted(45.0, 90.0)}});  // downhill toward image +y
   down.reset();
   const glm::dvec3 f = down.force(down.probe_at(p, {0.0, 100.0}));
   CHECK(f.y == Approx(-kim_kwon_max_force * std::sin(45.0 * deg)));
@@ -117,15 +115,14 @@ TEST_CASE("signs agree with the 3D geometry of the box stimulus") {
       const glm::dvec2 centre = 0.25 * (c[0] + c[1] + c[2] + c[3]);
       // the true plane: outward normal and face centre from the box pose
       const cv::Vec3d n(view.normals[f].x, view.normals[f].y, view.normals[f].z);
-      const cv::Vec3d on_plane = R * (f == 0 ? cv::Vec3d(0, 0, -100) : cv::Vec3d(100, 0, 0)) +
-                                 cv::Vec3d(0, 0, scene.distance_mm);
+      const cv::Vec3d on_plane =
+          R * (f == 0 ? cv::Vec3d(0, 0, -100) : cv::Vec3d(100, 0, 0)) + cv::Vec3d(0, 0, scene.distance_mm);
       const auto depth = [&](glm::dvec2 px) {  // z of the plane point seen at px [mm]
         const cv::Vec3d ray = Kinv * cv::Vec3d(px.x, px.y, 1.0);
         return n.dot(on_plane) / n.dot(ray);  // ray.z = 1
       };
       for (int corner = -1; corner < 4; ++corner) {
-        const glm::dvec2 p =
-            corner < 0 ? centre : 0.5 * (centre + c[static_cast<std::size_t>(corner)]);
+        const glm::dvec2 p = corner < 0 ? centre : 0.5 * (centre + c[static_cast<std::size_t>(corner)]);
         for (int k = 0; k < 24; ++k) {
           const double a = 2.0 * std::numbers::pi * unit(rng);
           const glm::dvec2 m{std::cos(a), std::sin(a)};
@@ -134,8 +131,7 @@ TEST_CASE("signs agree with the 3D geometry of the box stimulus") {
           INFO("rotation " << rotation << " face " << f << " corner " << corner << " angle " << a);
           if (std::abs(climb) > 1e-9) CHECK((glm::dot(force, m) < 0.0) == (climb > 0.0));
           // magnitude: 0.6 N |n . m_hat| with the true normal
-          CHECK(glm::length(force) ==
-                Approx(kim_kwon_max_force * std::abs(n[0] * m.x + n[1] * m.y)).margin(1e-9));
+          CHECK(glm::length(force) == Approx(kim_kwon_max_force * std::abs(n[0] * m.x + n[1] * m.y)).margin(1e-9));
         }
       }
     }
@@ -160,13 +156,14 @@ TEST_CASE("speed threshold, velocity low-pass and reset") {
   const double tau = 1.0 / (2.0 * std::numbers::pi * options.velocity_cutoff_hz);
   const int ticks = static_cast<int>(std::round(tau / servo_period));
   glm::dvec3 f{0.0};
-  for (int i = 0; i < ticks; ++i) f = field.force(field.probe_at(p, {200.0, 0.0}));
+  for (int i = 0; i < ticks; ++i)
+    f = field.force(field.probe_at(p, {200.0, 0.0}));
   // after one time constant: -200 + 400 (1 - e^-1) = 52.8 px/s
-  CHECK(field.filtered_velocity().x ==
-        Approx(200.0 - 400.0 * std::exp(-ticks * servo_period / tau)).epsilon(1e-9));
+  CHECK(field.filtered_velocity().x == Approx(200.0 - 400.0 * std::exp(-ticks * servo_period / tau)).epsilon(1e-9));
   CHECK(field.filtered_velocity().x == Approx(52.8).margin(2.0));
   CHECK(glm::length(f) == 0.0);  // 52.8 px/s is below the 64 px/s threshold
-  for (int i = 0; i < 200; ++i) f = field.force(field.probe_at(p, {200.0, 0.0}));
+  for (int i = 0; i < 200; ++i)
+    f = field.force(field.probe_at(p, {200.0, 0.0}));
   CHECK(field.to_image_axes(f).x == Approx(0.3).epsilon(1e-3));
   field.reset();
   CHECK(field.filtered_velocity() == glm::dvec2{0.0});
@@ -224,11 +221,9 @@ TEST_CASE("the force never exceeds the bound") {
     for (auto mode : {NormalForceMode::along_motion, NormalForceMode::gradient}) {
       NormalFieldConfig options;
       options.mode = mode;
-      NormalField field(64, 64, {{rect(-1, -1, 65, 65), n}}, options,
-                        PlaneMapping(6.4, {32.0, 32.0}));
+      NormalField field(64, 64, {{rect(-1, -1, 65, 65), n}}, options, PlaneMapping(6.4, {32.0, 32.0}));
       const double a = 2.0 * std::numbers::pi * u(rng);
-      const glm::dvec3 f =
-          field.force(field.probe_at({32.0, 32.0}, 500.0 * glm::dvec2{std::cos(a), std::sin(a)}));
+      const glm::dvec3 f = field.force(field.probe_at({32.0, 32.0}, 500.0 * glm::dvec2{std::cos(a), std::sin(a)}));
       CHECK(glm::length(f) <= kim_kwon_max_force * (1.0 + 1e-12));
     }
   }
@@ -271,9 +266,8 @@ TEST_CASE("edges are felt; force shading makes the slope continuous") {
 
 TEST_CASE("explicit shading grid: bilinear interpolation of vertex normals") {
   // a cylinder-like surface: normals turn with x across 3 x 2 vertices
-  const std::vector<glm::dvec3> normals{tilted(30.0, 180.0),        glm::dvec3{0.0, 0.0, -1.0},
-                                        tilted(30.0, 0.0),          tilted(30.0, 180.0),
-                                        glm::dvec3{0.0, 0.0, -1.0}, tilted(30.0, 0.0)};
+  const std::vector<glm::dvec3> normals{tilted(30.0, 180.0), glm::dvec3{0.0, 0.0, -1.0}, tilted(30.0, 0.0),
+                                        tilted(30.0, 180.0), glm::dvec3{0.0, 0.0, -1.0}, tilted(30.0, 0.0)};
   const ShadingGrid grid({100.0, 100.0}, 50.0, 3, 2, normals);
   CHECK(grid.normal_at({100.0, 100.0}).x == Approx(normals[0].x));
   CHECK(grid.normal_at({200.0, 150.0}).x == Approx(normals[5].x));
@@ -284,8 +278,7 @@ TEST_CASE("explicit shading grid: bilinear interpolation of vertex normals") {
   CHECK(grid.normal_at({99.0, 120.0}) == glm::dvec3{0.0});
   NormalFieldConfig options;
   options.mode = NormalForceMode::gradient;
-  NormalField field(640, 640, {{rect(90, 90, 210, 160), glm::dvec3{0.0, 0.0, -1.0}}}, options,
-                    std::nullopt, grid);
+  NormalField field(640, 640, {{rect(90, 90, 210, 160), glm::dvec3{0.0, 0.0, -1.0}}}, options, std::nullopt, grid);
   CHECK(felt(field, {110.0, 120.0}, {}).x < 0.0);
   CHECK(felt(field, {190.0, 120.0}, {}).x > 0.0);
   CHECK_THROWS_WITH(ShadingGrid({0.0, 0.0}, 0.0, 3, 2, normals), Catch::Contains("spacing"));
@@ -312,8 +305,8 @@ TEST_CASE("labels match point-in-polygon for 1, 10 and 1000 faces and non-convex
         std::vector<cv::Point2f> poly;
         for (auto v : faces[f].polygon)
           poly.emplace_back(static_cast<float>(v.x), static_cast<float>(v.y));
-        const double d = cv::pointPolygonTest(
-            poly, cv::Point2f(static_cast<float>(p.x), static_cast<float>(p.y)), true);
+        const double d =
+            cv::pointPolygonTest(poly, cv::Point2f(static_cast<float>(p.x), static_cast<float>(p.y)), true);
         if (std::abs(d) < 1.0) near_edge = true;
         if (d > 0.0) expected = static_cast<int>(f);
       }
@@ -336,8 +329,8 @@ TEST_CASE("labels match point-in-polygon for 1, 10 and 1000 faces and non-convex
   CHECK(shapes.labels().label_at({100.0, 100.0}) == -1);  // the notch of the L
   CHECK(shapes.labels().label_at({320.0, 320.0}) == 1);
   CHECK(shapes.labels().label_at({320.0 + 190.0, 320.0}) == 1);  // a star tip
-  CHECK(shapes.labels().label_at({320.0 + 150.0 * std::cos(36.0 * deg),
-                                  320.0 + 150.0 * std::sin(36.0 * deg)}) == -1);  // between tips
+  CHECK(shapes.labels().label_at({320.0 + 150.0 * std::cos(36.0 * deg), 320.0 + 150.0 * std::sin(36.0 * deg)}) ==
+        -1);  // between tips
 }
 
 TEST_CASE("a tick never allocates, with or without shading, whatever the face count") {
@@ -364,20 +357,15 @@ TEST_CASE("a tick never allocates, with or without shading, whatever the face co
 }
 
 TEST_CASE("bad field setup is rejected with a clear error") {
-  const auto face = [](std::vector<glm::dvec2> poly, glm::dvec3 n) {
-    return std::vector<ImageFace>{{poly, n}};
-  };
+  const auto face = [](std::vector<glm::dvec2> poly, glm::dvec3 n) { return std::vector<ImageFace>{{poly, n}}; };
   CHECK_THROWS_WITH(NormalField(0, 640, {}), Catch::Contains("size"));
-  CHECK_THROWS_WITH(NormalField(640, 640, face({{0, 0}, {10, 0}}, {0, 0, -1})),
-                    Catch::Contains("3 vertices"));
+  CHECK_THROWS_WITH(NormalField(640, 640, face({{0, 0}, {10, 0}}, {0, 0, -1})), Catch::Contains("3 vertices"));
   CHECK_THROWS_WITH(NormalField(640, 640, face({{0, 0}, {10, 0}, {0, std::nan("")}}, {0, 0, -1})),
                     Catch::Contains("non-finite"));
-  CHECK_THROWS_WITH(NormalField(640, 640, face(rect(0, 0, 10, 10), {0, 0, 0})),
-                    Catch::Contains("non-zero normal"));
+  CHECK_THROWS_WITH(NormalField(640, 640, face(rect(0, 0, 10, 10), {0, 0, 0})), Catch::Contains("non-zero normal"));
   CHECK_THROWS_WITH(NormalField(640, 640, face(rect(0, 0, 10, 10), {0, std::nan(""), -1})),
                     Catch::Contains("non-zero normal"));
-  CHECK_THROWS_WITH(NormalField(640, 640, face(rect(0, 0, 10, 10), {0.1, 0, 1})),
-                    Catch::Contains("face the camera"));
+  CHECK_THROWS_WITH(NormalField(640, 640, face(rect(0, 0, 10, 10), {0.1, 0, 1})), Catch::Contains("face the camera"));
   NormalFieldConfig o;
   o.max_force = 0.0;
   CHECK_THROWS_WITH(NormalField(640, 640, {}, o), Catch::Contains("max_force"));

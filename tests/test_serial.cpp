@@ -47,9 +47,16 @@ struct Pty {
     if (master >= 0) ::close(master);
     if (slave >= 0) ::close(slave);
   }
-  void close_master() { ::close(master); master = -1; }
-  void write_master(std::span<const std::uint8_t> b) const { REQUIRE(::write(master, b.data(), b.size()) == static_cast<ssize_t>(b.size())); }
-  void write_master(const std::string& s) const { write_master(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(s.data()), s.size())); }
+  void close_master() {
+    ::close(master);
+    master = -1;
+  }
+  void write_master(std::span<const std::uint8_t> b) const {
+    REQUIRE(::write(master, b.data(), b.size()) == static_cast<ssize_t>(b.size()));
+  }
+  void write_master(const std::string& s) const {
+    write_master(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()));
+  }
 };
 
 /// The firmware on the master side of the pty, in its own thread: it serves
@@ -81,7 +88,10 @@ class PtyFirmware {
     wake();
     const auto deadline = std::chrono::steady_clock::now() + hard_timeout;
     while (done_.load(std::memory_order_acquire) < target)
-      if (std::chrono::steady_clock::now() > deadline) return false; else std::this_thread::yield();
+      if (std::chrono::steady_clock::now() > deadline)
+        return false;
+      else
+        std::this_thread::yield();
     return true;
   }
 
@@ -94,7 +104,10 @@ class PtyFirmware {
   const firmware::StreamPort<256>& port() const { return port_; }
 
  private:
-  void wake() const { const char c = 1; (void)!::write(wake_[1], &c, 1); }
+  void wake() const {
+    const char c = 1;
+    (void)!::write(wake_[1], &c, 1);
+  }
 
   void send(std::span<const std::uint8_t> b) {
     if (pty_.master >= 0) (void)!::write(pty_.master, b.data(), b.size());
@@ -108,7 +121,8 @@ class PtyFirmware {
       pollfd p[2] = {{pty_.master, POLLIN, 0}, {wake_[0], POLLIN, 0}};
       ::poll(p, 2, 100);
       char sink[64];
-      while (p[1].revents & POLLIN && ::read(wake_[0], sink, sizeof sink) == static_cast<ssize_t>(sizeof sink)) {}
+      while (p[1].revents & POLLIN && ::read(wake_[0], sink, sizeof sink) == static_cast<ssize_t>(sizeof sink)) {
+      }
       const std::int64_t target = target_.load(std::memory_order_acquire);
       for (;;) {  // every byte the host wrote before setting the target
         const ssize_t n = ::read(pty_.master, rx.data(), rx.size());
@@ -119,7 +133,10 @@ class PtyFirmware {
       while (arm_.ticks() < target) {
         arm_.step();
         const std::int64_t k = arm_.ticks();
-        if (rest_size) { send(std::span<const std::uint8_t>(rest.data(), rest_size)); rest_size = 0; }
+        if (rest_size) {
+          send(std::span<const std::uint8_t>(rest.data(), rest_size));
+          rest_size = 0;
+        }
         if (k == garbage_at) send(garbage);
         const std::span<const std::uint8_t> report = arm_.core().report();
         if (k == split_at) {
@@ -151,7 +168,10 @@ class SteppedSerial final : public Transport {
       : serial_(serial), fw_(fw), clock_(clock), start_(clock.now() + 500'000) {}
   Status read(std::span<std::uint8_t> b, std::size_t& n, int t) noexcept override {
     const std::int64_t due = clock_.now() >= start_ ? (clock_.now() - start_) / 1'000'000 + 1 : 0;
-    if (!fw_.advance_to(due)) { stuck_ = true; return Status::timeout; }
+    if (!fw_.advance_to(due)) {
+      stuck_ = true;
+      return Status::timeout;
+    }
     return serial_.read(b, n, t);
   }
   Status write(std::span<const std::uint8_t> r) noexcept override { return serial_.write(r); }
@@ -351,10 +371,13 @@ TEST_CASE("serial: a WoodenHaptics P4 arm over a pty, through line framing, with
       for (ssize_t i = 0; i < n; ++i) {
         const char c = rx[static_cast<std::size_t>(i)];
         if (c == '\0') continue;
-        if (c != '\n') { line += c; continue; }
+        if (c != '\n') {
+          line += c;
+          continue;
+        }
         firmware.tick();  // the frame without its '\n', as the firmware's parser sees it
-        const woody::P4Reply r =
-            firmware.receive_p4(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(line.data()), line.size()));
+        const woody::P4Reply r = firmware.receive_p4(
+            std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(line.data()), line.size()));
         std::array<std::uint8_t, woody::p4_max_line> out{};
         pty.write_master(std::span<const std::uint8_t>(out.data(), woody::encode(r, out)));
         line.clear();
@@ -390,7 +413,8 @@ TEST_CASE("serial: a WoodenHaptics P4 arm over a pty, through line framing, with
       return false;
     };
     int fresh = 0;
-    for (int i = 0; i < 50; ++i) fresh += exchange() ? 1 : 0;
+    for (int i = 0; i < 50; ++i)
+      fresh += exchange() ? 1 : 0;
     CHECK(fresh == 50);
     CHECK(s.valid);
     CHECK(arm.counters().error_replies == 0);

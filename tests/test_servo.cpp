@@ -165,7 +165,8 @@ TEST_CASE("safety chain: slew limit and soft start") {
   SafetyChain ramp(cfg, 3.3);
   in.force = {0, 3.3, 0};
   in.time_since_armed = 0.05;  // half way through the ramp: limit 1.65 N
-  for (int i = 0; i < 10; ++i) (void)ramp.process(in);
+  for (int i = 0; i < 10; ++i)
+    (void)ramp.process(in);
   CHECK_THAT(ramp.previous().y, WithinAbs(1.65, 1e-12));
   in.time_since_armed = -1.0;  // not armed: zero
   CHECK(ramp.process(in) == glm::dvec3{0.0});
@@ -187,7 +188,7 @@ TEST_CASE("safety chain: watchdog on missing state, stale state and missed deadl
   CHECK(chain.latched() == 0);
   in.ticks_without_state = 0;
   CHECK(chain.process(in) != glm::dvec3{0.0});  // resumes (slew-limited from zero)
-  in.state_age = 0.011;  // older than 10 ms: zero and latch
+  in.state_age = 0.011;                         // older than 10 ms: zero and latch
   CHECK(chain.process(in) == glm::dvec3{0.0});
   CHECK((chain.latched() & safety_events::stale_state) != 0);
   in.state_age = 0.0;
@@ -217,7 +218,10 @@ TEST_CASE("safety configuration rejects limits that make no sense") {
   bad([](SafetyConfig& c) { c.soft_start = -0.1; });
   bad([](SafetyConfig& c) { c.max_state_age = 0; });
   bad([](SafetyConfig& c) { c.max_missed_deadlines = 0; });
-  bad([](SafetyConfig& c) { c.passivity_enabled = true; c.passivity_max_damping = qnan; });
+  bad([](SafetyConfig& c) {
+    c.passivity_enabled = true;
+    c.passivity_max_damping = qnan;
+  });
   bad([](SafetyConfig&) {}, 0.0);
   bad([](SafetyConfig&) {}, qnan);
   SafetyConfig off;
@@ -234,11 +238,16 @@ TEST_CASE("safety invariants hold over seeded random states, fields and garbage"
   std::uniform_int_distribution<int> pick(0, 9);
   const auto value = [&](double scale) {
     switch (pick(rng)) {
-      case 0: return qnan;
-      case 1: return unit(rng) < 0 ? -inf : inf;
-      case 2: return unit(rng) * 1e300;  // huge
-      case 3: return unit(rng) * 1e-300;
-      default: return unit(rng) * scale;
+      case 0:
+        return qnan;
+      case 1:
+        return unit(rng) < 0 ? -inf : inf;
+      case 2:
+        return unit(rng) * 1e300;  // huge
+      case 3:
+        return unit(rng) * 1e-300;
+      default:
+        return unit(rng) * scale;
     }
   };
   SafetyConfig cfg;
@@ -255,7 +264,8 @@ TEST_CASE("safety invariants hold over seeded random states, fields and garbage"
     // garbage begins: the zeroing branch is reached for any seed.
     const bool clean = i % 1000 < 300;
     SafetyInput in;
-    in.force = clean ? glm::dvec3{3.0 + unit(rng), unit(rng), unit(rng)} : glm::dvec3{value(5.0), value(5.0), value(5.0)};
+    in.force =
+        clean ? glm::dvec3{3.0 + unit(rng), unit(rng), unit(rng)} : glm::dvec3{value(5.0), value(5.0), value(5.0)};
     in.velocity = clean ? glm::dvec3{0.1 * unit(rng)} : glm::dvec3{value(0.5), value(0.5), value(0.5)};
     // A broken period (NaN, Inf, zero, negative) must zero the force.
     static constexpr double broken_periods[] = {qnan, inf, -inf, 0.0, -1e-3};
@@ -276,7 +286,7 @@ TEST_CASE("safety invariants hold over seeded random states, fields and garbage"
     if (!finite || magnitude > 3.3 * (1.0 + 1e-12) || !slew_ok) {
       ++violations;
       UNSCOPED_INFO("violation at " << i << ": |out| " << magnitude << ", step " << glm::length(out - previous)
-                    << ", events " << chain.events());
+                                    << ", events " << chain.events());
     }
     // A zero after a fault is the only way to break the slew limit, and only
     // when the chain says why.
@@ -304,10 +314,14 @@ TEST_CASE("through the whole loop, a garbage field never reaches the arm") {
   std::uniform_int_distribution<int> pick(0, 19);
   const auto garbage = [&] {
     switch (pick(rng)) {
-      case 0: return qnan;
-      case 1: return inf;
-      case 2: return -1e300;
-      default: return unit(rng) * 6.0;
+      case 0:
+        return qnan;
+      case 1:
+        return inf;
+      case 2:
+        return -1e300;
+      default:
+        return unit(rng) * 6.0;
     }
   };
   glm::dvec3 previous{0.0};
@@ -388,7 +402,7 @@ TEST_CASE("the loop homes, arms, keeps its rate on the virtual clock and soft-st
   CHECK(rig.arm.homed());
   CHECK(s.peak_force <= 1.0 + 1e-12);
   CHECK_THAT(s.peak_force, WithinAbs(1.0, 1e-12));  // soft start (0.25 s) finished within 1 s
-  CHECK_FALSE(rig.arm.armed());  // disarmed on exit
+  CHECK_FALSE(rig.arm.armed());                     // disarmed on exit
   CHECK(rig.arm.last_command().torque_mnm == std::array<std::int16_t, 3>{0, 0, 0});
 }
 
@@ -418,8 +432,8 @@ TEST_CASE("after an overrun the loop skips whole periods instead of bursting") {
   REQUIRE(wakes.size() == 20);
   for (std::size_t i = 1; i < wakes.size(); ++i) {
     const std::int64_t d = wakes[i] - wakes[i - 1];
-    CHECK(d % 1'000'000 == 0);    // every wake on the absolute grid
-    CHECK(d >= 1'000'000);        // never a burst of catch-up ticks
+    CHECK(d % 1'000'000 == 0);  // every wake on the absolute grid
+    CHECK(d >= 1'000'000);      // never a burst of catch-up ticks
   }
   CHECK(wakes[10] - wakes[9] == 3'000'000);
 }
@@ -461,7 +475,8 @@ TEST_CASE("stall and unplug: force zero within 2 ticks, no stale command") {
     const auto k = static_cast<std::size_t>(first_missing);
     CHECK(glm::length(commands[k - 1]) > 0.5);  // full force before the fault
     CHECK(commands[k + 2] == glm::dvec3{0.0});
-    for (std::size_t i = k + 2; i < commands.size(); ++i) CHECK(commands[i] == glm::dvec3{0.0});
+    for (std::size_t i = k + 2; i < commands.size(); ++i)
+      CHECK(commands[i] == glm::dvec3{0.0});
     if (fault == LinkFault::unplug) {
       CHECK(r == StopReason::disconnected);
       CHECK((rig.loop.safety().latched() & safety_events::disconnected) != 0);
@@ -505,7 +520,8 @@ TEST_CASE("a device fault (e-stop) zeroes the force; after release it soft-start
   };
   rig.loop.run(cb, {.max_ticks = 1200});
   CHECK_THAT(command[499], WithinAbs(0.6, 1e-12));
-  for (std::size_t i = 503; i < 700; ++i) CHECK(command[i] == 0.0);  // report latency: 1-2 ticks
+  for (std::size_t i = 503; i < 700; ++i)
+    CHECK(command[i] == 0.0);  // report latency: 1-2 ticks
   // The soft start ramps the limit from 0 to 3.3 N over 0.25 s, so 0.6 N
   // is reached about 45 ms after re-arming.
   CHECK(command[720] > 0.0);
@@ -711,7 +727,8 @@ void check_gentle_start(const std::vector<glm::dvec3>& c, double limit, double s
   for (std::size_t i = 0; i < c.size() && first == c.size(); ++i)
     if (c[i] != glm::dvec3{0.0}) first = i;
   REQUIRE(first < c.size());
-  for (std::size_t i = 1; i < c.size(); ++i) CHECK(glm::length(c[i] - c[i - 1]) <= slew_step * (1 + 1e-12));
+  for (std::size_t i = 1; i < c.size(); ++i)
+    CHECK(glm::length(c[i] - c[i - 1]) <= slew_step * (1 + 1e-12));
   for (std::size_t i = first; i < c.size(); ++i) {
     const double ramp = limit * std::min(1.0, static_cast<double>(i - first + 1) * period / soft_start);
     CHECK(glm::length(c[i]) <= ramp * (1 + 1e-9) + 1e-12);
@@ -879,7 +896,8 @@ TEST_CASE("a device that reboots is taken up again within a few ticks, force zer
   const auto k = static_cast<std::size_t>(first_resync - reads.begin());
   CHECK(std::count(reads.begin(), reads.end(), Status::resync) == 2);
   CHECK(reads[k + 2] == Status::ok);
-  for (std::size_t i = k + 1; i < k + 50; ++i) CHECK(log.commands[i] == glm::dvec3{0.0});  // then homing (50 ticks)
+  for (std::size_t i = k + 1; i < k + 50; ++i)
+    CHECK(log.commands[i] == glm::dvec3{0.0});  // then homing (50 ticks)
   // The arm homes and arms again and the force ramps back up from zero.
   CHECK(rig.arm.homed());
   const std::vector<glm::dvec3> after(log.commands.begin() + static_cast<long>(k) + 1, log.commands.end());
@@ -901,7 +919,8 @@ TEST_CASE("safety chain: a NaN, Inf, non-positive or absurd period is zero force
   SafetyInput in;
   in.force = {0, 1.0, 0};
   in.time_since_armed = 1.0;
-  for (int i = 0; i < 5; ++i) (void)chain.process(in);
+  for (int i = 0; i < 5; ++i)
+    (void)chain.process(in);
   REQUIRE(chain.previous().y == 1.0);
   for (const double bad : {qnan, inf, -inf, 0.0, -1e-3, 1e-9, 5.0}) {
     in.period = bad;
@@ -933,7 +952,8 @@ TEST_CASE("safety chain: an extreme velocity cannot disable the passivity observ
   // when the field would generate energy).
   in.velocity = {0, -0.1, 0};
   in.force = {0, 1.0, 0};
-  for (int i = 0; i < 50; ++i) (void)chain.process(in);
+  for (int i = 0; i < 50; ++i)
+    (void)chain.process(in);
   CHECK(std::isfinite(chain.observed_energy()));
   CHECK(chain.observed_energy() >= -1e-12);
 }
@@ -951,7 +971,8 @@ TEST_CASE("an early wake-up sleeps again: no short period and no double-length o
   };
   rig.loop.run(cb, {.max_ticks = 40});
   REQUIRE(wakes.size() == 40);
-  for (std::size_t i = 1; i < wakes.size(); ++i) CHECK(wakes[i] - wakes[i - 1] == 1'000'000);
+  for (std::size_t i = 1; i < wakes.size(); ++i)
+    CHECK(wakes[i] - wakes[i - 1] == 1'000'000);
   CHECK(rig.loop.statistics().overruns == 0);
 }
 
@@ -968,7 +989,8 @@ TEST_CASE("a late wake-up is followed by the next deadline on the grid, not a bu
   REQUIRE(wakes.size() == 40);
   CHECK(wakes[21] - wakes[20] == 3'600'000);  // woke late, inside the period of deadline +3 ms
   CHECK(wakes[22] - wakes[21] == 400'000);    // the next deadline on the grid: +4 ms (not at once, not +1 ms later)
-  for (std::size_t i = 23; i < wakes.size(); ++i) CHECK(wakes[i] - wakes[i - 1] == 1'000'000);
+  for (std::size_t i = 23; i < wakes.size(); ++i)
+    CHECK(wakes[i] - wakes[i - 1] == 1'000'000);
   CHECK(rig.loop.statistics().wake_max == Approx(2.6e-3).margin(1e-12));
   CHECK(rig.loop.statistics().latches == 0);
 }
@@ -984,8 +1006,13 @@ struct TwoArms {
   ForceArm device_a, device_b;
   MultiArmLoop<ForceArm, 2, VirtualClock> loop;
   explicit TwoArms(ArmFaultPolicy policy = ArmFaultPolicy::isolate)
-      : arm_a(free_arm()), arm_b(free_arm()), link_a(arm_a, [this] { return clock.now(); }),
-        link_b(arm_b, [this] { return clock.now(); }, 0.25), device_a(link_a), device_b(link_b),
+      : arm_a(free_arm()),
+        arm_b(free_arm()),
+        link_a(arm_a, [this] { return clock.now(); }),
+        link_b(
+            arm_b, [this] { return clock.now(); }, 0.25),
+        device_a(link_a),
+        device_b(link_b),
         loop({&device_a, &device_b}, clock, Rig::quiet({}), policy) {}
 };
 }  // namespace
@@ -1045,7 +1072,8 @@ TEST_CASE("two arms: forces while a fault holds, tick by tick") {
   REQUIRE(a.size() == 900);
   REQUIRE(b.size() == 900);
   CHECK_THAT(a.back().y, WithinAbs(0.8, 1e-12));
-  for (std::size_t i = 603; i < b.size(); ++i) CHECK(b[i] == glm::dvec3{0.0});
+  for (std::size_t i = 603; i < b.size(); ++i)
+    CHECK(b[i] == glm::dvec3{0.0});
   CHECK((rig.loop.arm(1).safety().latched() & safety_events::disconnected) != 0);
 }
 

@@ -33,8 +33,8 @@ struct Run {
 /// Runs tangible_image with args; returns the exit status and stderr.
 Run run(const std::string& args) {
   const std::string err_file = path_of("stderr.txt");
-  const std::string cmd = std::string(HAPTICFIELD_TANGIBLE_IMAGE) + " " + args + " > " + path_of("stdout.txt") +
-                          " 2> " + err_file;
+  const std::string cmd =
+      std::string(HAPTICFIELD_TANGIBLE_IMAGE) + " " + args + " > " + path_of("stdout.txt") + " 2> " + err_file;
   const int raw = std::system(cmd.c_str());
   std::ifstream in(err_file);
   std::stringstream ss;
@@ -51,7 +51,8 @@ std::vector<std::vector<double>> read_csv(const std::string& path) {
     std::vector<double> row;
     std::stringstream ss(line);
     std::string cell;
-    while (std::getline(ss, cell, ',')) row.push_back(std::strtod(cell.c_str(), nullptr));
+    while (std::getline(ss, cell, ','))
+      row.push_back(std::strtod(cell.c_str(), nullptr));
     rows.push_back(row);
   }
   return rows;
@@ -97,11 +98,13 @@ TEST_CASE("--probes output equals the library on a real photograph") {
   const std::string probes = path_of("photo_probes.csv");
   {
     std::ofstream out(probes);
-    for (int i = 0; i < 50; ++i) out << 20 + i * 11.3 << "," << 15 + i * 7.1 << "\n";
+    for (int i = 0; i < 50; ++i)
+      out << 20 + i * 11.3 << "," << 15 + i * 7.1 << "\n";
   }
   const std::string forces = path_of("photo_forces.csv");
   REQUIRE(run(photo + " --mask gauss --size 9 --sigma 2 --border reflect --gray bt601 --probes " + probes +
-              " --forces " + forces).status == 0);
+              " --forces " + forces)
+              .status == 0);
   const TangibleImage image(load_gray(photo, GrayWeights::bt601), {MaskKind::gaussian, 9, 2.0, Border::reflect});
   for (const auto& row : read_csv(forces)) {
     const glm::dvec2 f = image.at(row[0], row[1]);

@@ -20,7 +20,7 @@ int attractors(const TangibleImage& image, int x0, int x1, int y) {
   double previous = image.at_pixel(x0, y).x;
   for (int x = x0 + 1; x <= x1; ++x) {
     const double f = image.at_pixel(x, y).x;
-    if (f < -1e-12 && previous > 1e-12) ++count;                  // + then -
+    if (f < -1e-12 && previous > 1e-12) ++count;                     // + then -
     if (f < -1e-12 && std::abs(previous) <= 1e-12 && x - 2 >= x0 &&  // + then 0 then -
         image.at_pixel(x - 2, y).x > 1e-12)
       ++count;
@@ -47,7 +47,8 @@ TEST_CASE("section 5: force noise falls as 1 / sqrt(3 h (h + 1)) with mask size"
   std::uniform_real_distribution<double> level(0.0, 255.0);
   GrayImage noise(2048, 2048);
   for (int y = 0; y < noise.height(); ++y)
-    for (int x = 0; x < noise.width(); ++x) noise.at(x, y) = level(rng);
+    for (int x = 0; x < noise.width(); ++x)
+      noise.at(x, y) = level(rng);
   const double sigma = 255.0 / std::sqrt(12.0);
   for (int m : {5, 9, 17, 33, 65}) {
     CAPTURE(m);
@@ -73,9 +74,12 @@ TEST_CASE("section 5: the smallest separation felt grows with the mask, shrinks 
       o.border = Border::clamp;
       const TangibleImage image(picture, o);
       const int n = attractors(image, h, picture.width() - 1 - h, picture.height() / 2);
-      if (d <= h + 1) REQUIRE(n == 1);           // one line, at the midpoint
-      else if (d < m - 1) REQUIRE(n == 3);       // both lines and a phantom between
-      else REQUIRE(n == 2);                      // two lines, cleanly
+      if (d <= h + 1)
+        REQUIRE(n == 1);  // one line, at the midpoint
+      else if (d < m - 1)
+        REQUIRE(n == 3);  // both lines and a phantom between
+      else
+        REQUIRE(n == 2);  // two lines, cleanly
     }
     CHECK(prewitt_min_separation_px(m) == m - 1);
   }
@@ -99,7 +103,8 @@ TEST_CASE("section 5: the force is linear in contrast") {
     for (double c = 0.1; c <= 1.0001; c += 0.1) {
       GrayImage g(200, 100, 127.5 + 127.5 * c);
       for (int y = 0; y < 100; ++y)
-        for (int x = 100; x < 200; ++x) g.at(x, y) = 127.5 - 127.5 * c;
+        for (int x = 100; x < 200; ++x)
+          g.at(x, y) = 127.5 - 127.5 * c;
       const TangibleImage image(g, {MaskKind::prewitt, m});
       const double f = image.at(100.0, 50.0).x;
       sum_c += c, sum_f += f, sum_cc += c * c, sum_cf += c * f, sum_ff += f * f;
@@ -107,8 +112,8 @@ TEST_CASE("section 5: the force is linear in contrast") {
     }
     const double slope = (n * sum_cf - sum_c * sum_f) / (n * sum_cc - sum_c * sum_c);
     const double intercept = (sum_f - slope * sum_c) / n;
-    const double r = (n * sum_cf - sum_c * sum_f) /
-                     std::sqrt((n * sum_cc - sum_c * sum_c) * (n * sum_ff - sum_f * sum_f));
+    const double r =
+        (n * sum_cf - sum_c * sum_f) / std::sqrt((n * sum_cc - sum_c * sum_c) * (n * sum_ff - sum_f * sum_f));
     CAPTURE(m);
     CHECK(slope == Approx(1.0).epsilon(1e-12));  // full contrast = a black/white edge = 1
     CHECK(intercept == Approx(0.0).margin(1e-12));

@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "hapticfield/core.hpp"
-#include "hapticfield/texture/data_texture.hpp"
 #include "hapticfield/offline/fft.hpp"
+#include "hapticfield/texture/data_texture.hpp"
 #include "hapticfield/texture/friction.hpp"
 #include "hapticfield/texture/lattice.hpp"
 #include "hapticfield/texture/local_sphere.hpp"
@@ -36,7 +36,9 @@ namespace {
 
 constexpr int n_samples = 1'000'000;
 
-Cell cell(int i) { return Cell{static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i / 977), 3u}; }
+Cell cell(int i) {
+  return Cell{static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i / 977), 3u};
+}
 
 struct Moments {
   double mean{0}, var{0}, skew{0}, kurt{0}, mad{0};
@@ -46,7 +48,8 @@ template <class Fn>
 Moments moments(Fn&& sample) {
   std::vector<double> x(n_samples);
   double sum = 0;
-  for (int i = 0; i < n_samples; ++i) sum += (x[static_cast<std::size_t>(i)] = sample(i));
+  for (int i = 0; i < n_samples; ++i)
+    sum += (x[static_cast<std::size_t>(i)] = sample(i));
   Moments m;
   m.mean = sum / n_samples;
   double m2 = 0, m3 = 0, m4 = 0, ad = 0;
@@ -65,7 +68,9 @@ Moments moments(Fn&& sample) {
   return m;
 }
 
-double five_sigma(double per_sample_variance) { return 5.0 * std::sqrt(per_sample_variance / n_samples); }
+double five_sigma(double per_sample_variance) {
+  return 5.0 * std::sqrt(per_sample_variance / n_samples);
+}
 
 Probe moving(glm::dvec3 p, glm::dvec3 v = {0.05, 0.0, 0.0}, double fn = 1.0) {
   Probe probe;
@@ -81,7 +86,8 @@ Probe moving(glm::dvec3 p, glm::dvec3 v = {0.05, 0.0, 0.0}, double fn = 1.0) {
 
 TEST_CASE("the permutation table is a permutation of 0..255") {
   std::set<int> seen;
-  for (std::uint32_t i = 0; i < 256; ++i) seen.insert(permutation(i));
+  for (std::uint32_t i = 0; i < 256; ++i)
+    seen.insert(permutation(i));
   REQUIRE(seen.size() == 256);
   REQUIRE(permutation(256) == permutation(0));  // indices wrap at 256
 }
@@ -117,9 +123,9 @@ TEST_CASE("uniform01: mean 1/2, variance 1/12, range (0, 1)") {
 TEST_CASE("Gaussian: mean 0, variance 1, skewness 0, kurtosis 3") {
   const Moments m = moments([](int i) { return gaussian(11, cell(i)); });
   CHECK_THAT(m.mean, WithinAbs(0.0, five_sigma(1.0)));
-  CHECK_THAT(m.var, WithinAbs(1.0, five_sigma(2.0)));     // Var(g^2) = 2
-  CHECK_THAT(m.skew, WithinAbs(0.0, five_sigma(6.0)));    // asymptotic SE^2 = 6/n
-  CHECK_THAT(m.kurt, WithinAbs(3.0, five_sigma(24.0)));   // asymptotic SE^2 = 24/n
+  CHECK_THAT(m.var, WithinAbs(1.0, five_sigma(2.0)));    // Var(g^2) = 2
+  CHECK_THAT(m.skew, WithinAbs(0.0, five_sigma(6.0)));   // asymptotic SE^2 = 6/n
+  CHECK_THAT(m.kurt, WithinAbs(3.0, five_sigma(24.0)));  // asymptotic SE^2 = 24/n
   CHECK_THAT(m.mad, WithinAbs(std::sqrt(2.0 / std::numbers::pi), five_sigma(1.0 - 2.0 / std::numbers::pi)));
 }
 
@@ -151,18 +157,22 @@ TEST_CASE("multivariate Gaussian reproduces a full covariance") {
   glm::dmat3 c{0.0};
   const double cov[3][3] = {{4.0, 1.2, -0.8}, {1.2, 2.0, 0.5}, {-0.8, 0.5, 1.0}};
   for (int r = 0; r < 3; ++r)
-    for (int k = 0; k < 3; ++k) c[k][r] = cov[r][k];
+    for (int k = 0; k < 3; ++k)
+      c[k][r] = cov[r][k];
   const glm::dvec3 mean{0.1, -0.2, 0.3};
   const MultivariateGaussianNoise mv(mean, c);
   std::vector<glm::dvec3> s(n_samples);
   glm::dvec3 sum{0.0};
-  for (int i = 0; i < n_samples; ++i) sum += (s[static_cast<std::size_t>(i)] = mv.sample(9, cell(i)));
+  for (int i = 0; i < n_samples; ++i)
+    sum += (s[static_cast<std::size_t>(i)] = mv.sample(9, cell(i)));
   const glm::dvec3 m = sum / double(n_samples);
-  for (int r = 0; r < 3; ++r) CHECK_THAT(m[r], WithinAbs(mean[r], five_sigma(cov[r][r])));
+  for (int r = 0; r < 3; ++r)
+    CHECK_THAT(m[r], WithinAbs(mean[r], five_sigma(cov[r][r])));
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k) {
       double e = 0;
-      for (const auto& v : s) e += (v[r] - m[r]) * (v[k] - m[k]);
+      for (const auto& v : s)
+        e += (v[r] - m[r]) * (v[k] - m[k]);
       e /= n_samples;
       // Var of (x_r x_k) for a Gaussian pair: s_rr s_kk + s_rk^2
       CHECK_THAT(e, WithinAbs(cov[r][k], five_sigma(cov[r][r] * cov[k][k] + cov[r][k] * cov[r][k])));
@@ -175,7 +185,8 @@ TEST_CASE("zero variance in z gives a lateral-only texture") {
   c[1][1] = 2.0;
   c[0][1] = c[1][0] = 0.5;
   const MultivariateGaussianNoise mv(glm::dvec3{0.0}, c);
-  for (int i = 0; i < 1000; ++i) REQUIRE(mv.sample(1, cell(i)).z == 0.0);
+  for (int i = 0; i < 1000; ++i)
+    REQUIRE(mv.sample(1, cell(i)).z == 0.0);
 }
 
 TEST_CASE("bad noise parameters throw at setup") {
@@ -218,7 +229,8 @@ TEST_CASE("Gaussian mixture: mean and variance of the mixture") {
   const auto phi = [](double z) { return 0.5 * std::erfc(-z / std::numbers::sqrt2); };
   const double p_low = 0.25 * phi(1.5 / std::sqrt(0.5)) + 0.75 * phi(-1.5 / std::sqrt(0.1));
   int low = 0;
-  for (int i = 0; i < n_samples; ++i) low += mix.sample(21, cell(i)).x < -0.5;
+  for (int i = 0; i < n_samples; ++i)
+    low += mix.sample(21, cell(i)).x < -0.5;
   CHECK_THAT(double(low) / n_samples, WithinAbs(p_low, five_sigma(p_low * (1.0 - p_low))));
 }
 
@@ -226,7 +238,8 @@ TEST_CASE("tabulated noise: a hashed table of samples of the wrapped noise, read
   const GaussianNoise g(1.0);
   const TabulatedNoise<GaussianNoise, 1024> t(g, 77);
   REQUIRE(t.table().size() == 1024);
-  for (std::uint32_t i = 0; i < 1024; ++i) REQUIRE(t.table()[i] == g.sample(77, Cell{i, 0, 0}));
+  for (std::uint32_t i = 0; i < 1024; ++i)
+    REQUIRE(t.table()[i] == g.sample(77, Cell{i, 0, 0}));
   std::vector<int> hits(1024, 0);
   int not_in_table = 0, not_repeatable = 0;
   for (int i = 0; i < 200000; ++i) {
@@ -234,15 +247,18 @@ TEST_CASE("tabulated noise: a hashed table of samples of the wrapped noise, read
     not_repeatable += v != t.sample(5, cell(i));
     // which entry was read (entries are distinct with probability ~1)
     const auto it = std::find(t.table().begin(), t.table().end(), v);
-    if (it == t.table().end()) ++not_in_table;
-    else ++hits[static_cast<std::size_t>(it - t.table().begin())];
+    if (it == t.table().end())
+      ++not_in_table;
+    else
+      ++hits[static_cast<std::size_t>(it - t.table().begin())];
   }
   REQUIRE(not_in_table == 0);
   REQUIRE(not_repeatable == 0);
   // chi-square of 200000 reads over 1024 entries: 1023 dof, mean 1023, sd 45.2
   double chi2 = 0;
   const double expect = 200000.0 / 1024.0;
-  for (int h : hits) chi2 += (h - expect) * (h - expect) / expect;
+  for (int h : hits)
+    chi2 += (h - expect) * (h - expect) / expect;
   CHECK_THAT(chi2, WithinAbs(1023.0, 5.0 * 45.2));
   const NoiseLattice<TabulatedNoise<GaussianNoise, 1024>, 3> lat(t, 1, glm::dvec3{1e-3}, Interpolation::cubic);
   REQUIRE(is_finite(lat(glm::dvec3{0.3e-3, 1.7e-3, -2.2e-3})));
@@ -260,7 +276,8 @@ TEST_CASE("lattices interpolate through the lattice samples") {
       const glm::dvec3 expect = g.sample(99, Cell{static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1),
                                                   static_cast<std::uint32_t>(2 - i)});
       const glm::dvec3 got = lat(p);
-      for (int k = 0; k < 3; ++k) REQUIRE_THAT(got[k], WithinAbs(expect[k], 1e-9));
+      for (int k = 0; k < 3; ++k)
+        REQUIRE_THAT(got[k], WithinAbs(expect[k], 1e-9));
     }
   }
 }
@@ -338,7 +355,8 @@ TEST_CASE("local sphere draws a new sample each time the HIP leaves the ball") {
 TEST_CASE("local circle: motion along the surface normal draws no sample") {
   LocalSphere<GaussianNoise> lc(GaussianNoise(1.0), 4, 1e-3, glm::dvec3{0, 0, 1});
   (void)lc.sample(glm::dvec3{0.0});
-  for (int i = 0; i < 100; ++i) (void)lc.sample(glm::dvec3{0, 0, i * 1e-3});
+  for (int i = 0; i < 100; ++i)
+    (void)lc.sample(glm::dvec3{0, 0, i * 1e-3});
   REQUIRE(lc.samples_drawn() == 2);
   (void)lc.sample(glm::dvec3{2e-3, 0, 0.5});
   REQUIRE(lc.samples_drawn() == 3);
@@ -350,7 +368,8 @@ TEST_CASE("local circle: motion along the surface normal draws no sample") {
 
 TEST_CASE("fft equals the DFT computed term by term") {
   std::vector<std::complex<double>> x(64);
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = {std::sin(0.37 * double(i * i)), std::cos(1.3 * double(i))};
+  for (std::size_t i = 0; i < x.size(); ++i)
+    x[i] = {std::sin(0.37 * double(i * i)), std::cos(1.3 * double(i))};
   std::vector<std::complex<double>> fast = x;
   fft(fast);
   for (std::size_t k = 0; k < x.size(); ++k) {
@@ -387,7 +406,8 @@ double fbm_slope(double h, int octaves) {
       a[i] = hann * fbm(glm::dvec3{x, 0.0, 0.0}).x;
     }
     fft(a);
-    for (std::size_t k = 0; k < seg / 2; ++k) psd[k] += std::norm(a[k]);
+    for (std::size_t k = 0; k < seg / 2; ++k)
+      psd[k] += std::norm(a[k]);
   }
   // frequencies in cycles per base cell: k / (seg dx / grain) = k per_cell / seg
   // fit from 1/2 cycle per cell up to 2^(octaves-3) cycles per cell (away
@@ -414,11 +434,13 @@ double fbm_slope(double h, int octaves) {
     }
   }
   double mx = 0, my = 0;
-  for (std::size_t i = 0; i < lx.size(); ++i) mx += lx[i], my += ly[i];
+  for (std::size_t i = 0; i < lx.size(); ++i)
+    mx += lx[i], my += ly[i];
   mx /= double(lx.size());
   my /= double(ly.size());
   double sxy = 0, sxx = 0;
-  for (std::size_t i = 0; i < lx.size(); ++i) sxy += (lx[i] - mx) * (ly[i] - my), sxx += (lx[i] - mx) * (lx[i] - mx);
+  for (std::size_t i = 0; i < lx.size(); ++i)
+    sxy += (lx[i] - mx) * (ly[i] - my), sxx += (lx[i] - mx) * (lx[i] - mx);
   return sxy / sxx;
 }
 }  // namespace
@@ -429,10 +451,12 @@ TEST_CASE("fBm power spectrum falls as f^-(2h+1) (within 0.1)") {
     INFO("h = " << h << ", measured slope " << slope << ", expected " << -(2 * h + 1));
     CHECK_THAT(slope, WithinAbs(-(2.0 * h + 1.0), 0.1));
   }
-  CHECK_THROWS_AS((Fbm<GaussianNoise, 3>(NoiseLattice<GaussianNoise, 3>(GaussianNoise(1.0), 1, glm::dvec3{1e-3}), -0.1, 4)),
-                  std::invalid_argument);
-  CHECK_THROWS_AS((Fbm<GaussianNoise, 3>(NoiseLattice<GaussianNoise, 3>(GaussianNoise(1.0), 1, glm::dvec3{1e-3}), 0.5, 0)),
-                  std::invalid_argument);
+  CHECK_THROWS_AS(
+      (Fbm<GaussianNoise, 3>(NoiseLattice<GaussianNoise, 3>(GaussianNoise(1.0), 1, glm::dvec3{1e-3}), -0.1, 4)),
+      std::invalid_argument);
+  CHECK_THROWS_AS(
+      (Fbm<GaussianNoise, 3>(NoiseLattice<GaussianNoise, 3>(GaussianNoise(1.0), 1, glm::dvec3{1e-3}), 0.5, 0)),
+      std::invalid_argument);
 }
 
 // --- Fourier synthesis -----------------------------------------------------------------
@@ -451,11 +475,12 @@ TEST_CASE("Fourier synthesis of sine, square and sawtooth terms") {
   CHECK_THAT(saw(glm::dvec3{2.5e-3, 0, 0}).z, WithinAbs(2.0 * (2.0 * 0.25 - 1.0), 1e-12));
   CHECK_THAT(saw(glm::dvec3{7.5e-3, 0, 0}).z, WithinAbs(2.0 * (2.0 * 0.75 - 1.0), 1e-9));
   // sum of terms
-  const FourierSynthesis both({{Waveform::sine, 1.0, 50.0, 0.0, glm::dvec3{1, 0, 0}},
-                               {Waveform::sine, 0.3, 150.0, 1.0, glm::dvec3{1, 0, 0}}});
+  const FourierSynthesis both(
+      {{Waveform::sine, 1.0, 50.0, 0.0, glm::dvec3{1, 0, 0}}, {Waveform::sine, 0.3, 150.0, 1.0, glm::dvec3{1, 0, 0}}});
   const double x = 1.7e-3;
-  CHECK_THAT(both(glm::dvec3{x, 0, 0}).z,
-             WithinAbs(std::sin(2 * std::numbers::pi * 50 * x) + 0.3 * std::sin(2 * std::numbers::pi * 150 * x + 1.0), 1e-12));
+  CHECK_THAT(
+      both(glm::dvec3{x, 0, 0}).z,
+      WithinAbs(std::sin(2 * std::numbers::pi * 50 * x) + 0.3 * std::sin(2 * std::numbers::pi * 150 * x + 1.0), 1e-12));
   CHECK_THROWS_AS(FourierSynthesis({}), std::invalid_argument);
   CHECK_THROWS_AS(FourierSynthesis({{Waveform::sine, 1.0, -5.0, 0.0, glm::dvec3{1, 0, 0}}}), std::invalid_argument);
   CHECK_THROWS_AS(FourierSynthesis({{Waveform::sine, 1.0, 5.0, 0.0, glm::dvec3{1, 1, 0}}}), std::invalid_argument);
@@ -538,7 +563,8 @@ TEST_CASE("friction opposes velocity and follows c s(|v|) + b|v| + d|v|^2") {
 TEST_CASE("Coulomb friction does not chatter near zero speed") {
   const Friction fr(FrictionConfig{1.0, 0.0, 0.0, 1e-3, false, glm::dvec3{0.0}});
   // a hand jittering at +-1 um/s: the force stays tiny instead of flipping +-1 N
-  for (double v : {1e-6, -1e-6, 5e-7, -5e-7}) REQUIRE(std::fabs(fr.force(moving({}, {v, 0, 0})).x) < 1.1e-3);
+  for (double v : {1e-6, -1e-6, 5e-7, -5e-7})
+    REQUIRE(std::fabs(fr.force(moving({}, {v, 0, 0})).x) < 1.1e-3);
   // continuous in v: the largest change between neighbouring speeds is small
   double worst = 0;
   for (int i = -1000; i < 1000; ++i) {
@@ -571,7 +597,8 @@ TEST_CASE("stick-slip friction: spring while stuck, kinetic limit while sliding,
   CHECK(fr.force(at(0.0)) == glm::dvec3{0.0});
   // slide: push 3 mm in 10 um steps; breakaway past 0.25 mm, then 0.4 N opposing +x
   glm::dvec3 f{0.0};
-  for (int i = 1; i <= 300; ++i) f = fr.force(at(i * 1e-5));
+  for (int i = 1; i <= 300; ++i)
+    f = fr.force(at(i * 1e-5));
   CHECK(fr.sliding());
   CHECK_THAT(f.x, WithinAbs(-0.4, 1e-12));
   CHECK_THAT(fr.anchor().x, WithinAbs(3e-3 - 0.4 / 2000.0, 1e-12));
@@ -585,11 +612,13 @@ TEST_CASE("stick-slip friction: spring while stuck, kinetic limit while sliding,
   CHECK(hi - lo <= 2000.0 * 2e-6 + 1e-12);
   CHECK(hi < 0.0);
   // reversing: stuck again, then slides the other way with +0.4 N
-  for (int i = 1; i <= 300; ++i) f = fr.force(at(3e-3 - i * 1e-5));
+  for (int i = 1; i <= 300; ++i)
+    f = fr.force(at(3e-3 - i * 1e-5));
   CHECK_THAT(f.x, WithinAbs(0.4, 1e-12));
   // no normal force: no friction
   CHECK_THAT(glm::length(fr.force(at(0.0, 0.0))), WithinAbs(0.0, 1e-15));
-  CHECK_THROWS_AS(StickSlipFriction(StickSlipConfig{2000.0, 0.3, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
+  CHECK_THROWS_AS(StickSlipFriction(StickSlipConfig{2000.0, 0.3, 0.4, true, glm::dvec3{0, 0, 1}}),
+                  std::invalid_argument);
   CHECK_THROWS_AS(StickSlipFriction(StickSlipConfig{0.0, 0.5, 0.4, true, glm::dvec3{0, 0, 1}}), std::invalid_argument);
   CHECK(fr.force(moving(glm::dvec3{std::numeric_limits<double>::quiet_NaN()})) == glm::dvec3{0.0});
 }
@@ -622,7 +651,8 @@ TEST_CASE("flow texture: mean shift pushes, viscous drag resists") {
   REQUIRE(glm::length(flow.force(moving(p, v)) - (at_rest - 3.0 * v)) < 1e-15);
   // mean over space is the shift
   glm::dvec3 mean{0.0};
-  for (int i = 0; i < 20000; ++i) mean += flow.force(moving(glm::dvec3{i * 0.77e-3, i * 0.31e-3, i * 0.13e-3}, {}));
+  for (int i = 0; i < 20000; ++i)
+    mean += flow.force(moving(glm::dvec3{i * 0.77e-3, i * 0.31e-3, i * 0.13e-3}, {}));
   mean /= 20000.0;
   REQUIRE_THAT(mean.x, WithinAbs(0.2, 0.01));
   CHECK_THROWS_AS(FlowTexture(lat, FlowConfig{glm::dvec3{0.0}, 1.0, -1.0}), std::invalid_argument);
@@ -671,7 +701,8 @@ TEST_CASE("image maps: gray levels to data values and label bands") {
   // 4 x 1 BGR image with gray levels 0, 64, 128, 255 (B = G = R)
   cv::Mat img(1, 4, CV_8UC3);
   const int levels[] = {0, 64, 128, 255};
-  for (int x = 0; x < 4; ++x) img.at<cv::Vec3b>(0, x) = cv::Vec3b(levels[x], levels[x], levels[x]);
+  for (int x = 0; x < 4; ++x)
+    img.at<cv::Vec3b>(0, x) = cv::Vec3b(levels[x], levels[x], levels[x]);
   const PlaneMapping mapping(1.0, glm::dvec2{0.0, 0.0});  // 1 px per mm, pixel 0 at the origin
   const ScalarMap data = scalar_map_from_image(img, mapping);
   CHECK_THAT(data.value(glm::dvec3{1e-3, 0, 0}), WithinAbs(64.0 / 255.0, 1e-6));

@@ -23,20 +23,24 @@ namespace {
 
 constexpr double fs = 1000.0;  // [Hz]
 
-double db(std::complex<double> h) { return 20.0 * std::log10(std::abs(h)); }
+double db(std::complex<double> h) {
+  return 20.0 * std::log10(std::abs(h));
+}
 
 using Poly = std::vector<double>;  // coefficients of z^0, z^-1, ...
 
 Poly multiply(const Poly& a, const Poly& b) {
   Poly c(a.size() + b.size() - 1, 0.0);
   for (std::size_t i = 0; i < a.size(); ++i)
-    for (std::size_t j = 0; j < b.size(); ++j) c[i + j] += a[i] * b[j];
+    for (std::size_t j = 0; j < b.size(); ++j)
+      c[i + j] += a[i] * b[j];
   return c;
 }
 
 Poly power(const Poly& a, int n) {
   Poly r{1.0};
-  for (int i = 0; i < n; ++i) r = multiply(r, a);
+  for (int i = 0; i < n; ++i)
+    r = multiply(r, a);
   return r;
 }
 
@@ -46,7 +50,8 @@ Poly power(const Poly& a, int n) {
 Poly analog_butterworth(int n) {
   const double g = std::numbers::pi / (2.0 * n);
   Poly c(static_cast<std::size_t>(n) + 1, 1.0);
-  for (int k = 1; k <= n; ++k) c[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k) - 1] * std::cos((k - 1) * g) / std::sin(k * g);
+  for (int k = 1; k <= n; ++k)
+    c[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k) - 1] * std::cos((k - 1) * g) / std::sin(k * g);
   return c;
 }
 
@@ -63,15 +68,20 @@ void reference_butterworth(int n, double fc, bool high, Poly& num, Poly& den) {
   const Poly minus{1.0, -1.0}, plus{1.0, 1.0};
   den.assign(static_cast<std::size_t>(n) + 1, 0.0);
   for (int i = 0; i <= n; ++i) {
-    const Poly term = high ? multiply(power(plus, i), power(minus, n - i)) : multiply(power(minus, i), power(plus, n - i));
+    const Poly term =
+        high ? multiply(power(plus, i), power(minus, n - i)) : multiply(power(minus, i), power(plus, n - i));
     const double scale = c[static_cast<std::size_t>(i)] * std::pow(k, high ? i : n - i);
-    for (std::size_t j = 0; j < term.size(); ++j) den[j] += scale * term[j];
+    for (std::size_t j = 0; j < term.size(); ++j)
+      den[j] += scale * term[j];
   }
   num = power(high ? minus : plus, n);
-  for (double& v : num) v *= high ? 1.0 : std::pow(k, n);
+  for (double& v : num)
+    v *= high ? 1.0 : std::pow(k, n);
   const double a0 = den[0];
-  for (double& v : den) v /= a0;
-  for (double& v : num) v /= a0;
+  for (double& v : den)
+    v /= a0;
+  for (double& v : num)
+    v /= a0;
 }
 
 template <int N>
@@ -161,8 +171,8 @@ TEST_CASE("Butterworth steady state: a sine at the cutoff comes out at 1/sqrt(2)
 }
 
 TEST_CASE("bad filter parameters throw at setup") {
-  CHECK_THROWS_AS(Butterworth<4>::low_pass(500.0, fs), std::invalid_argument);   // at Nyquist
-  CHECK_THROWS_AS(Butterworth<4>::low_pass(600.0, fs), std::invalid_argument);   // above
+  CHECK_THROWS_AS(Butterworth<4>::low_pass(500.0, fs), std::invalid_argument);  // at Nyquist
+  CHECK_THROWS_AS(Butterworth<4>::low_pass(600.0, fs), std::invalid_argument);  // above
   CHECK_THROWS_AS(Butterworth<4>::high_pass(0.0, fs), std::invalid_argument);
   CHECK_THROWS_AS(Butterworth<4>::band_pass(100.0, 50.0, fs), std::invalid_argument);
   CHECK_THROWS_AS(Butterworth<4>::band_pass(100.0, 500.0, fs), std::invalid_argument);
@@ -172,7 +182,7 @@ TEST_CASE("bad filter parameters throw at setup") {
   CHECK_THROWS_AS((Equaliser<1>({EqualiserBand{600.0, 1.0, 6.0}}, fs)), std::invalid_argument);
   CHECK_THROWS_AS((Equaliser<1>({EqualiserBand{100.0, 0.0, 6.0}}, fs)), std::invalid_argument);
   CHECK_THROWS_AS(Biquad(BiquadCoefficients{1.0, 0.0, 0.0, -2.0, 1.0}), std::invalid_argument);  // double pole at 1
-  CHECK_THROWS_AS(Biquad(BiquadCoefficients{1.0, 0.0, 0.0, 0.0, 1.01}), std::invalid_argument);   // |pole| > 1
+  CHECK_THROWS_AS(Biquad(BiquadCoefficients{1.0, 0.0, 0.0, 0.0, 1.01}), std::invalid_argument);  // |pole| > 1
 }
 
 TEST_CASE("FIR by windowed sinc: symmetric taps, linear phase, group delay (N-1)/2") {
@@ -180,7 +190,8 @@ TEST_CASE("FIR by windowed sinc: symmetric taps, linear phase, group delay (N-1)
   const auto hp = FirFilter<41>::high_pass(200.0, fs, Window::blackman);
   const auto bp = FirFilter<40>::band_pass(100.0, 200.0, fs);
   const auto check_symmetric = [](const auto& taps) {
-    for (std::size_t i = 0; i < taps.size(); ++i) REQUIRE(taps[i] == Approx(taps[taps.size() - 1 - i]).margin(1e-15));
+    for (std::size_t i = 0; i < taps.size(); ++i)
+      REQUIRE(taps[i] == Approx(taps[taps.size() - 1 - i]).margin(1e-15));
   };
   check_symmetric(lp.taps());
   check_symmetric(hp.taps());
@@ -249,7 +260,8 @@ TEST_CASE("ARMA output variance equals input variance times sum h^2") {
   // ARMA(3,2): against the sum of the squared impulse response
   const Arma<3, 2> arma({-0.5, 0.3, -0.2}, {1.0, -0.4, 0.25});
   double sum_h2 = 0;
-  for (double h : arma.impulse_response(2000)) sum_h2 += h * h;
+  for (double h : arma.impulse_response(2000))
+    sum_h2 += h * h;
   CHECK_THAT(run_variance(arma), WithinRel(sum_h2, 0.02));
 }
 

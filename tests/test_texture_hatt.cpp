@@ -17,8 +17,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <iostream>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -38,8 +38,12 @@ namespace {
 
 const std::filesystem::path data_dir = std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / "tests" / "data" / "hatt";
 
-HattModelSet grid() { return load_hatt_model_set(data_dir / "Models_Synthetic Grid.xml"); }
-HattModelSet arma_set() { return load_hatt_model_set(data_dir / "Models_Synthetic ARMA.xml"); }
+HattModelSet grid() {
+  return load_hatt_model_set(data_dir / "Models_Synthetic Grid.xml");
+}
+HattModelSet arma_set() {
+  return load_hatt_model_set(data_dir / "Models_Synthetic ARMA.xml");
+}
 
 Probe stroke(double speed_m_s, double normal_force) {
   Probe p;
@@ -75,10 +79,12 @@ TEST_CASE("lsf_to_ar reproduces the published lsf2poly example") {
   // doctest of the Python 'spectrum' package): these LSFs give
   // a = [1 0.6148 0.9899 0.0001 0.0031 -0.0081] (full digits below).
   const std::vector<double> lsf{0.7842, 1.5605, 1.8776, 1.8984, 2.3593};
-  const std::vector<double> expect{1.0, 6.14837835e-01, 9.89884967e-01, 9.31594056e-05, 3.13713832e-03, -8.12002261e-03};
+  const std::vector<double> expect{
+      1.0, 6.14837835e-01, 9.89884967e-01, 9.31594056e-05, 3.13713832e-03, -8.12002261e-03};
   const auto a = lsf_to_ar(lsf);
   REQUIRE(a.size() == expect.size());
-  for (std::size_t i = 0; i < a.size(); ++i) CHECK_THAT(a[i], WithinAbs(expect[i], 1e-9));
+  for (std::size_t i = 0; i < a.size(); ++i)
+    CHECK_THAT(a[i], WithinAbs(expect[i], 1e-9));
 }
 
 TEST_CASE("lsf_to_ar for order 2 matches the closed form") {
@@ -98,18 +104,22 @@ TEST_CASE("AR -> LSF -> AR round trip on a polynomial built from its roots") {
   for (auto r : {std::polar(0.9, 0.5), std::polar(0.9, -0.5), std::polar(0.7, 1.8), std::polar(0.7, -1.8),
                  std::complex<double>(-0.5, 0.0)}) {
     std::vector<std::complex<double>> next(poly.size() + 1, 0.0);
-    for (std::size_t i = 0; i < poly.size(); ++i) next[i] += poly[i], next[i + 1] -= r * poly[i];
+    for (std::size_t i = 0; i < poly.size(); ++i)
+      next[i] += poly[i], next[i + 1] -= r * poly[i];
     poly = next;
   }
   std::vector<double> a;
-  for (auto c : poly) a.push_back(c.real());
+  for (auto c : poly)
+    a.push_back(c.real());
   const auto lsf = ar_to_lsf(a);
   REQUIRE(lsf.size() == 5);
-  for (std::size_t i = 1; i < lsf.size(); ++i) REQUIRE(lsf[i] > lsf[i - 1]);
+  for (std::size_t i = 1; i < lsf.size(); ++i)
+    REQUIRE(lsf[i] > lsf[i - 1]);
   const auto back = lsf_to_ar(lsf);
-  for (std::size_t i = 0; i < a.size(); ++i) CHECK_THAT(back[i], WithinAbs(a[i], 1e-9));
+  for (std::size_t i = 0; i < a.size(); ++i)
+    CHECK_THAT(back[i], WithinAbs(a[i], 1e-9));
   CHECK_THROWS_AS(ar_to_lsf(std::vector<double>{1.0, -1.7, 0.6}), std::invalid_argument);  // pole 1.2
-  CHECK_THROWS_AS(lsf_to_ar(std::vector<double>{1.0, 0.5}), std::invalid_argument);      // not increasing
+  CHECK_THROWS_AS(lsf_to_ar(std::vector<double>{1.0, 0.5}), std::invalid_argument);        // not increasing
 }
 
 // --- parsing -------------------------------------------------------------------------
@@ -131,7 +141,8 @@ TEST_CASE("a modelSet file is parsed with its units, lists, triangles and models
     // the file's ARcoeff (a_1..a_p) was computed independently from its LSFs
     const auto a = lsf_to_ar(s.models[i].ar_lsf);
     REQUIRE(s.models[i].ar_coeff.size() == 6);
-    for (std::size_t k = 0; k < 6; ++k) CHECK_THAT(a[k + 1], WithinAbs(s.models[i].ar_coeff[k], 1e-9));
+    for (std::size_t k = 0; k < 6; ++k)
+      CHECK_THAT(a[k + 1], WithinAbs(s.models[i].ar_coeff[k], 1e-9));
   }
   const HattModelSet m = arma_set();
   CHECK(m.ma_order == 2);
@@ -144,8 +155,8 @@ TEST_CASE("malformed or incomplete modelSet documents throw a clear error") {
   REQUIRE_NOTHROW(parse_hatt_model_set(minimal()));
   {  // models listed in another order than the vertex lists are matched by value
     const HattModelSet r = parse_hatt_model_set(minimal("<mu>0.2</mu>", "<var>0.1</var>",
-        "<tri><value>1</value><value>2</value><value>3</value></tri>",
-        "<ARlsf><value>0.5</value><value>1.5</value></ARlsf>", true));
+                                                        "<tri><value>1</value><value>2</value><value>3</value></tri>",
+                                                        "<ARlsf><value>0.5</value><value>1.5</value></ARlsf>", true));
     for (std::size_t v = 0; v < 3; ++v) {
       CHECK(r.models[v].speed == r.speeds[v]);
       CHECK(r.models[v].force == r.forces[v]);
@@ -176,17 +187,15 @@ TEST_CASE("malformed or incomplete modelSet documents throw a clear error") {
   fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>", "<tri><value>1</value><value>2</value></tri>"),
              "three vertex indices");
   fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>", ""), "<numTri> says 1");
-  fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>",
-                     "<tri><value>1</value><value>2</value><value>3</value></tri>",
+  fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>", "<tri><value>1</value><value>2</value><value>3</value></tri>",
                      "<ARlsf><value>1.5</value><value>0.5</value></ARlsf>"),
              "increase strictly");
-  fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>",
-                     "<tri><value>1</value><value>2</value><value>3</value></tri>",
+  fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>", "<tri><value>1</value><value>2</value><value>3</value></tri>",
                      "<ARlsf><value>0.5</value></ARlsf>"),
              "<ARlsf> holds 1 values, numARCoeff = 2");
-  fails_with(minimal("<mu>0.2</mu>", "<var>0.1</var>",
-                     "<tri><value>1</value><value>2</value><value>3</value></tri>", ""),
-             "missing <ARlsf>");
+  fails_with(
+      minimal("<mu>0.2</mu>", "<var>0.1</var>", "<tri><value>1</value><value>2</value><value>3</value></tri>", ""),
+      "missing <ARlsf>");
   std::string wrong_count = minimal();
   wrong_count.replace(wrong_count.find("<numMod>3"), 9, "<numMod>4");
   fails_with(wrong_count, "numMod");
@@ -234,10 +243,13 @@ TEST_CASE("every truncation of a model file is a clear error, never a crash") {
 
 namespace {
 
-std::string read_text(const std::filesystem::path& p) { return hapticfield::read_file(p.string()); }
+std::string read_text(const std::filesystem::path& p) {
+  return hapticfield::read_file(p.string());
+}
 
 void replace_all(std::string& s, const std::string& from, const std::string& to) {
-  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
 }
 
 /// Band powers of the synthesised acceleration (averaged Hann-windowed
@@ -247,7 +259,8 @@ void replace_all(std::string& s, const std::string& from, const std::string& to)
 double spectrum_error_db(HattTexture<>& tex, const HattModel& model, double gain, double period, Probe p) {
   constexpr std::size_t seg = 1024, segments = 64;
   p.period = period;
-  for (int i = 0; i < 2000; ++i) (void)tex.force(p);  // settle the filter
+  for (int i = 0; i < 2000; ++i)
+    (void)tex.force(p);  // settle the filter
   std::vector<double> power(seg / 2, 0.0), hann(seg);
   double w2 = 0;
   for (std::size_t n = 0; n < seg; ++n)
@@ -259,11 +272,13 @@ double spectrum_error_db(HattTexture<>& tex, const HattModel& model, double gain
       x[n] = hann[n] * tex.acceleration();
     }
     fft(x);
-    for (std::size_t k = 0; k < seg / 2; ++k) power[k] += std::norm(x[k]) / (w2 * segments);
+    for (std::size_t k = 0; k < seg / 2; ++k)
+      power[k] += std::norm(x[k]) / (w2 * segments);
   }
   const auto response = [](const std::vector<double>& c, double w) {
     std::complex<double> v = 0;
-    for (std::size_t k = 0; k < c.size(); ++k) v += c[k] * std::exp(std::complex<double>(0, -w * static_cast<double>(k)));
+    for (std::size_t k = 0; k < c.size(); ++k)
+      v += c[k] * std::exp(std::complex<double>(0, -w * static_cast<double>(k)));
     return std::norm(v);
   };
   double worst = 0;
@@ -315,7 +330,8 @@ TEST_CASE("toolkit files: capitalised <SampleRate>, <SpeedUnits>, <AccelUnits>, 
   // both spellings at once, and units we do not know, are errors naming the field
   std::string both = text;
   replace_all(both, "<SampleRate>1000</SampleRate>", "<SampleRate>1000</SampleRate><sampleRate>1000</sampleRate>");
-  CHECK_THROWS_WITH(parse_hatt_model_set(both, "k.xml"), Catch::Contains("k.xml") && Catch::Contains("both <SampleRate> and <sampleRate>"));
+  CHECK_THROWS_WITH(parse_hatt_model_set(both, "k.xml"),
+                    Catch::Contains("k.xml") && Catch::Contains("both <SampleRate> and <sampleRate>"));
   std::string furlong = text;
   replace_all(furlong, "<SpeedUnits>mm/s</SpeedUnits>", "<SpeedUnits>in/s</SpeedUnits>");
   CHECK_THROWS_WITH(parse_hatt_model_set(furlong, "k.xml"), Catch::Contains("<SpeedUnits> must be mm/s or m/s"));
@@ -358,7 +374,8 @@ TEST_CASE("a 1 kHz toolkit model makes one step per 1 kHz tick and its spectrum 
   for (std::size_t v : {1u, 3u}) {
     INFO("vertex " << v);
     HattTexture<> t(s, params);
-    const double err = spectrum_error_db(t, s.models[v], s.models[v].gain, 1e-3, stroke(s.speeds[v] / 1000.0, s.forces[v]));
+    const double err =
+        spectrum_error_db(t, s.models[v], s.models[v].gain, 1e-3, stroke(s.speeds[v] / 1000.0, s.forces[v]));
     CHECK(err < 0.5);
     // read as a 10 kHz model (the lower-case-only reader did this), its
     // 1 kHz output is about 10 dB off in some band: the test can tell
@@ -386,14 +403,17 @@ namespace {
 /// models carry only <ARcoeff> lists of `coeffs` values (numARCoeff = order).
 std::string coeff_only_set(std::size_t models, std::size_t order, std::size_t coeffs, bool distinct = true) {
   std::string s = "<modelSet><mu>0.1</mu><numMod>" + std::to_string(models) + "</numMod><numTri>1</numTri><speedList>";
-  for (std::size_t i = 0; i < models; ++i) s += "<value>" + std::to_string(i) + "</value>";
+  for (std::size_t i = 0; i < models; ++i)
+    s += "<value>" + std::to_string(i) + "</value>";
   s += "</speedList><forceList>";
-  for (std::size_t i = 0; i < models; ++i) s += "<value>" + std::to_string(i * i) + "</value>";
+  for (std::size_t i = 0; i < models; ++i)
+    s += "<value>" + std::to_string(i * i) + "</value>";
   s += "</forceList><tri><value>1</value><value>2</value><value>3</value></tri><numARCoeff>" + std::to_string(order) +
        "</numARCoeff>";
   for (std::size_t m = 0; m < models; ++m) {
     s += "<model><ARcoeff><value>" + std::string(distinct ? "-0.0" + std::to_string(m + 1) : "-0.5") + "</value>";
-    for (std::size_t k = 1; k < coeffs; ++k) s += "<value>0</value>";
+    for (std::size_t k = 1; k < coeffs; ++k)
+      s += "<value>0</value>";
     s += "</ARcoeff><var>1</var><speedMod>" + std::to_string(m) + "</speedMod><forceMod>" + std::to_string(m * m) +
          "</forceMod></model>";
   }
@@ -426,8 +446,10 @@ TEST_CASE("hostile model files: sizes are checked before anything is converted")
   // when the list was converted first): rejected by its size
   std::string long_list = coeff_only_set(3, 4, 4);
   std::string tokens = "-0.5";
-  for (int k = 1; k < 2000; ++k) tokens += " 0";
-  long_list.replace(long_list.find("<ARcoeff>") + 9, long_list.find("</ARcoeff>") - long_list.find("<ARcoeff>") - 9, tokens);
+  for (int k = 1; k < 2000; ++k)
+    tokens += " 0";
+  long_list.replace(long_list.find("<ARcoeff>") + 9, long_list.find("</ARcoeff>") - long_list.find("<ARcoeff>") - 9,
+                    tokens);
   CHECK(long_list.size() < 5000);
   double t = seconds([&] { throws_hatt(long_list, "<ARcoeff> holds 2000 values, numARCoeff = 4"); });
   CHECK(t < 1.0);  // loose bound: the size check converts nothing
@@ -458,13 +480,17 @@ TEST_CASE("hostile model files: a 1 MB file of order-256 <ARcoeff> lists fails o
 
 TEST_CASE("hostile model files: entities, deep nesting and stray roots are clear errors") {
   // entities are not expanded (no "billion laughs"): the text stays "&b;"
-  std::string laughs = "<?xml version=\"1.0\"?><!DOCTYPE modelSet [<!ENTITY a \"1111111111\">"
-                       "<!ENTITY b \"&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;\">]>" + minimal("<mu>&b;</mu>").substr(21);
+  std::string laughs =
+      "<?xml version=\"1.0\"?><!DOCTYPE modelSet [<!ENTITY a \"1111111111\">"
+      "<!ENTITY b \"&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;\">]>" +
+      minimal("<mu>&b;</mu>").substr(21);
   throws_hatt(laughs, "<mu> is not a finite number");
   // 100000 nested elements: parsed without recursion, then the field is missing
   std::string deep = "<modelSet>";
-  for (int i = 0; i < 100000; ++i) deep += "<a>";
-  for (int i = 0; i < 100000; ++i) deep += "</a>";
+  for (int i = 0; i < 100000; ++i)
+    deep += "<a>";
+  for (int i = 0; i < 100000; ++i)
+    deep += "</a>";
   throws_hatt(deep + "</modelSet>", "missing <mu>");
   throws_hatt(std::string(20, '\0'), "expected <modelSet>");
   throws_hatt("<?xml version=", "malformed XML");
@@ -509,7 +535,8 @@ TEST_CASE("barycentric weights equal 1 at a vertex and reproduce the point insid
         for (int m = 0; m < 3; ++m)
           if (hinted.vertex[static_cast<std::size_t>(k)] == plain.vertex[static_cast<std::size_t>(m)] &&
               plain.weight[static_cast<std::size_t>(m)] > 1e-9)
-            REQUIRE_THAT(hinted.weight[static_cast<std::size_t>(k)], WithinAbs(plain.weight[static_cast<std::size_t>(m)], 1e-9));
+            REQUIRE_THAT(hinted.weight[static_cast<std::size_t>(k)],
+                         WithinAbs(plain.weight[static_cast<std::size_t>(m)], 1e-9));
     }
   }
   const Barycentric out = tri.locate(900.0, 10.0);  // beyond the largest speed and force
@@ -524,7 +551,8 @@ TEST_CASE("at a model's vertex the texture uses exactly that model") {
     tex.update(s.speeds[v], s.forces[v]);
     const auto a = tex.ar_coefficients();
     REQUIRE(a.size() == 7);
-    for (std::size_t k = 0; k < 6; ++k) CHECK_THAT(a[k + 1], WithinAbs(s.models[v].ar_coeff[k], 1e-9));
+    for (std::size_t k = 0; k < 6; ++k)
+      CHECK_THAT(a[k + 1], WithinAbs(s.models[v].ar_coeff[k], 1e-9));
     CHECK_THAT(tex.variance(), WithinAbs(s.models[v].variance, 1e-15));
   }
   // between vertices: interpolated LSFs give a stable filter
@@ -539,7 +567,8 @@ TEST_CASE("at a model's vertex the texture uses exactly that model") {
   arma.update(m.speeds[2], m.forces[2]);
   const auto b = arma.ma_coefficients();
   REQUIRE(b.size() == 3);
-  for (std::size_t k = 0; k < 3; ++k) CHECK_THAT(b[k], WithinAbs(m.models[2].ma_coeff[k], 1e-9));
+  for (std::size_t k = 0; k < 3; ++k)
+    CHECK_THAT(b[k], WithinAbs(m.models[2].ma_coeff[k], 1e-9));
 }
 
 // --- synthesis and forces -------------------------------------------------------------------
@@ -551,7 +580,8 @@ TEST_CASE("synthesised acceleration variance = model variance x sum of squared A
   const auto& c = s.models[v].ar_coeff;
   const Arma<6, 0> reference({c[0], c[1], c[2], c[3], c[4], c[5]}, {1.0});
   double sum_h2 = 0;
-  for (double h : reference.impulse_response(5000)) sum_h2 += h * h;
+  for (double h : reference.impulse_response(5000))
+    sum_h2 += h * h;
   const Probe p = stroke(s.speeds[v] / 1000.0, s.forces[v]);
   const int n = 300'000;
   double sum = 0, sum2 = 0, fsum2 = 0;
@@ -580,7 +610,8 @@ TEST_CASE("ARMA model sets: variance = var x gain^2 x sum of squared ARMA impuls
   REQUIRE(b.size() == 3);
   const Arma<4, 2> reference({a[0], a[1], a[2], a[3]}, {b[0], b[1], b[2]});
   double sum_h2 = 0;
-  for (double h : reference.impulse_response(5000)) sum_h2 += h * h;
+  for (double h : reference.impulse_response(5000))
+    sum_h2 += h * h;
   const Probe p = stroke(s.speeds[v] / 1000.0, s.forces[v]);
   const int n = 300'000;
   double sum = 0, sum2 = 0;
@@ -641,7 +672,8 @@ TEST_CASE("coefficients can be refreshed every N ticks") {
   HattTexture<> every10(s, HattConfig{0.05, glm::dvec3{0, 0, 1}, 1, 10, 1e-3, false});
   (void)every10.force(stroke(0.05, 0.5));  // first tick: no update yet (initial model at (0, 0))
   const auto first = std::vector<double>(every10.ar_coefficients().begin(), every10.ar_coefficients().end());
-  for (int i = 0; i < 8; ++i) (void)every10.force(stroke(0.3, 3.0));
+  for (int i = 0; i < 8; ++i)
+    (void)every10.force(stroke(0.3, 3.0));
   CHECK(std::vector<double>(every10.ar_coefficients().begin(), every10.ar_coefficients().end()) == first);
   (void)every10.force(stroke(0.3, 3.0));  // 10th tick: update at (300 mm/s, 3 N)
   CHECK_THAT(every10.ar_coefficients()[1], WithinAbs(s.models[3].ar_coeff[0], 1e-9));
@@ -659,9 +691,9 @@ TEST_CASE("a full texture tick allocates nothing") {
   const NoiseLattice<GaussianNoise, 3> lat(GaussianNoise(1.0), 2, glm::dvec3{1e-3}, Interpolation::cubic);
   auto spatial = TextureField(SpatialSource(Fbm<GaussianNoise, 3>(lat, 0.5, 4)), TextureConfig{},
                               Butterworth<2>::low_pass(100.0, 1000.0));
-  auto sphere = TextureField(LocalSphere<GaussianMixtureNoise>(
-                                 GaussianMixtureNoise({{1.0, glm::dvec3{0.0}, glm::dmat3{1.0}}}), 3, 5e-4),
-                             TextureConfig{});
+  auto sphere = TextureField(
+      LocalSphere<GaussianMixtureNoise>(GaussianMixtureNoise({{1.0, glm::dvec3{0.0}, glm::dmat3{1.0}}}), 3, 5e-4),
+      TextureConfig{});
   glm::dvec3 total{0.0};
   const long allocations = test::count_allocations([&] {
     for (int i = 0; i < 5000; ++i) {

@@ -69,7 +69,8 @@ std::string write_mjpg(const std::string& name, const std::vector<cv::Mat>& fram
                          frames.front().size());
   REQUIRE(writer.isOpened());
   writer.set(cv::VIDEOWRITER_PROP_QUALITY, quality);
-  for (const cv::Mat& f : frames) writer.write(f);
+  for (const cv::Mat& f : frames)
+    writer.write(f);
   writer.release();
   return path;
 }
@@ -94,7 +95,9 @@ PrepareConfig plain_config(int size = 5) {
 }
 
 /// The force of one still picture, through the still-picture API (the oracle).
-TangibleImage still(const cv::Mat& bgr, const TangibleConfig& o) { return TangibleImage(to_gray(bgr), o); }
+TangibleImage still(const cv::Mat& bgr, const TangibleConfig& o) {
+  return TangibleImage(to_gray(bgr), o);
+}
 
 struct Quiet {
   Quiet() {
@@ -113,7 +116,8 @@ const char* opencv_doc_dir() {
 
 TEST_CASE("between cuts the force is the linear blend of the two bracketing frames", "[video]") {
   std::vector<cv::Mat> frames;
-  for (int k = 0; k < 6; ++k) frames.push_back(scene_frame(0, k));
+  for (int k = 0; k < 6; ++k)
+    frames.push_back(scene_frame(0, k));
   VideoSource source(write_sequence("blend", frames), {.fallback_fps = 25.0});
   const double fps = source.fps();
   const PrepareConfig config = plain_config();
@@ -139,8 +143,10 @@ TEST_CASE("between cuts the force is the linear blend of the two bracketing fram
 
 TEST_CASE("a cut is found at its frame and faded out and in, never blended", "[video]") {
   std::vector<cv::Mat> frames;
-  for (int k = 0; k < 10; ++k) frames.push_back(scene_frame(0, k));
-  for (int k = 0; k < 8; ++k) frames.push_back(scene_frame(1, k));
+  for (int k = 0; k < 10; ++k)
+    frames.push_back(scene_frame(0, k));
+  for (int k = 0; k < 8; ++k)
+    frames.push_back(scene_frame(1, k));
   VideoSource source(write_sequence("cut", frames), {.fallback_fps = 25.0});
   const double fps = source.fps();
   const PrepareConfig config = plain_config();
@@ -174,14 +180,18 @@ TEST_CASE("a cut is found at its frame and faded out and in, never blended", "[v
 
 TEST_CASE("scene cuts are found in a compressed, noisy clip with motion, and nowhere else", "[video]") {
   std::vector<cv::Mat> frames;
-  for (int k = 0; k < 15; ++k) frames.push_back(add_noise(scene_frame(0, k, 160, 96, 3.0), 6.0, 100u + k));
-  for (int k = 0; k < 15; ++k) frames.push_back(add_noise(scene_frame(1, k, 160, 96), 6.0, 200u + k));
-  for (int k = 15; k < 30; ++k) frames.push_back(add_noise(scene_frame(0, k, 160, 96, 3.0), 6.0, 300u + k));
+  for (int k = 0; k < 15; ++k)
+    frames.push_back(add_noise(scene_frame(0, k, 160, 96, 3.0), 6.0, 100u + k));
+  for (int k = 0; k < 15; ++k)
+    frames.push_back(add_noise(scene_frame(1, k, 160, 96), 6.0, 200u + k));
+  for (int k = 15; k < 30; ++k)
+    frames.push_back(add_noise(scene_frame(0, k, 160, 96, 3.0), 6.0, 300u + k));
   VideoSource source(write_mjpg("cuts", frames, 30.0, 50));
   VideoTimeline timeline(source, plain_config());
   timeline.run_to_end();
   std::vector<long> found;
-  for (const SceneCut& c : timeline.cuts()) found.push_back(c.frame);
+  for (const SceneCut& c : timeline.cuts())
+    found.push_back(c.frame);
   CHECK(found == std::vector<long>{15, 30});
   CHECK(timeline.prepared() == 45);
 }
@@ -216,7 +226,8 @@ TEST_CASE("temporal denoising removes codec flicker at static points and keeps m
       const double t = k / 30.0;
       std::vector<glm::dvec2> now;
       for (int y = 8; y < 50; y += 4)  // static area above the bar
-        for (int x = 8; x < 152; x += 4) now.push_back(timeline.at(t, x, y));
+        for (int x = 8; x < 152; x += 4)
+          now.push_back(timeline.at(t, x, y));
       if (k >= 5 && !previous.empty())
         for (std::size_t i = 0; i < now.size(); ++i) {
           const glm::dvec2 d = now[i] - previous[i];
@@ -301,7 +312,8 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
   config.before_prepare = [&](long index) {
     if (index >= 3 && hold.load()) {
       holding.store(true);
-      while (hold.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      while (hold.load())
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
       holding.store(false);
     }
     if (const int d = delay_ms.load()) std::this_thread::sleep_for(std::chrono::milliseconds(d));
@@ -366,7 +378,8 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
 
 TEST_CASE("a video field composes with a plane, textures and friction like a still picture", "[video]") {
   std::vector<cv::Mat> frames;
-  for (int k = 0; k < 4; ++k) frames.push_back(scene_frame(0, 0));
+  for (int k = 0; k < 4; ++k)
+    frames.push_back(scene_frame(0, 0));
   VideoFieldConfig config;
   config.prepare = plain_config(5);
   config.fade = 0.0;
@@ -405,7 +418,8 @@ TEST_CASE("bad video input is one clear error, and a damaged stream plays what d
 
   // An MJPG clip with a run of bytes overwritten in its middle.
   std::vector<cv::Mat> frames;
-  for (int k = 0; k < 30; ++k) frames.push_back(scene_frame(0, k, 96, 64, 1.0));
+  for (int k = 0; k < 30; ++k)
+    frames.push_back(scene_frame(0, k, 96, 64, 1.0));
   const std::string clip = write_mjpg("damaged", frames, 25.0);
   {
     std::fstream f(clip, std::ios::in | std::ios::out | std::ios::binary);
@@ -450,13 +464,15 @@ TEST_CASE("opencv-doc's real clips: cuts in Megamind, the damaged copy plays, vt
     VideoTimeline timeline(source, plain_config(17));
     timeline.run_to_end();
     std::string list;
-    for (const SceneCut& c : timeline.cuts()) list += std::to_string(c.frame) + " ";
+    for (const SceneCut& c : timeline.cuts())
+      list += std::to_string(c.frame) + " ";
     INFO("Megamind cuts: " << list);
     // The three camera changes, checked by eye on a contact sheet of the
     // clip (frames 97/98, 153/154, 199/200); frame 0 -> 1 is a fade from
     // black, not a cut.
     std::vector<long> frames;
-    for (const SceneCut& c : timeline.cuts()) frames.push_back(c.frame);
+    for (const SceneCut& c : timeline.cuts())
+      frames.push_back(c.frame);
     CHECK(frames == std::vector<long>{98, 154, 200});
   }
   if (fs::exists(d / "Megamind_bugy.avi")) {
@@ -473,8 +489,7 @@ TEST_CASE("opencv-doc's real clips: cuts in Megamind, the damaged copy plays, vt
   }
 }
 
-TEST_CASE("a live source blends the previous and the newest frame one frame late, and fades across a cut",
-          "[video]") {
+TEST_CASE("a live source blends the previous and the newest frame one frame late, and fades across a cut", "[video]") {
   PrepareConfig config = plain_config();
   config.cuts.min_scene_frames = 1;
   FramePreparer prep(config);

@@ -21,7 +21,6 @@
 using namespace hapticfield;
 using namespace hapticfield::view;
 
-
 namespace {
 
 /// 120 x 80 px, white on the left, black from column 60.
@@ -63,7 +62,8 @@ TEST_CASE("Scope::range is a nice value above the largest force, and the window 
 
 TEST_CASE("SampleRing: in order, a full ring drops and counts, two threads") {
   SampleRing<4> ring;
-  for (int i = 0; i < 6; ++i) ring.push({static_cast<double>(i), {0, 0}, {0, 0, 0}});
+  for (int i = 0; i < 6; ++i)
+    ring.push({static_cast<double>(i), {0, 0}, {0, 0, 0}});
   CHECK(ring.dropped() == 2);
   ViewSample s;
   for (int i = 0; i < 4; ++i) {
@@ -76,7 +76,8 @@ TEST_CASE("SampleRing: in order, a full ring drops and counts, two threads") {
   constexpr int n = 100000;
   std::thread producer([&] {
     for (int i = 0; i < n; ++i)
-      while (!shared.push({static_cast<double>(i), {i, -i}, {0, 0, 0}})) std::this_thread::yield();
+      while (!shared.push({static_cast<double>(i), {i, -i}, {0, 0, 0}}))
+        std::this_thread::yield();
   });
   int expected = 0;
   bool in_order = true;

@@ -31,7 +31,9 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-Bytes bytes_of(std::span<const std::uint8_t> s) { return Bytes(s.begin(), s.end()); }
+Bytes bytes_of(std::span<const std::uint8_t> s) {
+  return Bytes(s.begin(), s.end());
+}
 std::span<const std::uint8_t> text(const std::string& s) {
   return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
 }
@@ -75,7 +77,10 @@ struct Rig {
     return c;
   }
   explicit Rig(SimulatedWoodyConfig a, LoopConfig c = {})
-      : arm(a), link(arm, [this] { return clock.now(); }), device(link, host(a.generation, clock)), loop(device, clock, quiet(c)) {}
+      : arm(a),
+        link(arm, [this] { return clock.now(); }),
+        device(link, host(a.generation, clock)),
+        loop(device, clock, quiet(c)) {}
 };
 
 /// A line Transport over byte queues, for driving WoodyArm by hand.
@@ -186,9 +191,10 @@ TEST_CASE("woody codecs: hand-assembled reports, round trips and rejects") {
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> d(-32768, 32767);
   for (int k = 0; k < 2000; ++k) {
-    woody::P2Out m{{static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng))},
-                   static_cast<std::int16_t>(d(rng)),
-                   {static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng))}};
+    woody::P2Out m{
+        {static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng))},
+        static_cast<std::int16_t>(d(rng)),
+        {static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng)), static_cast<std::int16_t>(d(rng))}};
     woody::P2Out b;
     REQUIRE(woody::decode(std::span<const std::uint8_t>(out.data(), woody::encode(m, out)), b) == Status::ok);
     REQUIRE((b.milliamps == m.milliamps && b.command == m.command && b.attr == m.attr));
@@ -196,7 +202,8 @@ TEST_CASE("woody codecs: hand-assembled reports, round trips and rejects") {
     const std::size_t n = woody::encode_p4_command(ma, out);
     REQUIRE(n >= woody::p4_min_command);
     std::size_t line = 0;
-    while (out[line] != '\n') ++line;
+    while (out[line] != '\n')
+      ++line;
     std::array<std::int32_t, 3> parsed{};
     REQUIRE(woody::parse_p4_command(std::span<const std::uint8_t>(out.data(), line), parsed) == 0);
     REQUIRE(parsed == std::array<std::int32_t, 3>{ma[0], ma[1], ma[2]});
@@ -273,15 +280,16 @@ TEST_CASE("woody kinematics: encoder counts to angles with dir and capstan/body 
   const WoodyKinematics v(woody_presets::vintage());
   CHECK_THAT(v.angles({0, 4000, 0}).y, WithinAbs(-2.0 * std::numbers::pi / 12, 1e-12));
   // counts() inverts angles().
-  for (const std::array<std::int32_t, 3> c : {std::array<std::int32_t, 3>{123, -4567, 8901}, std::array<std::int32_t, 3>{0, 1, -1}})
+  for (const std::array<std::int32_t, 3> c :
+       {std::array<std::int32_t, 3>{123, -4567, 8901}, std::array<std::int32_t, 3>{0, 1, -1}})
     CHECK(k.counts(k.angles(c)) == c);
 }
 
 TEST_CASE("woody kinematics: Jacobian against central differences, virtual work, current round trip") {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.5, 1.5);
-  for (const auto& preset : {woody_presets::woody_v2015(), woody_presets::woodenhaptics_v2019(), woody_presets::aluhaptics_v2(),
-                             woody_presets::vintage()}) {
+  for (const auto& preset : {woody_presets::woody_v2015(), woody_presets::woodenhaptics_v2019(),
+                             woody_presets::aluhaptics_v2(), woody_presets::vintage()}) {
     const WoodyKinematics k(preset);
     for (int n = 0; n < 200; ++n) {
       const glm::dvec3 q{u(rng), u(rng), u(rng)};
@@ -291,7 +299,8 @@ TEST_CASE("woody kinematics: Jacobian against central differences, virtual work,
         glm::dvec3 dq{0.0};
         dq[i] = h;
         const glm::dvec3 fd = (k.forward_source(q + dq) - k.forward_source(q - dq)) / (2.0 * h);
-        for (int r = 0; r < 3; ++r) REQUIRE_THAT(j[i][r], WithinAbs(fd[r], 1e-8));
+        for (int r = 0; r < 3; ++r)
+          REQUIRE_THAT(j[i][r], WithinAbs(fd[r], 1e-8));
       }
       // Virtual work: tau . dq == F . dp for a small joint motion (device frame).
       const glm::dvec3 f{u(rng), u(rng), u(rng)};
@@ -368,7 +377,8 @@ TEST_CASE("WoodyArm P1: decodes signs and offsets, zero current without state, f
   const Bytes& w = t.written.back();
   REQUIRE(w.size() == 9);
   CHECK(w[0] == 0x00);
-  for (int i = 0; i < 3; ++i) CHECK(le16(w, 1 + 2 * static_cast<std::size_t>(i)) == std::lround(std::clamp(amps[i], -3.0, 3.0) * 1000.0));
+  for (int i = 0; i < 3; ++i)
+    CHECK(le16(w, 1 + 2 * static_cast<std::size_t>(i)) == std::lround(std::clamp(amps[i], -3.0, 3.0) * 1000.0));
   REQUIRE(arm.write({0.0, 500.0, 0.0}) == Status::ok);  // far beyond the limit
   bool saturated = false;
   for (int i = 0; i < 3; ++i) {
@@ -396,7 +406,8 @@ TEST_CASE("WoodyArm P1: decodes signs and offsets, zero current without state, f
 
 TEST_CASE("WoodyArm P4: an error reply is counted, its encoders ignored, the state kept") {
   ScriptTransport t;
-  t.incoming.push_back(Bytes{'[', '3', ',', '1', '0', ',', '2', '0', ',', '3', '0', ',', '0', ',', '0', ',', '0', ',', '0', ']', '\n'});
+  t.incoming.push_back(
+      Bytes{'[', '3', ',', '1', '0', ',', '2', '0', ',', '3', '0', ',', '0', ',', '0', ',', '0', ',', '0', ']', '\n'});
   WoodyArm arm(t, WoodyArmConfig::defaults(Generation::p4_text));
   REQUIRE(t.written.size() == 1);  // one wake-up frame was enough
   DeviceState s;
@@ -549,7 +560,8 @@ TEST_CASE("end to end P4: a malformed frame gets the error reply; WoodyArm count
   CHECK(rig.device.last_error() == woody::p4_error::buffer_full);
 }
 
-TEST_CASE("P2: request_home sends the calibrate command while the button flag is set; counters jump to the attributes") {
+TEST_CASE(
+    "P2: request_home sends the calibrate command while the button flag is set; counters jump to the attributes") {
   SimulatedWoodyConfig a = sim_config(Generation::p2_hid14);
   a.hand.holding = false;
   Rig rig(a);

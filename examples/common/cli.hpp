@@ -64,11 +64,17 @@ struct Interval {
 };
 
 /// [lo, hi]
-[[nodiscard]] inline Interval closed(double lo, double hi) { return {lo, hi, false, false}; }
+[[nodiscard]] inline Interval closed(double lo, double hi) {
+  return {lo, hi, false, false};
+}
 /// (lo, hi)
-[[nodiscard]] inline Interval open(double lo, double hi) { return {lo, hi, true, true}; }
+[[nodiscard]] inline Interval open(double lo, double hi) {
+  return {lo, hi, true, true};
+}
 /// (lo, hi]
-[[nodiscard]] inline Interval open_closed(double lo, double hi) { return {lo, hi, true, false}; }
+[[nodiscard]] inline Interval open_closed(double lo, double hi) {
+  return {lo, hi, true, false};
+}
 
 namespace detail {
 
@@ -80,7 +86,8 @@ inline std::string number_text(double v) {
   const auto e = s.find("e+");
   if (e != std::string::npos) {
     std::size_t digits = e + 2;
-    while (digits + 1 < s.size() && s[digits] == '0') ++digits;
+    while (digits + 1 < s.size() && s[digits] == '0')
+      ++digits;
     s = s.substr(0, e + 1) + s.substr(digits);
   }
   return s;
@@ -100,7 +107,8 @@ inline std::string quoted(std::string_view text) {
 
 /// Makes a message fit on one line.
 inline std::string one_line(std::string text) {
-  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' '))
+    text.pop_back();
   for (char& c : text)
     if (c == '\n' || c == '\r') c = ' ';
   return text.empty() ? std::string("unknown error") : text;
@@ -142,7 +150,8 @@ inline std::string Interval::text() const {
   errno = 0;
   char* end = nullptr;
   const long long v = std::strtoll(text.c_str(), &end, 10);
-  if (errno == ERANGE || v < lo || v > hi) throw UsageError(what + " must be in " + range + ", got " + detail::quoted(text));
+  if (errno == ERANGE || v < lo || v > hi)
+    throw UsageError(what + " must be in " + range + ", got " + detail::quoted(text));
   return v;
 }
 
@@ -198,7 +207,8 @@ inline void check_output_dir(const std::string& path, const std::string& what) {
     return;
   }
   fs::path ancestor = p.parent_path();
-  while (!ancestor.empty() && !fs::exists(ancestor, ec)) ancestor = ancestor.parent_path();
+  while (!ancestor.empty() && !fs::exists(ancestor, ec))
+    ancestor = ancestor.parent_path();
   if (ancestor.empty()) ancestor = ".";
   if (!fs::is_directory(ancestor, ec)) throw FileError(head + detail::quoted(ancestor.string()) + " is not a folder");
   if (::access(ancestor.c_str(), W_OK | X_OK) != 0)
@@ -297,8 +307,10 @@ class Parser {
   /// @throws FileError naming the flag.
   void finish() const {
     for (const Output& o : outputs_) {
-      if (o.dir) check_output_dir(o.path, o.flag);
-      else check_output_file(o.path, o.flag);
+      if (o.dir)
+        check_output_dir(o.path, o.flag);
+      else
+        check_output_file(o.path, o.flag);
     }
   }
 

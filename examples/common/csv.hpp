@@ -24,20 +24,22 @@
 namespace hapticfield::cli {
 
 struct CsvConfig {
-  std::string columns{"x,y"};           ///< the column names, for messages ("x,y,vx,vy")
-  std::string what{"probes"};           ///< what the file holds, for messages
-  std::size_t max_line_bytes{4096};     ///< longest line [bytes]
-  std::size_t max_rows{1'000'000};      ///< most rows
-  bool finite_only{false};              ///< reject NaN / Inf values
-  bool allow_empty{false};              ///< a file with no rows is fine
+  std::string columns{"x,y"};        ///< the column names, for messages ("x,y,vx,vy")
+  std::string what{"probes"};        ///< what the file holds, for messages
+  std::size_t max_line_bytes{4096};  ///< longest line [bytes]
+  std::size_t max_rows{1'000'000};   ///< most rows
+  bool finite_only{false};           ///< reject NaN / Inf values
+  bool allow_empty{false};           ///< a file with no rows is fine
 };
 
 namespace detail {
 
 /// Parses one trimmed cell as a number; false when it is not one.
 inline bool csv_number(std::string_view cell, double& out) {
-  while (!cell.empty() && (cell.front() == ' ' || cell.front() == '\t')) cell.remove_prefix(1);
-  while (!cell.empty() && (cell.back() == ' ' || cell.back() == '\t')) cell.remove_suffix(1);
+  while (!cell.empty() && (cell.front() == ' ' || cell.front() == '\t'))
+    cell.remove_prefix(1);
+  while (!cell.empty() && (cell.back() == ' ' || cell.back() == '\t'))
+    cell.remove_suffix(1);
   if (cell.empty() || cell.size() > 512) return false;
   char buf[514];
   cell.copy(buf, cell.size());
@@ -65,9 +67,9 @@ inline std::string csv_excerpt(std::string_view line) {
 ///         longer than 4096 bytes", "NAME: more than 1000000 rows",
 ///         "NAME: no x,y rows".
 template <std::size_t N>
-  requires(N >= 1)
-[[nodiscard]] std::vector<std::array<double, N>> parse_csv(std::string_view text, const std::string& name,
-                                                           const CsvConfig& config = {}) {
+requires(N >= 1)
+    [[nodiscard]] std::vector<std::array<double, N>> parse_csv(std::string_view text, const std::string& name,
+                                                               const CsvConfig& config = {}) {
   std::vector<std::array<double, N>> rows;
   std::size_t number = 0;
   bool header_seen = false;
@@ -120,8 +122,8 @@ template <std::size_t N>
 /// max_rows * max_line_bytes bytes.
 /// @throws FileError "cannot open probes file 'p': no such file", ... and as parse_csv().
 template <std::size_t N>
-  requires(N >= 1)
-[[nodiscard]] std::vector<std::array<double, N>> read_csv(const std::string& path, const CsvConfig& config = {}) {
+requires(N >= 1)
+    [[nodiscard]] std::vector<std::array<double, N>> read_csv(const std::string& path, const CsvConfig& config = {}) {
   std::string text;
   try {
     text = read_file(path, static_cast<std::uintmax_t>(config.max_rows + 1) * (config.max_line_bytes + 2));

@@ -32,13 +32,15 @@ namespace detail {
 inline int run(const std::vector<std::string>& args) {
   std::fflush(nullptr);  // our own output first
   std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  for (const std::string& a : args)
+    argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   pid_t pid = 0;
   if (posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
   int status = 0;
   pid_t done = 0;
-  do done = waitpid(pid, &status, 0);
+  do
+    done = waitpid(pid, &status, 0);
   while (done < 0 && errno == EINTR);
   if (done != pid) return -1;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;

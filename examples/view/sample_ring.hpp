@@ -17,15 +17,14 @@ namespace hapticfield::view {
 
 /// One servo tick as the viewer draws it.
 struct ViewSample {
-  double t{0.0};                 ///< loop time [s]
-  glm::dvec2 pixel{0.0};         ///< probe in the picture [px] (x right, y down)
-  glm::dvec3 force{0.0};         ///< commanded force, device frame [N]
+  double t{0.0};          ///< loop time [s]
+  glm::dvec2 pixel{0.0};  ///< probe in the picture [px] (x right, y down)
+  glm::dvec3 force{0.0};  ///< commanded force, device frame [N]
 };
 
 /// SPSC ring of N samples (N a power of two).
 template <std::size_t N>
-  requires(N >= 2 && (N & (N - 1)) == 0)
-class SampleRing {
+requires(N >= 2 && (N & (N - 1)) == 0) class SampleRing {
  public:
   /// Producer (servo thread): false when full (the sample is dropped).
   bool push(const ViewSample& s) noexcept {

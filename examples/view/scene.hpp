@@ -23,8 +23,8 @@
 #include "hapticfield/image.hpp"
 #include "hapticfield/kernels.hpp"
 #include "hapticfield/normals.hpp"
-#include "hapticfield/texture/noise.hpp"
 #include "hapticfield/texture/lattice.hpp"
+#include "hapticfield/texture/noise.hpp"
 #include "hapticfield/texture/texture_field.hpp"
 
 namespace hapticfield::view {
@@ -33,29 +33,42 @@ enum class FieldKind { tangible, normals, texture };
 
 [[nodiscard]] inline const char* field_name(FieldKind k) noexcept {
   switch (k) {
-    case FieldKind::tangible: return "tangible";
-    case FieldKind::normals: return "normals";
-    case FieldKind::texture: return "texture";
+    case FieldKind::tangible:
+      return "tangible";
+    case FieldKind::normals:
+      return "normals";
+    case FieldKind::texture:
+      return "texture";
   }
   return "?";
 }
 [[nodiscard]] inline const char* mask_name(MaskKind m) noexcept {
   switch (m) {
-    case MaskKind::prewitt: return "prewitt";
-    case MaskKind::sobel: return "sobel";
-    case MaskKind::scharr: return "scharr";
-    case MaskKind::roberts: return "roberts";
-    case MaskKind::gaussian: return "gauss";
-    case MaskKind::emboss: return "emboss";
+    case MaskKind::prewitt:
+      return "prewitt";
+    case MaskKind::sobel:
+      return "sobel";
+    case MaskKind::scharr:
+      return "scharr";
+    case MaskKind::roberts:
+      return "roberts";
+    case MaskKind::gaussian:
+      return "gauss";
+    case MaskKind::emboss:
+      return "emboss";
   }
   return "?";
 }
 [[nodiscard]] inline const char* border_name(Border b) noexcept {
   switch (b) {
-    case Border::suspend: return "suspend";
-    case Border::clamp: return "clamp";
-    case Border::reflect: return "reflect";
-    case Border::fade: return "fade";
+    case Border::suspend:
+      return "suspend";
+    case Border::clamp:
+      return "clamp";
+    case Border::reflect:
+      return "reflect";
+    case Border::fade:
+      return "fade";
   }
   return "?";
 }
@@ -65,17 +78,17 @@ struct SceneConfig {
   FieldKind kind{FieldKind::tangible};
   // tangible images
   MaskKind mask{MaskKind::prewitt};
-  int size{17};                  ///< mask size [px]
+  int size{17};  ///< mask size [px]
   Border border{Border::fade};
-  double denoise_px{0.0};        ///< Gaussian blur of the picture before the masks, sigma [px]; 0: none
-  double gain{1.0};              ///< force at a black/white edge [N]
+  double denoise_px{0.0};  ///< Gaussian blur of the picture before the masks, sigma [px]; 0: none
+  double gain{1.0};        ///< force at a black/white edge [N]
   // normals from a picture
-  std::vector<std::vector<glm::dvec2>> faces;  ///< 4 corners per face [px]
-  double focal_px{0.0};          ///< focal length [px]; 0: a 60 degree field of view
+  std::vector<std::vector<glm::dvec2>> faces;    ///< 4 corners per face [px]
+  double focal_px{0.0};                          ///< focal length [px]; 0: a 60 degree field of view
   double normals_max_force{kim_kwon_max_force};  ///< [N]
   // stochastic texture
-  double grain_mm{2.0};          ///< lattice spacing [mm]
-  double texture_gain{0.5};      ///< force per texture unit [N]
+  double grain_mm{2.0};      ///< lattice spacing [mm]
+  double texture_gain{0.5};  ///< force per texture unit [N]
   std::uint32_t seed{1};
 };
 
@@ -85,10 +98,14 @@ struct SizeRange {
 };
 [[nodiscard]] inline SizeRange size_range(MaskKind m) noexcept {
   switch (m) {
-    case MaskKind::roberts: return {2, 2, 1};
-    case MaskKind::scharr: return {3, 3, 2};
-    case MaskKind::sobel: return {3, 31, 2};
-    default: return {3, 129, 2};
+    case MaskKind::roberts:
+      return {2, 2, 1};
+    case MaskKind::scharr:
+      return {3, 3, 2};
+    case MaskKind::sobel:
+      return {3, 31, 2};
+    default:
+      return {3, 129, 2};
   }
 }
 
@@ -102,8 +119,8 @@ struct SizeRange {
 /// A field and what the viewer draws under the probe.
 struct Scene {
   AnyField field;
-  cv::Mat underlay;     ///< BGR, the picture's size
-  std::string label;    ///< one line: the field and its parameters
+  cv::Mat underlay;   ///< BGR, the picture's size
+  std::string label;  ///< one line: the field and its parameters
 };
 
 /// A still picture as a frame source (a video source has the same shape).
@@ -125,8 +142,10 @@ namespace detail {
 
 inline AnyField tangible(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping, cv::Mat& underlay) {
   cv::Mat source;  // a new buffer: the frame itself is never blurred in place
-  if (c.denoise_px > 0.0) cv::GaussianBlur(frame, source, cv::Size(), c.denoise_px);
-  else source = frame;
+  if (c.denoise_px > 0.0)
+    cv::GaussianBlur(frame, source, cv::Size(), c.denoise_px);
+  else
+    source = frame;
   TangibleConfig options;
   options.mask = c.mask;
   options.size = c.size;
@@ -142,9 +161,8 @@ inline cv::Scalar normal_colour(glm::dvec3 n) {
 
 inline AnyField normals(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping, cv::Mat& underlay) {
   if (c.faces.empty()) throw std::invalid_argument("--field normals needs at least one --face");
-  const Camera camera = c.focal_px > 0.0
-                            ? Camera::from_focal(c.focal_px, Camera::image_centre(frame.cols, frame.rows))
-                            : Camera::from_field_of_view(60.0, frame.cols, frame.rows);
+  const Camera camera = c.focal_px > 0.0 ? Camera::from_focal(c.focal_px, Camera::image_centre(frame.cols, frame.rows))
+                                         : Camera::from_field_of_view(60.0, frame.cols, frame.rows);
   std::vector<ImageFace> faces;
   cv::Mat tint = frame.clone();
   for (std::size_t i = 0; i < c.faces.size(); ++i) {
@@ -156,7 +174,8 @@ inline AnyField normals(const cv::Mat& frame, const SceneConfig& c, const PlaneM
     }
     faces.push_back({c.faces[i], pose.normal});
     std::vector<cv::Point> polygon;
-    for (const glm::dvec2& p : c.faces[i]) polygon.emplace_back(cvRound(p.x), cvRound(p.y));
+    for (const glm::dvec2& p : c.faces[i])
+      polygon.emplace_back(cvRound(p.x), cvRound(p.y));
     cv::fillPoly(tint, std::vector<std::vector<cv::Point>>{polygon}, normal_colour(pose.normal));
   }
   cv::addWeighted(frame, 0.45, tint, 0.55, 0.0, underlay);
@@ -175,8 +194,8 @@ inline AnyField texture_field(const cv::Mat& frame, const SceneConfig& c, const 
   for (int y = 0; y < frame.rows; ++y)
     for (int x = 0; x < frame.cols; ++x) {
       const glm::dvec3 g = lattice(mapping.to_device(glm::dvec2{x, y}));
-      underlay.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(128.0 + 110.0 * g.x),
-                                               cv::saturate_cast<uchar>(128.0 + 110.0 * g.y), 110);
+      underlay.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(cv::saturate_cast<uchar>(128.0 + 110.0 * g.x), cv::saturate_cast<uchar>(128.0 + 110.0 * g.y), 110);
     }
   TextureConfig params;
   params.gain = c.texture_gain;

@@ -47,8 +47,8 @@ namespace hapticfield::view {
 
 /// Settings of Scope.
 struct ScopeConfig {
-  double window{5.0};      ///< time shown [s]
-  double min_range{0.1};   ///< smallest half-height of the force axis [N]
+  double window{5.0};     ///< time shown [s]
+  double min_range{0.1};  ///< smallest half-height of the force axis [N]
 };
 
 /// History of samples for the scope, and its drawing.
@@ -59,7 +59,8 @@ class Scope {
   /// Adds a sample; drops those older than the window.
   void add(const ViewSample& s) {
     samples_.push_back(s);
-    while (!samples_.empty() && samples_.front().t < s.t - config_.window) samples_.pop_front();
+    while (!samples_.empty() && samples_.front().t < s.t - config_.window)
+      samples_.pop_front();
   }
   void clear() { samples_.clear(); }
   [[nodiscard]] const std::deque<ViewSample>& samples() const noexcept { return samples_; }
@@ -68,7 +69,8 @@ class Scope {
   /// force shown.
   [[nodiscard]] double range() const {
     double peak = 0.0;
-    for (const ViewSample& s : samples_) peak = std::max(peak, glm::length(s.force));
+    for (const ViewSample& s : samples_)
+      peak = std::max(peak, glm::length(s.force));
     peak = std::max(peak * 1.1, config_.min_range);
     const double magnitude = std::pow(10.0, std::floor(std::log10(peak)));
     for (const double m : {1.0, 2.0, 2.5, 5.0, 10.0})

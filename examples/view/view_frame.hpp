@@ -28,9 +28,9 @@ inline const cv::Scalar arrow_colour(0, 200, 255);
 
 /// Where things go on the canvas.
 struct ViewLayout {
-  static constexpr int margin = 10;        ///< [px]
-  static constexpr int panel_width = 330;  ///< status panel [px]
-  static constexpr int scope_height = 230; ///< [px]
+  static constexpr int margin = 10;                                        ///< [px]
+  static constexpr int panel_width = 330;                                  ///< status panel [px]
+  static constexpr int scope_height = 230;                                 ///< [px]
   static constexpr int max_picture_width = 800, max_picture_height = 600;  ///< [px]
 
   cv::Rect picture;  ///< the picture, scaled by `scale`
@@ -56,31 +56,30 @@ struct ViewLayout {
 
   /// Canvas position of picture position p [px].
   [[nodiscard]] cv::Point to_canvas(glm::dvec2 p) const {
-    return {picture.x + static_cast<int>(std::lround(p.x * scale)), picture.y + static_cast<int>(std::lround(p.y * scale))};
+    return {picture.x + static_cast<int>(std::lround(p.x * scale)),
+            picture.y + static_cast<int>(std::lround(p.y * scale))};
   }
   /// Picture position [px] of a canvas point.
-  [[nodiscard]] glm::dvec2 to_picture(int x, int y) const {
-    return {(x - picture.x) / scale, (y - picture.y) / scale};
-  }
+  [[nodiscard]] glm::dvec2 to_picture(int x, int y) const { return {(x - picture.x) / scale, (y - picture.y) / scale}; }
 };
 
 /// Everything the status panel shows.
 struct ViewStatus {
-  std::string source;        ///< picture file
-  std::string device;        ///< device name
-  std::string field;         ///< Scene::label
+  std::string source;  ///< picture file
+  std::string device;  ///< device name
+  std::string field;   ///< Scene::label
   LoopSnapshot loop{};
-  bool latched{false};       ///< the safety chain holds zero force now
+  bool latched{false};  ///< the safety chain holds zero force now
   std::uint32_t latch_bits{0};
   std::uint64_t dropped{0};  ///< samples the viewer missed
   bool paused{false};
-  std::string note;          ///< a transient message (a saved screenshot, a refused key)
+  std::string note;  ///< a transient message (a saved screenshot, a refused key)
 };
 
 /// Settings of the drawing.
 struct ViewDrawConfig {
   double arrow_px_per_newton{150.0};  ///< [px/N]
-  double arrow_max_px{120.0};        ///< longest arrow [px]
+  double arrow_max_px{120.0};         ///< longest arrow [px]
 };
 
 /// Draws the whole view into `canvas` (allocated here, BGR).
@@ -103,7 +102,8 @@ inline void draw_view(cv::Mat& canvas, const ViewLayout& layout, const cv::Mat& 
   arrow *= config.arrow_px_per_newton;
   if (const double len = glm::length(arrow); len > config.arrow_max_px) arrow *= config.arrow_max_px / len;
   if (glm::length(arrow) >= 3.0) {
-    const cv::Point tip = probe + cv::Point(static_cast<int>(std::lround(arrow.x)), static_cast<int>(std::lround(arrow.y)));
+    const cv::Point tip =
+        probe + cv::Point(static_cast<int>(std::lround(arrow.x)), static_cast<int>(std::lround(arrow.y)));
     cv::arrowedLine(pic, probe, tip, cv::Scalar(0, 0, 0), 4, cv::LINE_AA, 0, 0.25);
     cv::arrowedLine(pic, probe, tip, arrow_colour, 2, cv::LINE_AA, 0, 0.25);
   }
@@ -138,14 +138,16 @@ inline void draw_view(cv::Mat& canvas, const ViewLayout& layout, const cv::Mat& 
   std::snprintf(text, sizeof text, "jitter p99-p50 %.0f us  wake p99 %.0f us", (s.period_p99 - s.period_p50) * 1e6,
                 s.wake_p99 * 1e6);
   line(text);
-  std::snprintf(text, sizeof text, "late ticks %llu   missed deadlines %llu", static_cast<unsigned long long>(s.overruns),
-                static_cast<unsigned long long>(s.missed_deadlines));
+  std::snprintf(text, sizeof text, "late ticks %llu   missed deadlines %llu",
+                static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines));
   line(text);
-  std::snprintf(text, sizeof text, "safety events %llu   latches %llu", static_cast<unsigned long long>(s.safety_events),
-                static_cast<unsigned long long>(s.latches));
+  std::snprintf(text, sizeof text, "safety events %llu   latches %llu",
+                static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
   line(text);
-  if (status.latched) line("ZERO FORCE: " + safety_events::names(status.latch_bits), {0, 0, 220});
-  else if (s.latches > 0) line("last latch: " + safety_events::names(s.last_latch), {0, 90, 200});
+  if (status.latched)
+    line("ZERO FORCE: " + safety_events::names(status.latch_bits), {0, 0, 220});
+  else if (s.latches > 0)
+    line("last latch: " + safety_events::names(s.last_latch), {0, 90, 200});
   y += 6;
   std::snprintf(text, sizeof text, "probe %.1f, %.1f px", now.pixel.x, now.pixel.y);
   line(text);

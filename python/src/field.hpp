@@ -35,11 +35,13 @@ struct FieldSum {
   std::vector<SharedField> parts;
   glm::dvec3 force(const Probe& probe) noexcept {
     glm::dvec3 f{0.0};
-    for (auto& p : parts) f += p.force(probe);
+    for (auto& p : parts)
+      f += p.force(probe);
     return f;
   }
   void reset() noexcept {
-    for (auto& p : parts) p.reset();
+    for (auto& p : parts)
+      p.reset();
   }
 };
 
@@ -57,13 +59,16 @@ inline py::ssize_t rows_of(const Array& a, py::ssize_t cols, const char* what) {
     return a.shape(0);
   }
   if (a.ndim() != 2 || a.shape(1) != cols)
-    throw py::value_error(std::string(what) + ": expected an N x " + std::to_string(cols) + " array, got shape " +
-                          std::string(py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()))))));
+    throw py::value_error(
+        std::string(what) + ": expected an N x " + std::to_string(cols) + " array, got shape " +
+        std::string(py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()))))));
   return a.shape(0);
 }
 
 using V3 = std::array<double, 3>;
-inline glm::dvec3 glm3(const V3& a) { return {a[0], a[1], a[2]}; }
+inline glm::dvec3 glm3(const V3& a) {
+  return {a[0], a[1], a[2]};
+}
 
 /// An N x 3 (or N x cols) result array.
 inline py::array_t<double> matrix(py::ssize_t n, py::ssize_t cols) {

@@ -21,20 +21,25 @@ E choose(const std::string& what, const std::string& name, const std::map<std::s
   const auto it = options.find(name);
   if (it != options.end()) return it->second;
   std::string names;
-  for (const auto& [k, v] : options) names += (names.empty() ? "" : ", ") + k;
+  for (const auto& [k, v] : options)
+    names += (names.empty() ? "" : ", ") + k;
   throw py::value_error(what + ": unknown '" + name + "' (choose " + names + ")");
 }
 
 MaskKind mask_kind(const std::string& name) {
   return choose<MaskKind>("mask", name,
-                          {{"prewitt", MaskKind::prewitt}, {"sobel", MaskKind::sobel}, {"scharr", MaskKind::scharr},
-                           {"roberts", MaskKind::roberts}, {"gauss", MaskKind::gaussian}, {"emboss", MaskKind::emboss}});
+                          {{"prewitt", MaskKind::prewitt},
+                           {"sobel", MaskKind::sobel},
+                           {"scharr", MaskKind::scharr},
+                           {"roberts", MaskKind::roberts},
+                           {"gauss", MaskKind::gaussian},
+                           {"emboss", MaskKind::emboss}});
 }
 
 Border border_kind(const std::string& name) {
-  return choose<Border>("border", name,
-                        {{"suspend", Border::suspend}, {"clamp", Border::clamp}, {"reflect", Border::reflect},
-                         {"fade", Border::fade}});
+  return choose<Border>(
+      "border", name,
+      {{"suspend", Border::suspend}, {"clamp", Border::clamp}, {"reflect", Border::reflect}, {"fade", Border::fade}});
 }
 
 GrayWeights gray_weights(const std::string& name) {
@@ -71,12 +76,16 @@ GrayImage gray_from(const py::object& image, GrayWeights weights) {
 }
 
 TangibleConfig tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
-                                 double sigma) {
+                                double sigma) {
   TangibleConfig o;
   o.mask = mask_kind(mask);
-  o.size = size ? *size : o.mask == MaskKind::roberts ? 2 : (o.mask == MaskKind::scharr || o.mask == MaskKind::sobel) ? 3 : 17;
+  o.size = size                                                        ? *size
+           : o.mask == MaskKind::roberts                               ? 2
+           : (o.mask == MaskKind::scharr || o.mask == MaskKind::sobel) ? 3
+                                                                       : 17;
   o.border = border_kind(border);
-  if (!(std::isfinite(sigma) && sigma >= 0.0)) throw py::value_error("sigma: must be finite and >= 0 [px] (0: size / 6)");
+  if (!(std::isfinite(sigma) && sigma >= 0.0))
+    throw py::value_error("sigma: must be finite and >= 0 [px] (0: size / 6)");
   o.sigma = sigma;
   return o;
 }
@@ -111,7 +120,8 @@ py::dict pose_dict(const FacePose& pose) {
   d["normal"] = std::array<double, 3>{pose.normal.x, pose.normal.y, pose.normal.z};
   std::array<std::array<double, 3>, 3> R{}, H{};
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) R[r][c] = pose.R(r, c), H[r][c] = pose.H(r, c);
+    for (int c = 0; c < 3; ++c)
+      R[r][c] = pose.R(r, c), H[r][c] = pose.H(r, c);
   d["R"] = py::array(py::cast(R));
   d["H"] = py::array(py::cast(H));
   d["t"] = std::array<double, 3>{pose.t[0], pose.t[1], pose.t[2]};
@@ -126,15 +136,18 @@ py::dict pose_dict(const FacePose& pose) {
 std::vector<glm::dvec2> points_of(const Array& a, const char* what) {
   const py::ssize_t n = rows_of(a, 2, what);
   std::vector<glm::dvec2> p;
-  for (py::ssize_t i = 0; i < n; ++i) p.emplace_back(a.at(i, 0), a.at(i, 1));
+  for (py::ssize_t i = 0; i < n; ++i)
+    p.emplace_back(a.at(i, 0), a.at(i, 1));
   return p;
 }
 
 Camera camera_of(const Array& K) {
-  if (K.ndim() != 2 || K.shape(0) != 3 || K.shape(1) != 3) throw py::value_error("K: expected a 3 x 3 camera matrix [px]");
+  if (K.ndim() != 2 || K.shape(0) != 3 || K.shape(1) != 3)
+    throw py::value_error("K: expected a 3 x 3 camera matrix [px]");
   cv::Matx33d k;
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) k(r, c) = K.at(r, c);
+    for (int c = 0; c < 3; ++c)
+      k(r, c) = K.at(r, c);
   return Camera(k);
 }
 
@@ -158,8 +171,10 @@ void bind_image(py::module_& m) {
         ForceMap map;
         {
           py::gil_scoped_release release;
-          if (o.mask == MaskKind::prewitt) map = prewitt_force_map(g, o.size, o.border, o.fade_px);
-          else map = force_map(TangibleImage(g, o));
+          if (o.mask == MaskKind::prewitt)
+            map = prewitt_force_map(g, o.size, o.border, o.fade_px);
+          else
+            map = force_map(TangibleImage(g, o));
         }
         py::array_t<float> fx({map.height, map.width}), fy({map.height, map.width});
         std::copy(map.fx.begin(), map.fx.end(), fx.mutable_data());
@@ -177,8 +192,9 @@ void bind_image(py::module_& m) {
          const std::string& gray) {
         const GrayImage g = gray_from(image, gray_weights(gray));
         const PlaneMapping mapping = mapping_for(g.width(), g.height(), px_per_mm, workspace_mm);
-        return make_field(TangibleImageField(TangibleImage(g, tangible_options(mask, size, border, sigma)), mapping, gain),
-                          "tangible image " + std::to_string(g.width()) + " x " + std::to_string(g.height()) + " px");
+        return make_field(
+            TangibleImageField(TangibleImage(g, tangible_options(mask, size, border, sigma)), mapping, gain),
+            "tangible image " + std::to_string(g.width()) + " x " + std::to_string(g.height()) + " px");
       },
       py::arg("image"), py::arg("mask") = "prewitt", py::arg("size") = py::none(), py::arg("border") = "suspend",
       py::arg("sigma") = 0.0, py::arg("gain") = 1.0, py::arg("px_per_mm") = py::none(),
@@ -214,10 +230,11 @@ void bind_image(py::module_& m) {
          const std::string& mode, double max_force, double speed_threshold, double shading_cell_px,
          std::optional<double> px_per_mm) {
         std::vector<ImageFace> f;
-        for (const auto& [polygon, normal] : faces) f.push_back({points_of(polygon, "face polygon"), glm3(normal)});
+        for (const auto& [polygon, normal] : faces)
+          f.push_back({points_of(polygon, "face polygon"), glm3(normal)});
         NormalFieldConfig o;
-        o.mode = choose<NormalForceMode>("mode", mode, {{"along_motion", NormalForceMode::along_motion},
-                                                        {"gradient", NormalForceMode::gradient}});
+        o.mode = choose<NormalForceMode>(
+            "mode", mode, {{"along_motion", NormalForceMode::along_motion}, {"gradient", NormalForceMode::gradient}});
         o.max_force = max_force;
         o.speed_threshold = speed_threshold;
         o.shading_cell_px = shading_cell_px;

@@ -114,45 +114,51 @@ void bind_core(py::module_& m) {
           py::arg("position"), py::arg("velocity") = V3{0.0, 0.0, 0.0}, py::arg("normal_force") = 0.0,
           py::arg("surface_normal") = V3{0.0, 0.0, 0.0},
           "Force [N] (3 numbers) at one probe: position [m], velocity [m/s], normal force [N].")
-      .def("reset", [](Field& self) { self.impl->reset(); }, "Resets the state of stateful parts (filters, samplers).")
-      .def("__add__", [](const Field& a, const Field& b) { return sum_of({a, b}); })
+      .def(
+          "reset", [](Field& self) { self.impl->reset(); }, "Resets the state of stateful parts (filters, samplers).")
+      .def("__add__",
+           [](const Field& a, const Field& b) {
+             return sum_of({a, b});
+           })
       .def("__repr__", [](const Field& self) { return "<hapticfield.Field " + self.description + ">"; })
       .def_property_readonly("description", [](const Field& self) { return self.description; });
 
   m.def("sum", &sum_of, py::arg("fields"), "F = sum of the fields' forces [N]. The parts are shared, not copied.");
   m.def(
-      "scale", [](const Field& f, double k) {
+      "scale",
+      [](const Field& f, double k) {
         if (!std::isfinite(k)) throw py::value_error("scale: factor must be finite");
         return make_field(scale(SharedField{f.impl}, k), "scale(" + f.description + ")");
       },
       py::arg("field"), py::arg("factor"), "F = factor x field [N].");
   m.def(
-      "clamp", [](const Field& f, double limit) {
+      "clamp",
+      [](const Field& f, double limit) {
         return make_field(clamp(SharedField{f.impl}, limit), "clamp(" + f.description + ")");
       },
       py::arg("field"), py::arg("limit"),
       "|F| limited to limit [N] keeping the direction; a non-finite force becomes zero.");
-  m.def("zero", [] { return make_field(ZeroField{}, "zero"); }, "A field that is always zero.");
+  m.def(
+      "zero", [] { return make_field(ZeroField{}, "zero"); }, "A field that is always zero.");
 
   m.def(
       "plane_contact",
       [](const std::vector<Field>& parts, const V3& point, const V3& normal, double stiffness, double damping) {
-        return contact_with(PlaneConstraint(PlaneConstraintConfig{glm3(point), glm3(normal),
-                                                                  stiffness, damping}),
+        return contact_with(PlaneConstraint(PlaneConstraintConfig{glm3(point), glm3(normal), stiffness, damping}),
                             parts, "plane");
       },
-      py::arg("parts") = std::vector<Field>{}, py::arg("point") = V3{0.0, 0.0, 0.0}, py::arg("normal") = V3{0.0, 0.0, 1.0},
-      py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0,
+      py::arg("parts") = std::vector<Field>{}, py::arg("point") = V3{0.0, 0.0, 0.0},
+      py::arg("normal") = V3{0.0, 0.0, 1.0}, py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0,
       "F = Fc + parts: a penalty plane through point [m] with unit normal (toward the user), stiffness [N/m] and "
       "damping [N s/m] gives Fc; while touching, the parts see |Fc| [N] and the plane's normal of the same tick.");
   m.def(
       "sphere_contact",
       [](const std::vector<Field>& parts, const V3& centre, double radius, double stiffness, double damping) {
-        return contact_with(SphereConstraint(SphereConstraintConfig{glm3(centre), radius, stiffness, damping}),
-                            parts, "sphere");
+        return contact_with(SphereConstraint(SphereConstraintConfig{glm3(centre), radius, stiffness, damping}), parts,
+                            "sphere");
       },
-      py::arg("parts") = std::vector<Field>{}, py::arg("centre") = V3{0.0, 0.0, 0.0},
-      py::arg("radius") = 0.02, py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0,
+      py::arg("parts") = std::vector<Field>{}, py::arg("centre") = V3{0.0, 0.0, 0.0}, py::arg("radius") = 0.02,
+      py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0,
       "F = Fc + parts on a solid penalty sphere: centre [m], radius [m], stiffness [N/m], damping [N s/m].");
 }
 

@@ -85,12 +85,14 @@ py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, dou
   for (py::ssize_t i = 0; i < n; ++i) {
     const TraceRow& r = rows[static_cast<std::size_t>(i)];
     t.mutable_at(i) = r.t;
-    for (int k = 0; k < 3; ++k) position.mutable_at(i, k) = r.position[k], force.mutable_at(i, k) = r.force[k];
+    for (int k = 0; k < 3; ++k)
+      position.mutable_at(i, k) = r.position[k], force.mutable_at(i, k) = r.force[k];
   }
   // The tick period histogram in 1 us bins: counts from the loop's own statistics.
   const DurationHistogram& periods = loop.detailed_statistics().periods();
   py::array_t<std::uint64_t> hist(static_cast<py::ssize_t>(DurationHistogram::bins));
-  for (std::size_t i = 0; i < DurationHistogram::bins; ++i) hist.mutable_at(static_cast<py::ssize_t>(i)) = periods.bin(i);
+  for (std::size_t i = 0; i < DurationHistogram::bins; ++i)
+    hist.mutable_at(static_cast<py::ssize_t>(i)) = periods.bin(i);
   py::dict trace;
   trace["t"] = t;
   trace["position"] = position;
@@ -102,8 +104,9 @@ py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, dou
   result["histogram_bin_s"] = DurationHistogram::bin_ns * 1e-9;
   result["nominal_period_s"] = loop.period();
   result["max_force_n"] = device.info().max_force;
-  result["stop_reason"] = reason == StopReason::tick_limit ? "tick_limit"
-                          : reason == StopReason::disconnected ? "disconnected" : "requested";
+  result["stop_reason"] = reason == StopReason::tick_limit     ? "tick_limit"
+                          : reason == StopReason::disconnected ? "disconnected"
+                                                               : "requested";
   return result;
 }
 
@@ -112,12 +115,16 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
                    bool confirm_hardware) {
   if (!(std::isfinite(seconds) && seconds > 0.0 && seconds <= 3600.0))
     throw py::value_error("seconds: must be within (0, 3600] [s]");
-  if (!(std::isfinite(rate) && rate >= 1.0 && rate <= 10000.0)) throw py::value_error("rate: must be within [1, 10000] [Hz]");
+  if (!(std::isfinite(rate) && rate >= 1.0 && rate <= 10000.0))
+    throw py::value_error("rate: must be within [1, 10000] [Hz]");
   if (std::llround(seconds * rate) < 1) throw py::value_error("seconds: gives no tick at this rate");
   RealTime rt = RealTime::off;
-  if (realtime == "best_effort") rt = RealTime::best_effort;
-  else if (realtime == "enforce") rt = RealTime::enforce;
-  else if (realtime != "off") throw py::value_error("realtime: unknown '" + realtime + "' (choose off, best_effort or enforce)");
+  if (realtime == "best_effort")
+    rt = RealTime::best_effort;
+  else if (realtime == "enforce")
+    rt = RealTime::enforce;
+  else if (realtime != "off")
+    throw py::value_error("realtime: unknown '" + realtime + "' (choose off, best_effort or enforce)");
   SteadyClock clock;
   const auto now = [&clock] { return clock.now(); };
   if (device == "sim") {
@@ -132,8 +139,9 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
   if (device.rfind("hid", 0) == 0) {
 #if HAPTICFIELD_PYTHON_HID
     if (!confirm_hardware)
-      throw py::value_error("device hid: a real arm will move and push; pass confirm_hardware=True once the "
-                            "handle is held and the workspace clear");
+      throw py::value_error(
+          "device hid: a real arm will move and push; pass confirm_hardware=True once the "
+          "handle is held and the workspace clear");
     std::uint16_t vid = default_vendor_id, pid = default_product_id;
     if (device.size() > 3) {
       unsigned v = 0, p = 0;

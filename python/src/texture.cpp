@@ -55,15 +55,24 @@ decltype(auto) with_butterworth(int order, const std::string& band, double f1, d
     throw py::value_error("band: unknown '" + band + "' (choose low_pass, high_pass or band_pass)");
   };
   switch (order) {
-    case 1: return make(std::integral_constant<int, 1>{});
-    case 2: return make(std::integral_constant<int, 2>{});
-    case 3: return make(std::integral_constant<int, 3>{});
-    case 4: return make(std::integral_constant<int, 4>{});
-    case 5: return make(std::integral_constant<int, 5>{});
-    case 6: return make(std::integral_constant<int, 6>{});
-    case 7: return make(std::integral_constant<int, 7>{});
-    case 8: return make(std::integral_constant<int, 8>{});
-    default: throw py::value_error("order: Butterworth order must be 1..8");
+    case 1:
+      return make(std::integral_constant<int, 1>{});
+    case 2:
+      return make(std::integral_constant<int, 2>{});
+    case 3:
+      return make(std::integral_constant<int, 3>{});
+    case 4:
+      return make(std::integral_constant<int, 4>{});
+    case 5:
+      return make(std::integral_constant<int, 5>{});
+    case 6:
+      return make(std::integral_constant<int, 6>{});
+    case 7:
+      return make(std::integral_constant<int, 7>{});
+    case 8:
+      return make(std::integral_constant<int, 8>{});
+    default:
+      throw py::value_error("order: Butterworth order must be 1..8");
   }
 }
 
@@ -74,7 +83,8 @@ py::array_t<double> run_filter(Filter filter, const Array& x) {
   const double* in = x.data();
   double* out = y.mutable_data();
   py::gil_scoped_release release;
-  for (py::ssize_t i = 0; i < n; ++i) out[i] = filter.process(in[i]);
+  for (py::ssize_t i = 0; i < n; ++i)
+    out[i] = filter.process(in[i]);
   return y;
 }
 
@@ -200,15 +210,14 @@ void bind_texture(py::module_& m) {
         d["models"] = set.models.size();
         return d;
       },
-      py::arg("path"),
-      "What a HaTT modelSet file holds: name, mu [-], sample_rate [Hz], ar_order, ma_order, models.");
+      py::arg("path"), "What a HaTT modelSet file holds: name, mu [-], sample_rate [Hz], ar_order, ma_order, models.");
   m.def(
       "butterworth",
       [](const Array& x, int order, const std::string& band, double f1, double f2, double rate) {
         return with_butterworth(order, band, f1, f2, rate, [&](auto filter) { return run_filter(filter, x); });
       },
-      py::arg("signal"), py::arg("order") = 4, py::arg("band") = "low_pass", py::arg("f1") = 100.0,
-      py::arg("f2") = 0.0, py::arg("rate") = 1000.0,
+      py::arg("signal"), py::arg("order") = 4, py::arg("band") = "low_pass", py::arg("f1") = 100.0, py::arg("f2") = 0.0,
+      py::arg("rate") = 1000.0,
       "Filters a 1-D signal sampled at rate [Hz] with the library's Butterworth filter (order 1..8, bilinear "
       "transform, -3.01 dB at each edge): band low_pass|high_pass (cutoff f1 [Hz]) or band_pass (f1..f2 [Hz]).");
   m.def(

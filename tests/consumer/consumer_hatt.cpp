@@ -13,7 +13,8 @@ int main(int argc, char** argv) {
   probe.velocity = {0.1, 0.0, 0.0};  // [m/s]
   probe.normal_force = 1.0;          // [N]
   double largest = 0.0;
-  for (int i = 0; i < 1000; ++i) largest = std::max(largest, glm::length(texture.force(probe)));
+  for (int i = 0; i < 1000; ++i)
+    largest = std::max(largest, glm::length(texture.force(probe)));
   std::printf("consumer_hatt: '%s' at %.0f Hz, largest force %.3f N\n", set.name.c_str(), set.sample_rate, largest);
   return largest > 0.0 ? 0 : 1;
 }

@@ -38,7 +38,11 @@ void parse(std::string_view text, const cli::CsvConfig& config) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   parse<2>(text, {.columns = "x,y", .what = "probes", .max_line_bytes = 64, .max_rows = 50});
-  parse<4>(text, {.columns = "x,y,vx,vy", .what = "probes", .max_line_bytes = 4096, .max_rows = 1000,
-                  .finite_only = true, .allow_empty = true});
+  parse<4>(text, {.columns = "x,y,vx,vy",
+                  .what = "probes",
+                  .max_line_bytes = 4096,
+                  .max_rows = 1000,
+                  .finite_only = true,
+                  .allow_empty = true});
   return 0;
 }

@@ -30,7 +30,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   p.period = 1e-3;
   for (int i = 0; i < 64; ++i) {
     p.velocity = {0.001 + 0.5 * (i % 16) / 16.0, 0.0, 0.0};  // [m/s]
-    p.normal_force = 0.1 * (i % 7);                         // [N]
+    p.normal_force = 0.1 * (i % 7);                          // [N]
     if (!is_finite(tex.force(p))) std::abort();
   }
   return 0;

@@ -54,9 +54,10 @@ int main(int argc, char** argv) {
     cursor = seen == cv::Vec3b(255, 0, 255);  // BGR
   }
   const bool ok = best > 0.95 && worst_channel < 2.0 && cursor;
-  std::printf("view_check: %s: picture at %d,%d (correlation %.4f), mean |difference| away from the probe %.3f "
-              "levels, pixel at the probe (%d,%d) RGB %d,%d,%d%s\n",
-              ok ? "ok" : "FAIL", at.x, at.y, best, worst_channel, probe.x, probe.y, seen[2], seen[1], seen[0],
-              cursor ? " (the cursor)" : " (not the cursor)");
+  std::printf(
+      "view_check: %s: picture at %d,%d (correlation %.4f), mean |difference| away from the probe %.3f "
+      "levels, pixel at the probe (%d,%d) RGB %d,%d,%d%s\n",
+      ok ? "ok" : "FAIL", at.x, at.y, best, worst_channel, probe.x, probe.y, seen[2], seen[1], seen[0],
+      cursor ? " (the cursor)" : " (not the cursor)");
   return ok ? 0 : 1;
 }

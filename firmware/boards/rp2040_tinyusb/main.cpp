@@ -24,17 +24,19 @@ struct Rp2040Board {
 
   void read_inputs(firmware::BoardInputs& in) noexcept {
     in.now_us = time_us_32();
-    in.encoder = read_encoders();        // PIO quadrature counters (builder's code)
-    in.estop = !gpio_get(kEstopPin);     // normally closed e-stop loop
+    in.encoder = read_encoders();     // PIO quadrature counters (builder's code)
+    in.estop = !gpio_get(kEstopPin);  // normally closed e-stop loop
     in.over_current = !gpio_get(kFaultPin);
   }
   void write_outputs(const firmware::MotorOutputs& out) noexcept {
     gpio_put(kEnablePin, out.enable);
-    for (int i = 0; i < 3; ++i) set_current_ma(i, out.current_ma[static_cast<std::size_t>(i)]);  // PWM + direction
+    for (int i = 0; i < 3; ++i)
+      set_current_ma(i, out.current_ma[static_cast<std::size_t>(i)]);  // PWM + direction
   }
   std::size_t usb_receive(std::span<std::uint8_t> buffer) noexcept {
     const std::size_t n = rx_size;
-    for (std::size_t i = 0; i < n && i < buffer.size(); ++i) buffer[i] = rx[i];
+    for (std::size_t i = 0; i < n && i < buffer.size(); ++i)
+      buffer[i] = rx[i];
     rx_size = 0;
     return n;
   }
@@ -45,7 +47,7 @@ struct Rp2040Board {
   }
 
   static constexpr unsigned kEstopPin = 2, kFaultPin = 3, kEnablePin = 4;
-  std::array<std::int32_t, 3> read_encoders() noexcept;    // builder's code
+  std::array<std::int32_t, 3> read_encoders() noexcept;      // builder's code
   void set_current_ma(int joint, std::int16_t ma) noexcept;  // builder's code
 };
 static_assert(firmware::Board<Rp2040Board>);
@@ -61,7 +63,8 @@ extern "C" std::uint16_t tud_hid_get_report_cb(std::uint8_t, std::uint8_t id, hi
   std::array<std::uint8_t, protocol::max_report_size> report{};
   std::size_t size = 0;
   if (core.get_feature(id, report, size) != Status::ok || size - 1 > length) return 0;
-  for (std::size_t i = 1; i < size; ++i) buffer[i - 1] = report[i];  // without the id byte
+  for (std::size_t i = 1; i < size; ++i)
+    buffer[i - 1] = report[i];  // without the id byte
   return static_cast<std::uint16_t>(size - 1);
 }
 
@@ -70,12 +73,14 @@ extern "C" void tud_hid_set_report_cb(std::uint8_t, std::uint8_t id, hid_report_
   std::array<std::uint8_t, protocol::max_report_size> report{};
   if (length + 1u > report.size()) return;
   report[0] = id;  // put the id back in front: the codecs expect it
-  for (std::uint16_t i = 0; i < length; ++i) report[i + 1u] = buffer[i];
+  for (std::uint16_t i = 0; i < length; ++i)
+    report[i + 1u] = buffer[i];
   const std::span<const std::uint8_t> bytes(report.data(), length + 1u);
   if (type == HID_REPORT_TYPE_FEATURE) {
     (void)core.set_feature(bytes);
   } else {
-    for (std::size_t i = 0; i < bytes.size(); ++i) board.rx[i] = bytes[i];
+    for (std::size_t i = 0; i < bytes.size(); ++i)
+      board.rx[i] = bytes[i];
     board.rx_size = bytes.size();
   }
 }

@@ -18,8 +18,8 @@ class AnyField {
   AnyField() = default;
 
   template <HapticField F>
-    requires(!std::is_same_v<std::remove_cvref_t<F>, AnyField>)
-  AnyField(F&& field)  // NOLINT(google-explicit-constructor): a field converts implicitly
+  requires(!std::is_same_v<std::remove_cvref_t<F>, AnyField>)
+      AnyField(F&& field)  // NOLINT(google-explicit-constructor): a field converts implicitly
       : model_(std::make_unique<Model<std::remove_cvref_t<F>>>(std::forward<F>(field))) {}
 
   AnyField(AnyField&&) noexcept = default;

@@ -20,9 +20,7 @@ class SumField {
   explicit SumField(Fields... fields) : fields_(std::move(fields)...) {}
 
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
-    return std::apply(
-        [&probe](auto&... f) { return (glm::dvec3{0.0} + ... + glm::dvec3(f.force(probe))); },
-        fields_);
+    return std::apply([&probe](auto&... f) { return (glm::dvec3{0.0} + ... + glm::dvec3(f.force(probe))); }, fields_);
   }
 
   void reset() noexcept {
@@ -48,9 +46,7 @@ class ScaledField {
     if (!std::isfinite(gain)) throw std::invalid_argument("ScaledField: gain must be finite");
   }
 
-  [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
-    return gain_ * glm::dvec3(field_.force(probe));
-  }
+  [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept { return gain_ * glm::dvec3(field_.force(probe)); }
 
   void reset() noexcept { reset_if_stateful(field_); }
 

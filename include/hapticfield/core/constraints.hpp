@@ -42,10 +42,10 @@ inline void check_penalty(const char* who, double stiffness, double damping) {
 }  // namespace detail
 
 struct PlaneConstraintConfig {
-  glm::dvec3 point{0.0};              ///< a point on the plane [m]
-  glm::dvec3 normal{0.0, 0.0, 1.0};   ///< unit normal, out of the solid toward the user
-  double stiffness{1500.0};           ///< k [N/m]
-  double damping{0.0};                ///< b on the normal velocity while penetrating [N s/m]
+  glm::dvec3 point{0.0};             ///< a point on the plane [m]
+  glm::dvec3 normal{0.0, 0.0, 1.0};  ///< unit normal, out of the solid toward the user
+  double stiffness{1500.0};          ///< k [N/m]
+  double damping{0.0};               ///< b on the normal velocity while penetrating [N s/m]
 };
 
 /// A solid half-space behind a plane: touching where (p - point) . n < 0.
@@ -78,10 +78,10 @@ class PlaneConstraint {
 };
 
 struct SphereConstraintConfig {
-  glm::dvec3 centre{0.0};   ///< [m]
-  double radius{0.02};      ///< [m]
-  double stiffness{1500.0}; ///< k [N/m]
-  double damping{0.0};      ///< b on the normal velocity while penetrating [N s/m]
+  glm::dvec3 centre{0.0};    ///< [m]
+  double radius{0.02};       ///< [m]
+  double stiffness{1500.0};  ///< k [N/m]
+  double damping{0.0};       ///< b on the normal velocity while penetrating [N s/m]
 };
 
 /// A solid ball: touching where |p - centre| < radius; the normal points

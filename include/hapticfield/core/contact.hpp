@@ -32,10 +32,10 @@ namespace hapticfield {
 
 /// What a constraint reports about the HIP this tick.
 struct Contact {
-  bool touching{false};     ///< the HIP is inside the surface (depth > 0)
-  double depth{0.0};        ///< penetration depth [m], >= 0
-  glm::dvec3 normal{0.0};   ///< unit surface normal toward the user; zero when not touching
-  glm::dvec3 force{0.0};    ///< constraint force Fc [N]; zero when not touching
+  bool touching{false};    ///< the HIP is inside the surface (depth > 0)
+  double depth{0.0};       ///< penetration depth [m], >= 0
+  glm::dvec3 normal{0.0};  ///< unit surface normal toward the user; zero when not touching
+  glm::dvec3 force{0.0};   ///< constraint force Fc [N]; zero when not touching
 };
 
 /// A constraint: a surface that reports the contact of the HIP with it.
@@ -43,7 +43,8 @@ struct Contact {
 /// probe gives a Contact that is not touching.
 template <class C>
 concept Constraint = requires(const C& constraint, const Probe& probe) {
-  { constraint.contact(probe) } noexcept -> std::same_as<Contact>;
+  { constraint.contact(probe) }
+  noexcept->std::same_as<Contact>;
 };
 
 /// Fc + parts, in that order (see the file comment). Itself a HapticField,
@@ -66,8 +67,8 @@ class ContactField {
     Probe on = probe;
     on.normal_force = glm::length(last_.force);
     on.surface_normal = last_.normal;
-    const glm::dvec3 f = std::apply(
-        [&on, this](auto&... part) { return (last_.force + ... + glm::dvec3(part.force(on))); }, parts_);
+    const glm::dvec3 f =
+        std::apply([&on, this](auto&... part) { return (last_.force + ... + glm::dvec3(part.force(on))); }, parts_);
     return is_finite(f) ? f : glm::dvec3{0.0};
   }
 
@@ -94,9 +95,9 @@ class ContactField {
 /// contact(constraint, texture, friction, ...): the field Fc + Ft + Ff.
 template <Constraint C, HapticField... Parts>
 [[nodiscard]] ContactField<std::remove_cvref_t<C>, std::remove_cvref_t<Parts>...> contact(C&& constraint,
-                                                                                        Parts&&... parts) {
+                                                                                          Parts&&... parts) {
   return ContactField<std::remove_cvref_t<C>, std::remove_cvref_t<Parts>...>(std::forward<C>(constraint),
-                                                                            std::forward<Parts>(parts)...);
+                                                                             std::forward<Parts>(parts)...);
 }
 
 }  // namespace hapticfield

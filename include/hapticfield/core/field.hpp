@@ -16,13 +16,15 @@ namespace hapticfield {
 /// sampling) may change their own state in force() and expose reset().
 template <class F>
 concept HapticField = requires(F& field, const Probe& probe) {
-  { field.force(probe) } noexcept -> std::convertible_to<glm::dvec3>;
+  { field.force(probe) }
+  noexcept->std::convertible_to<glm::dvec3>;
 };
 
 /// A field with state that can be returned to its initial condition.
 template <class F>
 concept ResettableField = HapticField<F> && requires(F& field) {
-  { field.reset() } noexcept;
+  { field.reset() }
+  noexcept;
 };
 
 /// Calls field.reset() when the field has one; otherwise does nothing.

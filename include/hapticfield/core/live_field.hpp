@@ -46,9 +46,9 @@ class TripleBuffer {
   static constexpr int fresh = 4;  ///< set when the middle slot holds something the reader has not seen
 
   std::unique_ptr<T> slots_[3];
-  int front_ = 0;                 ///< reader's slot
-  int back_ = 2;                  ///< writer's slot
-  std::atomic<int> state_{1};     ///< middle slot index | fresh
+  int front_ = 0;              ///< reader's slot
+  int back_ = 2;               ///< writer's slot
+  std::atomic<int> state_{1};  ///< middle slot index | fresh
 };
 
 /// A field that another thread can replace at any time: `publish()` from the

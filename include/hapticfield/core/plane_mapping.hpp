@@ -18,7 +18,7 @@ namespace hapticfield {
 
 /// Kim & Kwon (World Haptics 2013): the device's 100 x 100 mm plane is shown
 /// on screen at 6.4 px/mm.
-inline constexpr double kim_kwon_px_per_mm = 6.4;        // [px/mm]
+inline constexpr double kim_kwon_px_per_mm = 6.4;  // [px/mm]
 
 class PlaneMapping {
  public:
@@ -30,8 +30,7 @@ class PlaneMapping {
   /// @throws std::invalid_argument for a non-finite or non-positive scale,
   ///         non-finite origins, or axes that are not orthonormal.
   explicit PlaneMapping(double px_per_mm, glm::dvec2 origin_px = glm::dvec2{0.0},
-                        glm::dvec3 plane_origin = glm::dvec3{0.0},
-                        glm::dvec3 image_x_axis = glm::dvec3{1.0, 0.0, 0.0},
+                        glm::dvec3 plane_origin = glm::dvec3{0.0}, glm::dvec3 image_x_axis = glm::dvec3{1.0, 0.0, 0.0},
                         glm::dvec3 image_y_axis = glm::dvec3{0.0, -1.0, 0.0})
       : px_per_m_(px_per_mm * 1000.0),
         origin_px_(origin_px),
@@ -42,9 +41,7 @@ class PlaneMapping {
     if (!std::isfinite(px_per_mm) || px_per_mm <= 0.0)
       throw std::invalid_argument("PlaneMapping: px_per_mm must be finite and positive");
     const auto finite2 = [](glm::dvec2 a) { return std::isfinite(a.x) && std::isfinite(a.y); };
-    const auto finite3 = [](glm::dvec3 a) {
-      return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
-    };
+    const auto finite3 = [](glm::dvec3 a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); };
     if (!finite2(origin_px) || !finite3(plane_origin))
       throw std::invalid_argument("PlaneMapping: origins must be finite");
     constexpr double tolerance = 1e-9;
@@ -103,8 +100,7 @@ class PlaneMapping {
 
  private:
   static glm::dvec2 centre_of(int width, int height) {
-    if (width <= 0 || height <= 0)
-      throw std::invalid_argument("PlaneMapping: image size must be positive");
+    if (width <= 0 || height <= 0) throw std::invalid_argument("PlaneMapping: image size must be positive");
     return glm::dvec2{(width - 1) / 2.0, (height - 1) / 2.0};
   }
 

@@ -21,12 +21,12 @@ inline constexpr double servo_period = 1e-3;
 /// ContactField (core/contact.hpp) fills them from its constraint before it
 /// calls its parts; a probe that touches nothing has both zero.
 struct Probe {
-  glm::dvec3 position{0.0};  ///< HIP position [m]
-  glm::dvec3 velocity{0.0};  ///< HIP velocity [m/s]
-  double normal_force{0.0};  ///< magnitude of the constraint force |Fc| of this tick [N]
+  glm::dvec3 position{0.0};        ///< HIP position [m]
+  glm::dvec3 velocity{0.0};        ///< HIP velocity [m/s]
+  double normal_force{0.0};        ///< magnitude of the constraint force |Fc| of this tick [N]
   glm::dvec3 surface_normal{0.0};  ///< unit normal of the touched surface, toward the user; zero: no surface
-  double time{0.0};          ///< time since the loop started [s]
-  double period{servo_period};  ///< tick period [s]
+  double time{0.0};                ///< time since the loop started [s]
+  double period{servo_period};     ///< tick period [s]
 };
 
 }  // namespace hapticfield

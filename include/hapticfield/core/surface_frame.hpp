@@ -26,9 +26,7 @@ struct SurfaceFrame {
     return local.x * tangent1 + local.y * tangent2 + local.z * normal;
   }
   /// v without its component along the normal.
-  [[nodiscard]] glm::dvec3 tangential(const glm::dvec3& v) const noexcept {
-    return v - glm::dot(v, normal) * normal;
-  }
+  [[nodiscard]] glm::dvec3 tangential(const glm::dvec3& v) const noexcept { return v - glm::dot(v, normal) * normal; }
 };
 
 /// The frame whose normal is the unit vector n: the rotation about z x n

@@ -61,8 +61,7 @@ class FirmwareArm {
   /// @throws std::invalid_argument for a bad arm or firmware configuration.
   explicit FirmwareArm(const SimulatedArmConfig& arm = {}, std::uint16_t watchdog_us = 5000)
       : FirmwareArm(arm, firmware_config_for(arm, watchdog_us)) {}
-  FirmwareArm(const SimulatedArmConfig& arm, const firmware::FirmwareConfig& config)
-      : plant_(arm), core_(config) {
+  FirmwareArm(const SimulatedArmConfig& arm, const firmware::FirmwareConfig& config) : plant_(arm), core_(config) {
     if (const char* e = config.check()) throw std::invalid_argument(std::string("FirmwareConfig: ") + e);
     period_us_ = config.period_us;
   }
@@ -99,7 +98,10 @@ class FirmwareArm {
   void flag_over_temperature() noexcept { over_temperature_ = true; }
   void set_buttons(std::uint8_t b) noexcept { buttons_ = b; }
   /// Power cycle of the board: the core restarts, the mechanics move on.
-  void reboot() noexcept { core_.reset(); ++boots_; }
+  void reboot() noexcept {
+    core_.reset();
+    ++boots_;
+  }
 
   [[nodiscard]] firmware::FirmwareCore& core() noexcept { return core_; }
   [[nodiscard]] const firmware::FirmwareCore& core() const noexcept { return core_; }
@@ -134,7 +136,8 @@ class FirmwareLoopback final : public Transport {
   /// @param now  time source [ns]; firmware tick k runs at start + (k + phase) periods
   FirmwareLoopback(FirmwareArm& arm, TimeSource now, double phase = 0.5) : arm_(&arm), now_(std::move(now)) {
     if (!now_) throw std::invalid_argument("FirmwareLoopback: a time source is required");
-    if (!(phase >= 0.0 && phase < 1.0)) throw std::invalid_argument("FirmwareLoopback: phase must be in [0, 1) [periods]");
+    if (!(phase >= 0.0 && phase < 1.0))
+      throw std::invalid_argument("FirmwareLoopback: phase must be in [0, 1) [periods]");
     period_ns_ = static_cast<std::int64_t>(arm.period_us()) * 1000;
     start_ns_ = now_() + static_cast<std::int64_t>(phase * static_cast<double>(period_ns_));
   }
@@ -163,10 +166,17 @@ class FirmwareLoopback final : public Transport {
       slot.size = report.size();
       if (active(LinkFault::drop, k)) continue;
       if (active(LinkFault::corrupt, k)) slot.bytes[protocol::offset::state::encoder] ^= 0x5A;
-      if (active(LinkFault::reorder, k)) { held_ = slot; holding_ = true; continue; }
+      if (active(LinkFault::reorder, k)) {
+        held_ = slot;
+        holding_ = true;
+        continue;
+      }
       push(slot);
       if (active(LinkFault::duplicate, k)) push(slot);
-      if (holding_) { push(held_); holding_ = false; }
+      if (holding_) {
+        push(held_);
+        holding_ = false;
+      }
     }
   }
 
@@ -231,7 +241,10 @@ class FirmwareLoopback final : public Transport {
     return false;
   }
   void push(const Slot& s) noexcept {
-    if (count_ == queue_capacity) { head_ = (head_ + 1) % queue_capacity; --count_; }
+    if (count_ == queue_capacity) {
+      head_ = (head_ + 1) % queue_capacity;
+      --count_;
+    }
     queue_[(head_ + count_) % queue_capacity] = s;
     ++count_;
   }

@@ -22,27 +22,27 @@ namespace hapticfield {
 
 /// Link events seen by the last ForceArm::read (bit mask).
 namespace link_events {
-inline constexpr std::uint32_t dropped = 1u << 0;     ///< sequence gap
-inline constexpr std::uint32_t duplicate = 1u << 1;   ///< same sequence twice
-inline constexpr std::uint32_t reordered = 1u << 2;   ///< older sequence after a newer one
-inline constexpr std::uint32_t corrupt = 1u << 3;     ///< bad CRC
-inline constexpr std::uint32_t malformed = 1u << 4;   ///< short, unknown id or bad version
+inline constexpr std::uint32_t dropped = 1u << 0;       ///< sequence gap
+inline constexpr std::uint32_t duplicate = 1u << 1;     ///< same sequence twice
+inline constexpr std::uint32_t reordered = 1u << 2;     ///< older sequence after a newer one
+inline constexpr std::uint32_t corrupt = 1u << 3;       ///< bad CRC
+inline constexpr std::uint32_t malformed = 1u << 4;     ///< short, unknown id or bad version
 inline constexpr std::uint32_t device_fault = 1u << 5;  ///< a fault bit is set
-inline constexpr std::uint32_t jumped = 1u << 6;      ///< a report far off the sequence: held back
-inline constexpr std::uint32_t resynced = 1u << 7;    ///< a new, consistent stream was taken up
+inline constexpr std::uint32_t jumped = 1u << 6;        ///< a report far off the sequence: held back
+inline constexpr std::uint32_t resynced = 1u << 7;      ///< a new, consistent stream was taken up
 }  // namespace link_events
 
 /// Running counts of link events since construction.
 struct LinkCounters {
-  std::uint64_t reports{0};     ///< reports decoded
-  std::uint64_t dropped{0};     ///< reports missing from the sequence
+  std::uint64_t reports{0};  ///< reports decoded
+  std::uint64_t dropped{0};  ///< reports missing from the sequence
   std::uint64_t duplicates{0};
   std::uint64_t reordered{0};
   std::uint64_t corrupt{0};
   std::uint64_t malformed{0};
-  std::uint64_t commands{0};    ///< command reports written
+  std::uint64_t commands{0};  ///< command reports written
   std::uint64_t write_errors{0};
-  std::uint64_t resyncs{0};     ///< times a new stream was taken up (device restart, long loss)
+  std::uint64_t resyncs{0};  ///< times a new stream was taken up (device restart, long loss)
 };
 
 struct ForceArmConfig {
@@ -65,7 +65,8 @@ class ForceArm {
  public:
   /// @throws std::invalid_argument for bad options, std::runtime_error when
   ///         the device-info feature report cannot be read or is invalid.
-  explicit ForceArm(Transport& transport, ForceArmConfig options = {}) : transport_(&transport), config_(std::move(options)) {
+  explicit ForceArm(Transport& transport, ForceArmConfig options = {})
+      : transport_(&transport), config_(std::move(options)) {
     if (config_.query_device) {
       std::array<std::uint8_t, protocol::max_report_size> buf{};
       buf[0] = static_cast<std::uint8_t>(protocol::ReportId::device_info);
@@ -74,7 +75,8 @@ class ForceArm {
       Status s = transport_->get_feature(buf, size);
       if (s == Status::ok) s = protocol::decode(std::span<const std::uint8_t>(buf.data(), size), r);
       if (s != Status::ok)
-        throw std::runtime_error("ForceArm: reading the device-info feature report failed: " + std::string(to_string(s)));
+        throw std::runtime_error("ForceArm: reading the device-info feature report failed: " +
+                                 std::string(to_string(s)));
       apply(r);
     }
     if (!std::isfinite(config_.velocity_cutoff) || config_.velocity_cutoff <= 0.0)
@@ -115,25 +117,47 @@ class ForceArm {
         if (fresh) update(newest, state);
         return Status::disconnected;
       }
-      if (s != Status::ok) { events_ |= link_events::malformed; ++counters_.malformed; continue; }
+      if (s != Status::ok) {
+        events_ |= link_events::malformed;
+        ++counters_.malformed;
+        continue;
+      }
       protocol::StateReport r;
       const Status d = protocol::decode(std::span<const std::uint8_t>(buf_.data(), size), r);
-      if (d == Status::bad_crc) { events_ |= link_events::corrupt; ++counters_.corrupt; continue; }
-      if (d != Status::ok) { events_ |= link_events::malformed; ++counters_.malformed; continue; }
+      if (d == Status::bad_crc) {
+        events_ |= link_events::corrupt;
+        ++counters_.corrupt;
+        continue;
+      }
+      if (d != Status::ok) {
+        events_ |= link_events::malformed;
+        ++counters_.malformed;
+        continue;
+      }
       ++counters_.reports;
       const std::uint16_t reference = fresh ? newest.sequence : last_sequence_;
       const auto diff = static_cast<std::int16_t>(static_cast<std::uint16_t>(r.sequence - reference));
       if (have_last_ || fresh) {
-        if (diff == 0) { events_ |= link_events::duplicate; ++counters_.duplicates; continue; }
+        if (diff == 0) {
+          events_ |= link_events::duplicate;
+          ++counters_.duplicates;
+          continue;
+        }
         if (diff < 0 || diff > config_.max_sequence_gap) {
           // One stale report (reordering) or the start of a new stream: hold
           // it until resync_reports consecutive reports confirm a new stream.
-          if (diff < 0) { events_ |= link_events::reordered; ++counters_.reordered; }
+          if (diff < 0) {
+            events_ |= link_events::reordered;
+            ++counters_.reordered;
+          }
           events_ |= link_events::jumped;
           if (!(candidate_count_ > 0 && r.sequence == candidate_next_)) candidate_count_ = 0;
           ++candidate_count_;
           candidate_next_ = static_cast<std::uint16_t>(r.sequence + 1);
-          if (candidate_count_ < config_.resync_reports) { held = true; continue; }
+          if (candidate_count_ < config_.resync_reports) {
+            held = true;
+            continue;
+          }
           events_ |= link_events::resynced;
           ++counters_.resyncs;
           candidate_count_ = 0;
@@ -143,7 +167,10 @@ class ForceArm {
           held = false;
           continue;
         }
-        if (diff > 1) { events_ |= link_events::dropped; counters_.dropped += static_cast<std::uint64_t>(diff - 1); }
+        if (diff > 1) {
+          events_ |= link_events::dropped;
+          counters_.dropped += static_cast<std::uint64_t>(diff - 1);
+        }
       }
       candidate_count_ = 0;
       held = false;
@@ -174,7 +201,10 @@ class ForceArm {
     last_command_ = c;
     const std::size_t n = protocol::encode(c, out_);
     const Status s = transport_->write(std::span<const std::uint8_t>(out_.data(), n));
-    if (s == Status::ok) ++counters_.commands; else ++counters_.write_errors;
+    if (s == Status::ok)
+      ++counters_.commands;
+    else
+      ++counters_.write_errors;
     if (s == Status::disconnected) disconnected_ = true;
     return s;
   }
@@ -258,7 +288,8 @@ class ForceArm {
     s.joint_angles = q;
     s.encoder = r.encoder;
     s.gimbal = r.gimbal;
-    for (int i = 0; i < 3; ++i) s.applied_torque[i] = r.torque_mnm[static_cast<std::size_t>(i)] * config_.torque_unit;
+    for (int i = 0; i < 3; ++i)
+      s.applied_torque[i] = r.torque_mnm[static_cast<std::size_t>(i)] * config_.torque_unit;
     s.sequence = r.sequence;
     s.command_echo = r.command_echo;
     s.flags = r.status;

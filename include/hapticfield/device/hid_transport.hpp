@@ -17,8 +17,8 @@
 
 #include <array>
 #include <atomic>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -58,7 +58,8 @@ namespace detail {
 inline std::string narrow(const wchar_t* w) {
   std::string s;
   if (!w) return s;
-  for (; *w; ++w) s += (*w < 128) ? static_cast<char>(*w) : '?';
+  for (; *w; ++w)
+    s += (*w < 128) ? static_cast<char>(*w) : '?';
   return s;
 }
 inline std::string hex4(std::uint16_t v) {
@@ -69,8 +70,9 @@ inline std::string hex4(std::uint16_t v) {
 /// The message for a hidraw node that exists but cannot be opened.
 inline std::string open_error_message(const std::string& path, int error) {
   if (error == EACCES || error == EPERM)
-    return "HidTransport: permission denied on " + path + ". Install the udev rule " + udev_rule_name +
-           " (sudo cp " + udev_rule_name + " /etc/udev/rules.d/ && sudo udevadm control --reload && "
+    return "HidTransport: permission denied on " + path + ". Install the udev rule " + udev_rule_name + " (sudo cp " +
+           udev_rule_name +
+           " /etc/udev/rules.d/ && sudo udevadm control --reload && "
            "sudo udevadm trigger), then unplug and replug the arm";
   if (error == ENOENT) return "HidTransport: no device at " + path + " (unplugged, or a wrong path)";
   return "HidTransport: cannot open " + path + ": " + std::strerror(error);
@@ -191,7 +193,8 @@ class HidTransport final : public Transport {
         overflows_.fetch_add(1, std::memory_order_relaxed);
       // Write only the newest pending command; older ones are stale.
       std::size_t size = 0, newest = 0;
-      while (output_.pop(out, size)) newest = size;
+      while (output_.pop(out, size))
+        newest = size;
       if (newest) {
         std::lock_guard<std::mutex> lock(device_mutex_);
         if (hid_write(device_, out.data(), newest) < 0) {

@@ -63,7 +63,8 @@ struct Inverse3Frame {
   void validate() const {
     for (int c = 0; c < 3; ++c)
       for (int r = 0; r < 3; ++r)
-        if (!std::isfinite(rotation[c][r])) throw std::invalid_argument("Inverse3Frame: rotation entries must be finite");
+        if (!std::isfinite(rotation[c][r]))
+          throw std::invalid_argument("Inverse3Frame: rotation entries must be finite");
     for (int i = 0; i < 3; ++i)
       if (!std::isfinite(origin[i])) throw std::invalid_argument("Inverse3Frame: origin must be finite [m]");
     const glm::dmat3 g = glm::transpose(rotation) * rotation;
@@ -81,7 +82,7 @@ struct Inverse3Frame {
 };
 
 struct Inverse3Config {
-  Inverse3Frame frame{};              ///< device axes to ours (default unverified)
+  Inverse3Frame frame{};  ///< device axes to ours (default unverified)
   /// Force clamp and DeviceInfo::max_force [N]: a conservative figure of
   /// ours, not a datasheet value (unverified).
   double max_force{3.0};
@@ -93,27 +94,30 @@ struct Inverse3Config {
   /// A decoded position component beyond this is a corrupt or misaligned
   /// frame, dropped [m].
   double plausible_position{1.0};
-  double plausible_velocity{20.0};    ///< same for velocity [m/s]
-  int wake_attempts{3};               ///< wake-up requests sent at construction before giving up
-  int reply_timeout_us{200000};       ///< wait for each setup reply [us]
+  double plausible_velocity{20.0};  ///< same for velocity [m/s]
+  int wake_attempts{3};             ///< wake-up requests sent at construction before giving up
+  int reply_timeout_us{200000};     ///< wait for each setup reply [us]
   /// Requests whose replies have not come: beyond this many the replies
   /// count as lost; the stream is resynchronised (pending bytes dropped).
   int max_outstanding{16};
-  std::string port{};                 ///< named in errors; empty: the transport's where()
-  TimeSource now{};                   ///< host time [ns] for the state stamps; empty: CLOCK_MONOTONIC
+  std::string port{};  ///< named in errors; empty: the transport's where()
+  TimeSource now{};    ///< host time [ns] for the state stamps; empty: CLOCK_MONOTONIC
 
   /// @throws std::invalid_argument naming the first setting that makes no sense.
   void validate() const {
     frame.validate();
     const auto bad = [](double v) { return !std::isfinite(v) || v <= 0.0; };
     if (bad(max_force)) throw std::invalid_argument("Inverse3Config: max_force must be finite and > 0 [N]");
-    if (bad(max_joint_torque)) throw std::invalid_argument("Inverse3Config: max_joint_torque must be finite and > 0 [N mm]");
+    if (bad(max_joint_torque))
+      throw std::invalid_argument("Inverse3Config: max_joint_torque must be finite and > 0 [N mm]");
     if (bad(plausible_position) || bad(plausible_velocity))
       throw std::invalid_argument("Inverse3Config: plausible_position and plausible_velocity must be finite and > 0");
-    if (wake_attempts < 1 || wake_attempts > 100) throw std::invalid_argument("Inverse3Config: wake_attempts must be 1..100");
+    if (wake_attempts < 1 || wake_attempts > 100)
+      throw std::invalid_argument("Inverse3Config: wake_attempts must be 1..100");
     if (reply_timeout_us < 1000 || reply_timeout_us > 5'000'000)
       throw std::invalid_argument("Inverse3Config: reply_timeout_us must be 1000..5000000 [us]");
-    if (max_outstanding < 1 || max_outstanding > 32) throw std::invalid_argument("Inverse3Config: max_outstanding must be 1..32");
+    if (max_outstanding < 1 || max_outstanding > 32)
+      throw std::invalid_argument("Inverse3Config: max_outstanding must be 1..32");
   }
 };
 
@@ -214,7 +218,8 @@ class Inverse3 {
   Status write_joint_torques(const glm::dvec3& torque_nmm) noexcept {
     glm::dvec3 t{0.0};
     if (armed_ && std::isfinite(torque_nmm.x) && std::isfinite(torque_nmm.y) && std::isfinite(torque_nmm.z))
-      for (int i = 0; i < 3; ++i) t[i] = std::fmax(-config_.max_joint_torque, std::fmin(config_.max_joint_torque, torque_nmm[i]));
+      for (int i = 0; i < 3; ++i)
+        t[i] = std::fmax(-config_.max_joint_torque, std::fmin(config_.max_joint_torque, torque_nmm[i]));
     return send(inverse3::code::joint_torques, t);
   }
 
@@ -242,15 +247,19 @@ class Inverse3 {
     for (int attempt = 0; attempt < config_.wake_attempts && !awake; ++attempt) {
       std::array<std::uint8_t, inverse3::wake_request_size> req{};
       const Status w = transport_->write(std::span<const std::uint8_t>(req.data(), inverse3::encode_wake(req)));
-      if (w == Status::disconnected) throw Error("Inverse3: the device" + where + " is gone (disconnected during the wake-up)");
+      if (w == Status::disconnected)
+        throw Error("Inverse3: the device" + where + " is gone (disconnected during the wake-up)");
       std::size_t size = 0;
       const Status s = transport_->read(buf_, size, config_.reply_timeout_us);
-      if (s == Status::disconnected) throw Error("Inverse3: the device" + where + " is gone (disconnected during the wake-up)");
-      awake = s == Status::ok && inverse3::decode_wake_reply(std::span<const std::uint8_t>(buf_.data(), size), identity_) == Status::ok;
+      if (s == Status::disconnected)
+        throw Error("Inverse3: the device" + where + " is gone (disconnected during the wake-up)");
+      awake = s == Status::ok &&
+              inverse3::decode_wake_reply(std::span<const std::uint8_t>(buf_.data(), size), identity_) == Status::ok;
     }
     if (!awake)
-      throw Error("Inverse3: no reply to the wake-up (0x0A)" + where + " after " + std::to_string(config_.wake_attempts) +
-                  " attempts of " + std::to_string(config_.reply_timeout_us / 1000) +
+      throw Error("Inverse3: no reply to the wake-up (0x0A)" + where + " after " +
+                  std::to_string(config_.wake_attempts) + " attempts of " +
+                  std::to_string(config_.reply_timeout_us / 1000) +
                   " ms; check the port, the cable, and that no other program holds it");
     ++counters_.headers[identity_.header];
     if (transport_->set_frame_size(inverse3::state_reply_size) != Status::ok)
@@ -260,9 +269,11 @@ class Inverse3 {
       throw Error("Inverse3: the device" + where + " is gone (disconnected after the wake-up)");
     std::size_t size = 0;
     const Status s = transport_->read(buf_, size, config_.reply_timeout_us);
-    if (s == Status::disconnected) throw Error("Inverse3: the device" + where + " is gone (disconnected after the wake-up)");
+    if (s == Status::disconnected)
+      throw Error("Inverse3: the device" + where + " is gone (disconnected after the wake-up)");
     if (s != Status::ok || !take(std::span<const std::uint8_t>(buf_.data(), size)))
-      throw Error("Inverse3: the device" + where + " answered the wake-up but sent no valid state for a zero force within " +
+      throw Error("Inverse3: the device" + where +
+                  " answered the wake-up but sent no valid state for a zero force within " +
                   std::to_string(config_.reply_timeout_us / 1000) + " ms");
     pending_ = true;
   }

@@ -26,20 +26,20 @@ static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559, "inve
 
 /// Request codes (section 4 table).
 namespace code {
-inline constexpr std::uint8_t wake = 0x0A;            ///< wake-up; resets the device's state
-inline constexpr std::uint8_t joint_torques = 0x1A;   ///< 3 x f32 torques -> joint angles and velocities
-inline constexpr std::uint8_t force = 0x2A;           ///< 3 x f32 force [N] -> position [m], velocity [m/s]
+inline constexpr std::uint8_t wake = 0x0A;           ///< wake-up; resets the device's state
+inline constexpr std::uint8_t joint_torques = 0x1A;  ///< 3 x f32 torques -> joint angles and velocities
+inline constexpr std::uint8_t force = 0x2A;          ///< 3 x f32 force [N] -> position [m], velocity [m/s]
 }  // namespace code
 
-inline constexpr std::size_t wake_request_size = 1;     ///< [bytes]
-inline constexpr std::size_t command_request_size = 13; ///< code + 3 x f32 [bytes]
-inline constexpr std::size_t wake_reply_size = 22;      ///< header + u16 + 3 x u8 + 16 bytes [bytes]
-inline constexpr std::size_t state_reply_size = 25;     ///< header + 6 x f32 [bytes]
-inline constexpr std::size_t max_frame_size = 25;       ///< largest request or reply [bytes]
+inline constexpr std::size_t wake_request_size = 1;      ///< [bytes]
+inline constexpr std::size_t command_request_size = 13;  ///< code + 3 x f32 [bytes]
+inline constexpr std::size_t wake_reply_size = 22;       ///< header + u16 + 3 x u8 + 16 bytes [bytes]
+inline constexpr std::size_t state_reply_size = 25;      ///< header + 6 x f32 [bytes]
+inline constexpr std::size_t max_frame_size = 25;        ///< largest request or reply [bytes]
 
 /// The wake-up reply: who the device is.
 struct Identity {
-  std::uint8_t header{0};       ///< reply header byte (value unpublished: not checked)
+  std::uint8_t header{0};  ///< reply header byte (value unpublished: not checked)
   std::uint16_t device_id{0};
   std::uint8_t model{0};
   std::uint8_t hardware_version{0};
@@ -53,19 +53,21 @@ struct Identity {
 /// A 0x1A reply has the same shape: joint angles [deg], velocities [deg/s]
 /// (units from Haply's API header; that the wire uses them is inferred).
 struct StateReply {
-  std::uint8_t header{0};               ///< reply header byte (not checked)
-  std::array<float, 3> first{};         ///< position [m] or joint angles [deg]
-  std::array<float, 3> second{};        ///< velocity [m/s] or joint velocities [deg/s]
+  std::uint8_t header{0};         ///< reply header byte (not checked)
+  std::array<float, 3> first{};   ///< position [m] or joint angles [deg]
+  std::array<float, 3> second{};  ///< velocity [m/s] or joint velocities [deg/s]
 };
 
 namespace detail {
 inline void put_f32(std::span<std::uint8_t> out, std::size_t at, float v) noexcept {
   const std::uint32_t u = std::bit_cast<std::uint32_t>(v);
-  for (std::size_t i = 0; i < 4; ++i) out[at + i] = static_cast<std::uint8_t>(u >> (8 * i));
+  for (std::size_t i = 0; i < 4; ++i)
+    out[at + i] = static_cast<std::uint8_t>(u >> (8 * i));
 }
 [[nodiscard]] inline float get_f32(std::span<const std::uint8_t> in, std::size_t at) noexcept {
   std::uint32_t u = 0;
-  for (std::size_t i = 0; i < 4; ++i) u |= static_cast<std::uint32_t>(in[at + i]) << (8 * i);
+  for (std::size_t i = 0; i < 4; ++i)
+    u |= static_cast<std::uint32_t>(in[at + i]) << (8 * i);
   return std::bit_cast<float>(u);
 }
 }  // namespace detail
@@ -83,7 +85,8 @@ inline void put_f32(std::span<std::uint8_t> out, std::size_t at, float v) noexce
                                                 std::span<std::uint8_t> out) noexcept {
   if (out.size() < command_request_size || (request != code::force && request != code::joint_torques)) return 0;
   out[0] = request;
-  for (std::size_t i = 0; i < 3; ++i) detail::put_f32(out, 1 + 4 * i, v[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    detail::put_f32(out, 1 + 4 * i, v[i]);
   return command_request_size;
 }
 
@@ -95,7 +98,8 @@ inline void put_f32(std::span<std::uint8_t> out, std::size_t at, float v) noexce
   id.model = in[3];
   id.hardware_version = in[4];
   id.firmware_version = in[5];
-  for (std::size_t i = 0; i < 16; ++i) id.extra[i] = in[6 + i];
+  for (std::size_t i = 0; i < 16; ++i)
+    id.extra[i] = in[6 + i];
   return Status::ok;
 }
 
@@ -124,7 +128,8 @@ inline void put_f32(std::span<std::uint8_t> out, std::size_t at, float v) noexce
   out[3] = id.model;
   out[4] = id.hardware_version;
   out[5] = id.firmware_version;
-  for (std::size_t i = 0; i < 16; ++i) out[6 + i] = id.extra[i];
+  for (std::size_t i = 0; i < 16; ++i)
+    out[6 + i] = id.extra[i];
   return wake_reply_size;
 }
 
@@ -144,7 +149,8 @@ inline void put_f32(std::span<std::uint8_t> out, std::size_t at, float v) noexce
 [[nodiscard]] inline Status decode_command(std::span<const std::uint8_t> in, std::array<float, 3>& v) noexcept {
   if (in.size() != command_request_size) return Status::short_report;
   if (in[0] != code::force && in[0] != code::joint_torques) return Status::unknown_report;
-  for (std::size_t i = 0; i < 3; ++i) v[i] = detail::get_f32(in, 1 + 4 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    v[i] = detail::get_f32(in, 1 + 4 * i);
   return Status::ok;
 }
 

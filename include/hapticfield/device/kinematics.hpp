@@ -30,10 +30,10 @@ namespace hapticfield {
 
 /// Geometry and encoder parameters (Omni-like defaults, not datasheet facts).
 struct KinematicsConfig {
-  double l1{0.133};  ///< upper arm length [m] (default)
-  double l2{0.133};  ///< forearm length [m] (default)
-  glm::dvec3 q_min{-1.0, -0.6, -0.5};  ///< joint lower limits [rad] (default)
-  glm::dvec3 q_max{1.0, 1.2, 1.4};     ///< joint upper limits [rad] (default)
+  double l1{0.133};                                                 ///< upper arm length [m] (default)
+  double l2{0.133};                                                 ///< forearm length [m] (default)
+  glm::dvec3 q_min{-1.0, -0.6, -0.5};                               ///< joint lower limits [rad] (default)
+  glm::dvec3 q_max{1.0, 1.2, 1.4};                                  ///< joint upper limits [rad] (default)
   std::array<std::int32_t, 3> counts_per_rev{15000, 15000, 15000};  ///< encoder counts per joint turn (default)
   glm::dvec3 max_torque{0.45, 0.45, 0.45};  ///< motor torque saturation at the joint [N m] (default)
 

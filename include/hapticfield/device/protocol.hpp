@@ -21,11 +21,11 @@ inline constexpr std::size_t max_report_size = 64;   ///< largest report [bytes]
 
 /// Report ids.
 enum class ReportId : std::uint8_t {
-  state = 0x01,          ///< input: streamed every device tick
-  command = 0x02,        ///< output: written by the host every servo tick
-  device_info = 0x10,    ///< feature (get): geometry, encoders, limits
-  configuration = 0x11,  ///< feature (get/set): watchdog period
-  control = 0x12,        ///< feature (set): arm, disarm, clear fault, home
+  state = 0x01,            ///< input: streamed every device tick
+  command = 0x02,          ///< output: written by the host every servo tick
+  device_info = 0x10,      ///< feature (get): geometry, encoders, limits
+  configuration = 0x11,    ///< feature (get/set): watchdog period
+  control = 0x12,          ///< feature (set): arm, disarm, clear fault, home
   feature_request = 0x13,  ///< serial links only: host asks for a feature report (get)
   feature_reply = 0x14,    ///< serial links only: device answers a set (or a failed get)
 };
@@ -116,13 +116,16 @@ inline constexpr std::array<std::uint16_t, 256> crc16_table = [] {
 }
 
 namespace detail {
-inline void put_u8(std::span<std::uint8_t> b, std::size_t at, std::uint8_t v) noexcept { b[at] = v; }
+inline void put_u8(std::span<std::uint8_t> b, std::size_t at, std::uint8_t v) noexcept {
+  b[at] = v;
+}
 inline void put_u16(std::span<std::uint8_t> b, std::size_t at, std::uint16_t v) noexcept {
   b[at] = static_cast<std::uint8_t>(v & 0xFFu);
   b[at + 1] = static_cast<std::uint8_t>(v >> 8);
 }
 inline void put_u32(std::span<std::uint8_t> b, std::size_t at, std::uint32_t v) noexcept {
-  for (std::size_t i = 0; i < 4; ++i) b[at + i] = static_cast<std::uint8_t>((v >> (8 * i)) & 0xFFu);
+  for (std::size_t i = 0; i < 4; ++i)
+    b[at + i] = static_cast<std::uint8_t>((v >> (8 * i)) & 0xFFu);
 }
 inline void put_i16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noexcept {
   put_u16(b, at, static_cast<std::uint16_t>(v));
@@ -135,7 +138,8 @@ inline void put_i32(std::span<std::uint8_t> b, std::size_t at, std::int32_t v) n
 }
 [[nodiscard]] inline std::uint32_t get_u32(std::span<const std::uint8_t> b, std::size_t at) noexcept {
   std::uint32_t v = 0;
-  for (std::size_t i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(b[at + i]) << (8 * i);
+  for (std::size_t i = 0; i < 4; ++i)
+    v |= static_cast<std::uint32_t>(b[at + i]) << (8 * i);
   return v;
 }
 [[nodiscard]] inline std::int16_t get_i16(std::span<const std::uint8_t> b, std::size_t at) noexcept {
@@ -161,21 +165,21 @@ inline void seal(std::span<std::uint8_t> b, std::size_t size) noexcept {
 
 /// Input state report (id 0x01), streamed by the device every tick.
 struct StateReport {
-  std::uint16_t sequence{0};                ///< increments by one per report (wraps)
-  std::uint16_t command_echo{0};            ///< sequence of the last command applied
-  std::uint32_t timestamp_us{0};            ///< device clock [us] (wraps)
-  std::array<std::int32_t, 3> encoder{};    ///< joint encoder counts
-  std::array<std::int16_t, 3> gimbal{};     ///< gimbal values (device units)
-  std::uint16_t status{0};                  ///< status_bits
-  std::uint8_t buttons{0};                  ///< button bit mask
-  std::array<std::int16_t, 3> torque_mnm{}; ///< torques applied [mN m]
+  std::uint16_t sequence{0};                 ///< increments by one per report (wraps)
+  std::uint16_t command_echo{0};             ///< sequence of the last command applied
+  std::uint32_t timestamp_us{0};             ///< device clock [us] (wraps)
+  std::array<std::int32_t, 3> encoder{};     ///< joint encoder counts
+  std::array<std::int16_t, 3> gimbal{};      ///< gimbal values (device units)
+  std::uint16_t status{0};                   ///< status_bits
+  std::uint8_t buttons{0};                   ///< button bit mask
+  std::array<std::int16_t, 3> torque_mnm{};  ///< torques applied [mN m]
 };
 
 /// Output command report (id 0x02), written by the host every servo tick.
 struct CommandReport {
-  std::uint16_t sequence{0};                ///< increments by one per command (wraps)
-  std::uint8_t flags{0};                    ///< command_flags
-  std::array<std::int16_t, 3> torque_mnm{}; ///< joint torques requested [mN m]
+  std::uint16_t sequence{0};                 ///< increments by one per command (wraps)
+  std::uint8_t flags{0};                     ///< command_flags
+  std::array<std::int16_t, 3> torque_mnm{};  ///< joint torques requested [mN m]
 };
 
 /// Flags of the command report.
@@ -216,11 +220,14 @@ inline std::size_t encode(const StateReport& r, std::span<std::uint8_t> out) noe
   put_u16(out, at::sequence, r.sequence);
   put_u16(out, at::command_echo, r.command_echo);
   put_u32(out, at::timestamp, r.timestamp_us);
-  for (std::size_t i = 0; i < 3; ++i) put_i32(out, at::encoder + 4 * i, r.encoder[i]);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::gimbal + 2 * i, r.gimbal[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_i32(out, at::encoder + 4 * i, r.encoder[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_i16(out, at::gimbal + 2 * i, r.gimbal[i]);
   put_u16(out, at::status, r.status);
   put_u8(out, at::buttons, r.buttons);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::torque + 2 * i, r.torque_mnm[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_i16(out, at::torque + 2 * i, r.torque_mnm[i]);
   put_u8(out, at::reserved, 0);
   seal(out, state_size);
   return state_size;
@@ -234,11 +241,14 @@ inline std::size_t encode(const StateReport& r, std::span<std::uint8_t> out) noe
   r.sequence = get_u16(in, at::sequence);
   r.command_echo = get_u16(in, at::command_echo);
   r.timestamp_us = get_u32(in, at::timestamp);
-  for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = get_i32(in, at::encoder + 4 * i);
-  for (std::size_t i = 0; i < 3; ++i) r.gimbal[i] = get_i16(in, at::gimbal + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.encoder[i] = get_i32(in, at::encoder + 4 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.gimbal[i] = get_i16(in, at::gimbal + 2 * i);
   r.status = get_u16(in, at::status);
   r.buttons = in[at::buttons];
-  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
   return Status::ok;
 }
 
@@ -250,8 +260,10 @@ inline std::size_t encode(const CommandReport& r, std::span<std::uint8_t> out) n
   put_u8(out, offset::version, version);
   put_u16(out, at::sequence, r.sequence);
   put_u8(out, at::flags, r.flags);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::torque + 2 * i, r.torque_mnm[i]);
-  for (std::size_t i = at::reserved; i < command_size - 2; ++i) put_u8(out, i, 0);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_i16(out, at::torque + 2 * i, r.torque_mnm[i]);
+  for (std::size_t i = at::reserved; i < command_size - 2; ++i)
+    put_u8(out, i, 0);
   seal(out, command_size);
   return command_size;
 }
@@ -263,7 +275,8 @@ inline std::size_t encode(const CommandReport& r, std::span<std::uint8_t> out) n
   r.sequence = get_u16(in, at::sequence);
   r.flags = in[at::flags];
   if ((r.flags & ~(command_flags::arm | command_flags::home)) != 0) return Status::bad_value;
-  for (std::size_t i = 0; i < 3; ++i) r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
   return Status::ok;
 }
 
@@ -273,12 +286,16 @@ inline std::size_t encode(const DeviceInfoReport& r, std::span<std::uint8_t> out
   if (out.size() < device_info_size) return 0;
   put_u8(out, offset::id, static_cast<std::uint8_t>(ReportId::device_info));
   put_u8(out, offset::version, version);
-  for (std::size_t i = 0; i < 3; ++i) put_u32(out, at::counts_per_rev + 4 * i, r.counts_per_rev[i]);
-  for (std::size_t i = 0; i < 3; ++i) put_u16(out, at::max_torque + 2 * i, r.max_torque_mnm[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_u32(out, at::counts_per_rev + 4 * i, r.counts_per_rev[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_u16(out, at::max_torque + 2 * i, r.max_torque_mnm[i]);
   put_u32(out, at::l1, r.l1_um);
   put_u32(out, at::l2, r.l2_um);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::q_min + 2 * i, r.q_min_mrad[i]);
-  for (std::size_t i = 0; i < 3; ++i) put_i16(out, at::q_max + 2 * i, r.q_max_mrad[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_i16(out, at::q_min + 2 * i, r.q_min_mrad[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    put_i16(out, at::q_max + 2 * i, r.q_max_mrad[i]);
   put_u16(out, at::max_force, r.max_force_mn);
   put_u16(out, at::continuous_force, r.continuous_force_mn);
   put_u16(out, at::rate, r.rate_hz);
@@ -291,12 +308,16 @@ inline std::size_t encode(const DeviceInfoReport& r, std::span<std::uint8_t> out
   using namespace detail;
   namespace at = offset::device_info;
   if (const Status s = check(in, ReportId::device_info, device_info_size); s != Status::ok) return s;
-  for (std::size_t i = 0; i < 3; ++i) r.counts_per_rev[i] = get_u32(in, at::counts_per_rev + 4 * i);
-  for (std::size_t i = 0; i < 3; ++i) r.max_torque_mnm[i] = get_u16(in, at::max_torque + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.counts_per_rev[i] = get_u32(in, at::counts_per_rev + 4 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.max_torque_mnm[i] = get_u16(in, at::max_torque + 2 * i);
   r.l1_um = get_u32(in, at::l1);
   r.l2_um = get_u32(in, at::l2);
-  for (std::size_t i = 0; i < 3; ++i) r.q_min_mrad[i] = get_i16(in, at::q_min + 2 * i);
-  for (std::size_t i = 0; i < 3; ++i) r.q_max_mrad[i] = get_i16(in, at::q_max + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.q_min_mrad[i] = get_i16(in, at::q_min + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.q_max_mrad[i] = get_i16(in, at::q_max + 2 * i);
   r.max_force_mn = get_u16(in, at::max_force);
   r.continuous_force_mn = get_u16(in, at::continuous_force);
   r.rate_hz = get_u16(in, at::rate);
@@ -403,13 +424,20 @@ inline std::size_t encode(const FeatureReply& r, std::span<std::uint8_t> out) no
 /// Size of the report whose id is the first byte, or 0 for an unknown id.
 [[nodiscard]] constexpr std::size_t report_size(std::uint8_t id) noexcept {
   switch (static_cast<ReportId>(id)) {
-    case ReportId::state: return state_size;
-    case ReportId::command: return command_size;
-    case ReportId::device_info: return device_info_size;
-    case ReportId::configuration: return configuration_size;
-    case ReportId::control: return control_size;
-    case ReportId::feature_request: return feature_request_size;
-    case ReportId::feature_reply: return feature_reply_size;
+    case ReportId::state:
+      return state_size;
+    case ReportId::command:
+      return command_size;
+    case ReportId::device_info:
+      return device_info_size;
+    case ReportId::configuration:
+      return configuration_size;
+    case ReportId::control:
+      return control_size;
+    case ReportId::feature_request:
+      return feature_request_size;
+    case ReportId::feature_reply:
+      return feature_reply_size;
   }
   return 0;
 }

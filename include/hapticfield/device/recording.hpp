@@ -77,7 +77,8 @@ class RecordingTransport final : public Transport {
     for (const RecordedReport& r : records_) {
       std::array<std::uint8_t, 10> head{};
       head[0] = static_cast<std::uint8_t>(r.kind);
-      for (int i = 0; i < 8; ++i) head[1 + i] = static_cast<std::uint8_t>((static_cast<std::uint64_t>(r.time) >> (8 * i)) & 0xFF);
+      for (int i = 0; i < 8; ++i)
+        head[1 + i] = static_cast<std::uint8_t>((static_cast<std::uint64_t>(r.time) >> (8 * i)) & 0xFF);
       head[9] = r.size;
       f.write(reinterpret_cast<const char*>(head.data()), head.size());
       f.write(reinterpret_cast<const char*>(r.bytes.data()), r.size);
@@ -87,7 +88,10 @@ class RecordingTransport final : public Transport {
 
  private:
   void record(char kind, std::span<const std::uint8_t> bytes) noexcept {
-    if (records_.size() == records_.capacity()) { ++dropped_; return; }
+    if (records_.size() == records_.capacity()) {
+      ++dropped_;
+      return;
+    }
     const std::int64_t now = now_();
     if (records_.empty()) t0_ = now;
     RecordedReport r;
@@ -119,7 +123,8 @@ class ReplayTransport final : public Transport {
     if (!f) throw std::runtime_error("ReplayTransport: cannot open " + path);
     std::string magic(std::strlen(detail::recording_magic), '\0');
     f.read(magic.data(), static_cast<std::streamsize>(magic.size()));
-    if (!f || magic != detail::recording_magic) throw std::runtime_error("ReplayTransport: " + path + " is not a hapticfield recording");
+    if (!f || magic != detail::recording_magic)
+      throw std::runtime_error("ReplayTransport: " + path + " is not a hapticfield recording");
     for (;;) {
       std::array<std::uint8_t, 10> head{};
       f.read(reinterpret_cast<char*>(head.data()), head.size());
@@ -129,7 +134,8 @@ class ReplayTransport final : public Transport {
       RecordedReport r;
       r.kind = static_cast<char>(head[0]);
       std::uint64_t t = 0;
-      for (int i = 0; i < 8; ++i) t |= static_cast<std::uint64_t>(head[1 + i]) << (8 * i);
+      for (int i = 0; i < 8; ++i)
+        t |= static_cast<std::uint64_t>(head[1 + i]) << (8 * i);
       r.time = static_cast<std::int64_t>(t);
       r.size = head[9];
       if (r.size > r.bytes.size() || (r.kind != 'I' && r.kind != 'O' && r.kind != 'F' && r.kind != 'S'))

@@ -70,7 +70,8 @@ class SerialTransport final : public Transport {
     fd_ = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd_ < 0) {
       const int e = errno;
-      if (e == ENOENT) throw DeviceError("SerialTransport: no serial port at " + path + " (unplugged, or a wrong path)");
+      if (e == ENOENT)
+        throw DeviceError("SerialTransport: no serial port at " + path + " (unplugged, or a wrong path)");
       if (e == EACCES || e == EPERM)
         throw DeviceError("SerialTransport: permission denied on " + path +
                           " (add the user to the group that owns it, usually dialout, then log in again)");
@@ -175,18 +176,30 @@ class SerialTransport final : public Transport {
 
   static speed_t to_speed(int baud) noexcept {
     switch (baud) {
-      case 9600: return B9600;
-      case 19200: return B19200;
-      case 38400: return B38400;
-      case 57600: return B57600;
-      case 115200: return B115200;
-      case 230400: return B230400;
-      case 460800: return B460800;
-      case 921600: return B921600;
-      case 1000000: return B1000000;
-      case 2000000: return B2000000;
-      case 4000000: return B4000000;
-      default: return B0;
+      case 9600:
+        return B9600;
+      case 19200:
+        return B19200;
+      case 38400:
+        return B38400;
+      case 57600:
+        return B57600;
+      case 115200:
+        return B115200;
+      case 230400:
+        return B230400;
+      case 460800:
+        return B460800;
+      case 921600:
+        return B921600;
+      case 1000000:
+        return B1000000;
+      case 2000000:
+        return B2000000;
+      case 4000000:
+        return B4000000;
+      default:
+        return B0;
     }
   }
 
@@ -195,7 +208,10 @@ class SerialTransport final : public Transport {
     if (framer_.full()) framer_.discard();  // a full buffer without a frame holds nothing of use
     std::span<std::uint8_t> space = framer_.space();
     ssize_t n = ::read(fd_, space.data(), space.size());
-    if (n > 0) { framer_.commit(static_cast<std::size_t>(n)); return Status::ok; }
+    if (n > 0) {
+      framer_.commit(static_cast<std::size_t>(n));
+      return Status::ok;
+    }
     if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return gone();
     pollfd p{fd_, POLLIN, 0};
     const int wait_ms = timeout_us > 0 ? (timeout_us + 999) / 1000 : 0;
@@ -205,7 +221,10 @@ class SerialTransport final : public Transport {
     if (wait_ms == 0) return Status::no_data;  // bytes arrived just now: the next call reads them
     space = framer_.space();
     n = ::read(fd_, space.data(), space.size());
-    if (n > 0) { framer_.commit(static_cast<std::size_t>(n)); return Status::ok; }
+    if (n > 0) {
+      framer_.commit(static_cast<std::size_t>(n));
+      return Status::ok;
+    }
     if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return gone();
     return Status::no_data;
   }

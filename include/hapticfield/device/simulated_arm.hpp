@@ -7,8 +7,8 @@
 /// handle along a line, a circle or a raster scan). It speaks the report
 /// protocol through SimulatedTransport (simulated_transport.hpp).
 
-#include <array>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -39,23 +39,45 @@ struct HandPath {
   int rows{8};                   ///< raster rows (2..32)
   double speed{0.05};            ///< speed along the path [m/s]
 
-  [[nodiscard]] static HandPath hold(glm::dvec3 p) { HandPath h; h.a = p; return h; }
+  [[nodiscard]] static HandPath hold(glm::dvec3 p) {
+    HandPath h;
+    h.a = p;
+    return h;
+  }
   [[nodiscard]] static HandPath line(glm::dvec3 from, glm::dvec3 to, double speed) {
-    HandPath h; h.kind = Kind::line; h.a = from; h.b = to; h.speed = speed; return h;
+    HandPath h;
+    h.kind = Kind::line;
+    h.a = from;
+    h.b = to;
+    h.speed = speed;
+    return h;
   }
   [[nodiscard]] static HandPath circle(glm::dvec3 centre, double radius, double speed) {
-    HandPath h; h.kind = Kind::circle; h.a = centre; h.radius = radius; h.speed = speed; return h;
+    HandPath h;
+    h.kind = Kind::circle;
+    h.a = centre;
+    h.radius = radius;
+    h.speed = speed;
+    return h;
   }
   [[nodiscard]] static HandPath raster(glm::dvec3 centre, double width, double height, int rows, double speed) {
-    HandPath h; h.kind = Kind::raster; h.a = centre; h.width = width; h.height = height; h.rows = rows; h.speed = speed;
+    HandPath h;
+    h.kind = Kind::raster;
+    h.a = centre;
+    h.width = width;
+    h.height = height;
+    h.rows = rows;
+    h.speed = speed;
     return h;
   }
 
   /// @throws std::invalid_argument naming the bad parameter.
   void validate() const {
     const auto finite = [](glm::dvec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); };
-    if (!finite(a) || !finite(b) || !finite(u) || !finite(v)) throw std::invalid_argument("HandPath: points must be finite [m]");
-    if (!std::isfinite(speed) || speed < 0.0) throw std::invalid_argument("HandPath: speed must be finite and >= 0 [m/s]");
+    if (!finite(a) || !finite(b) || !finite(u) || !finite(v))
+      throw std::invalid_argument("HandPath: points must be finite [m]");
+    if (!std::isfinite(speed) || speed < 0.0)
+      throw std::invalid_argument("HandPath: speed must be finite and >= 0 [m/s]");
     if (kind == Kind::circle && (!std::isfinite(radius) || radius <= 0.0))
       throw std::invalid_argument("HandPath: radius must be finite and > 0 [m]");
     if (kind == Kind::raster) {
@@ -69,7 +91,8 @@ struct HandPath {
   [[nodiscard]] glm::dvec3 at(double t) const noexcept {
     const double s = speed * t;  // arc length travelled [m]
     switch (kind) {
-      case Kind::hold: return a;
+      case Kind::hold:
+        return a;
       case Kind::line: {
         const double length = glm::length(b - a);
         if (length <= 0.0) return a;
@@ -125,14 +148,14 @@ struct SimulatedArmConfig {
   glm::dvec3 inertia{9.0e-4, 9.0e-4, 6.0e-4};  ///< effective joint inertia [kg m^2] (about 50 g at the handle)
   glm::dvec3 viscous{2.0e-4, 2.0e-4, 2.0e-4};  ///< viscous friction [N m s/rad]
   glm::dvec3 coulomb{2.0e-3, 2.0e-3, 2.0e-3};  ///< Coulomb friction [N m]
-  double rate{1000.0};              ///< firmware tick and report rate [Hz]
-  int substeps{8};                  ///< integration steps per firmware tick
-  double watchdog{0.02};            ///< firmware watchdog period [s]
-  int homing_ticks{50};             ///< firmware ticks homing takes
-  double torque_unit{1e-3};         ///< size of one torque unit on the wire [N m]
-  double max_force{3.3};            ///< peak force reported in device info [N] (default)
-  double continuous_force{0.88};    ///< continuous force reported in device info [N] (default)
-  glm::dvec3 initial_q{0.0, 0.0, 0.0};  ///< joint angles at power-up [rad] (the home pose)
+  double rate{1000.0};                         ///< firmware tick and report rate [Hz]
+  int substeps{8};                             ///< integration steps per firmware tick
+  double watchdog{0.02};                       ///< firmware watchdog period [s]
+  int homing_ticks{50};                        ///< firmware ticks homing takes
+  double torque_unit{1e-3};                    ///< size of one torque unit on the wire [N m]
+  double max_force{3.3};                       ///< peak force reported in device info [N] (default)
+  double continuous_force{0.88};               ///< continuous force reported in device info [N] (default)
+  glm::dvec3 initial_q{0.0, 0.0, 0.0};         ///< joint angles at power-up [rad] (the home pose)
   std::array<std::int32_t, 3> unhomed_offset{1234, -567, 89};  ///< encoder offset until homed [counts]
   Hand hand{};
 
@@ -148,15 +171,19 @@ struct SimulatedArmConfig {
       if (!std::isfinite(coulomb[i]) || coulomb[i] < 0.0)
         throw std::invalid_argument("SimulatedArmConfig: coulomb must be finite and >= 0 [N m]");
     }
-    if (!pos(rate) || rate > 20000.0) throw std::invalid_argument("SimulatedArmConfig: rate must be in (0, 20000] [Hz]");
+    if (!pos(rate) || rate > 20000.0)
+      throw std::invalid_argument("SimulatedArmConfig: rate must be in (0, 20000] [Hz]");
     if (substeps < 1 || substeps > 100) throw std::invalid_argument("SimulatedArmConfig: substeps must be 1..100");
-    if (!pos(watchdog) || watchdog > 0.065) throw std::invalid_argument("SimulatedArmConfig: watchdog must be in (0, 0.065] [s]");
+    if (!pos(watchdog) || watchdog > 0.065)
+      throw std::invalid_argument("SimulatedArmConfig: watchdog must be in (0, 0.065] [s]");
     if (homing_ticks < 0) throw std::invalid_argument("SimulatedArmConfig: homing_ticks must be >= 0");
     if (!pos(torque_unit)) throw std::invalid_argument("SimulatedArmConfig: torque_unit must be finite and > 0 [N m]");
     if (!pos(max_force) || !pos(continuous_force) || continuous_force > max_force)
       throw std::invalid_argument("SimulatedArmConfig: forces must be finite, > 0, continuous <= max [N]");
-    if (!pos(hand.stiffness) && hand.holding) throw std::invalid_argument("Hand: stiffness must be finite and > 0 [N/m]");
-    if (!std::isfinite(hand.damping) || hand.damping < 0.0) throw std::invalid_argument("Hand: damping must be finite and >= 0 [N s/m]");
+    if (!pos(hand.stiffness) && hand.holding)
+      throw std::invalid_argument("Hand: stiffness must be finite and > 0 [N/m]");
+    if (!std::isfinite(hand.damping) || hand.damping < 0.0)
+      throw std::invalid_argument("Hand: damping must be finite and >= 0 [N s/m]");
   }
 };
 
@@ -177,10 +204,14 @@ class ArmPlant {
   /// joint torques tau [N m], starting at time t [s] (the hand's clock).
   void period(const glm::dvec3& tau, double t) noexcept {
     const double h = 1.0 / (config_.rate * config_.substeps);
-    for (int k = 0; k < config_.substeps; ++k) step(tau, t + k * h, h);
+    for (int k = 0; k < config_.substeps; ++k)
+      step(tau, t + k * h, h);
   }
 
-  void set_hand(const Hand& hand) { hand.path.validate(); config_.hand = hand; }
+  void set_hand(const Hand& hand) {
+    hand.path.validate();
+    config_.hand = hand;
+  }
 
   [[nodiscard]] glm::dvec3 q() const noexcept { return q_; }
   [[nodiscard]] glm::dvec3 qdot() const noexcept { return qd_; }
@@ -189,7 +220,8 @@ class ArmPlant {
   /// Force the scripted hand applies to the handle in the last substep [N].
   [[nodiscard]] glm::dvec3 hand_force() const noexcept { return hand_force_; }
   [[nodiscard]] double kinetic_energy() const noexcept {
-    return 0.5 * (config_.inertia.x * qd_.x * qd_.x + config_.inertia.y * qd_.y * qd_.y + config_.inertia.z * qd_.z * qd_.z);
+    return 0.5 *
+           (config_.inertia.x * qd_.x * qd_.x + config_.inertia.y * qd_.y * qd_.y + config_.inertia.z * qd_.z * qd_.z);
   }
   [[nodiscard]] const SimulatedArmConfig& config() const noexcept { return config_; }
   [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return kin_; }
@@ -211,10 +243,21 @@ class ArmPlant {
       double qd = qd_[i] + h * drive / config_.inertia[i];
       // Coulomb friction: opposes motion, sticks when it would reverse it.
       const double dv = h * config_.coulomb[i] / config_.inertia[i];
-      if (qd > dv) qd -= dv; else if (qd < -dv) qd += dv; else qd = 0.0;
+      if (qd > dv)
+        qd -= dv;
+      else if (qd < -dv)
+        qd += dv;
+      else
+        qd = 0.0;
       double q = q_[i] + h * qd;
-      if (q < config_.kinematics.q_min[i]) { q = config_.kinematics.q_min[i]; qd = std::fmax(qd, 0.0); }
-      if (q > config_.kinematics.q_max[i]) { q = config_.kinematics.q_max[i]; qd = std::fmin(qd, 0.0); }
+      if (q < config_.kinematics.q_min[i]) {
+        q = config_.kinematics.q_min[i];
+        qd = std::fmax(qd, 0.0);
+      }
+      if (q > config_.kinematics.q_max[i]) {
+        q = config_.kinematics.q_max[i];
+        qd = std::fmin(qd, 0.0);
+      }
       q_[i] = q;
       qd_[i] = qd;
     }
@@ -238,7 +281,10 @@ class SimulatedArm {
   /// Handles an output (command) report; invalid ones are counted and ignored.
   void receive(std::span<const std::uint8_t> bytes) noexcept {
     protocol::CommandReport cmd;
-    if (protocol::decode(bytes, cmd) != Status::ok) { ++rejected_; return; }
+    if (protocol::decode(bytes, cmd) != Status::ok) {
+      ++rejected_;
+      return;
+    }
     ++accepted_;
     last_command_ = cmd;
     last_valid_tick_ = tick_;
@@ -248,7 +294,8 @@ class SimulatedArm {
     } else {
       armed_ = false;
     }
-    for (std::size_t i = 0; i < 3; ++i) command_torque_[static_cast<int>(i)] = cmd.torque_mnm[i] * config_.torque_unit;
+    for (std::size_t i = 0; i < 3; ++i)
+      command_torque_[static_cast<int>(i)] = cmd.torque_mnm[i] * config_.torque_unit;
   }
 
   /// Gets a feature report (device info or configuration); buffer[0] is the id.
@@ -274,7 +321,8 @@ class SimulatedArm {
     }
     if (buffer[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
       protocol::ConfigurationReport r;
-      r.watchdog_us = static_cast<std::uint16_t>(std::lround(static_cast<double>(watchdog_ticks_) / config_.rate * 1e6));
+      r.watchdog_us =
+          static_cast<std::uint16_t>(std::lround(static_cast<double>(watchdog_ticks_) / config_.rate * 1e6));
       size = protocol::encode(r, buffer);
       return size ? Status::ok : Status::short_report;
     }
@@ -299,11 +347,13 @@ class SimulatedArm {
         armed_ = true;
         last_valid_tick_ = tick_;
         return Status::ok;
-      case protocol::ControlOp::disarm: armed_ = false; return Status::ok;
+      case protocol::ControlOp::disarm:
+        armed_ = false;
+        return Status::ok;
       case protocol::ControlOp::clear_fault:
         if (armed_) return Status::bad_value;  // only while disarmed
-        faults_ &= static_cast<std::uint16_t>(~(status_bits::watchdog_tripped | status_bits::over_current |
-                                                status_bits::over_temperature));
+        faults_ &= static_cast<std::uint16_t>(
+            ~(status_bits::watchdog_tripped | status_bits::over_current | status_bits::over_temperature));
         return Status::ok;
       case protocol::ControlOp::home:
         if (!homed_ && homing_left_ < 0) homing_left_ = config_.homing_ticks;
@@ -338,14 +388,18 @@ class SimulatedArm {
     r.sequence = ++sequence_;
     r.command_echo = last_command_.sequence;
     const double since_boot = static_cast<double>(tick_ - boot_tick_) / config_.rate;  // [s]
-    r.timestamp_us = static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(since_boot * 1e6)) & 0xFFFFFFFFu);
+    r.timestamp_us =
+        static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(since_boot * 1e6)) & 0xFFFFFFFFu);
     r.encoder = plant_.kinematics().counts(plant_.q());
     if (!homed_)
-      for (std::size_t i = 0; i < 3; ++i) r.encoder[i] += config_.unhomed_offset[i];
-    r.status = static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
+      for (std::size_t i = 0; i < 3; ++i)
+        r.encoder[i] += config_.unhomed_offset[i];
+    r.status =
+        static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
     r.buttons = buttons_;
     for (std::size_t i = 0; i < 3; ++i)
-      r.torque_mnm[i] = static_cast<std::int16_t>(std::lround(applied_torque_[static_cast<int>(i)] / config_.torque_unit));
+      r.torque_mnm[i] =
+          static_cast<std::int16_t>(std::lround(applied_torque_[static_cast<int>(i)] / config_.torque_unit));
     return r;
   }
 
@@ -369,7 +423,10 @@ class SimulatedArm {
   void inject_fault(std::uint16_t bits) noexcept { faults_ |= bits; }
   void release_estop() noexcept { faults_ &= static_cast<std::uint16_t>(~status_bits::estop); }
   void set_buttons(std::uint8_t b) noexcept { buttons_ = b; }
-  void set_hand(const Hand& hand) { plant_.set_hand(hand); config_.hand = hand; }
+  void set_hand(const Hand& hand) {
+    plant_.set_hand(hand);
+    config_.hand = hand;
+  }
 
   [[nodiscard]] double time() const noexcept { return static_cast<double>(tick_) / config_.rate; }
   [[nodiscard]] std::int64_t ticks() const noexcept { return tick_; }

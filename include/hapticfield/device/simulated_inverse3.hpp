@@ -25,21 +25,22 @@ namespace hapticfield {
 
 struct SimulatedInverse3Config {
   inverse3::Identity identity{0x0B, 0x1234, 3, 2, 7, {}};  ///< the wake-up reply (header 0x0B: code + 1, a guess)
-  std::uint8_t force_header{0x2B};        ///< header of 0x2A replies (a guess)
-  std::uint8_t joint_header{0x1B};        ///< header of 0x1A replies (a guess)
-  double mass{0.3};                       ///< handle mass [kg]
-  double damping{2.0};                    ///< viscous damping [N s/m]
-  double period{1e-3};                    ///< time per force request [s]
-  glm::dvec3 initial_position{0.0, 0.1, 0.05};  ///< device frame [m]
-  double box{0.15};                       ///< |position component| limit [m] (a stop)
-  double joint_inertia{1e-4};             ///< per joint [kg m^2]
-  double joint_damping{1e-3};             ///< per joint [N m s/rad]
+  std::uint8_t force_header{0x2B};                         ///< header of 0x2A replies (a guess)
+  std::uint8_t joint_header{0x1B};                         ///< header of 0x1A replies (a guess)
+  double mass{0.3};                                        ///< handle mass [kg]
+  double damping{2.0};                                     ///< viscous damping [N s/m]
+  double period{1e-3};                                     ///< time per force request [s]
+  glm::dvec3 initial_position{0.0, 0.1, 0.05};             ///< device frame [m]
+  double box{0.15};                                        ///< |position component| limit [m] (a stop)
+  double joint_inertia{1e-4};                              ///< per joint [kg m^2]
+  double joint_damping{1e-3};                              ///< per joint [N m s/rad]
 
   /// @throws std::invalid_argument naming the first parameter that makes no sense.
   void validate() const {
     const auto bad = [](double v) { return !std::isfinite(v) || v <= 0.0; };
     if (bad(mass) || bad(period) || bad(box) || bad(joint_inertia))
-      throw std::invalid_argument("SimulatedInverse3Config: mass, period, box and joint_inertia must be finite and > 0");
+      throw std::invalid_argument(
+          "SimulatedInverse3Config: mass, period, box and joint_inertia must be finite and > 0");
     if (!std::isfinite(damping) || damping < 0.0 || !std::isfinite(joint_damping) || joint_damping < 0.0)
       throw std::invalid_argument("SimulatedInverse3Config: damping must be finite and >= 0");
     for (int i = 0; i < 3; ++i)
@@ -51,10 +52,10 @@ struct SimulatedInverse3Config {
 /// Counts of what the simulated device met.
 struct SimulatedInverse3Counters {
   std::uint64_t wakes{0};
-  std::uint64_t forces{0};          ///< 0x2A requests served
-  std::uint64_t torques{0};         ///< 0x1A requests served
-  std::uint64_t before_wake{0};     ///< requests ignored before the first wake-up
-  std::uint64_t skipped{0};         ///< unknown bytes skipped
+  std::uint64_t forces{0};       ///< 0x2A requests served
+  std::uint64_t torques{0};      ///< 0x1A requests served
+  std::uint64_t before_wake{0};  ///< requests ignored before the first wake-up
+  std::uint64_t skipped{0};      ///< unknown bytes skipped
 };
 
 class SimulatedInverse3 {
@@ -74,7 +75,8 @@ class SimulatedInverse3 {
         continue;
       }
       rx_[size_++] = b;
-      const std::size_t need = rx_[0] == inverse3::code::wake ? inverse3::wake_request_size : inverse3::command_request_size;
+      const std::size_t need =
+          rx_[0] == inverse3::code::wake ? inverse3::wake_request_size : inverse3::command_request_size;
       if (size_ < need) continue;
       size_ = 0;
       std::array<std::uint8_t, inverse3::max_frame_size> out{};
@@ -115,9 +117,9 @@ class SimulatedInverse3 {
     if (req[0] == inverse3::code::force) {
       ++counters_.forces;
       force_ = in;
-      if (std::isfinite(in.x + in.y + in.z) && in.x * in.x + in.y * in.y + in.z * in.z > peak_force_.x * peak_force_.x +
-                                                                                          peak_force_.y * peak_force_.y +
-                                                                                          peak_force_.z * peak_force_.z)
+      if (std::isfinite(in.x + in.y + in.z) &&
+          in.x * in.x + in.y * in.y + in.z * in.z >
+              peak_force_.x * peak_force_.x + peak_force_.y * peak_force_.y + peak_force_.z * peak_force_.z)
         peak_force_ = in;
       step_handle();
       r.header = config_.force_header;

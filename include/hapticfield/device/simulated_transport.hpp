@@ -37,10 +37,10 @@ class SimulatedTransport final : public Transport {
   /// @param arm  the arm (outlives the transport)
   /// @param now  time source [ns]; firmware tick k runs at start + (k + phase) / rate
   /// @param phase  offset of the firmware ticks within a period [periods, 0..1)
-  SimulatedTransport(SimulatedArm& arm, TimeSource now, double phase = 0.5)
-      : arm_(&arm), now_(std::move(now)) {
+  SimulatedTransport(SimulatedArm& arm, TimeSource now, double phase = 0.5) : arm_(&arm), now_(std::move(now)) {
     if (!now_) throw std::invalid_argument("SimulatedTransport: a time source is required");
-    if (!(phase >= 0.0 && phase < 1.0)) throw std::invalid_argument("SimulatedTransport: phase must be in [0, 1) [periods]");
+    if (!(phase >= 0.0 && phase < 1.0))
+      throw std::invalid_argument("SimulatedTransport: phase must be in [0, 1) [periods]");
     period_ns_ = static_cast<std::int64_t>(1e9 / arm.config().rate + 0.5);
     start_ns_ = now_() + static_cast<std::int64_t>(phase * static_cast<double>(period_ns_));
   }
@@ -61,16 +61,26 @@ class SimulatedTransport final : public Transport {
       const std::int64_t k = arm_->ticks();
       if (starts(LinkFault::reboot, k)) arm_->reboot();
       if (active(LinkFault::unplug, k)) unplugged_ = true;
-      if (unplugged_ || active(LinkFault::stall, k)) { stalled_ = !unplugged_; continue; }
+      if (unplugged_ || active(LinkFault::stall, k)) {
+        stalled_ = !unplugged_;
+        continue;
+      }
       stalled_ = false;
       Slot slot;
       slot.size = protocol::encode(arm_->report(), slot.bytes);
       if (active(LinkFault::drop, k)) continue;
       if (active(LinkFault::corrupt, k)) slot.bytes[protocol::offset::state::encoder] ^= 0x5A;
-      if (active(LinkFault::reorder, k)) { held_ = slot; holding_ = true; continue; }
+      if (active(LinkFault::reorder, k)) {
+        held_ = slot;
+        holding_ = true;
+        continue;
+      }
       push(slot);
       if (active(LinkFault::duplicate, k)) push(slot);
-      if (holding_) { push(held_); holding_ = false; }
+      if (holding_) {
+        push(held_);
+        holding_ = false;
+      }
     }
   }
 

@@ -33,31 +33,33 @@ namespace hapticfield {
 struct SimulatedWoodyConfig {
   woody::Generation generation{woody::Generation::p4_text};
   WoodyKinematicsConfig kinematics{};
-  std::array<int, 3> encoder_sign{1, 1, 1};      ///< raw = sign * host counts (as the host expects)
-  glm::dvec3 inertia{9.0e-4, 9.0e-4, 6.0e-4};    ///< effective joint inertia [kg m^2]
-  glm::dvec3 viscous{2.0e-4, 2.0e-4, 2.0e-4};    ///< viscous friction [N m s/rad]
-  glm::dvec3 coulomb{2.0e-3, 2.0e-3, 2.0e-3};    ///< Coulomb friction [N m]
-  glm::dvec3 q_min{-1.2, -0.4, 0.0};             ///< joint stops [rad] (plausible, not published)
-  glm::dvec3 q_max{1.2, 1.4, 2.2};               ///< joint stops [rad]
+  std::array<int, 3> encoder_sign{1, 1, 1};    ///< raw = sign * host counts (as the host expects)
+  glm::dvec3 inertia{9.0e-4, 9.0e-4, 6.0e-4};  ///< effective joint inertia [kg m^2]
+  glm::dvec3 viscous{2.0e-4, 2.0e-4, 2.0e-4};  ///< viscous friction [N m s/rad]
+  glm::dvec3 coulomb{2.0e-3, 2.0e-3, 2.0e-3};  ///< Coulomb friction [N m]
+  glm::dvec3 q_min{-1.2, -0.4, 0.0};           ///< joint stops [rad] (plausible, not published)
+  glm::dvec3 q_max{1.2, 1.4, 2.2};             ///< joint stops [rad]
   /// Angles at the start [rad] (near the woody origin). The counters read
   /// zero at the rest pose (host counts = home_offset): the arm was powered
   /// on there and then moved here.
   glm::dvec3 initial_q{0.0, 0.345, 0.78};
-  double rate{1000.0};                           ///< firmware tick [Hz]
-  int substeps{8};                               ///< integration steps per tick
-  Hand hand{};                                   ///< the scripted hand (device frame)
+  double rate{1000.0};  ///< firmware tick [Hz]
+  int substeps{8};      ///< integration steps per tick
+  Hand hand{};          ///< the scripted hand (device frame)
 
   /// @throws std::invalid_argument naming the first parameter that makes no sense.
   void validate() const {
     kinematics.validate();
     hand.path.validate();
     for (int i = 0; i < 3; ++i) {
-      if (!(inertia[i] > 0.0) || !std::isfinite(inertia[i])) throw std::invalid_argument("SimulatedWoodyConfig: inertia must be finite and > 0 [kg m^2]");
+      if (!(inertia[i] > 0.0) || !std::isfinite(inertia[i]))
+        throw std::invalid_argument("SimulatedWoodyConfig: inertia must be finite and > 0 [kg m^2]");
       if (!(viscous[i] >= 0.0) || !(coulomb[i] >= 0.0) || !std::isfinite(viscous[i]) || !std::isfinite(coulomb[i]))
         throw std::invalid_argument("SimulatedWoodyConfig: friction must be finite and >= 0");
       if (!(q_min[i] < q_max[i])) throw std::invalid_argument("SimulatedWoodyConfig: q_min must be < q_max [rad]");
     }
-    if (!(rate > 0.0 && rate <= 20000.0)) throw std::invalid_argument("SimulatedWoodyConfig: rate must be in (0, 20000] [Hz]");
+    if (!(rate > 0.0 && rate <= 20000.0))
+      throw std::invalid_argument("SimulatedWoodyConfig: rate must be in (0, 20000] [Hz]");
     if (substeps < 1 || substeps > 100) throw std::invalid_argument("SimulatedWoodyConfig: substeps must be 1..100");
   }
 };
@@ -89,14 +91,16 @@ class SimulatedWoody {
     applied_amps_ = amps;
     const glm::dvec3 tau = kin_.joint_torques(amps);
     const double h = 1.0 / (config_.rate * config_.substeps);
-    for (int k = 0; k < config_.substeps; ++k) step(h, tau, k);
+    for (int k = 0; k < config_.substeps; ++k)
+      step(h, tau, k);
   }
 
   /// The P1 report of this tick (the firmware streams one per tick).
   [[nodiscard]] woody::P1In p1_report() noexcept {
     woody::P1In r;
     const auto raw = raw_counts();
-    for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = static_cast<std::int16_t>(raw[i]);
+    for (std::size_t i = 0; i < 3; ++i)
+      r.encoder[i] = static_cast<std::int16_t>(raw[i]);
     r.debug = ++debug_;
     return r;
   }
@@ -105,8 +109,10 @@ class SimulatedWoody {
   [[nodiscard]] woody::P2In p2_report() const noexcept {
     woody::P2In r;
     const auto raw = raw_counts();
-    for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = static_cast<std::int16_t>(raw[i]);
-    for (std::size_t i = 0; i < 3; ++i) r.encoder[i + 3] = static_cast<std::int16_t>(extra_[i]);
+    for (std::size_t i = 0; i < 3; ++i)
+      r.encoder[i] = static_cast<std::int16_t>(raw[i]);
+    for (std::size_t i = 0; i < 3; ++i)
+      r.encoder[i + 3] = static_cast<std::int16_t>(extra_[i]);
     r.info = button_ ? 1 : 0;
     return r;
   }
@@ -114,7 +120,10 @@ class SimulatedWoody {
   /// Handles a P1 write; false when it does not decode (ignored, no watchdog re-arm).
   bool receive_p1(std::span<const std::uint8_t> bytes) noexcept {
     woody::P1Out m;
-    if (woody::decode(bytes, m) != Status::ok) { ++rejected_; return false; }
+    if (woody::decode(bytes, m) != Status::ok) {
+      ++rejected_;
+      return false;
+    }
     set_currents(m.milliamps, 3000);
     return true;
   }
@@ -122,11 +131,16 @@ class SimulatedWoody {
   /// Handles a P2 write (currents or calibrate).
   bool receive_p2(std::span<const std::uint8_t> bytes) noexcept {
     woody::P2Out m;
-    if (woody::decode(bytes, m) != Status::ok) { ++rejected_; return false; }
+    if (woody::decode(bytes, m) != Status::ok) {
+      ++rejected_;
+      return false;
+    }
     if (m.command == woody::p2_command::calibrate) {
       const auto raw = raw_counts();
-      for (std::size_t i = 0; i < 3; ++i) offset_[i] += m.attr[i] - raw[i];
-      for (std::size_t i = 0; i < 3; ++i) extra_[i] = m.milliamps[i];
+      for (std::size_t i = 0; i < 3; ++i)
+        offset_[i] += m.attr[i] - raw[i];
+      for (std::size_t i = 0; i < 3; ++i)
+        extra_[i] = m.milliamps[i];
       button_ = false;
       ++calibrations_;
       last_valid_tick_ = tick_;
@@ -153,13 +167,17 @@ class SimulatedWoody {
       m[i] = static_cast<std::int16_t>(std::abs(ma[i]) > 6000 ? 0 : ma[i]);
     set_currents(m, 6000);
     const auto raw = raw_counts();
-    for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = raw[i];
+    for (std::size_t i = 0; i < 3; ++i)
+      r.encoder[i] = raw[i];
     last_reply_ = r;
     return r;
   }
 
   void press_calibration_button() noexcept { button_ = true; }
-  void set_hand(const Hand& hand) { hand.path.validate(); config_.hand = hand; }
+  void set_hand(const Hand& hand) {
+    hand.path.validate();
+    config_.hand = hand;
+  }
 
   [[nodiscard]] const SimulatedWoodyConfig& config() const noexcept { return config_; }
   [[nodiscard]] const WoodyKinematics& kinematics() const noexcept { return kin_; }
@@ -169,7 +187,8 @@ class SimulatedWoody {
   [[nodiscard]] glm::dvec3 position() const noexcept { return kin_.forward(q_); }
   [[nodiscard]] glm::dvec3 velocity() const noexcept { return kin_.velocity(q_, qd_); }
   [[nodiscard]] double kinetic_energy() const noexcept {
-    return 0.5 * (config_.inertia.x * qd_.x * qd_.x + config_.inertia.y * qd_.y * qd_.y + config_.inertia.z * qd_.z * qd_.z);
+    return 0.5 *
+           (config_.inertia.x * qd_.x * qd_.x + config_.inertia.y * qd_.y * qd_.y + config_.inertia.z * qd_.z * qd_.z);
   }
   /// Currents the drivers output in the last tick [A].
   [[nodiscard]] glm::dvec3 applied_current() const noexcept { return applied_amps_; }
@@ -181,7 +200,8 @@ class SimulatedWoody {
   /// Raw counters as the firmware reports them [counts].
   [[nodiscard]] std::array<std::int32_t, 3> raw_counts() const noexcept {
     auto raw = raw_from_angles();
-    for (std::size_t i = 0; i < 3; ++i) raw[i] += offset_[i];
+    for (std::size_t i = 0; i < 3; ++i)
+      raw[i] += offset_[i];
     return raw;
   }
 
@@ -189,7 +209,8 @@ class SimulatedWoody {
   /// Raw counters from the angles alone (before the power-on / calibration offset).
   [[nodiscard]] std::array<std::int32_t, 3> raw_from_angles() const noexcept {
     auto host = kin_.counts(q_);  // host counts = sign * raw + home_offset
-    for (std::size_t i = 0; i < 3; ++i) host[i] = config_.encoder_sign[i] * (host[i] - config_.kinematics.home_offset[i]);
+    for (std::size_t i = 0; i < 3; ++i)
+      host[i] = config_.encoder_sign[i] * (host[i] - config_.kinematics.home_offset[i]);
     return host;
   }
 
@@ -210,17 +231,29 @@ class SimulatedWoody {
       const double t = time() + substep * h;
       const glm::dvec3 target = config_.hand.path.at(t);
       const glm::dvec3 target_v = (config_.hand.path.at(t + 1e-4) - target) / 1e-4;
-      hand_force_ = config_.hand.stiffness * (target - kin_.forward(q_)) + config_.hand.damping * (target_v - kin_.velocity(q_, qd_));
+      hand_force_ = config_.hand.stiffness * (target - kin_.forward(q_)) +
+                    config_.hand.damping * (target_v - kin_.velocity(q_, qd_));
       tau_hand = kin_.torques(q_, hand_force_);
     }
     for (int i = 0; i < 3; ++i) {  // the joint model of SimulatedArm
       const double drive = tau_motor[i] + tau_hand[i] - config_.viscous[i] * qd_[i];
       double qd = qd_[i] + h * drive / config_.inertia[i];
       const double dv = h * config_.coulomb[i] / config_.inertia[i];
-      if (qd > dv) qd -= dv; else if (qd < -dv) qd += dv; else qd = 0.0;
+      if (qd > dv)
+        qd -= dv;
+      else if (qd < -dv)
+        qd += dv;
+      else
+        qd = 0.0;
       double q = q_[i] + h * qd;
-      if (q < config_.q_min[i]) { q = config_.q_min[i]; qd = std::fmax(qd, 0.0); }
-      if (q > config_.q_max[i]) { q = config_.q_max[i]; qd = std::fmin(qd, 0.0); }
+      if (q < config_.q_min[i]) {
+        q = config_.q_min[i];
+        qd = std::fmax(qd, 0.0);
+      }
+      if (q > config_.q_max[i]) {
+        q = config_.q_max[i];
+        qd = std::fmin(qd, 0.0);
+      }
       q_[i] = q;
       qd_[i] = qd;
     }
@@ -299,7 +332,9 @@ class SimulatedWoodyTransport final : public Transport {
     ++writes_;
     if (stalled_) return Status::ok;  // lost on the wire
     switch (arm_->config().generation) {
-      case woody::Generation::p1_hid8: arm_->receive_p1(report); break;
+      case woody::Generation::p1_hid8:
+        arm_->receive_p1(report);
+        break;
       case woody::Generation::p2_hid14:
         if (arm_->receive_p2(report)) {
           Slot s;
@@ -314,7 +349,8 @@ class SimulatedWoodyTransport final : public Transport {
             ++line_size_;  // an overlong frame still ends at '\n'; the firmware says buffer full
             continue;
           }
-          reply(std::span<const std::uint8_t>(line_.data(), std::min(line_size_, line_.size())), line_size_ > line_.size());
+          reply(std::span<const std::uint8_t>(line_.data(), std::min(line_size_, line_.size())),
+                line_size_ > line_.size());
           line_size_ = 0;
         }
         break;

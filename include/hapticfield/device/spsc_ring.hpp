@@ -17,8 +17,7 @@ namespace hapticfield::detail {
 
 /// Ring of N reports of at most 64 bytes (N a power of two).
 template <std::size_t N>
-  requires(N >= 2 && (N & (N - 1)) == 0)
-class ReportRing {
+requires(N >= 2 && (N & (N - 1)) == 0) class ReportRing {
  public:
   /// Producer: false when full (the report is not queued).
   bool push(std::span<const std::uint8_t> report) noexcept {

@@ -11,20 +11,20 @@ namespace hapticfield {
 
 /// Outcome of a device, transport or codec call.
 enum class Status : std::uint8_t {
-  ok,               ///< success
-  no_data,          ///< nothing new to read (not an error)
-  timeout,          ///< a blocking read timed out
-  short_report,     ///< fewer bytes than the report needs
-  unknown_report,   ///< report id not defined by the protocol
-  bad_crc,          ///< CRC-16 mismatch
-  bad_version,      ///< protocol version not supported
-  bad_value,        ///< a field holds a value outside its range
-  disconnected,     ///< the device is gone (unplugged or read error)
-  not_homed,        ///< arming refused: the arm is not homed
-  fault,            ///< the device reports a latched fault
-  overflow,         ///< a buffer or queue was full
-  unsupported,      ///< the transport does not implement the call
-  resync,           ///< the report stream jumped (device restart, long loss): held back until consistent
+  ok,              ///< success
+  no_data,         ///< nothing new to read (not an error)
+  timeout,         ///< a blocking read timed out
+  short_report,    ///< fewer bytes than the report needs
+  unknown_report,  ///< report id not defined by the protocol
+  bad_crc,         ///< CRC-16 mismatch
+  bad_version,     ///< protocol version not supported
+  bad_value,       ///< a field holds a value outside its range
+  disconnected,    ///< the device is gone (unplugged or read error)
+  not_homed,       ///< arming refused: the arm is not homed
+  fault,           ///< the device reports a latched fault
+  overflow,        ///< a buffer or queue was full
+  unsupported,     ///< the transport does not implement the call
+  resync,          ///< the report stream jumped (device restart, long loss): held back until consistent
 };
 
 /// Status bits of the input state report (see docs/device-protocol.md).
@@ -42,20 +42,34 @@ inline constexpr std::uint16_t any_fault = watchdog_tripped | over_current | ove
 /// Short human-readable name of a status.
 [[nodiscard]] constexpr std::string_view to_string(Status s) noexcept {
   switch (s) {
-    case Status::ok: return "ok";
-    case Status::no_data: return "no data";
-    case Status::timeout: return "timeout";
-    case Status::short_report: return "short report";
-    case Status::unknown_report: return "unknown report";
-    case Status::bad_crc: return "bad CRC";
-    case Status::bad_version: return "bad protocol version";
-    case Status::bad_value: return "bad value";
-    case Status::disconnected: return "disconnected";
-    case Status::not_homed: return "not homed";
-    case Status::fault: return "device fault";
-    case Status::overflow: return "overflow";
-    case Status::unsupported: return "unsupported";
-    case Status::resync: return "resynchronising";
+    case Status::ok:
+      return "ok";
+    case Status::no_data:
+      return "no data";
+    case Status::timeout:
+      return "timeout";
+    case Status::short_report:
+      return "short report";
+    case Status::unknown_report:
+      return "unknown report";
+    case Status::bad_crc:
+      return "bad CRC";
+    case Status::bad_version:
+      return "bad protocol version";
+    case Status::bad_value:
+      return "bad value";
+    case Status::disconnected:
+      return "disconnected";
+    case Status::not_homed:
+      return "not homed";
+    case Status::fault:
+      return "device fault";
+    case Status::overflow:
+      return "overflow";
+    case Status::unsupported:
+      return "unsupported";
+    case Status::resync:
+      return "resynchronising";
   }
   return "?";
 }

@@ -40,9 +40,9 @@ enum class Framing : std::uint8_t {
 
 /// Counts of what a StreamFramer met.
 struct FramerCounters {
-  std::uint64_t frames{0};   ///< frames (or lines) returned
-  std::uint64_t skipped{0};  ///< bytes dropped while resynchronising
-  std::uint64_t overflow{0}; ///< bytes lost to a full buffer or an over-long line
+  std::uint64_t frames{0};    ///< frames (or lines) returned
+  std::uint64_t skipped{0};   ///< bytes dropped while resynchronising
+  std::uint64_t overflow{0};  ///< bytes lost to a full buffer or an over-long line
 };
 
 /// Capacity: bytes held between reads (>= 2 reports).
@@ -126,7 +126,11 @@ class StreamFramer {
   Status next_report(std::span<std::uint8_t> out, std::size_t& size) noexcept {
     while (end_ > begin_) {
       const std::size_t need = protocol::report_size(buffer_[begin_]);
-      if (need == 0 || need > out.size()) { ++begin_; ++counters_.skipped; continue; }
+      if (need == 0 || need > out.size()) {
+        ++begin_;
+        ++counters_.skipped;
+        continue;
+      }
       if (end_ - begin_ < need) {  // partial, or a stray byte that looks like an id
         if (!skip_to_complete_frame(out.size())) return Status::no_data;  // wait for the rest
         continue;
@@ -150,7 +154,10 @@ class StreamFramer {
     while (frame_size_ != 0 && end_ - begin_ >= frame_size_) {
       const std::size_t at = begin_;
       begin_ += frame_size_;
-      if (frame_size_ > out.size()) { counters_.overflow += frame_size_; continue; }  // caller's buffer too small
+      if (frame_size_ > out.size()) {
+        counters_.overflow += frame_size_;
+        continue;
+      }  // caller's buffer too small
       std::memcpy(out.data(), buffer_.data() + at, frame_size_);
       size = frame_size_;
       ++counters_.frames;
@@ -177,8 +184,9 @@ class StreamFramer {
   Status next_line(std::span<std::uint8_t> out, std::size_t& size) noexcept {
     while (end_ > begin_) {
       std::size_t at = begin_;
-      while (at < end_ && buffer_[at] != '\n') ++at;
-      if (at == end_) {  // no end of line yet
+      while (at < end_ && buffer_[at] != '\n')
+        ++at;
+      if (at == end_) {                   // no end of line yet
         if (end_ - begin_ > max_line_) {  // too long already: drop it up to its '\n'
           counters_.overflow += end_ - begin_;
           begin_ = end_;
@@ -188,15 +196,25 @@ class StreamFramer {
       }
       const std::size_t line_begin = begin_;
       begin_ = at + 1;
-      if (dropping_) { counters_.overflow += at + 1 - line_begin; dropping_ = false; continue; }
+      if (dropping_) {
+        counters_.overflow += at + 1 - line_begin;
+        dropping_ = false;
+        continue;
+      }
       std::size_t n = 0;
       bool fits = true;
       for (std::size_t i = line_begin; i < at; ++i) {
         if (buffer_[i] == 0) continue;  // NUL padding
-        if (n == max_line_ || n == out.size()) { fits = false; break; }
+        if (n == max_line_ || n == out.size()) {
+          fits = false;
+          break;
+        }
         out[n++] = buffer_[i];
       }
-      if (!fits) { counters_.overflow += at + 1 - line_begin; continue; }
+      if (!fits) {
+        counters_.overflow += at + 1 - line_begin;
+        continue;
+      }
       if (n == 0) continue;  // only padding
       size = n;
       ++counters_.frames;

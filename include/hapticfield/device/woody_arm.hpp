@@ -43,13 +43,13 @@ namespace hapticfield {
 
 struct WoodyArmConfig {
   woody::Generation generation{woody::Generation::p4_text};
-  WoodyKinematicsConfig kinematics{};         ///< a woody_presets:: preset
-  std::array<int, 3> encoder_sign{1, 1, 1};   ///< host sign of each raw encoder (+1 or -1)
-  double max_current{5.999};                  ///< current clamp [A], at most woody_current_limit()
-  double velocity_cutoff{100.0};              ///< first-order low-pass on the velocity estimate [Hz]
-  TimeSource now{};                           ///< host time [ns] for the velocity; empty: CLOCK_MONOTONIC
-  int wake_attempts{50};                      ///< P2/P4: zero frames sent at construction before giving up
-  int wake_timeout_us{10000};                 ///< P2/P4: wait for a reply after each [us]
+  WoodyKinematicsConfig kinematics{};                ///< a woody_presets:: preset
+  std::array<int, 3> encoder_sign{1, 1, 1};          ///< host sign of each raw encoder (+1 or -1)
+  double max_current{5.999};                         ///< current clamp [A], at most woody_current_limit()
+  double velocity_cutoff{100.0};                     ///< first-order low-pass on the velocity estimate [Hz]
+  TimeSource now{};                                  ///< host time [ns] for the velocity; empty: CLOCK_MONOTONIC
+  int wake_attempts{50};                             ///< P2/P4: zero frames sent at construction before giving up
+  int wake_timeout_us{10000};                        ///< P2/P4: wait for a reply after each [us]
   std::array<std::int16_t, 6> calibration_counts{};  ///< P2: counters set by the calibrate command [counts]
 
   /// Defaults for a generation: its encoder signs and current limit.
@@ -72,7 +72,8 @@ struct WoodyArmConfig {
                                   std::to_string(woody_current_limit(generation)) + " [A] for this generation");
     if (!std::isfinite(velocity_cutoff) || velocity_cutoff <= 0.0)
       throw std::invalid_argument("WoodyArmConfig: velocity_cutoff must be finite and > 0 [Hz]");
-    if (wake_attempts < 1 || wake_attempts > 10000) throw std::invalid_argument("WoodyArmConfig: wake_attempts must be 1..10000");
+    if (wake_attempts < 1 || wake_attempts > 10000)
+      throw std::invalid_argument("WoodyArmConfig: wake_attempts must be 1..10000");
     if (wake_timeout_us < 0 || wake_timeout_us > 1000000)
       throw std::invalid_argument("WoodyArmConfig: wake_timeout_us must be 0..1000000 [us]");
   }
@@ -85,7 +86,7 @@ struct WoodyCounters {
   std::uint64_t error_replies{0};  ///< P4 replies with error bits (encoders ignored)
   std::uint64_t commands{0};       ///< frames written
   std::uint64_t write_errors{0};
-  std::uint64_t calibrations{0};   ///< P2 calibrate commands sent
+  std::uint64_t calibrations{0};  ///< P2 calibrate commands sent
 };
 
 class WoodyArm {
@@ -98,7 +99,8 @@ class WoodyArm {
       : transport_(&transport), config_(std::move(config)) {
     config_.validate();
     kin_ = WoodyKinematics(config_.kinematics);
-    info_.name = "WoodenHaptics " + config_.kinematics.name + " (" + std::string(woody::to_string(config_.generation)) + ")";
+    info_.name =
+        "WoodenHaptics " + config_.kinematics.name + " (" + std::string(woody::to_string(config_.generation)) + ")";
     info_.max_force = config_.kinematics.max_force;
     info_.continuous_force = config_.kinematics.max_force;  // the sources state no continuous figure
     info_.validate();
@@ -155,7 +157,8 @@ class WoodyArm {
     if (ok) {
       const glm::dvec3 amps = kin_.currents(kin_.torques(angles_, force));
       for (int i = 0; i < 3; ++i) {
-        const double a = std::isfinite(amps[i]) ? std::fmax(-config_.max_current, std::fmin(config_.max_current, amps[i])) : 0.0;
+        const double a =
+            std::isfinite(amps[i]) ? std::fmax(-config_.max_current, std::fmin(config_.max_current, amps[i])) : 0.0;
         ma[static_cast<std::size_t>(i)] = static_cast<std::int16_t>(std::lround(a * 1000.0));
       }
     }
@@ -212,7 +215,8 @@ class WoodyArm {
       }
     }
     throw Error("WoodyArm: no reply from the arm after " + std::to_string(config_.wake_attempts) + " zero-current " +
-                std::string(woody::to_string(config_.generation)) + " frames; check the port, the cable and the firmware");
+                std::string(woody::to_string(config_.generation)) +
+                " frames; check the port, the cable and the firmware");
   }
 
   /// Decodes one report; counts what does not decode or carries error bits.
@@ -220,21 +224,32 @@ class WoodyArm {
     switch (config_.generation) {
       case woody::Generation::p1_hid8: {
         woody::P1In in;
-        if (woody::decode(bytes, in) != Status::ok) { ++counters_.malformed; return false; }
-        for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = in.encoder[i];
+        if (woody::decode(bytes, in) != Status::ok) {
+          ++counters_.malformed;
+          return false;
+        }
+        for (std::size_t i = 0; i < 3; ++i)
+          r.encoder[i] = in.encoder[i];
         return true;
       }
       case woody::Generation::p2_hid14: {
         woody::P2In in;
-        if (woody::decode(bytes, in) != Status::ok) { ++counters_.malformed; return false; }
-        for (std::size_t i = 0; i < 6; ++i) r.encoder[i] = in.encoder[i];
+        if (woody::decode(bytes, in) != Status::ok) {
+          ++counters_.malformed;
+          return false;
+        }
+        for (std::size_t i = 0; i < 6; ++i)
+          r.encoder[i] = in.encoder[i];
         r.button_flag = in.info == 1;
         r.buttons = r.button_flag ? 1 : 0;
         return true;
       }
       case woody::Generation::p4_text: {
         woody::P4Reply in;
-        if (woody::decode(bytes, in) != Status::ok) { ++counters_.malformed; return false; }
+        if (woody::decode(bytes, in) != Status::ok) {
+          ++counters_.malformed;
+          return false;
+        }
         model_ = in.model;
         if (in.error != 0) {  // the firmware sent its last encoders: ignore them
           ++counters_.error_replies;
@@ -252,7 +267,9 @@ class WoodyArm {
     std::size_t n = 0;
     std::array<std::int16_t, 3> sent = ma;
     switch (config_.generation) {
-      case woody::Generation::p1_hid8: n = woody::encode(woody::P1Out{ma, 0}, out_); break;
+      case woody::Generation::p1_hid8:
+        n = woody::encode(woody::P1Out{ma, 0}, out_);
+        break;
       case woody::Generation::p2_hid14: {
         woody::P2Out m;
         m.milliamps = ma;
@@ -271,11 +288,16 @@ class WoodyArm {
         n = woody::encode(m, out_);
         break;
       }
-      case woody::Generation::p4_text: n = woody::encode_p4_command(ma, out_); break;
+      case woody::Generation::p4_text:
+        n = woody::encode_p4_command(ma, out_);
+        break;
     }
     last_milliamps_ = sent;
     const Status s = transport_->write(std::span<const std::uint8_t>(out_.data(), n));
-    if (s == Status::ok) ++counters_.commands; else ++counters_.write_errors;
+    if (s == Status::ok)
+      ++counters_.commands;
+    else
+      ++counters_.write_errors;
     return s;
   }
 

@@ -28,19 +28,22 @@ enum class Generation : std::uint8_t {
 
 [[nodiscard]] constexpr std::string_view to_string(Generation g) noexcept {
   switch (g) {
-    case Generation::p1_hid8: return "p1";
-    case Generation::p2_hid14: return "p2";
-    case Generation::p4_text: return "p4";
+    case Generation::p1_hid8:
+      return "p1";
+    case Generation::p2_hid14:
+      return "p2";
+    case Generation::p4_text:
+      return "p4";
   }
   return "?";
 }
 
-inline constexpr std::size_t p1_in_size = 8;    ///< P1 IN report [bytes]
-inline constexpr std::size_t p1_out_size = 9;   ///< P1 host write: 0x00 + 8 bytes [bytes]
-inline constexpr std::size_t p2_in_size = 14;   ///< P2 IN report [bytes]
-inline constexpr std::size_t p2_out_size = 15;  ///< P2 host write: 0x00 + 14 bytes [bytes]
-inline constexpr std::size_t p4_min_command = 16;  ///< P4 host frames are NUL-padded to this [bytes]
-inline constexpr std::size_t p4_max_line = 128;    ///< longest P4 line this codec handles [bytes]
+inline constexpr std::size_t p1_in_size = 8;           ///< P1 IN report [bytes]
+inline constexpr std::size_t p1_out_size = 9;          ///< P1 host write: 0x00 + 8 bytes [bytes]
+inline constexpr std::size_t p2_in_size = 14;          ///< P2 IN report [bytes]
+inline constexpr std::size_t p2_out_size = 15;         ///< P2 host write: 0x00 + 14 bytes [bytes]
+inline constexpr std::size_t p4_min_command = 16;      ///< P4 host frames are NUL-padded to this [bytes]
+inline constexpr std::size_t p4_max_line = 128;        ///< longest P4 line this codec handles [bytes]
 inline constexpr std::size_t p4_firmware_buffer = 64;  ///< device line buffer in the simulated firmware [bytes]
 
 /// P1 IN (section 1, P1): three encoder counters and a send counter.
@@ -67,20 +70,21 @@ inline constexpr std::int16_t calibrate = 1;  ///< enc_a..c = attr0..2, enc_d..f
 struct P2Out {
   std::array<std::int16_t, 3> milliamps{};  ///< [mA] (counts for enc_d..f under calibrate)
   std::int16_t command{p2_command::currents};
-  std::array<std::int16_t, 3> attr{};       ///< counts for enc_a..c under calibrate
+  std::array<std::int16_t, 3> attr{};  ///< counts for enc_a..c under calibrate
 };
 
 /// P4 error bits in the last field of a device reply (section 1, P4).
 namespace p4_error {
-inline constexpr std::uint32_t gimbal_i2c_1 = 1u;          ///< gimbal I2C error
-inline constexpr std::uint32_t gimbal_i2c_2 = 2u;          ///< gimbal I2C error
-inline constexpr std::uint32_t gimbal_i2c_4 = 4u;          ///< gimbal I2C error
-inline constexpr std::uint32_t trailing_characters = 8u;   ///< characters after ']'
-inline constexpr std::uint32_t buffer_full = 128u;         ///< frame longer than the firmware buffer
-inline constexpr std::uint32_t close_before_open = 256u;   ///< ']' before '['
-inline constexpr std::uint32_t comma_count = 512u;         ///< not exactly two commas
-inline constexpr std::uint32_t parse_error = 1024u;        ///< a field is not an integer
-inline constexpr std::uint32_t frame_errors = trailing_characters | buffer_full | close_before_open | comma_count | parse_error;
+inline constexpr std::uint32_t gimbal_i2c_1 = 1u;         ///< gimbal I2C error
+inline constexpr std::uint32_t gimbal_i2c_2 = 2u;         ///< gimbal I2C error
+inline constexpr std::uint32_t gimbal_i2c_4 = 4u;         ///< gimbal I2C error
+inline constexpr std::uint32_t trailing_characters = 8u;  ///< characters after ']'
+inline constexpr std::uint32_t buffer_full = 128u;        ///< frame longer than the firmware buffer
+inline constexpr std::uint32_t close_before_open = 256u;  ///< ']' before '['
+inline constexpr std::uint32_t comma_count = 512u;        ///< not exactly two commas
+inline constexpr std::uint32_t parse_error = 1024u;       ///< a field is not an integer
+inline constexpr std::uint32_t frame_errors =
+    trailing_characters | buffer_full | close_before_open | comma_count | parse_error;
 }  // namespace p4_error
 
 /// P4 model numbers.
@@ -112,7 +116,8 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
   const auto r = std::to_chars(text.data(), text.data() + text.size(), v);
   const auto len = static_cast<std::size_t>(r.ptr - text.data());
   if (r.ec != std::errc{} || n + len > b.size()) return 0;
-  for (std::size_t i = 0; i < len; ++i) b[n + i] = static_cast<std::uint8_t>(text[i]);
+  for (std::size_t i = 0; i < len; ++i)
+    b[n + i] = static_cast<std::uint8_t>(text[i]);
   return n + len;
 }
 /// Strict integer: optional '-', then 1..11 digits, the whole of [first, last).
@@ -130,7 +135,8 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
 [[nodiscard]] inline std::size_t encode(const P1Out& m, std::span<std::uint8_t> out) noexcept {
   if (out.size() < p1_out_size) return 0;
   out[0] = 0x00;
-  for (std::size_t i = 0; i < 3; ++i) detail::put16(out, 1 + 2 * i, m.milliamps[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    detail::put16(out, 1 + 2 * i, m.milliamps[i]);
   detail::put16(out, 7, m.debug);
   return p1_out_size;
 }
@@ -138,21 +144,24 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, P1Out& m) noexcept {
   if (in.size() != p1_out_size) return Status::short_report;
   if (in[0] != 0x00) return Status::unknown_report;
-  for (std::size_t i = 0; i < 3; ++i) m.milliamps[i] = detail::get16(in, 1 + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    m.milliamps[i] = detail::get16(in, 1 + 2 * i);
   m.debug = detail::get16(in, 7);
   return Status::ok;
 }
 /// Device: the 8-byte P1 IN report (no report id on the wire).
 [[nodiscard]] inline std::size_t encode(const P1In& r, std::span<std::uint8_t> out) noexcept {
   if (out.size() < p1_in_size) return 0;
-  for (std::size_t i = 0; i < 3; ++i) detail::put16(out, 2 * i, r.encoder[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    detail::put16(out, 2 * i, r.encoder[i]);
   detail::put16(out, 6, static_cast<std::int16_t>(r.debug));
   return p1_in_size;
 }
 /// Host: decodes an 8-byte P1 IN report.
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, P1In& r) noexcept {
   if (in.size() != p1_in_size) return Status::short_report;
-  for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = detail::get16(in, 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    r.encoder[i] = detail::get16(in, 2 * i);
   r.debug = static_cast<std::uint16_t>(detail::get16(in, 6));
   return Status::ok;
 }
@@ -163,31 +172,37 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
 [[nodiscard]] inline std::size_t encode(const P2Out& m, std::span<std::uint8_t> out) noexcept {
   if (out.size() < p2_out_size) return 0;
   out[0] = 0x00;
-  for (std::size_t i = 0; i < 3; ++i) detail::put16(out, 1 + 2 * i, m.milliamps[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    detail::put16(out, 1 + 2 * i, m.milliamps[i]);
   detail::put16(out, 7, m.command);
-  for (std::size_t i = 0; i < 3; ++i) detail::put16(out, 9 + 2 * i, m.attr[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    detail::put16(out, 9 + 2 * i, m.attr[i]);
   return p2_out_size;
 }
 /// Device: decodes the host's 15-byte P2 write.
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, P2Out& m) noexcept {
   if (in.size() != p2_out_size) return Status::short_report;
   if (in[0] != 0x00) return Status::unknown_report;
-  for (std::size_t i = 0; i < 3; ++i) m.milliamps[i] = detail::get16(in, 1 + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    m.milliamps[i] = detail::get16(in, 1 + 2 * i);
   m.command = detail::get16(in, 7);
-  for (std::size_t i = 0; i < 3; ++i) m.attr[i] = detail::get16(in, 9 + 2 * i);
+  for (std::size_t i = 0; i < 3; ++i)
+    m.attr[i] = detail::get16(in, 9 + 2 * i);
   return Status::ok;
 }
 /// Device: the 14-byte P2 IN report.
 [[nodiscard]] inline std::size_t encode(const P2In& r, std::span<std::uint8_t> out) noexcept {
   if (out.size() < p2_in_size) return 0;
-  for (std::size_t i = 0; i < 6; ++i) detail::put16(out, 2 * i, r.encoder[i]);
+  for (std::size_t i = 0; i < 6; ++i)
+    detail::put16(out, 2 * i, r.encoder[i]);
   detail::put16(out, 12, r.info);
   return p2_in_size;
 }
 /// Host: decodes a 14-byte P2 IN report.
 [[nodiscard]] inline Status decode(std::span<const std::uint8_t> in, P2In& r) noexcept {
   if (in.size() != p2_in_size) return Status::short_report;
-  for (std::size_t i = 0; i < 6; ++i) r.encoder[i] = detail::get16(in, 2 * i);
+  for (std::size_t i = 0; i < 6; ++i)
+    r.encoder[i] = detail::get16(in, 2 * i);
   r.info = detail::get16(in, 12);
   return Status::ok;
 }
@@ -202,14 +217,18 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
   std::size_t n = 0;
   out[n++] = '[';
   for (std::size_t i = 0; i < 3; ++i) {
-    if (i > 0) { if (n >= out.size()) return 0; out[n++] = ','; }
+    if (i > 0) {
+      if (n >= out.size()) return 0;
+      out[n++] = ',';
+    }
     n = detail::put_int(out, n, milliamps[i]);
     if (n == 0) return 0;
   }
   if (n + 2 > out.size()) return 0;
   out[n++] = ']';
   out[n++] = '\n';
-  while (n < p4_min_command) out[n++] = 0x00;
+  while (n < p4_min_command)
+    out[n++] = 0x00;
   return n;
 }
 
@@ -218,10 +237,13 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
   std::size_t n = 0;
   if (out.empty()) return 0;
   out[n++] = '[';
-  std::array<long long, 8> v{r.model, r.encoder[0], r.encoder[1], r.encoder[2], r.encoder[3], r.encoder[4], r.encoder[5],
-                             static_cast<long long>(r.error)};
+  std::array<long long, 8> v{r.model,      r.encoder[0], r.encoder[1], r.encoder[2],
+                             r.encoder[3], r.encoder[4], r.encoder[5], static_cast<long long>(r.error)};
   for (std::size_t i = 0; i < v.size(); ++i) {
-    if (i > 0) { if (n >= out.size()) return 0; out[n++] = ','; }
+    if (i > 0) {
+      if (n >= out.size()) return 0;
+      out[n++] = ',';
+    }
     n = detail::put_int(out, n, v[i]);
     if (n == 0) return 0;
   }
@@ -246,14 +268,16 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
   std::array<long long, 8> v{};
   for (std::size_t i = 0; i < v.size(); ++i) {
     const char* q = p;
-    while (q < stop && *q != ',') ++q;
+    while (q < stop && *q != ',')
+      ++q;
     if ((i + 1 < v.size()) != (q < stop)) return Status::bad_value;  // seven commas, exactly
     if (!detail::parse_int(p, q, v[i]) || v[i] < INT32_MIN || v[i] > INT32_MAX) return Status::bad_value;
     p = q + 1;
   }
   if (v[0] < 0 || v[7] < 0) return Status::bad_value;
   r.model = static_cast<std::int32_t>(v[0]);
-  for (std::size_t i = 0; i < 6; ++i) r.encoder[i] = static_cast<std::int32_t>(v[i + 1]);
+  for (std::size_t i = 0; i < 6; ++i)
+    r.encoder[i] = static_cast<std::int32_t>(v[i + 1]);
   r.error = static_cast<std::uint32_t>(v[7]);
   return Status::ok;
 }
@@ -274,12 +298,14 @@ inline void put16(std::span<std::uint8_t> b, std::size_t at, std::int16_t v) noe
   const std::size_t open = s.find('[');
   const std::size_t close = s.find(']');
   std::uint32_t err = 0;
-  if (close != std::string_view::npos && (open == std::string_view::npos || close < open)) return p4_error::close_before_open;
+  if (close != std::string_view::npos && (open == std::string_view::npos || close < open))
+    return p4_error::close_before_open;
   if (open == std::string_view::npos || close == std::string_view::npos) return p4_error::parse_error;
   if (close + 1 < s.size()) err |= p4_error::trailing_characters;
   const std::string_view body = s.substr(open + 1, close - open - 1);
   std::size_t commas = 0;
-  for (const char c : body) commas += c == ',' ? 1 : 0;
+  for (const char c : body)
+    commas += c == ',' ? 1 : 0;
   if (commas != 2) return err | p4_error::comma_count;
   std::array<std::int32_t, 3> v{};
   std::size_t from = 0;

@@ -34,28 +34,30 @@ namespace hapticfield {
 /// Geometry, drive and limits of one serial woody-structure arm.
 struct WoodyKinematicsConfig {
   std::string name{"woody_v2015"};
-  double ln{0.080};                                    ///< height of the shoulder axis (La) [m]
-  double lb{0.205};                                    ///< first link [m]
-  double lc{0.245};                                    ///< second link [m]
-  glm::dvec3 origin{0.220, 0.0, 0.080};                ///< origin offset, source frame [m]
-  glm::dvec3 capstan{0.010, 0.010, 0.010};             ///< capstan diameters [m]
-  glm::dvec3 body{0.160, 0.120, 0.120};                ///< driven body diameters [m]
-  glm::dvec3 torque_constant{0.0259, 0.0259, 0.0259};  ///< motor Kt [N m/A]
+  double ln{0.080};                                              ///< height of the shoulder axis (La) [m]
+  double lb{0.205};                                              ///< first link [m]
+  double lc{0.245};                                              ///< second link [m]
+  glm::dvec3 origin{0.220, 0.0, 0.080};                          ///< origin offset, source frame [m]
+  glm::dvec3 capstan{0.010, 0.010, 0.010};                       ///< capstan diameters [m]
+  glm::dvec3 body{0.160, 0.120, 0.120};                          ///< driven body diameters [m]
+  glm::dvec3 torque_constant{0.0259, 0.0259, 0.0259};            ///< motor Kt [N m/A]
   std::array<std::int32_t, 3> counts_per_rev{2000, 2000, 2000};  ///< quadrature counts per motor turn
-  std::array<bool, 3> aligned{false, true, true};      ///< motor_and_body_aligned (dir = -1 when true)
-  std::array<std::int32_t, 3> home_offset{0, 0, -6000};  ///< added to the host's encoder counts [counts]
-  int model_code{3};                                   ///< P4 model number (1 Polhem, 2 vintage, 3 Woody)
-  double max_force{5.0};                               ///< peak handle force [N]
+  std::array<bool, 3> aligned{false, true, true};                ///< motor_and_body_aligned (dir = -1 when true)
+  std::array<std::int32_t, 3> home_offset{0, 0, -6000};          ///< added to the host's encoder counts [counts]
+  int model_code{3};                                             ///< P4 model number (1 Polhem, 2 vintage, 3 Woody)
+  double max_force{5.0};                                         ///< peak handle force [N]
 
   /// @throws std::invalid_argument naming the parameter that makes no sense.
   void validate() const {
     const auto bad = [](double v) { return !std::isfinite(v) || v <= 0.0; };
-    if (bad(ln) || bad(lb) || bad(lc)) throw std::invalid_argument("WoodyKinematicsConfig: ln, lb, lc must be finite and > 0 [m]");
+    if (bad(ln) || bad(lb) || bad(lc))
+      throw std::invalid_argument("WoodyKinematicsConfig: ln, lb, lc must be finite and > 0 [m]");
     for (int i = 0; i < 3; ++i) {
       if (!std::isfinite(origin[i])) throw std::invalid_argument("WoodyKinematicsConfig: origin must be finite [m]");
       if (bad(capstan[i]) || bad(body[i]))
         throw std::invalid_argument("WoodyKinematicsConfig: capstan and body diameters must be finite and > 0 [m]");
-      if (bad(torque_constant[i])) throw std::invalid_argument("WoodyKinematicsConfig: torque_constant must be finite and > 0 [N m/A]");
+      if (bad(torque_constant[i]))
+        throw std::invalid_argument("WoodyKinematicsConfig: torque_constant must be finite and > 0 [N m/A]");
       if (counts_per_rev[static_cast<std::size_t>(i)] <= 0)
         throw std::invalid_argument("WoodyKinematicsConfig: counts_per_rev must be > 0");
     }
@@ -69,7 +71,9 @@ struct WoodyKinematicsConfig {
 namespace woody_presets {
 
 /// woody (default / v2015): La/Lb/Lc 80/205/245 mm, Kt 0.0259 N m/A, cpr 2000.
-[[nodiscard]] inline WoodyKinematicsConfig woody_v2015() { return {}; }
+[[nodiscard]] inline WoodyKinematicsConfig woody_v2015() {
+  return {};
+}
 
 /// woodenhaptics_v2019: as v2015 with Kt 0.321 / 0.0603 / 0.0603 [N m/A].
 [[nodiscard]] inline WoodyKinematicsConfig woodenhaptics_v2019() {
@@ -124,9 +128,13 @@ namespace woody_presets {
 }  // namespace woody_presets
 
 /// Source frame (x toward the user, y right, z up) to device frame.
-[[nodiscard]] constexpr glm::dvec3 woody_to_device(const glm::dvec3& s) noexcept { return {s.y, s.z, s.x}; }
+[[nodiscard]] constexpr glm::dvec3 woody_to_device(const glm::dvec3& s) noexcept {
+  return {s.y, s.z, s.x};
+}
 /// Device frame (x right, y up, z toward the user) to source frame.
-[[nodiscard]] constexpr glm::dvec3 woody_to_source(const glm::dvec3& d) noexcept { return {d.z, d.x, d.y}; }
+[[nodiscard]] constexpr glm::dvec3 woody_to_source(const glm::dvec3& d) noexcept {
+  return {d.z, d.x, d.y};
+}
 
 /// Kinematics of a serial woody-structure arm. Angles tA (base), tB, tC [rad].
 class WoodyKinematics {
@@ -159,7 +167,8 @@ class WoodyKinematics {
     std::array<std::int32_t, 3> c{};
     for (int i = 0; i < 3; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      c[k] = static_cast<std::int32_t>(std::lround(q[i] / ratio(i) * config_.counts_per_rev[k] / (2.0 * std::numbers::pi)));
+      c[k] = static_cast<std::int32_t>(
+          std::lround(q[i] / ratio(i) * config_.counts_per_rev[k] / (2.0 * std::numbers::pi)));
     }
     return c;
   }
@@ -202,14 +211,16 @@ class WoodyKinematics {
   /// Motor currents [A] for joint torques [N m]: I = tau dir (d_cap/d_body) / Kt.
   [[nodiscard]] glm::dvec3 currents(const glm::dvec3& tau) const noexcept {
     glm::dvec3 a{0.0};
-    for (int i = 0; i < 3; ++i) a[i] = tau[i] * ratio(i) / config_.torque_constant[i];
+    for (int i = 0; i < 3; ++i)
+      a[i] = tau[i] * ratio(i) / config_.torque_constant[i];
     return a;
   }
 
   /// Joint torques [N m] that motor currents [A] produce (the inverse of currents()).
   [[nodiscard]] glm::dvec3 joint_torques(const glm::dvec3& amps) const noexcept {
     glm::dvec3 t{0.0};
-    for (int i = 0; i < 3; ++i) t[i] = amps[i] * config_.torque_constant[i] / ratio(i);
+    for (int i = 0; i < 3; ++i)
+      t[i] = amps[i] * config_.torque_constant[i] / ratio(i);
     return t;
   }
 

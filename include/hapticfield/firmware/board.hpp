@@ -22,10 +22,14 @@ namespace hapticfield::firmware {
 template <class B>
 concept Board = requires(B& board, BoardInputs& in, const MotorOutputs& out, std::span<std::uint8_t> rx,
                          std::span<const std::uint8_t> tx) {
-  { board.read_inputs(in) } noexcept;
-  { board.write_outputs(out) } noexcept;
-  { board.usb_receive(rx) } noexcept -> std::convertible_to<std::size_t>;
-  { board.usb_send(tx) } noexcept -> std::convertible_to<bool>;
+  { board.read_inputs(in) }
+  noexcept;
+  { board.write_outputs(out) }
+  noexcept;
+  { board.usb_receive(rx) }
+  noexcept->std::convertible_to<std::size_t>;
+  { board.usb_send(tx) }
+  noexcept->std::convertible_to<bool>;
 };
 
 /// One firmware period on a HID board: every received output report goes

@@ -38,9 +38,9 @@ struct FirmwareConfig {
   std::uint16_t max_force_mn{3300};                                  ///< peak force [mN]
   std::uint16_t continuous_force_mn{880};                            ///< continuous force [mN]
   std::uint16_t torque_unit_unm{1000};                               ///< one torque unit on the wire [uN m]
-  std::uint32_t period_us{1000};     ///< firmware tick and report period [us] (50..65535)
-  std::uint16_t watchdog_us{5000};   ///< command watchdog [us] (>= period_us)
-  std::uint16_t homing_ticks{50};    ///< ticks the arm must rest at home to home
+  std::uint32_t period_us{1000};    ///< firmware tick and report period [us] (50..65535)
+  std::uint16_t watchdog_us{5000};  ///< command watchdog [us] (>= period_us)
+  std::uint16_t homing_ticks{50};   ///< ticks the arm must rest at home to home
 
   /// nullptr when the configuration is usable, else what is wrong.
   [[nodiscard]] constexpr const char* check() const noexcept {
@@ -60,14 +60,14 @@ struct FirmwareConfig {
 
 /// What the board measured this period.
 struct BoardInputs {
-  std::uint32_t now_us{0};                 ///< free-running board clock [us] (wraps)
-  std::array<std::int32_t, 3> encoder{};   ///< raw encoder counts since power-up
-  std::array<std::int16_t, 3> gimbal{};    ///< gimbal values (device units)
-  std::uint8_t buttons{0};                 ///< button bit mask
-  bool at_home{true};          ///< home switch / dock sensor; true on boards without one (rest at home)
-  bool estop{false};           ///< emergency stop pressed (held, not latched)
-  bool over_current{false};    ///< motor driver over-current flag (latches)
-  bool over_temperature{false};///< over-temperature flag (latches)
+  std::uint32_t now_us{0};                ///< free-running board clock [us] (wraps)
+  std::array<std::int32_t, 3> encoder{};  ///< raw encoder counts since power-up
+  std::array<std::int16_t, 3> gimbal{};   ///< gimbal values (device units)
+  std::uint8_t buttons{0};                ///< button bit mask
+  bool at_home{true};                     ///< home switch / dock sensor; true on boards without one (rest at home)
+  bool estop{false};                      ///< emergency stop pressed (held, not latched)
+  bool over_current{false};               ///< motor driver over-current flag (latches)
+  bool over_temperature{false};           ///< over-temperature flag (latches)
 };
 
 /// What the board applies this period.
@@ -79,12 +79,12 @@ struct MotorOutputs {
 
 /// Reports the core refused, by reason.
 struct FirmwareCounters {
-  std::uint32_t commands{0};      ///< valid commands accepted
+  std::uint32_t commands{0};  ///< valid commands accepted
   std::uint32_t bad_crc{0};
   std::uint32_t short_report{0};
-  std::uint32_t unknown{0};       ///< unknown report id
+  std::uint32_t unknown{0};  ///< unknown report id
   std::uint32_t bad_version{0};
-  std::uint32_t bad_value{0};     ///< unknown flags or operations, zero watchdog
+  std::uint32_t bad_value{0};  ///< unknown flags or operations, zero watchdog
   std::uint32_t watchdog_trips{0};
 };
 
@@ -118,7 +118,10 @@ class FirmwareCore {
   void receive(std::span<const std::uint8_t> bytes) noexcept {
     protocol::CommandReport c;
     const Status s = protocol::decode(bytes, c);
-    if (s != Status::ok) { count(s); return; }
+    if (s != Status::ok) {
+      count(s);
+      return;
+    }
     ++counters_.commands;
     command_ = c;
     fresh_command_ = true;
@@ -156,16 +159,28 @@ class FirmwareCore {
 
   /// Applies a set feature report (configuration or control).
   Status set_feature(std::span<const std::uint8_t> bytes) noexcept {
-    if (bytes.empty()) { count(Status::short_report); return Status::short_report; }
+    if (bytes.empty()) {
+      count(Status::short_report);
+      return Status::short_report;
+    }
     if (bytes[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
       protocol::ConfigurationReport r;
-      if (const Status s = protocol::decode(bytes, r); s != Status::ok) { count(s); return s; }
-      if (r.watchdog_us < config_.period_us) { count(Status::bad_value); return Status::bad_value; }
+      if (const Status s = protocol::decode(bytes, r); s != Status::ok) {
+        count(s);
+        return s;
+      }
+      if (r.watchdog_us < config_.period_us) {
+        count(Status::bad_value);
+        return Status::bad_value;
+      }
       watchdog_us_ = r.watchdog_us;
       return Status::ok;
     }
     protocol::ControlOp op;
-    if (const Status s = protocol::decode(bytes, op); s != Status::ok) { count(s); return s; }
+    if (const Status s = protocol::decode(bytes, op); s != Status::ok) {
+      count(s);
+      return s;
+    }
     switch (op) {
       case protocol::ControlOp::arm:
         if (!homed_) return Status::not_homed;
@@ -173,13 +188,17 @@ class FirmwareCore {
         armed_ = true;
         last_valid_us_ = now_us_;
         return Status::ok;
-      case protocol::ControlOp::disarm: armed_ = false; return Status::ok;
+      case protocol::ControlOp::disarm:
+        armed_ = false;
+        return Status::ok;
       case protocol::ControlOp::clear_fault:
         if (armed_) return Status::bad_value;  // only while disarmed
-        faults_ &= static_cast<std::uint16_t>(~(status_bits::watchdog_tripped | status_bits::over_current |
-                                                status_bits::over_temperature));
+        faults_ &= static_cast<std::uint16_t>(
+            ~(status_bits::watchdog_tripped | status_bits::over_current | status_bits::over_temperature));
         return Status::ok;
-      case protocol::ControlOp::home: start_homing(); return Status::ok;
+      case protocol::ControlOp::home:
+        start_homing();
+        return Status::ok;
     }
     return Status::bad_value;
   }
@@ -190,10 +209,16 @@ class FirmwareCore {
   std::size_t handle_frame(std::span<const std::uint8_t> frame, std::span<std::uint8_t> reply) noexcept {
     if (frame.empty()) return 0;
     const auto id = static_cast<protocol::ReportId>(frame[0]);
-    if (id == protocol::ReportId::command) { receive(frame); return 0; }
+    if (id == protocol::ReportId::command) {
+      receive(frame);
+      return 0;
+    }
     if (id == protocol::ReportId::feature_request) {
       std::uint8_t wanted = 0;
-      if (const Status s = protocol::decode_feature_request(frame, wanted); s != Status::ok) { count(s); return 0; }
+      if (const Status s = protocol::decode_feature_request(frame, wanted); s != Status::ok) {
+        count(s);
+        return 0;
+      }
       std::size_t size = 0;
       const Status s = get_feature(wanted, reply, size);
       return s == Status::ok ? size : protocol::encode(protocol::FeatureReply{wanted, s}, reply);
@@ -211,7 +236,11 @@ class FirmwareCore {
   /// Returns what the board must drive now.
   const MotorOutputs& tick(const BoardInputs& in) noexcept {
     now_us_ = in.now_us;
-    if (!boot_set_) { boot_us_ = in.now_us; last_valid_us_ = in.now_us; boot_set_ = true; }
+    if (!boot_set_) {
+      boot_us_ = in.now_us;
+      last_valid_us_ = in.now_us;
+      boot_set_ = true;
+    }
     if (in.over_current) faults_ |= status_bits::over_current;
     if (in.over_temperature) faults_ |= status_bits::over_temperature;
     faults_ = static_cast<std::uint16_t>(in.estop ? faults_ | status_bits::estop : faults_ & ~status_bits::estop);
@@ -219,12 +248,18 @@ class FirmwareCore {
       fresh_command_ = false;
       last_valid_us_ = in.now_us;
       if (command_.flags & protocol::command_flags::home) start_homing();
-      if (!(command_.flags & protocol::command_flags::arm)) armed_ = false;
-      else if (homed_ && !(faults_ & status_bits::any_fault)) armed_ = true;
+      if (!(command_.flags & protocol::command_flags::arm))
+        armed_ = false;
+      else if (homed_ && !(faults_ & status_bits::any_fault))
+        armed_ = true;
     }
     if (homing_left_ >= 0) {  // the arm must rest at home for homing_ticks ticks
-      if (!in.at_home) homing_left_ = config_.homing_ticks;
-      else if (homing_left_-- == 0) { homed_ = true; offset_ = in.encoder; }
+      if (!in.at_home)
+        homing_left_ = config_.homing_ticks;
+      else if (homing_left_-- == 0) {
+        homed_ = true;
+        offset_ = in.encoder;
+      }
     }
     if (armed_ && in.now_us - last_valid_us_ > watchdog_us_) {  // wraps correctly
       armed_ = false;
@@ -235,16 +270,19 @@ class FirmwareCore {
     outputs_ = {};
     if (armed_) {
       outputs_.enable = true;
-      for (std::size_t i = 0; i < 3; ++i) limit(i, command_.torque_mnm[i]);
+      for (std::size_t i = 0; i < 3; ++i)
+        limit(i, command_.torque_mnm[i]);
     }
     protocol::StateReport r;
     r.sequence = ++sequence_;
     r.command_echo = command_.sequence;
     r.timestamp_us = in.now_us - boot_us_;
-    for (std::size_t i = 0; i < 3; ++i) r.encoder[i] = static_cast<std::int32_t>(
-        static_cast<std::uint32_t>(in.encoder[i]) - static_cast<std::uint32_t>(homed_ ? offset_[i] : 0));
+    for (std::size_t i = 0; i < 3; ++i)
+      r.encoder[i] = static_cast<std::int32_t>(static_cast<std::uint32_t>(in.encoder[i]) -
+                                               static_cast<std::uint32_t>(homed_ ? offset_[i] : 0));
     r.gimbal = in.gimbal;
-    r.status = static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
+    r.status =
+        static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
     r.buttons = in.buttons;
     r.torque_mnm = outputs_.torque;
     report_size_ = protocol::encode(r, report_);
@@ -293,11 +331,21 @@ class FirmwareCore {
 
   void count(Status s) noexcept {
     switch (s) {
-      case Status::bad_crc: ++counters_.bad_crc; break;
-      case Status::short_report: ++counters_.short_report; break;
-      case Status::unknown_report: ++counters_.unknown; break;
-      case Status::bad_version: ++counters_.bad_version; break;
-      default: ++counters_.bad_value; break;
+      case Status::bad_crc:
+        ++counters_.bad_crc;
+        break;
+      case Status::short_report:
+        ++counters_.short_report;
+        break;
+      case Status::unknown_report:
+        ++counters_.unknown;
+        break;
+      case Status::bad_version:
+        ++counters_.bad_version;
+        break;
+      default:
+        ++counters_.bad_value;
+        break;
     }
   }
 

@@ -21,8 +21,8 @@ class GrayImage {
   /// @throws std::invalid_argument for a non-positive size.
   GrayImage(int width, int height, double value = 0.0) : width_(width), height_(height) {
     if (width <= 0 || height <= 0)
-      throw std::invalid_argument("GrayImage: size must be positive, got " + std::to_string(width) +
-                                  " x " + std::to_string(height) + " px");
+      throw std::invalid_argument("GrayImage: size must be positive, got " + std::to_string(width) + " x " +
+                                  std::to_string(height) + " px");
     pixels_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), value);
   }
 
@@ -54,7 +54,8 @@ class GrayImage {
   GrayImage out = gray;
   for (int y = 0; y < out.height(); ++y) {
     double* r = out.row(y);
-    for (int x = 0; x < out.width(); ++x) r[x] = gray_full_scale - r[x];
+    for (int x = 0; x < out.width(); ++x)
+      r[x] = gray_full_scale - r[x];
   }
   return out;
 }

@@ -36,8 +36,7 @@ GrayImage to_gray_typed(const cv::Mat& image, LumaWeights w, double to_8bit) {
     double* dst = out.row(y);
     for (int x = 0; x < image.cols; ++x, src += channels) {
       // OpenCV stores colour as B, G, R (, A); alpha is ignored.
-      dst[x] = channels == 1 ? to_8bit * src[0]
-                             : to_8bit * (w.b * src[0] + w.g * src[1] + w.r * src[2]);
+      dst[x] = channels == 1 ? to_8bit * src[0] : to_8bit * (w.b * src[0] + w.g * src[1] + w.r * src[2]);
     }
   }
   return out;
@@ -56,8 +55,10 @@ GrayImage to_gray_typed(const cv::Mat& image, LumaWeights w, double to_8bit) {
     throw std::invalid_argument("to_gray: expected 1, 3 or 4 channels, got " + std::to_string(channels));
   const LumaWeights w = luma_weights(weights);
   switch (image.depth()) {
-    case CV_8U: return detail::to_gray_typed<unsigned char>(image, w, 1.0);
-    case CV_16U: return detail::to_gray_typed<unsigned short>(image, w, gray_full_scale / 65535.0);
+    case CV_8U:
+      return detail::to_gray_typed<unsigned char>(image, w, 1.0);
+    case CV_16U:
+      return detail::to_gray_typed<unsigned short>(image, w, gray_full_scale / 65535.0);
     default:
       throw std::invalid_argument("to_gray: expected 8- or 16-bit unsigned pixels, got OpenCV depth " +
                                   std::to_string(image.depth()));

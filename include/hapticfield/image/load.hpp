@@ -75,8 +75,7 @@ namespace detail {
   } catch (const cv::Exception& e) {
     throw ImageError("cannot decode '" + path + "': " + e.what());
   }
-  if (image.empty())
-    throw ImageError("cannot decode '" + path + "': not a picture OpenCV can read, or corrupt");
+  if (image.empty()) throw ImageError("cannot decode '" + path + "': not a picture OpenCV can read, or corrupt");
   if (std::uint64_t(image.cols) * std::uint64_t(image.rows) > max_pixels)
     throw ImageError(detail::too_large(path, std::uint64_t(image.cols), std::uint64_t(image.rows), max_pixels));
   return image;

@@ -52,18 +52,23 @@ class HeaderReader {
 [[nodiscard]] inline std::uint32_t be32(const unsigned char* p) noexcept {
   return std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 | std::uint32_t(p[2]) << 8 | p[3];
 }
-[[nodiscard]] inline std::uint32_t be16(const unsigned char* p) noexcept { return std::uint32_t(p[0]) << 8 | p[1]; }
+[[nodiscard]] inline std::uint32_t be16(const unsigned char* p) noexcept {
+  return std::uint32_t(p[0]) << 8 | p[1];
+}
 [[nodiscard]] inline std::uint32_t le32(const unsigned char* p) noexcept {
   return std::uint32_t(p[3]) << 24 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[1]) << 8 | p[0];
 }
-[[nodiscard]] inline std::uint32_t le16(const unsigned char* p) noexcept { return std::uint32_t(p[1]) << 8 | p[0]; }
+[[nodiscard]] inline std::uint32_t le16(const unsigned char* p) noexcept {
+  return std::uint32_t(p[1]) << 8 | p[0];
+}
 
 /// JPEG: walk the marker segments up to the first start-of-frame.
 [[nodiscard]] inline std::optional<PictureSize> jpeg_size(HeaderReader& in) {
   for (int segments = 0; segments < 1024; ++segments) {
     int c = in.get();
     if (c != 0xFF) return std::nullopt;
-    while (c == 0xFF) c = in.get();  // fill bytes
+    while (c == 0xFF)
+      c = in.get();  // fill bytes
     if (c < 0) return std::nullopt;
     const int marker = c;
     if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // no length
@@ -101,9 +106,12 @@ class HeaderReader {
     const std::uint32_t type = u16(e + 2);
     if (tag != 256 && tag != 257) continue;
     std::uint64_t value = 0;
-    if (type == 3) value = u16(e + 8);        // SHORT
-    else if (type == 4) value = u32(e + 8);   // LONG
-    else return std::nullopt;
+    if (type == 3)
+      value = u16(e + 8);  // SHORT
+    else if (type == 4)
+      value = u32(e + 8);  // LONG
+    else
+      return std::nullopt;
     (tag == 256 ? width : height) = value;
   }
   if (width == 0 || height == 0) return std::nullopt;
@@ -118,9 +126,11 @@ class HeaderReader {
     std::string t;
     int c = in.get();
     while (true) {
-      while (c == ' ' || c == '\t' || c == '\r' || c == '\n') c = in.get();
+      while (c == ' ' || c == '\t' || c == '\r' || c == '\n')
+        c = in.get();
       if (c != '#') break;
-      while (c >= 0 && c != '\n') c = in.get();
+      while (c >= 0 && c != '\n')
+        c = in.get();
     }
     while (c >= 0 && c != ' ' && c != '\t' && c != '\r' && c != '\n' && t.size() < 32) {
       t.push_back(static_cast<char>(c));
@@ -148,8 +158,10 @@ class HeaderReader {
   for (int words = 0; words < 64 && !(w && h); ++words) {
     const std::string t = token();
     if (t.empty() || t == "ENDHDR") break;
-    if (t == "WIDTH") w = number(token());
-    else if (t == "HEIGHT") h = number(token());
+    if (t == "WIDTH")
+      w = number(token());
+    else if (t == "HEIGHT")
+      h = number(token());
   }
   if (!w || !h) return std::nullopt;
   return PictureSize{*w, *h, "Netpbm"};

@@ -19,10 +19,14 @@ enum class Border {
 
 [[nodiscard]] constexpr const char* to_string(Border border) noexcept {
   switch (border) {
-    case Border::suspend: return "suspend";
-    case Border::clamp: return "clamp";
-    case Border::reflect: return "reflect";
-    case Border::fade: return "fade";
+    case Border::suspend:
+      return "suspend";
+    case Border::clamp:
+      return "clamp";
+    case Border::reflect:
+      return "reflect";
+    case Border::fade:
+      return "fade";
   }
   return "?";
 }
@@ -52,7 +56,9 @@ namespace detail {
 class PaddedImage {
  public:
   PaddedImage(const GrayImage& image, int pad, Border border)
-      : pad_(pad), width_(image.width() + 2 * pad), height_(image.height() + 2 * pad),
+      : pad_(pad),
+        width_(image.width() + 2 * pad),
+        height_(image.height() + 2 * pad),
         pixels_(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_), 0.0) {
     const bool fill = !needs_full_mask(border);
     for (int y = 0; y < height_; ++y) {

@@ -52,7 +52,8 @@ struct ForceMap {
   /// Largest force magnitude in the map.
   [[nodiscard]] double max_magnitude() const noexcept {
     double m = 0.0;
-    for (std::size_t i = 0; i < fx.size(); ++i) m = std::max(m, std::hypot(double(fx[i]), double(fy[i])));
+    for (std::size_t i = 0; i < fx.size(); ++i)
+      m = std::max(m, std::hypot(double(fx[i]), double(fy[i])));
     return m;
   }
 };
@@ -104,7 +105,8 @@ struct MapArithmetic<std::uint32_t> {
     // unsigned: any bit pattern (NaN, huge values) wraps instead of overflowing
     const std::uint64_t k = std::bit_cast<std::uint64_t>(q + magic) - bits;
     const std::uint64_t k20 = std::bit_cast<std::uint64_t>(q * 1048576.0 + magic) - bits;
-    bad |= (k20 - (k << 20)) | (k >> 31) | static_cast<std::uint64_t>(k > static_cast<std::uint64_t>(gray_full_scale * d));
+    bad |=
+        (k20 - (k << 20)) | (k >> 31) | static_cast<std::uint64_t>(k > static_cast<std::uint64_t>(gray_full_scale * d));
     return static_cast<std::uint32_t>(k);
   }
   [[nodiscard]] static std::uint32_t weight(int i) noexcept { return static_cast<std::uint32_t>(i); }
@@ -118,9 +120,8 @@ struct MapArithmetic<std::uint32_t> {
 /// non-zero when one is not an integer to integer_tolerance or lies outside
 /// [0, 255 d] (NaN included). The conversion is exact for integers whatever
 /// the rounding mode.
-__attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(const double* HAPTICFIELD_RESTRICT p, int n,
-                                                                         double d,
-                                                                         std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
+__attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(
+    const double* HAPTICFIELD_RESTRICT p, int n, double d, std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
   const __m256d vd = _mm256_set1_pd(d);
   const __m256d top = _mm256_set1_pd(gray_full_scale * d);
   const __m256d tol = _mm256_set1_pd(integer_tolerance);
@@ -133,13 +134,15 @@ __attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(const d
     const __m256d q = _mm256_sub_pd(top, _mm256_mul_pd(_mm256_loadu_pd(p + i), vd));
     const __m128i k = _mm256_cvtpd_epi32(q);
     const __m256d off = _mm256_andnot_pd(sign, _mm256_sub_pd(q, _mm256_cvtepi32_pd(k)));
-    const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(off, tol, _CMP_LE_OQ), _mm256_cmp_pd(q, low, _CMP_GE_OQ)),
-                                     _mm256_cmp_pd(q, high, _CMP_LE_OQ));
+    const __m256d ok =
+        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(off, tol, _CMP_LE_OQ), _mm256_cmp_pd(q, low, _CMP_GE_OQ)),
+                      _mm256_cmp_pd(q, high, _CMP_LE_OQ));
     bad |= _mm256_movemask_pd(ok) ^ 0xF;
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), k);
   }
   std::uint64_t rest = 0;
-  for (; i < n; ++i) out[i] = MapArithmetic<std::uint32_t>::value(gray_full_scale - p[i], d, rest);
+  for (; i < n; ++i)
+    out[i] = MapArithmetic<std::uint32_t>::value(gray_full_scale - p[i], d, rest);
   return static_cast<std::uint64_t>(bad) | rest;
 }
 #endif
@@ -164,8 +167,8 @@ HAPTICFIELD_ALWAYS_INLINE inline std::uint64_t inverted_padded_row(const GrayIma
 #if HAPTICFIELD_X86_DISPATCH
   if constexpr (Avx2 && std::is_same_v<T, std::uint32_t>) {
     if (stride == 1) {
-      worst |= convert_levels_avx2(src + c_first + interior_begin, interior_end - interior_begin, d,
-                                   out + interior_begin);
+      worst |=
+          convert_levels_avx2(src + c_first + interior_begin, interior_end - interior_begin, d, out + interior_begin);
       done = true;
     }
   }
@@ -173,7 +176,8 @@ HAPTICFIELD_ALWAYS_INLINE inline std::uint64_t inverted_padded_row(const GrayIma
   if (done) {
   } else if (stride == 1) {  // contiguous: vectorises
     const double* HAPTICFIELD_RESTRICT in = src + c_first;
-    for (int q = interior_begin; q < interior_end; ++q) out[q] = A::value(gray_full_scale - in[q], d, worst);
+    for (int q = interior_begin; q < interior_end; ++q)
+      out[q] = A::value(gray_full_scale - in[q], d, worst);
   } else {
     for (int q = interior_begin; q < interior_end; ++q)
       out[q * stride] = A::value(gray_full_scale - src[c_first + q], d, worst);
@@ -220,7 +224,8 @@ namespace detail {
 template <class T>
 HAPTICFIELD_ALWAYS_INLINE inline void slide_columns(T* HAPTICFIELD_RESTRICT box, T* HAPTICFIELD_RESTRICT ramp,
                                                     T* HAPTICFIELD_RESTRICT moment, const T* HAPTICFIELD_RESTRICT in0,
-                                                    const T* HAPTICFIELD_RESTRICT out0, const T* HAPTICFIELD_RESTRICT in1,
+                                                    const T* HAPTICFIELD_RESTRICT out0,
+                                                    const T* HAPTICFIELD_RESTRICT in1,
                                                     const T* HAPTICFIELD_RESTRICT out1, int n, T h,
                                                     float* HAPTICFIELD_RESTRICT fx, float* HAPTICFIELD_RESTRICT fy,
                                                     double scale) noexcept {
@@ -390,7 +395,7 @@ HAPTICFIELD_ALWAYS_INLINE inline void prefix_sums_scalar(const std::uint32_t* HA
 __attribute__((target("avx2"), always_inline)) inline __m256i scan8(__m256i x, __m256i carry) noexcept {
   x = _mm256_add_epi32(x, _mm256_slli_si256(x, 4));
   x = _mm256_add_epi32(x, _mm256_slli_si256(x, 8));
-  const __m256i low_total = _mm256_shuffle_epi32(x, 0xFF);                        // element 3 of each half
+  const __m256i low_total = _mm256_shuffle_epi32(x, 0xFF);                         // element 3 of each half
   x = _mm256_add_epi32(x, _mm256_permute2x128_si256(low_total, low_total, 0x08));  // into the upper half only
   return _mm256_add_epi32(x, carry);
 }
@@ -399,8 +404,8 @@ __attribute__((target("avx2"), always_inline)) inline __m256i scan8(__m256i x, _
 /// shifted adds per 128-bit half, then the lower half's total carried into
 /// the upper half and the running total into both).
 __attribute__((target("avx2"))) inline void prefix_sums_avx2(const std::uint32_t* HAPTICFIELD_RESTRICT b,
-                                                             const std::uint32_t* HAPTICFIELD_RESTRICT r,
-                                                             std::size_t n, std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                             const std::uint32_t* HAPTICFIELD_RESTRICT r, std::size_t n,
+                                                             std::uint32_t* HAPTICFIELD_RESTRICT c0,
                                                              std::uint32_t* HAPTICFIELD_RESTRICT d0,
                                                              std::uint32_t* HAPTICFIELD_RESTRICT c1) noexcept {
   const __m256i last = _mm256_set1_epi32(7);
@@ -468,8 +473,7 @@ __attribute__((target("avx2"), always_inline)) inline __m256 scale8(__m256i v, _
 __attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint32_t* HAPTICFIELD_RESTRICT c0,
                                                                 const std::uint32_t* HAPTICFIELD_RESTRICT d0,
                                                                 const std::uint32_t* HAPTICFIELD_RESTRICT c1, int h,
-                                                                int n_out, double scale,
-                                                                float* HAPTICFIELD_RESTRICT fx,
+                                                                int n_out, double scale, float* HAPTICFIELD_RESTRICT fx,
                                                                 float* HAPTICFIELD_RESTRICT fy) noexcept {
   const int width = 2 * h + 1;
   // Head: up to the first x where both rows are 32-byte aligned (they are
@@ -477,7 +481,8 @@ __attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint3
   int x = 0;
   const bool same_phase = ((reinterpret_cast<std::uintptr_t>(fx) ^ reinterpret_cast<std::uintptr_t>(fy)) & 31u) == 0;
   if (same_phase)
-    while (x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 31u) != 0) ++x;
+    while (x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 31u) != 0)
+      ++x;
   else
     x = n_out;  // unusual layout: scalar throughout
   integer_output_scalar(c0, d0, c1, h, 0, x, scale, fx, fy);
@@ -486,8 +491,8 @@ __attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint3
   const __m256i eight = _mm256_set1_epi32(8);
   for (; x + 8 <= n_out; x += 8) {
     const __m256i box = _mm256_sub_epi32(load8(c0 + x + width), load8(c0 + x));
-    const __m256i mx = _mm256_sub_epi32(_mm256_sub_epi32(load8(d0 + x + width), load8(d0 + x)),
-                                        _mm256_mullo_epi32(centre, box));
+    const __m256i mx =
+        _mm256_sub_epi32(_mm256_sub_epi32(load8(d0 + x + width), load8(d0 + x)), _mm256_mullo_epi32(centre, box));
     const __m256i my = _mm256_sub_epi32(load8(c1 + x + width), load8(c1 + x));
     _mm256_stream_ps(fx + x, scale8(mx, vs));
     _mm256_stream_ps(fy + x, scale8(my, vs));
@@ -556,8 +561,10 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
       }
     }
 #if HAPTICFIELD_X86_DISPATCH
-    if constexpr (Avx2) prefix_sums_avx2(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
-    else prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+    if constexpr (Avx2)
+      prefix_sums_avx2(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+    else
+      prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
 #else
     prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
 #endif
@@ -568,8 +575,10 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
     const U* HAPTICFIELD_RESTRICT pc1 = c1.data();
     if (border != Border::fade) {
 #if HAPTICFIELD_X86_DISPATCH
-      if constexpr (Avx2) integer_output_avx2(pc0, pd0, pc1, h, n_out, scale, fx, fy);
-      else integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
+      if constexpr (Avx2)
+        integer_output_avx2(pc0, pd0, pc1, h, n_out, scale, fx, fy);
+      else
+        integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
 #else
       integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
 #endif
@@ -609,18 +618,22 @@ template <bool Avx2>
 HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_any(const PrewittBand& a) {
   if (a.d > 0.0)
     return prewitt_band_integer<Avx2>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi, a.y_first,
-                                a.y_last, *a.map);
+                                      a.y_last, *a.map);
   return prewitt_band_in<double>(*a.gray, a.h, a.border, a.fade_px, a.scale, 1.0, a.lo, a.x_hi, a.y_hi, a.y_first,
                                  a.y_last, *a.map);
 }
 
 /// The band for baseline x86-64 (or any other target).
-inline bool prewitt_band_baseline(const PrewittBand& a) { return prewitt_band_any<false>(a); }
+inline bool prewitt_band_baseline(const PrewittBand& a) {
+  return prewitt_band_any<false>(a);
+}
 
 #if HAPTICFIELD_X86_DISPATCH
 /// The same code compiled for AVX2 (8 integer or 4 double lanes), chosen at
 /// run time when the CPU has it.
-__attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand& a) { return prewitt_band_any<true>(a); }
+__attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand& a) {
+  return prewitt_band_any<true>(a);
+}
 #endif
 
 /// True when the CPU runs prewitt_band_avx2().
@@ -700,10 +713,13 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
           errors[static_cast<std::size_t>(band)] = std::current_exception();
         }
       };
-      if (band == 0) work();
-      else workers.emplace_back(work);
+      if (band == 0)
+        work();
+      else
+        workers.emplace_back(work);
     }
-    for (std::thread& w : workers) w.join();
+    for (std::thread& w : workers)
+      w.join();
     for (const std::exception_ptr& e : errors)
       if (e) std::rethrow_exception(e);
     return std::all_of(exact.begin(), exact.end(), [](char ok) { return ok != 0; });

@@ -22,7 +22,8 @@ namespace hapticfield {
 /// A kernel that gives the normalised force at a pixel centre.
 template <class K>
 concept PixelKernel = requires(const K& k, int x, int y) {
-  { k.at_pixel(x, y) } noexcept -> std::same_as<glm::dvec2>;
+  { k.at_pixel(x, y) }
+  noexcept->std::same_as<glm::dvec2>;
   { k.width() } -> std::convertible_to<int>;
   { k.height() } -> std::convertible_to<int>;
   { k.mask_size() } -> std::convertible_to<int>;
@@ -56,8 +57,7 @@ class ImageForce {
  public:
   /// @param fade_px  width of the fade band [px], finite and > 0
   /// @throws std::invalid_argument for a bad fade width.
-  explicit ImageForce(Kernel kernel, double fade_px = default_fade_px)
-      : kernel_(std::move(kernel)), fade_px_(fade_px) {
+  explicit ImageForce(Kernel kernel, double fade_px = default_fade_px) : kernel_(std::move(kernel)), fade_px_(fade_px) {
     if (!std::isfinite(fade_px) || fade_px <= 0.0)
       throw std::invalid_argument("ImageForce: fade width must be finite and positive [px]");
     const int a = kernel_.anchor();

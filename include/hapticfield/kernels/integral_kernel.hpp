@@ -59,7 +59,7 @@ namespace detail {
 /// A fixed-size array of trivially copyable T, aligned to 2 MiB when large
 /// and advised for transparent huge pages on Linux (setup only).
 template <class T>
-  requires std::is_trivially_copyable_v<T>
+requires std::is_trivially_copyable_v<T>
 class LargeArray {
  public:
   LargeArray() = default;
@@ -87,13 +87,25 @@ class LargeArray {
     std::swap(size_, other.size_);
     return *this;
   }
-  ~LargeArray() { std::free(data_); }
+  ~LargeArray() {
+    std::free(data_);
+  }
 
-  [[nodiscard]] T* data() noexcept { return data_; }
-  [[nodiscard]] const T* data() const noexcept { return data_; }
-  [[nodiscard]] std::size_t size() const noexcept { return size_; }
-  T& operator[](std::size_t i) noexcept { return data_[i]; }
-  const T& operator[](std::size_t i) const noexcept { return data_[i]; }
+  [[nodiscard]] T* data() noexcept {
+    return data_;
+  }
+  [[nodiscard]] const T* data() const noexcept {
+    return data_;
+  }
+  [[nodiscard]] std::size_t size() const noexcept {
+    return size_;
+  }
+  T& operator[](std::size_t i) noexcept {
+    return data_[i];
+  }
+  const T& operator[](std::size_t i) const noexcept {
+    return data_[i];
+  }
 
  private:
   T* data_ = nullptr;
@@ -110,7 +122,8 @@ class LargeArray {
 /// Largest off_integer(p d) over the first n values of p.
 [[nodiscard]] inline double max_off_integer(const double* p, std::size_t n, double d) noexcept {
   double worst = 0.0;
-  for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, off_integer(p[i] * d));
+  for (std::size_t i = 0; i < n; ++i)
+    worst = std::max(worst, off_integer(p[i] * d));
   return worst;
 }
 
@@ -169,8 +182,10 @@ class IntegralKernel {
     const int h = size / 2;
     const double bound = d * gray_full_scale * size * h * (h + 1.0);  // largest |force| before scaling
     wide_ = !(bound < 2147483648.0);
-    if (wide_) build(inverted, d, wide_table_);
-    else build(inverted, d, narrow_table_);
+    if (wide_)
+      build(inverted, d, wide_table_);
+    else
+      build(inverted, d, narrow_table_);
   }
 
   [[nodiscard]] int width() const noexcept { return width_; }
@@ -224,7 +239,8 @@ class IntegralKernel {
         for (int c = 0; c < pw; ++c) {
           const int sx = c - pad_;
           if (!fill && (sx < 0 || sx >= width_)) continue;
-          q[static_cast<std::size_t>(c)] = static_cast<S>(std::llround(src[detail::border_index(sx, width_, border_)] * d));  // setup: exact rounding
+          q[static_cast<std::size_t>(c)] = static_cast<S>(
+              std::llround(src[detail::border_index(sx, width_, border_)] * d));  // setup: exact rounding
         }
       }
       Cell<U>* above = table.data() + static_cast<std::size_t>(r) * stride_;

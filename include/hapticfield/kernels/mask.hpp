@@ -54,12 +54,18 @@ namespace detail {
 /// Name of a mask kind as the command-line tools spell it.
 [[nodiscard]] constexpr const char* to_string(MaskKind kind) noexcept {
   switch (kind) {
-    case MaskKind::prewitt: return "prewitt";
-    case MaskKind::sobel: return "sobel";
-    case MaskKind::scharr: return "scharr";
-    case MaskKind::roberts: return "roberts";
-    case MaskKind::gaussian: return "gauss";
-    case MaskKind::emboss: return "emboss";
+    case MaskKind::prewitt:
+      return "prewitt";
+    case MaskKind::sobel:
+      return "sobel";
+    case MaskKind::scharr:
+      return "scharr";
+    case MaskKind::roberts:
+      return "roberts";
+    case MaskKind::gaussian:
+      return "gauss";
+    case MaskKind::emboss:
+      return "emboss";
   }
   return "?";
 }
@@ -69,8 +75,8 @@ namespace detail {
 inline void validate_mask_size(MaskKind kind, int size) {
   const std::string name = to_string(kind);
   const auto fail = [&](const std::string& allowed) {
-    throw std::invalid_argument("mask " + name + ": size " + std::to_string(size) + " px is not allowed (" +
-                                allowed + ")");
+    throw std::invalid_argument("mask " + name + ": size " + std::to_string(size) + " px is not allowed (" + allowed +
+                                ")");
   };
   switch (kind) {
     case MaskKind::scharr:
@@ -90,8 +96,7 @@ inline void validate_mask_size(MaskKind kind, int size) {
 /// A pair of x / y weight tables of size x size, anchored at (size / 2,
 /// size / 2) as OpenCV anchors kernels.
 template <int Size = dynamic_size>
-  requires(Size == dynamic_size || (Size >= 2 && Size <= max_mask_size))
-class Mask {
+requires(Size == dynamic_size || (Size >= 2 && Size <= max_mask_size)) class Mask {
   using Storage = std::conditional_t<Size == dynamic_size, std::vector<double>, std::array<double, Size * Size>>;
 
  public:
@@ -106,9 +111,11 @@ class Mask {
   [[nodiscard]] static Mask sobel(int size = Size) {
     validate_mask_size(MaskKind::sobel, size);
     std::vector<double> smooth{1.0};
-    for (int i = 1; i < size; ++i) smooth = convolve(smooth, {1.0, 1.0});
+    for (int i = 1; i < size; ++i)
+      smooth = convolve(smooth, {1.0, 1.0});
     std::vector<double> derivative{1.0};
-    for (int i = 1; i < size - 1; ++i) derivative = convolve(derivative, {1.0, 1.0});
+    for (int i = 1; i < size - 1; ++i)
+      derivative = convolve(derivative, {1.0, 1.0});
     derivative = convolve(derivative, {-1.0, 1.0});
     return build(MaskKind::sobel, size, [&](int r, int c, int) { return smooth[r] * derivative[c]; });
   }
@@ -131,9 +138,9 @@ class Mask {
   ///         min_gaussian_sigma (the message gives the allowed range).
   [[nodiscard]] static Mask gaussian(double sigma, int size = Size) {
     if (!std::isfinite(sigma) || sigma < min_gaussian_sigma)
-      throw std::invalid_argument("mask gauss: sigma must be finite and at least " + detail::short_number(min_gaussian_sigma) +
-                                  " px (smaller sigmas make every off-centre weight underflow to 0), got " +
-                                  detail::short_number(sigma));
+      throw std::invalid_argument(
+          "mask gauss: sigma must be finite and at least " + detail::short_number(min_gaussian_sigma) +
+          " px (smaller sigmas make every off-centre weight underflow to 0), got " + detail::short_number(sigma));
     const double two_sigma2 = 2.0 * sigma * sigma;
     return build(MaskKind::gaussian, size, [&](int r, int c, int a) {
       const double dc = c - a;
@@ -151,12 +158,18 @@ class Mask {
   /// size / 6, so the mask spans +-3 sigma).
   [[nodiscard]] static Mask make(MaskKind kind, int size = Size, double sigma = 0.0) {
     switch (kind) {
-      case MaskKind::prewitt: return prewitt(size);
-      case MaskKind::sobel: return sobel(size);
-      case MaskKind::scharr: return scharr(size);
-      case MaskKind::roberts: return roberts(size);
-      case MaskKind::gaussian: return gaussian(sigma > 0.0 ? sigma : size / 6.0, size);
-      case MaskKind::emboss: return emboss(size);
+      case MaskKind::prewitt:
+        return prewitt(size);
+      case MaskKind::sobel:
+        return sobel(size);
+      case MaskKind::scharr:
+        return scharr(size);
+      case MaskKind::roberts:
+        return roberts(size);
+      case MaskKind::gaussian:
+        return gaussian(sigma > 0.0 ? sigma : size / 6.0, size);
+      case MaskKind::emboss:
+        return emboss(size);
     }
     throw std::invalid_argument("mask: unknown kind");
   }
@@ -215,7 +228,8 @@ class Mask {
   static std::vector<double> convolve(const std::vector<double>& a, const std::vector<double>& b) {
     std::vector<double> out(a.size() + b.size() - 1, 0.0);
     for (std::size_t i = 0; i < a.size(); ++i)
-      for (std::size_t j = 0; j < b.size(); ++j) out[i + j] += a[i] * b[j];
+      for (std::size_t j = 0; j < b.size(); ++j)
+        out[i + j] += a[i] * b[j];
     return out;
   }
 

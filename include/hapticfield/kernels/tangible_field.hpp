@@ -25,7 +25,8 @@ namespace hapticfield {
 /// Something that gives a normalised 2D force at an image position.
 template <class S>
 concept ImageForceSource = requires(const S& s, double x, double y) {
-  { s.at(x, y) } noexcept -> std::same_as<glm::dvec2>;
+  { s.at(x, y) }
+  noexcept->std::same_as<glm::dvec2>;
 };
 
 template <ImageForceSource Source = TangibleImage>

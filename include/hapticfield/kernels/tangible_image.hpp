@@ -28,8 +28,8 @@ enum class KernelChoice {
 
 struct TangibleConfig {
   MaskKind mask = MaskKind::prewitt;
-  int size = 17;               ///< mask size [px]; 2 for Roberts, 3 for Scharr
-  double sigma = 0.0;          ///< Gaussian-derivative sigma [px]; <= 0 picks size / 6
+  int size = 17;       ///< mask size [px]; 2 for Roberts, 3 for Scharr
+  double sigma = 0.0;  ///< Gaussian-derivative sigma [px]; <= 0 picks size / 6
   Border border = Border::suspend;
   double fade_px = default_fade_px;  ///< ramp width for Border::fade [px]
   KernelChoice kernel = KernelChoice::automatic;
@@ -75,8 +75,8 @@ class TangibleImage {
   }
 
   static std::variant<Direct, Integral> build(const GrayImage& inv, const TangibleConfig& o) {
-    const bool integral = o.kernel == KernelChoice::integral ||
-                          (o.kernel == KernelChoice::automatic && has_integral_kernel(o.mask));
+    const bool integral =
+        o.kernel == KernelChoice::integral || (o.kernel == KernelChoice::automatic && has_integral_kernel(o.mask));
     if (integral) return Integral(IntegralKernel(inv, o.mask, o.size, o.border), o.fade_px);
     return Direct(DirectKernel<>(inv, Mask<>::make(o.mask, o.size, o.sigma), o.border), o.fade_px);
   }

@@ -88,8 +88,10 @@ class CalibrationReader {
  private:
   static bool is_space(char c) noexcept { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
   static std::string_view trim(std::string_view s) noexcept {
-    while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-    while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
+    while (!s.empty() && is_space(s.front()))
+      s.remove_prefix(1);
+    while (!s.empty() && is_space(s.back()))
+      s.remove_suffix(1);
     return s;
   }
   static std::string excerpt(std::string_view s) {
@@ -183,7 +185,8 @@ class CalibrationReader {
     };
     std::string_view line;
     // header: %YAML:1.x or %YAML 1.x, then an optional "---"
-    while (next_line(line) && trim(line).empty()) {}
+    while (next_line(line) && trim(line).empty()) {
+    }
     {
       const std::string_view h = trim(line);
       const bool ok = h.size() > 8 && h.starts_with("%YAML") && (h[5] == ':' || h[5] == ' ') &&
@@ -202,8 +205,8 @@ class CalibrationReader {
       if (matrix->rows == 0 || matrix->cols == 0) fail(where + ": no 'rows' and 'cols'");
       if (matrix->data.empty()) fail(where + ": no 'data'");
       if (matrix->data.size() != static_cast<std::size_t>(matrix->rows * matrix->cols))
-        fail(where + ": " + std::to_string(matrix->data.size()) + " values in 'data', rows x cols = " +
-             std::to_string(matrix->rows * matrix->cols));
+        fail(where + ": " + std::to_string(matrix->data.size()) +
+             " values in 'data', rows x cols = " + std::to_string(matrix->rows * matrix->cols));
       matrix = nullptr;
     };
     const auto data_tokens = [&](std::string_view s) {  // values separated by commas and spaces; ']' ends
@@ -221,7 +224,8 @@ class CalibrationReader {
           return;
         }
         std::size_t j = i;
-        while (j < s.size() && !is_space(s[j]) && s[j] != ',' && s[j] != ']') ++j;
+        while (j < s.size() && !is_space(s[j]) && s[j] != ',' && s[j] != ']')
+          ++j;
         if (matrix->data.size() >= static_cast<std::size_t>(matrix->rows * matrix->cols))
           fail(where + ": more values than rows x cols = " + std::to_string(matrix->rows * matrix->cols));
         matrix->data.push_back(number(s.substr(i, j - i), where));
@@ -279,7 +283,8 @@ class CalibrationReader {
         if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'))
           fail_at(line_no, "'" + excerpt(key) + "' is not a node name");
       std::string_view value = trim(content.substr(colon + 1));
-      if (const std::size_t hash = value.find(" #"); hash != std::string_view::npos) value = trim(value.substr(0, hash));
+      if (const std::size_t hash = value.find(" #"); hash != std::string_view::npos)
+        value = trim(value.substr(0, hash));
       const std::string where = "line " + std::to_string(line_no);
       if (value == "!!opencv-matrix") {
         matrix = matrix_for(key, where);
@@ -312,8 +317,7 @@ class CalibrationReader {
       if (root) fail("element <" + std::string(n.name()) + "> after the root element");
       root = n;
     }
-    if (!root || std::string_view(root.name()) != "opencv_storage")
-      fail("the root element must be <opencv_storage>");
+    if (!root || std::string_view(root.name()) != "opencv_storage") fail("the root element must be <opencv_storage>");
     for (pugi::xml_node n = root.first_child(); n; n = n.next_sibling()) {
       if (n.type() != pugi::node_element) continue;
       const std::string key = n.name();
@@ -344,9 +348,11 @@ class CalibrationReader {
       const std::size_t want = static_cast<std::size_t>(m->rows * m->cols);
       std::size_t i = 0;
       while (i < data.size()) {
-        while (i < data.size() && is_space(data[i])) ++i;
+        while (i < data.size() && is_space(data[i]))
+          ++i;
         std::size_t j = i;
-        while (j < data.size() && !is_space(data[j])) ++j;
+        while (j < data.size() && !is_space(data[j]))
+          ++j;
         if (j > i) {
           if (m->data.size() >= want) fail(where + "<data>: more values than rows x cols = " + std::to_string(want));
           m->data.push_back(number(data.substr(i, j - i), where + "<data>"));
@@ -375,8 +381,7 @@ class Camera {
   /// @throws std::invalid_argument for a non-positive or non-finite focal
   ///         length or a non-finite principal point.
   Camera(double fx, double fy, glm::dvec2 centre, std::vector<double> distortion = {})
-      : Camera(cv::Matx33d(fx, 0.0, centre.x, 0.0, fy, centre.y, 0.0, 0.0, 1.0),
-               std::move(distortion)) {}
+      : Camera(cv::Matx33d(fx, 0.0, centre.x, 0.0, fy, centre.y, 0.0, 0.0, 1.0), std::move(distortion)) {}
 
   /// From a full 3x3 camera matrix and optional distortion coefficients.
   /// @throws std::invalid_argument when K is not finite, not upper
@@ -385,29 +390,25 @@ class Camera {
   explicit Camera(const cv::Matx33d& K, std::vector<double> distortion = {})
       : K_(K), distortion_(std::move(distortion)) {
     for (int i = 0; i < 9; ++i)
-      if (!std::isfinite(K.val[i]))
-        throw std::invalid_argument("Camera: camera matrix entries must be finite");
-    if (!(K(0, 0) > 0.0) || !(K(1, 1) > 0.0))
-      throw std::invalid_argument("Camera: focal length must be positive [px]");
+      if (!std::isfinite(K.val[i])) throw std::invalid_argument("Camera: camera matrix entries must be finite");
+    if (!(K(0, 0) > 0.0) || !(K(1, 1) > 0.0)) throw std::invalid_argument("Camera: focal length must be positive [px]");
     if (K(1, 0) != 0.0 || K(2, 0) != 0.0 || K(2, 1) != 0.0 || K(2, 2) != 1.0)
       throw std::invalid_argument("Camera: camera matrix must be [fx s cx; 0 fy cy; 0 0 1]");
     const std::size_t n = distortion_.size();
     if (n != 0 && n != 4 && n != 5 && n != 8 && n != 12 && n != 14)
-      throw std::invalid_argument(
-          "Camera: distortion_coefficients must have 4, 5, 8, 12 or 14 entries");
+      throw std::invalid_argument("Camera: distortion_coefficients must have 4, 5, 8, 12 or 14 entries");
     for (double d : distortion_)
-      if (!std::isfinite(d))
-        throw std::invalid_argument("Camera: distortion coefficients must be finite");
+      if (!std::isfinite(d)) throw std::invalid_argument("Camera: distortion coefficients must be finite");
     bool any = false;
-    for (double d : distortion_) any = any || d != 0.0;
+    for (double d : distortion_)
+      any = any || d != 0.0;
     if (!any) distortion_.clear();
   }
 
   /// Square pixels: fx = fy = focal [px], principal point centre [px].
   [[nodiscard]] static Camera from_focal(double focal, glm::dvec2 centre) {
     if (!std::isfinite(focal) || focal <= 0.0)
-      throw std::invalid_argument(
-          "Camera::from_focal: focal length must be finite and positive [px]");
+      throw std::invalid_argument("Camera::from_focal: focal length must be finite and positive [px]");
     if (!std::isfinite(centre.x) || !std::isfinite(centre.y))
       throw std::invalid_argument("Camera::from_focal: principal point must be finite [px]");
     return Camera(focal, focal, centre);
@@ -419,10 +420,8 @@ class Camera {
   [[nodiscard]] static Camera from_field_of_view(double horizontal_fov_deg, int width, int height) {
     if (width <= 0 || height <= 0)
       throw std::invalid_argument("Camera::from_field_of_view: image size must be positive [px]");
-    if (!std::isfinite(horizontal_fov_deg) || horizontal_fov_deg <= 0.0 ||
-        horizontal_fov_deg >= 180.0)
-      throw std::invalid_argument(
-          "Camera::from_field_of_view: horizontal field of view must be in (0, 180) [deg]");
+    if (!std::isfinite(horizontal_fov_deg) || horizontal_fov_deg <= 0.0 || horizontal_fov_deg >= 180.0)
+      throw std::invalid_argument("Camera::from_field_of_view: horizontal field of view must be in (0, 180) [deg]");
     const double half = horizontal_fov_deg * std::numbers::pi / 360.0;
     return from_focal(0.5 * width / std::tan(half), image_centre(width, height));
   }
@@ -458,8 +457,7 @@ class Camera {
       if (width_ > 0) fs << "image_width" << width_;
       if (height_ > 0) fs << "image_height" << height_;
       fs << "camera_matrix" << cv::Mat(K_);
-      fs << "distortion_coefficients"
-         << cv::Mat(distortion_.empty() ? std::vector<double>(5, 0.0) : distortion_);
+      fs << "distortion_coefficients" << cv::Mat(distortion_.empty() ? std::vector<double>(5, 0.0) : distortion_);
     } catch (const cv::Exception& e) {
       throw FileError("cannot write '" + path + "': " + e.what());
     }
@@ -501,10 +499,12 @@ class Camera {
     if (distortion_.empty() || out.empty()) return out;
     std::vector<cv::Point2d> src;
     src.reserve(out.size());
-    for (auto p : out) src.emplace_back(p.x, p.y);
+    for (auto p : out)
+      src.emplace_back(p.x, p.y);
     std::vector<cv::Point2d> dst;
     cv::undistortPoints(src, dst, cv::Mat(K_), cv::Mat(distortion_), cv::noArray(), cv::Mat(K_));
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = glm::dvec2{dst[i].x, dst[i].y};
+    for (std::size_t i = 0; i < out.size(); ++i)
+      out[i] = glm::dvec2{dst[i].x, dst[i].y};
     return out;
   }
 
@@ -523,7 +523,8 @@ class Camera {
 inline Camera Camera::from_text(std::string_view text, std::string_view name) {
   detail::CalibrationReader reader(text, name);
   detail::CalibrationContent c = reader.read();
-  if (c.k.data.size() != 9) reader.fail("'camera_matrix' must hold 9 values");  // checked by read(); never trust it here
+  if (c.k.data.size() != 9)
+    reader.fail("'camera_matrix' must hold 9 values");  // checked by read(); never trust it here
   try {
     Camera camera(cv::Matx33d(c.k.data.data()), std::move(c.distortion.data));
     camera.width_ = c.width.value_or(0);

@@ -27,20 +27,18 @@ namespace hapticfield {
 
 /// Pose of a planar face relative to the camera.
 struct FacePose {
-  cv::Matx33d R;           ///< face plane axes -> camera frame (nearest rotation)
-  cv::Vec3d t;             ///< face-plane origin in the camera frame [plane units]
-  glm::dvec3 normal{0.0};  ///< unit normal, camera frame, toward the camera (n . centre < 0)
-  cv::Matx33d H;           ///< plane -> undistorted image homography
-  double rms_reprojection_px = 0.0;  ///< RMS reprojection error of K [R|t] with distortion [px]
-  double max_reprojection_px = 0.0;  ///< largest reprojection error [px]
-  double orthogonality =
-      0.0;  ///< |cos| of the angle between the columns of K^-1 H before orthogonalisation
-  double norm_ratio = 1.0;        ///< |K^-1 h1| / |K^-1 h2| (1 for a consistent K and size)
-  double width = 0.0;             ///< face width [plane units] (rectangles)
-  double height = 0.0;            ///< face height [plane units]; 1 when the aspect was recovered
-  bool aspect_recovered = false;  ///< true when the size was unknown and W/H came from K
-  double closed_form_rms_px =
-      0.0;  ///< RMS reprojection error of the closed form before refinement [px]
+  cv::Matx33d R;                       ///< face plane axes -> camera frame (nearest rotation)
+  cv::Vec3d t;                         ///< face-plane origin in the camera frame [plane units]
+  glm::dvec3 normal{0.0};              ///< unit normal, camera frame, toward the camera (n . centre < 0)
+  cv::Matx33d H;                       ///< plane -> undistorted image homography
+  double rms_reprojection_px = 0.0;    ///< RMS reprojection error of K [R|t] with distortion [px]
+  double max_reprojection_px = 0.0;    ///< largest reprojection error [px]
+  double orthogonality = 0.0;          ///< |cos| of the angle between the columns of K^-1 H before orthogonalisation
+  double norm_ratio = 1.0;             ///< |K^-1 h1| / |K^-1 h2| (1 for a consistent K and size)
+  double width = 0.0;                  ///< face width [plane units] (rectangles)
+  double height = 0.0;                 ///< face height [plane units]; 1 when the aspect was recovered
+  bool aspect_recovered = false;       ///< true when the size was unknown and W/H came from K
+  double closed_form_rms_px = 0.0;     ///< RMS reprojection error of the closed form before refinement [px]
   glm::dvec3 closed_form_normal{0.0};  ///< normal of the closed form before refinement
   bool refined = false;                ///< true when the Levenberg-Marquardt refinement was applied
   std::vector<bool> inliers;           ///< per correspondence
@@ -56,7 +54,9 @@ struct PoseConfig {
 
 namespace detail {
 
-inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(1, c), m(2, c)}; }
+inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept {
+  return {m(0, c), m(1, c), m(2, c)};
+}
 
 }  // namespace detail
 
@@ -72,8 +72,7 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 /// @throws std::invalid_argument when H is singular or the counts differ.
 [[nodiscard]] inline FacePose pose_from_homography(const Camera& camera, const cv::Matx33d& H,
                                                    std::span<const glm::dvec2> plane,
-                                                   std::span<const glm::dvec2> pixels,
-                                                   const PoseConfig& options = {}) {
+                                                   std::span<const glm::dvec2> pixels, const PoseConfig& options = {}) {
   if (plane.size() != pixels.size() || plane.empty())
     throw std::invalid_argument("pose_from_homography: plane and image point counts differ");
   const cv::Matx33d A = camera.matrix().inv() * H;
@@ -85,7 +84,8 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
   if (!(n1 > 0.0) || !(n2 > 0.0) || !std::isfinite(n1 + n2))
     throw std::invalid_argument("pose_from_homography: singular homography");
   glm::dvec2 centroid{0.0};
-  for (auto p : plane) centroid += p;
+  for (auto p : plane)
+    centroid += p;
   centroid /= static_cast<double>(plane.size());
   double lambda = 2.0 / (n1 + n2);
   if ((a1 * centroid.x + a2 * centroid.y + a3)[2] < 0.0) lambda = -lambda;
@@ -101,7 +101,8 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
   cv::Matx33d R = cv::Matx33d(u.ptr<double>()) * cv::Matx33d(vt.ptr<double>());
   if (cv::determinant(R) < 0.0) {  // cannot happen for det(M) = |r1 x r2|^2 > 0; kept for safety
     cv::Matx33d U(u.ptr<double>());
-    for (int r = 0; r < 3; ++r) U(r, 2) = -U(r, 2);
+    for (int r = 0; r < 3; ++r)
+      U(r, 2) = -U(r, 2);
     R = U * cv::Matx33d(vt.ptr<double>());
   }
 
@@ -146,9 +147,8 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
     cv::Mat t(pose.t);
     r = r.clone();
     t = t.clone();
-    cv::solvePnPRefineLM(
-        object, image, K, dist, r, t,
-        cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-12));
+    cv::solvePnPRefineLM(object, image, K, dist, r, t,
+                         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-12));
     const cv::Vec3d r2(r.ptr<double>());
     const cv::Vec3d t2(t.ptr<double>());
     double max2 = 0.0;
@@ -175,8 +175,7 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 /// reprojection error covers the inliers only.
 /// @throws std::invalid_argument on degenerate input (fewer than 4 points,
 ///         repeated, collinear or non-finite points).
-[[nodiscard]] inline FacePose estimate_plane_pose(const Camera& camera,
-                                                  std::span<const glm::dvec2> plane,
+[[nodiscard]] inline FacePose estimate_plane_pose(const Camera& camera, std::span<const glm::dvec2> plane,
                                                   std::span<const glm::dvec2> pixels,
                                                   const HomographyConfig& options = {},
                                                   const PoseConfig& pose_options = {}) {
@@ -215,16 +214,13 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 /// @throws std::invalid_argument for a corner count other than 4, a
 ///         non-finite or non-positive size, or degenerate corners (repeated,
 ///         collinear, non-finite, or not in order around a convex face).
-[[nodiscard]] inline FacePose estimate_rectangle_pose(const Camera& camera,
-                                                      std::span<const glm::dvec2> corners,
+[[nodiscard]] inline FacePose estimate_rectangle_pose(const Camera& camera, std::span<const glm::dvec2> corners,
                                                       std::optional<glm::dvec2> size = std::nullopt,
                                                       const PoseConfig& pose_options = {}) {
   if (corners.size() != 4)
-    throw std::invalid_argument(
-        "estimate_rectangle_pose: a rectangle needs exactly 4 corners, got " +
-        std::to_string(corners.size()));
-  if (size &&
-      (!std::isfinite(size->x) || !std::isfinite(size->y) || size->x <= 0.0 || size->y <= 0.0))
+    throw std::invalid_argument("estimate_rectangle_pose: a rectangle needs exactly 4 corners, got " +
+                                std::to_string(corners.size()));
+  if (size && (!std::isfinite(size->x) || !std::isfinite(size->y) || size->x <= 0.0 || size->y <= 0.0))
     throw std::invalid_argument("estimate_rectangle_pose: size must be finite and positive [mm]");
   if (!detail::finite_points(corners))
     throw std::invalid_argument("estimate_rectangle_pose: image points [px] must be finite");
@@ -277,10 +273,10 @@ inline cv::Vec3d col(const cv::Matx33d& m, int c) noexcept { return {m(0, c), m(
 /// or gives no positive f^2.
 [[nodiscard]] inline std::optional<double> focal_from_rectangle(std::span<const glm::dvec2> corners,
                                                                 glm::dvec2 principal_point) {
-  if (corners.size() != 4)
-    throw std::invalid_argument("focal_from_rectangle: a rectangle needs exactly 4 corners");
+  if (corners.size() != 4) throw std::invalid_argument("focal_from_rectangle: a rectangle needs exactly 4 corners");
   std::vector<glm::dvec2> shifted;
-  for (auto c : corners) shifted.push_back(c - principal_point);
+  for (auto c : corners)
+    shifted.push_back(c - principal_point);
   const std::vector<glm::dvec2> unit{{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}};
   const cv::Matx33d G = homography_dlt(unit, shifted);
   const cv::Vec3d g1 = detail::col(G, 0);

@@ -39,8 +39,7 @@ struct HomographyEstimate {
 namespace detail {
 
 inline bool finite_points(std::span<const glm::dvec2> p) noexcept {
-  return std::all_of(p.begin(), p.end(),
-                     [](glm::dvec2 q) { return std::isfinite(q.x) && std::isfinite(q.y); });
+  return std::all_of(p.begin(), p.end(), [](glm::dvec2 q) { return std::isfinite(q.x) && std::isfinite(q.y); });
 }
 
 /// Twice the triangle area over the squared longest side: 0 for collinear
@@ -50,8 +49,7 @@ inline double triangle_fatness(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) noexcep
   const glm::dvec2 ac = c - a;
   const glm::dvec2 bc = c - b;
   const double area2 = std::abs(ab.x * ac.y - ab.y * ac.x);
-  const double longest =
-      std::max({ab.x * ab.x + ab.y * ab.y, ac.x * ac.x + ac.y * ac.y, bc.x * bc.x + bc.y * bc.y});
+  const double longest = std::max({ab.x * ab.x + ab.y * ab.y, ac.x * ac.x + ac.y * ac.y, bc.x * bc.x + bc.y * bc.y});
   return longest > 0.0 ? area2 / longest : 0.0;
 }
 
@@ -74,8 +72,8 @@ inline void check_point_set(std::span<const glm::dvec2> p, const char* who, cons
     for (std::size_t j = i + 1; j < p.size(); ++j) {
       const glm::dvec2 d = p[i] - p[j];
       if (std::sqrt(d.x * d.x + d.y * d.y) <= 1e-9 * extent || extent == 0.0)
-        throw std::invalid_argument(prefix + " contain repeated points (" + std::to_string(i) +
-                                    " and " + std::to_string(j) + ")");
+        throw std::invalid_argument(prefix + " contain repeated points (" + std::to_string(i) + " and " +
+                                    std::to_string(j) + ")");
     }
   if (p.size() == 4) {
     for (std::size_t i = 0; i < 4; ++i) {
@@ -83,8 +81,7 @@ inline void check_point_set(std::span<const glm::dvec2> p, const char* who, cons
       const glm::dvec2 b = p[(i + 2) % 4];
       const glm::dvec2 c = p[(i + 3) % 4];
       if (triangle_fatness(a, b, c) < collinear_tolerance)
-        throw std::invalid_argument(prefix + " have three collinear points (all but point " +
-                                    std::to_string(i) + ")");
+        throw std::invalid_argument(prefix + " have three collinear points (all but point " + std::to_string(i) + ")");
     }
     return;
   }
@@ -111,10 +108,12 @@ inline void check_point_set(std::span<const glm::dvec2> p, const char* who, cons
 /// Hartley normalisation: centroid to the origin, mean distance sqrt(2).
 inline cv::Matx33d normalising_transform(std::span<const glm::dvec2> p) noexcept {
   glm::dvec2 c{0.0};
-  for (auto q : p) c += q;
+  for (auto q : p)
+    c += q;
   c /= static_cast<double>(p.size());
   double mean = 0.0;
-  for (auto q : p) mean += std::hypot(q.x - c.x, q.y - c.y);
+  for (auto q : p)
+    mean += std::hypot(q.x - c.x, q.y - c.y);
   mean /= static_cast<double>(p.size());
   const double s = mean > 0.0 ? std::sqrt(2.0) / mean : 1.0;
   return {s, 0.0, -s * c.x, 0.0, s, -s * c.y, 0.0, 0.0, 1.0};
@@ -140,10 +139,8 @@ inline cv::Matx33d normalise_homography(cv::Matx33d H) noexcept {
 /// sqrt(2) before the 2n x 9 system is solved by SVD.
 /// @throws std::invalid_argument for fewer than 4 points, different counts,
 ///         non-finite, repeated or collinear points.
-[[nodiscard]] inline cv::Matx33d homography_dlt(std::span<const glm::dvec2> plane,
-                                                std::span<const glm::dvec2> image) {
-  if (plane.size() != image.size())
-    throw std::invalid_argument("homography_dlt: plane and image point counts differ");
+[[nodiscard]] inline cv::Matx33d homography_dlt(std::span<const glm::dvec2> plane, std::span<const glm::dvec2> image) {
+  if (plane.size() != image.size()) throw std::invalid_argument("homography_dlt: plane and image point counts differ");
   if (plane.size() < 4)
     throw std::invalid_argument("homography_dlt: at least 4 correspondences are needed, got " +
                                 std::to_string(plane.size()));
@@ -179,8 +176,7 @@ inline cv::Matx33d normalise_homography(cv::Matx33d H) noexcept {
   const double* h = vt.ptr<double>(8);
   const cv::Matx33d Hn(h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8]);
   const cv::Matx33d H = Ti.inv() * Hn * Tp;
-  if (!std::isfinite(cv::norm(H)) ||
-      std::abs(cv::determinant(detail::normalise_homography(H))) < 1e-300)
+  if (!std::isfinite(cv::norm(H)) || std::abs(cv::determinant(detail::normalise_homography(H))) < 1e-300)
     throw std::invalid_argument("homography_dlt: degenerate configuration (singular homography)");
   return detail::normalise_homography(H);
 }
@@ -217,9 +213,9 @@ inline cv::Matx33d normalise_homography(cv::Matx33d H) noexcept {
     std::vector<unsigned char> mask;
     const cv::Mat H = cv::findHomography(src, dst, cv::RANSAC, options.ransac_threshold_px, mask,
                                          options.ransac_iterations, options.ransac_confidence);
-    if (H.empty())
-      throw std::invalid_argument("estimate_homography: RANSAC found no consistent homography");
-    for (std::size_t i = 0; i < mask.size(); ++i) est.inliers[i] = mask[i] != 0;
+    if (H.empty()) throw std::invalid_argument("estimate_homography: RANSAC found no consistent homography");
+    for (std::size_t i = 0; i < mask.size(); ++i)
+      est.inliers[i] = mask[i] != 0;
     est.H = detail::normalise_homography(cv::Matx33d(H.ptr<double>()));
   }
   double sum = 0.0;
@@ -231,8 +227,7 @@ inline cv::Matx33d normalise_homography(cv::Matx33d H) noexcept {
     est.max_error_px = std::max(est.max_error_px, e);
     ++est.inlier_count;
   }
-  if (est.inlier_count < 4)
-    throw std::invalid_argument("estimate_homography: fewer than 4 inliers after RANSAC");
+  if (est.inlier_count < 4) throw std::invalid_argument("estimate_homography: fewer than 4 inliers after RANSAC");
   est.rms_error_px = std::sqrt(sum / static_cast<double>(est.inlier_count));
   return est;
 }

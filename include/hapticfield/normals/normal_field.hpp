@@ -67,12 +67,12 @@ enum class NormalForceMode {
 struct NormalFieldConfig {
   NormalForceMode mode = NormalForceMode::along_motion;
   double max_force = kim_kwon_max_force;  ///< force bound F_max [N]
-  double speed_threshold = 0.005;    ///< below this filtered HIP speed no direction, no force [m/s]
+  double speed_threshold = 0.005;         ///< below this filtered HIP speed no direction, no force [m/s]
   /// Extra first-order low-pass on the HIP velocity [Hz]; 0 (default): none.
   /// ForceArm already low-passes the velocity (100 Hz), and two filters in
   /// a row add their lags; set it for velocity sources that are not filtered.
   double velocity_cutoff_hz = 0.0;
-  double shading_cell_px = 0.0;      ///< force-shading grid spacing [px]; 0 = flat faces
+  double shading_cell_px = 0.0;  ///< force-shading grid spacing [px]; 0 = flat faces
 };
 
 /// Image of face labels: label_at(pixel) is the index of the face covering
@@ -84,19 +84,15 @@ class FaceLabels {
 
   /// @throws std::invalid_argument for a non-positive size, a polygon with
   ///         fewer than 3 vertices or non-finite vertices.
-  FaceLabels(int width, int height, std::span<const ImageFace> faces)
-      : width_(width), height_(height) {
-    if (width <= 0 || height <= 0)
-      throw std::invalid_argument("FaceLabels: image size must be positive [px]");
-    if (faces.size() > static_cast<std::size_t>(INT32_MAX))
-      throw std::invalid_argument("FaceLabels: too many faces");
+  FaceLabels(int width, int height, std::span<const ImageFace> faces) : width_(width), height_(height) {
+    if (width <= 0 || height <= 0) throw std::invalid_argument("FaceLabels: image size must be positive [px]");
+    if (faces.size() > static_cast<std::size_t>(INT32_MAX)) throw std::invalid_argument("FaceLabels: too many faces");
     cv::Mat labels(height, width, CV_32S, cv::Scalar(-1));
     constexpr int shift = 8;  // sub-pixel vertices: 1/256 px
     for (std::size_t i = 0; i < faces.size(); ++i) {
       const auto& poly = faces[i].polygon;
       if (poly.size() < 3)
-        throw std::invalid_argument("FaceLabels: face " + std::to_string(i) +
-                                    " needs at least 3 vertices");
+        throw std::invalid_argument("FaceLabels: face " + std::to_string(i) + " needs at least 3 vertices");
       std::vector<cv::Point> pts;
       pts.reserve(poly.size());
       for (auto p : poly) {
@@ -115,13 +111,10 @@ class FaceLabels {
   /// Index of the face at an image position [px], or -1 (background or
   /// outside the picture). O(1).
   [[nodiscard]] int label_at(glm::dvec2 pixel) const noexcept {
-    if (!(pixel.x >= -0.5) || !(pixel.y >= -0.5) || !(pixel.x < width_ - 0.5) ||
-        !(pixel.y < height_ - 0.5))
-      return -1;
+    if (!(pixel.x >= -0.5) || !(pixel.y >= -0.5) || !(pixel.x < width_ - 0.5) || !(pixel.y < height_ - 0.5)) return -1;
     const int x = static_cast<int>(pixel.x + 0.5);
     const int y = static_cast<int>(pixel.y + 0.5);
-    return labels_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) +
-                   static_cast<std::size_t>(x)];
+    return labels_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x)];
   }
 
   [[nodiscard]] int width() const noexcept { return width_; }
@@ -146,28 +139,20 @@ class ShadingGrid {
   /// Vertex (i, j) sits at origin + spacing * (i, j) [px], i < cols, j < rows;
   /// normals row-major (cols * rows), each unit (n_z <= 0) or zero.
   /// @throws std::invalid_argument for a bad spacing, size or normal.
-  ShadingGrid(glm::dvec2 origin, double spacing_px, int cols, int rows,
-              std::vector<glm::dvec3> normals)
-      : origin_(origin),
-        spacing_(spacing_px),
-        cols_(cols),
-        rows_(rows),
-        normals_(std::move(normals)) {
+  ShadingGrid(glm::dvec2 origin, double spacing_px, int cols, int rows, std::vector<glm::dvec3> normals)
+      : origin_(origin), spacing_(spacing_px), cols_(cols), rows_(rows), normals_(std::move(normals)) {
     if (!is_finite(origin)) throw std::invalid_argument("ShadingGrid: origin must be finite [px]");
     if (!std::isfinite(spacing_px) || spacing_px <= 0.0)
       throw std::invalid_argument("ShadingGrid: spacing must be finite and positive [px]");
-    if (cols < 2 || rows < 2)
-      throw std::invalid_argument("ShadingGrid: at least 2 x 2 vertices are needed");
+    if (cols < 2 || rows < 2) throw std::invalid_argument("ShadingGrid: at least 2 x 2 vertices are needed");
     if (normals_.size() != static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows))
       throw std::invalid_argument("ShadingGrid: expected cols * rows vertex normals");
     for (auto& n : normals_) {
       if (!is_finite(n)) throw std::invalid_argument("ShadingGrid: vertex normals must be finite");
       const double len = glm::length(n);
       if (len == 0.0) continue;
-      if (std::abs(len - 1.0) > 1e-6)
-        throw std::invalid_argument("ShadingGrid: vertex normals must be unit or zero");
-      if (n.z > 1e-9)
-        throw std::invalid_argument("ShadingGrid: vertex normals must face the camera (n_z <= 0)");
+      if (std::abs(len - 1.0) > 1e-6) throw std::invalid_argument("ShadingGrid: vertex normals must be unit or zero");
+      if (n.z > 1e-9) throw std::invalid_argument("ShadingGrid: vertex normals must face the camera (n_z <= 0)");
     }
   }
 
@@ -175,8 +160,7 @@ class ShadingGrid {
   /// of the face normals of the pixels within one cell of it (the four cells
   /// around it), renormalised; zero where no face is near. Setup cost
   /// O(pixels), memory O(cells).
-  [[nodiscard]] static ShadingGrid from_faces(const FaceLabels& labels,
-                                              std::span<const glm::dvec3> face_normals,
+  [[nodiscard]] static ShadingGrid from_faces(const FaceLabels& labels, std::span<const glm::dvec3> face_normals,
                                               double spacing_px) {
     if (!std::isfinite(spacing_px) || spacing_px < 1.0)
       throw std::invalid_argument("ShadingGrid::from_faces: spacing must be at least 1 [px]");
@@ -189,14 +173,11 @@ class ShadingGrid {
     std::vector<glm::dvec3> cells(ucols * static_cast<std::size_t>(rows), glm::dvec3{0.0});
     const auto data = labels.data();
     for (int y = 0; y < h; ++y) {
-      const std::size_t cy =
-          static_cast<std::size_t>(std::min(static_cast<int>(y / spacing_px), rows - 1));
+      const std::size_t cy = static_cast<std::size_t>(std::min(static_cast<int>(y / spacing_px), rows - 1));
       for (int x = 0; x < w; ++x) {
-        const int l = data[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
-                           static_cast<std::size_t>(x)];
+        const int l = data[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)];
         if (l < 0) continue;
-        const std::size_t cx =
-            static_cast<std::size_t>(std::min(static_cast<int>(x / spacing_px), cols - 1));
+        const std::size_t cx = static_cast<std::size_t>(std::min(static_cast<int>(x / spacing_px), cols - 1));
         cells[cy * ucols + cx] += face_normals[static_cast<std::size_t>(l)];
       }
     }
@@ -208,12 +189,10 @@ class ShadingGrid {
           for (int di = -1; di <= 0; ++di) {
             const int ci = i + di;
             const int cj = j + dj;
-            if (ci >= 0 && cj >= 0)
-              sum += cells[static_cast<std::size_t>(cj) * ucols + static_cast<std::size_t>(ci)];
+            if (ci >= 0 && cj >= 0) sum += cells[static_cast<std::size_t>(cj) * ucols + static_cast<std::size_t>(ci)];
           }
         const double len = glm::length(sum);
-        if (len > 1e-9)
-          normals[static_cast<std::size_t>(j) * ucols + static_cast<std::size_t>(i)] = sum / len;
+        if (len > 1e-9) normals[static_cast<std::size_t>(j) * ucols + static_cast<std::size_t>(i)] = sum / len;
       }
     return ShadingGrid(glm::dvec2{0.0}, spacing_px, cols, rows, std::move(normals));
   }
@@ -222,14 +201,12 @@ class ShadingGrid {
   /// grid or where the surrounding vertices carry no normal. O(1).
   [[nodiscard]] glm::dvec3 normal_at(glm::dvec2 pixel) const noexcept {
     const glm::dvec2 g = (pixel - origin_) / spacing_;
-    if (!(g.x >= 0.0) || !(g.y >= 0.0) || !(g.x <= cols_ - 1.0) || !(g.y <= rows_ - 1.0))
-      return glm::dvec3{0.0};
+    if (!(g.x >= 0.0) || !(g.y >= 0.0) || !(g.x <= cols_ - 1.0) || !(g.y <= rows_ - 1.0)) return glm::dvec3{0.0};
     const int i = std::min(static_cast<int>(g.x), cols_ - 2);
     const int j = std::min(static_cast<int>(g.y), rows_ - 2);
     const double fx = g.x - i;
     const double fy = g.y - j;
-    const std::size_t k =
-        static_cast<std::size_t>(j) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(i);
+    const std::size_t k = static_cast<std::size_t>(j) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(i);
     const std::size_t c = static_cast<std::size_t>(cols_);
     const glm::dvec3 n = (1.0 - fy) * ((1.0 - fx) * normals_[k] + fx * normals_[k + 1]) +
                          fy * ((1.0 - fx) * normals_[k + c] + fx * normals_[k + c + 1]);
@@ -279,21 +256,17 @@ class NormalField {
     if (!std::isfinite(options.max_force) || options.max_force <= 0.0)
       throw std::invalid_argument("NormalField: max_force must be finite and positive [N]");
     if (!std::isfinite(options.speed_threshold) || options.speed_threshold < 0.0)
-      throw std::invalid_argument(
-          "NormalField: speed_threshold must be finite and non-negative [m/s]");
+      throw std::invalid_argument("NormalField: speed_threshold must be finite and non-negative [m/s]");
     if (!std::isfinite(options.velocity_cutoff_hz) || options.velocity_cutoff_hz < 0.0)
-      throw std::invalid_argument(
-          "NormalField: velocity_cutoff_hz must be finite and >= 0 (0: no filter) [Hz]");
+      throw std::invalid_argument("NormalField: velocity_cutoff_hz must be finite and >= 0 (0: no filter) [Hz]");
     if (!std::isfinite(options.shading_cell_px) || options.shading_cell_px < 0.0)
-      throw std::invalid_argument(
-          "NormalField: shading_cell_px must be finite and non-negative [px]");
+      throw std::invalid_argument("NormalField: shading_cell_px must be finite and non-negative [px]");
     normals_.reserve(faces.size());
     for (std::size_t i = 0; i < faces.size(); ++i) {
       const glm::dvec3 n = faces[i].normal;
       const double len = is_finite(n) ? glm::length(n) : 0.0;
       if (!(len > 1e-12) || !std::isfinite(len))
-        throw std::invalid_argument("NormalField: face " + std::to_string(i) +
-                                    " needs a finite non-zero normal");
+        throw std::invalid_argument("NormalField: face " + std::to_string(i) + " needs a finite non-zero normal");
       if (n.z / len > 1e-9)
         throw std::invalid_argument("NormalField: face " + std::to_string(i) +
                                     " normal must face the camera (n_z <= 0, camera frame)");
@@ -312,8 +285,7 @@ class NormalField {
     const glm::dvec2 pixel = mapping_.to_image(probe.position);
     const glm::dvec2 velocity = mapping_.velocity_to_image(probe.velocity);
     if (!is_finite(pixel) || !is_finite(velocity)) return glm::dvec3{0.0};
-    if (probe.period != period_ && std::isfinite(probe.period) && probe.period > 0.0)
-      update_alpha(probe.period);
+    if (probe.period != period_ && std::isfinite(probe.period) && probe.period > 0.0) update_alpha(probe.period);
     if (primed_) {
       velocity_ += alpha_ * (velocity - velocity_);
     } else {
@@ -333,8 +305,7 @@ class NormalField {
   /// position [px] for an image velocity [px/s] (no filtering).
   [[nodiscard]] glm::dvec2 image_force(glm::dvec2 pixel, glm::dvec2 velocity_px) const noexcept {
     const glm::dvec3 n = normal_at(pixel);
-    if (options_.mode == NormalForceMode::gradient)
-      return options_.max_force * glm::dvec2{n.x, n.y};
+    if (options_.mode == NormalForceMode::gradient) return options_.max_force * glm::dvec2{n.x, n.y};
     const double speed = glm::length(velocity_px);
     if (!(speed > threshold_px_) || !(speed > 0.0) || !std::isfinite(speed)) return glm::dvec2{0.0};
     const glm::dvec2 m = velocity_px / speed;
@@ -352,8 +323,7 @@ class NormalField {
   }
 
   /// A probe at an image position [px] moving at an image velocity [px/s].
-  [[nodiscard]] Probe probe_at(glm::dvec2 pixel,
-                               glm::dvec2 velocity_px = glm::dvec2{0.0}) const noexcept {
+  [[nodiscard]] Probe probe_at(glm::dvec2 pixel, glm::dvec2 velocity_px = glm::dvec2{0.0}) const noexcept {
     Probe p;
     p.position = mapping_.to_device(pixel);
     p.velocity = mapping_.vector_to_device(velocity_px) / (mapping_.px_per_mm() * 1000.0);

@@ -31,15 +31,13 @@ struct BoxScene {
   double distance_mm = 800.0;   ///< camera centre to box centre [mm]
   double elevation_deg = 20.0;  ///< camera looks down on the box by this angle [deg]
 
-  [[nodiscard]] Camera camera() const {
-    return Camera::from_focal(focal_px, Camera::image_centre(width, height));
-  }
+  [[nodiscard]] Camera camera() const { return Camera::from_focal(focal_px, Camera::image_centre(width, height)); }
 };
 
 /// One rendered view: the picture and the two visible side faces.
 struct BoxView {
-  double rotation_deg = 0.0;  ///< rotation about the box's vertical axis [deg]
-  cv::Mat picture;            ///< BGR picture (empty when not drawn)
+  double rotation_deg = 0.0;                           ///< rotation about the box's vertical axis [deg]
+  cv::Mat picture;                                     ///< BGR picture (empty when not drawn)
   std::array<std::array<glm::dvec2, 4>, 2> corners{};  ///< exact pixel corners: [0] front, [1] side
   std::array<glm::dvec3, 2> normals{};                 ///< true outward unit normals, camera frame
 };
@@ -47,7 +45,8 @@ struct BoxView {
 /// The paper's rotations: 15, 20, ..., 75 degrees.
 [[nodiscard]] inline std::vector<double> box_rotations() {
   std::vector<double> r;
-  for (int a = 15; a <= 75; a += 5) r.push_back(a);
+  for (int a = 15; a <= 75; a += 5)
+    r.push_back(a);
   return r;
 }
 
@@ -58,10 +57,8 @@ namespace detail {
 inline cv::Matx33d box_rotation(double rotation_deg, double elevation_deg) noexcept {
   const double t = rotation_deg * std::numbers::pi / 180.0;
   const double e = elevation_deg * std::numbers::pi / 180.0;
-  const cv::Matx33d yaw(std::cos(t), 0.0, std::sin(t), 0.0, 1.0, 0.0, -std::sin(t), 0.0,
-                        std::cos(t));
-  const cv::Matx33d pitch(1.0, 0.0, 0.0, 0.0, std::cos(e), -std::sin(e), 0.0, std::sin(e),
-                          std::cos(e));
+  const cv::Matx33d yaw(std::cos(t), 0.0, std::sin(t), 0.0, 1.0, 0.0, -std::sin(t), 0.0, std::cos(t));
+  const cv::Matx33d pitch(1.0, 0.0, 0.0, 0.0, std::cos(e), -std::sin(e), 0.0, std::sin(e), std::cos(e));
   return pitch * yaw;
 }
 
@@ -76,8 +73,7 @@ inline cv::Mat face_texture(int size, cv::Scalar a, cv::Scalar b) {
       const bool stripe = ((x + y) / (check / 2)) % 5 == 0;
       const cv::Scalar c = stripe ? 0.5 * (a + b) : (dark ? a : b);
       tex.at<cv::Vec3b>(y, x) =
-          cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]),
-                    cv::saturate_cast<uchar>(c[2]));
+          cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]), cv::saturate_cast<uchar>(c[2]));
     }
   cv::rectangle(tex, cv::Rect(0, 0, size, size), cv::Scalar(40, 40, 40), size / 32);
   return tex;
@@ -91,8 +87,7 @@ inline cv::Mat face_texture(int size, cv::Scalar a, cv::Scalar b) {
 /// bottom-left as seen from outside, so they map to (0,0), (W,0), (W,H),
 /// (0,H) with W = H = edge_mm.
 /// @throws std::invalid_argument when a side face is not visible.
-[[nodiscard]] inline BoxView render_box(const BoxScene& scene, double rotation_deg,
-                                        bool draw = true) {
+[[nodiscard]] inline BoxView render_box(const BoxScene& scene, double rotation_deg, bool draw = true) {
   const cv::Matx33d R = detail::box_rotation(rotation_deg, scene.elevation_deg);
   const cv::Vec3d centre(0.0, 0.0, scene.distance_mm);
   const cv::Matx33d K = scene.camera().matrix();
@@ -123,23 +118,21 @@ inline cv::Mat face_texture(int size, cv::Scalar a, cv::Scalar b) {
     visible[f] = n.dot(c) < 0.0;
     if (f < 2) {
       view.normals[f] = glm::dvec3{n[0], n[1], n[2]};
-      for (std::size_t k = 0; k < 4; ++k) view.corners[f][k] = project(faces[f].corners[k]);
+      for (std::size_t k = 0; k < 4; ++k)
+        view.corners[f][k] = project(faces[f].corners[k]);
     }
   }
   if (!visible[0] || !visible[1])
-    throw std::invalid_argument(
-        "render_box: rotation_deg must leave both side faces visible (0..90 exclusive)");
+    throw std::invalid_argument("render_box: rotation_deg must leave both side faces visible (0..90 exclusive)");
   if (!draw) return view;
 
   view.picture = cv::Mat(scene.height, scene.width, CV_8UC3, cv::Scalar(200, 200, 200));
   // a floor line and a soft gradient so the background is not flat
   for (int y = 0; y < scene.height; ++y)
-    view.picture.row(y).setTo(
-        cv::Scalar(215 - 40.0 * y / scene.height, 205 - 30.0 * y / scene.height, 190));
-  const std::array<std::array<cv::Scalar, 2>, 3> tones{
-      {{cv::Scalar(60, 90, 200), cv::Scalar(150, 180, 240)},
-       {cv::Scalar(200, 120, 50), cv::Scalar(240, 200, 150)},
-       {cv::Scalar(70, 160, 70), cv::Scalar(170, 230, 170)}}};
+    view.picture.row(y).setTo(cv::Scalar(215 - 40.0 * y / scene.height, 205 - 30.0 * y / scene.height, 190));
+  const std::array<std::array<cv::Scalar, 2>, 3> tones{{{cv::Scalar(60, 90, 200), cv::Scalar(150, 180, 240)},
+                                                        {cv::Scalar(200, 120, 50), cv::Scalar(240, 200, 150)},
+                                                        {cv::Scalar(70, 160, 70), cv::Scalar(170, 230, 170)}}};
   const cv::Vec3d light = cv::normalize(cv::Vec3d(-0.3, -1.0, -0.6));
   constexpr int tex_size = 256;
   for (std::size_t f = 0; f < 3; ++f) {
@@ -148,8 +141,7 @@ inline cv::Mat face_texture(int size, cv::Scalar a, cv::Scalar b) {
     const double shade = 0.55 + 0.45 * std::max(0.0, n.dot(light));
     cv::Mat tex = detail::face_texture(tex_size, tones[f][0] * shade, tones[f][1] * shade);
     std::array<cv::Point2f, 4> src{cv::Point2f(-0.5f, -0.5f), cv::Point2f(tex_size - 0.5f, -0.5f),
-                                   cv::Point2f(tex_size - 0.5f, tex_size - 0.5f),
-                                   cv::Point2f(-0.5f, tex_size - 0.5f)};
+                                   cv::Point2f(tex_size - 0.5f, tex_size - 0.5f), cv::Point2f(-0.5f, tex_size - 0.5f)};
     std::array<cv::Point2f, 4> dst{};
     std::vector<cv::Point> poly;
     for (std::size_t k = 0; k < 4; ++k) {

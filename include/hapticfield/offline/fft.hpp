@@ -20,7 +20,8 @@ inline void fft(std::vector<std::complex<double>>& a) {
   if (n == 0 || (n & (n - 1)) != 0) throw std::invalid_argument("fft: the size must be a power of two");
   for (std::size_t i = 1, j = 0; i < n; ++i) {  // bit-reversal permutation
     std::size_t bit = n >> 1;
-    for (; j & bit; bit >>= 1) j ^= bit;
+    for (; j & bit; bit >>= 1)
+      j ^= bit;
     j ^= bit;
     if (i < j) std::swap(a[i], a[j]);
   }

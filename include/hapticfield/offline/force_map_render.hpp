@@ -27,14 +27,15 @@ inline double full_scale_or_max(const ForceMap& map, double full_scale) {
   const double m = map.max_magnitude();
   return m > 0.0 ? m : 1.0;
 }
-inline unsigned char to_byte(double v) { return static_cast<unsigned char>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5); }
+inline unsigned char to_byte(double v) {
+  return static_cast<unsigned char>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
+}
 }  // namespace detail
 
 /// One component as a BGR picture: red where it is positive (right / down),
 /// blue where negative, brightness = |component| / full_scale (<= 0: the
 /// map's largest magnitude).
-[[nodiscard]] inline cv::Mat component_picture(const ForceMap& map, ForceComponent component,
-                                               double full_scale = 0.0) {
+[[nodiscard]] inline cv::Mat component_picture(const ForceMap& map, ForceComponent component, double full_scale = 0.0) {
   const double s = detail::full_scale_or_max(map, full_scale);
   const std::vector<float>& plane = component == ForceComponent::x ? map.fx : map.fy;
   cv::Mat out(map.height, map.width, CV_8UC3, cv::Scalar::all(0));
@@ -71,11 +72,16 @@ inline unsigned char to_byte(double v) { return static_cast<unsigned char>(std::
   const double s = detail::full_scale_or_max(map, full_scale);
   cv::Mat out;
   cv::Mat eight_bit;
-  if (photo.depth() == CV_16U) photo.convertTo(eight_bit, CV_8U, 255.0 / 65535.0);
-  else eight_bit = photo;
-  if (eight_bit.channels() == 1) cv::cvtColor(eight_bit, out, cv::COLOR_GRAY2BGR);
-  else if (eight_bit.channels() == 4) cv::cvtColor(eight_bit, out, cv::COLOR_BGRA2BGR);
-  else out = eight_bit.clone();
+  if (photo.depth() == CV_16U)
+    photo.convertTo(eight_bit, CV_8U, 255.0 / 65535.0);
+  else
+    eight_bit = photo;
+  if (eight_bit.channels() == 1)
+    cv::cvtColor(eight_bit, out, cv::COLOR_GRAY2BGR);
+  else if (eight_bit.channels() == 4)
+    cv::cvtColor(eight_bit, out, cv::COLOR_BGRA2BGR);
+  else
+    out = eight_bit.clone();
   out *= 0.6;  // dim the photo so the arrows stand out
   for (int y = spacing / 2; y < map.height; y += spacing) {
     for (int x = spacing / 2; x < map.width; x += spacing) {
@@ -83,7 +89,8 @@ inline unsigned char to_byte(double v) { return static_cast<unsigned char>(std::
       const double fy = map.fy[map.index(x, y)] / s;
       if (std::hypot(fx, fy) < 0.05) continue;
       const cv::Point from(x, y);
-      const cv::Point to(static_cast<int>(std::lround(x + fx * spacing)), static_cast<int>(std::lround(y + fy * spacing)));
+      const cv::Point to(static_cast<int>(std::lround(x + fx * spacing)),
+                         static_cast<int>(std::lround(y + fy * spacing)));
       cv::arrowedLine(out, from, to, cv::Scalar(0, 255, 255), 1, cv::LINE_AA, 0, 0.3);
     }
   }
@@ -93,7 +100,8 @@ inline unsigned char to_byte(double v) { return static_cast<unsigned char>(std::
 /// Writes fx.png, fy.png, magnitude.png, arrows.png and the float planes
 /// fx.tiff, fy.tiff (32-bit) into dir; returns the paths.
 /// @throws std::runtime_error when the folder or a file cannot be written.
-inline std::vector<std::string> write_force_pictures(const std::string& dir, const cv::Mat& photo, const ForceMap& map) {
+inline std::vector<std::string> write_force_pictures(const std::string& dir, const cv::Mat& photo,
+                                                     const ForceMap& map) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create '" + dir + "': " + ec.message());

@@ -67,8 +67,8 @@ namespace hapticfield {
   if (!std::isfinite(separation_mm) || separation_mm <= 0.0 || !std::isfinite(px_per_mm) || px_per_mm <= 0.0)
     throw std::invalid_argument("largest_separating_prewitt: separation [mm] and resolution [px/mm] must be positive");
   const double d = std::floor(separation_mm * px_per_mm + 1e-9);  // [px]
-  double m = d + 1.0;                                              // d >= m - 1
-  if (std::fmod(m, 2.0) == 0.0) m -= 1.0;                          // odd sizes only
+  double m = d + 1.0;                                             // d >= m - 1
+  if (std::fmod(m, 2.0) == 0.0) m -= 1.0;                         // odd sizes only
   if (m < min_mask_size) return 0;
   return m > max_mask_size ? max_mask_size : static_cast<int>(m);
 }

@@ -15,8 +15,10 @@ namespace hapticfield {
 /// absolute time.
 template <class C>
 concept ServoClock = requires(C& clock, std::int64_t t) {
-  { clock.now() } noexcept -> std::same_as<std::int64_t>;
-  { clock.sleep_until(t) } noexcept;
+  { clock.now() }
+  noexcept->std::same_as<std::int64_t>;
+  { clock.sleep_until(t) }
+  noexcept;
 };
 
 /// CLOCK_MONOTONIC with clock_nanosleep(TIMER_ABSTIME): sleeps to absolute

@@ -53,13 +53,13 @@ inline constexpr double max_servo_rate = 10000.0;  ///< [Hz]
 inline constexpr std::uint64_t no_tick_limit = UINT64_MAX;
 
 struct LoopConfig {
-  double rate{1000.0};                   ///< servo rate [Hz], 1..10000
+  double rate{1000.0};  ///< servo rate [Hz], 1..10000
   RealTime realtime{RealTime::best_effort};
-  int priority{80};                      ///< SCHED_FIFO priority (1..99)
+  int priority{80};  ///< SCHED_FIFO priority (1..99)
   SafetyConfig safety{};
-  bool auto_home{true};                  ///< request homing when the device is not homed
-  bool auto_arm{true};                   ///< request arming at start (the device arms once homed)
-  bool disarm_on_exit{true};             ///< disarm when run() returns
+  bool auto_home{true};       ///< request homing when the device is not homed
+  bool auto_arm{true};        ///< request arming at start (the device arms once homed)
+  bool disarm_on_exit{true};  ///< disarm when run() returns
   /// After a stale-state or missed-deadline latch, clear it and re-arm (with
   /// the soft start) once new states have arrived on time for this long [s];
   /// 0: never (clear_fault() only). Disconnects and throwing callbacks never
@@ -78,10 +78,10 @@ struct LoopConfig {
 
 /// What a callback sees each tick.
 struct TickInput {
-  Probe probe{};              ///< HIP state for fields
-  DeviceState state{};        ///< newest device state
+  Probe probe{};        ///< HIP state for fields
+  DeviceState state{};  ///< newest device state
   Status read_status{Status::no_data};
-  std::uint64_t tick{0};      ///< tick index since run() started
+  std::uint64_t tick{0};  ///< tick index since run() started
 };
 
 /// Why run() returned.
@@ -92,7 +92,8 @@ struct RunLimits {
 
   /// @throws std::invalid_argument for max_ticks == 0.
   void validate() const {
-    if (max_ticks == 0) throw std::invalid_argument("RunLimits: max_ticks must be >= 1 (no_tick_limit: run until stopped)");
+    if (max_ticks == 0)
+      throw std::invalid_argument("RunLimits: max_ticks must be >= 1 (no_tick_limit: run until stopped)");
   }
 };
 
@@ -156,7 +157,10 @@ class ServoLoop {
 
   /// @throws std::invalid_argument for a bad rate, priority or safety setting.
   ServoLoop(D& device, C& clock, LoopConfig config = {})
-      : device_(&device), clock_(&clock), config_(config), safety_((config_.validate(), config_.safety), device.info().max_force),
+      : device_(&device),
+        clock_(&clock),
+        config_(config),
+        safety_((config_.validate(), config_.safety), device.info().max_force),
         stats_(std::make_unique<LoopStatistics>()) {
     period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / config_.rate));
     period_ = static_cast<double>(period_ns_) * 1e-9;
@@ -181,8 +185,8 @@ class ServoLoop {
   /// is commanded and the arm disarmed first, then ServoError (with the
   /// last states, the callback's exception nested) is thrown.
   template <class Callback>
-    requires(!HapticField<Callback> && std::is_invocable_r_v<glm::dvec3, Callback&, const TickInput&>)
-  StopReason run(Callback& callback, RunLimits limits = {}) {
+  requires(!HapticField<Callback> && std::is_invocable_r_v<glm::dvec3, Callback&, const TickInput&>) StopReason
+      run(Callback& callback, RunLimits limits = {}) {
     return run_impl(callback, limits);
   }
 
@@ -233,7 +237,8 @@ class ServoLoop {
     si.state_age = state_.valid ? static_cast<double>(now_ - last_state_time_) * 1e-9 : 0.0;
     si.ticks_without_state = state_.valid ? ticks_without_state_ : 0;
     si.missed_in_a_row = missed_in_a_row_;
-    si.time_since_armed = (armed_since_ >= 0 && state_.armed()) ? static_cast<double>(now_ - armed_since_) * 1e-9 : -1.0;
+    si.time_since_armed =
+        (armed_since_ >= 0 && state_.armed()) ? static_cast<double>(now_ - armed_since_) * 1e-9 : -1.0;
     si.device_fault = state_.faulted();
     si.disconnected = disconnected_;
     si.link_resync = resync_;
@@ -303,7 +308,8 @@ class ServoLoop {
   void maybe_recover() noexcept {
     constexpr std::uint32_t recoverable = safety_events::stale_state | safety_events::missed_deadlines;
     const std::uint32_t latched = safety_.latched();
-    if (config_.recover_after <= 0.0 || !latched || (latched & ~recoverable) || fresh_since_ < 0 || missed_in_a_row_ > 0)
+    if (config_.recover_after <= 0.0 || !latched || (latched & ~recoverable) || fresh_since_ < 0 ||
+        missed_in_a_row_ > 0)
       return;
     if (static_cast<double>(now_ - fresh_since_) * 1e-9 < config_.recover_after) return;
     clear_now();
@@ -313,7 +319,8 @@ class ServoLoop {
   std::vector<DeviceState> last_states() const {
     std::vector<DeviceState> v;
     const std::size_t n = history_next_ < history_size ? history_next_ : history_size;
-    for (std::size_t i = history_next_ - n; i < history_next_; ++i) v.push_back(history_[i % history_size]);
+    for (std::size_t i = history_next_ - n; i < history_next_; ++i)
+      v.push_back(history_[i % history_size]);
     return v;
   }
 
@@ -363,7 +370,7 @@ class ServoLoop {
       clear_now();
       // Between runs (not in a tick) a device's own latched fault can be
       // cleared too; it accepts that only while disarmed, as it is now.
-      if constexpr (requires(D& d) { d.clear_fault(); }) device_->clear_fault();
+      if constexpr (requires(D & d) { d.clear_fault(); }) device_->clear_fault();
     }
     if (const std::uint32_t latched = safety_.latched())
       throw ServoError("ServoLoop: cannot arm: the safety chain latched (" + safety_events::names(latched) +
@@ -408,8 +415,14 @@ class ServoLoop {
     const std::uint64_t first_tick = tick_;
     TickInput in;
     for (;;) {
-      if (stop_.exchange(false, std::memory_order_acq_rel)) { safe_stop(); return StopReason::requested; }
-      if (tick_ - first_tick >= limits.max_ticks) { safe_stop(); return StopReason::tick_limit; }
+      if (stop_.exchange(false, std::memory_order_acq_rel)) {
+        safe_stop();
+        return StopReason::requested;
+      }
+      if (tick_ - first_tick >= limits.max_ticks) {
+        safe_stop();
+        return StopReason::tick_limit;
+      }
       const std::int64_t deadline = pacer.deadline();
       const std::int64_t wake = pacer.wait(*clock_);
       read_once(in);
@@ -436,7 +449,10 @@ class ServoLoop {
         stats_->add_overrun();
       }
       note_deadline(skipped > 0);
-      if (disconnected_) { safe_stop(); return StopReason::disconnected; }
+      if (disconnected_) {
+        safe_stop();
+        return StopReason::disconnected;
+      }
     }
   }
 

@@ -51,11 +51,11 @@ class MultiArmLoop {
   /// @throws std::invalid_argument for max_ticks == 0; ServoError when an
   ///         arm has a latched fault (clear_fault(i) first).
   template <HapticField... Fields>
-    requires(sizeof...(Fields) == N)
-  StopReason run(RunLimits limits, Fields&... fields) {
+  requires(sizeof...(Fields) == N) StopReason run(RunLimits limits, Fields&... fields) {
     limits.validate();
     const std::int64_t start = clock_->now();
-    for (auto& arm : arms_) arm->prepare_run(start);
+    for (auto& arm : arms_)
+      arm->prepare_run(start);
     arms_[0]->apply_realtime();  // the policy of the calling thread, once
     struct Restore {
       ServoLoop<D, C>* arm;
@@ -119,7 +119,8 @@ class MultiArmLoop {
   void apply_policy() noexcept {
     if (policy_ != ArmFaultPolicy::stop_all) return;
     bool any = false;
-    for (const auto& arm : arms_) any = any || arm->safety_.latched() != 0;
+    for (const auto& arm : arms_)
+      any = any || arm->safety_.latched() != 0;
     if (!any) return;
     for (auto& arm : arms_)
       if (!arm->safety_.latched()) {
@@ -130,7 +131,8 @@ class MultiArmLoop {
   }
 
   StopReason stop_all(StopReason reason) noexcept {
-    for (auto& arm : arms_) arm->safe_stop();
+    for (auto& arm : arms_)
+      arm->safe_stop();
     return reason;
   }
 

@@ -36,22 +36,34 @@ inline constexpr std::uint32_t device_fault = 1u << 6;      ///< device reports 
 inline constexpr std::uint32_t disconnected = 1u << 7;      ///< device gone (latches)
 inline constexpr std::uint32_t callback_threw = 1u << 8;    ///< the user callback threw (latches)
 inline constexpr std::uint32_t no_new_state = 1u << 9;      ///< K ticks without a new state: zero until one arrives
-inline constexpr std::uint32_t bad_period = 1u << 10;       ///< period NaN, Inf or outside [1e-4, 1] s: zero (the slew limit needs it)
+inline constexpr std::uint32_t bad_period =
+    1u << 10;  ///< period NaN, Inf or outside [1e-4, 1] s: zero (the slew limit needs it)
 inline constexpr std::uint32_t energy_overflow = 1u << 11;  ///< passivity energy went non-finite: zero, observer reset
-inline constexpr std::uint32_t link_resync = 1u << 12;      ///< the device's report stream jumped: zero until it is consistent
-inline constexpr std::uint32_t other_arm = 1u << 13;        ///< another arm of a MultiArmLoop latched (ArmFaultPolicy::stop_all)
+inline constexpr std::uint32_t link_resync = 1u
+                                             << 12;  ///< the device's report stream jumped: zero until it is consistent
+inline constexpr std::uint32_t other_arm = 1u
+                                           << 13;  ///< another arm of a MultiArmLoop latched (ArmFaultPolicy::stop_all)
 /// Events that latch the watchdog until SafetyChain::clear().
 inline constexpr std::uint32_t latching = stale_state | missed_deadlines | disconnected | callback_threw | other_arm;
 /// Events that zero the force for this tick without latching.
-inline constexpr std::uint32_t zeroing = non_finite | device_fault | no_new_state | bad_period | energy_overflow |
-                                          link_resync;
+inline constexpr std::uint32_t zeroing =
+    non_finite | device_fault | no_new_state | bad_period | energy_overflow | link_resync;
 
 /// Comma-separated names of the bits set in events ("" for none).
 [[nodiscard]] inline std::string names(std::uint32_t events) {
-  static constexpr const char* table[] = {"non-finite force", "clamped", "slew limited", "passivity",
-                                          "stale state", "missed deadlines", "device fault or not armed",
-                                          "disconnected", "callback threw", "no new state", "bad period",
-                                          "passivity energy overflow", "link resynchronising",
+  static constexpr const char* table[] = {"non-finite force",
+                                          "clamped",
+                                          "slew limited",
+                                          "passivity",
+                                          "stale state",
+                                          "missed deadlines",
+                                          "device fault or not armed",
+                                          "disconnected",
+                                          "callback threw",
+                                          "no new state",
+                                          "bad period",
+                                          "passivity energy overflow",
+                                          "link resynchronising",
                                           "another arm latched"};
   std::string s;
   for (std::uint32_t i = 0; i < sizeof table / sizeof table[0]; ++i)
@@ -61,29 +73,35 @@ inline constexpr std::uint32_t zeroing = non_finite | device_fault | no_new_stat
 }  // namespace safety_events
 
 struct SafetyConfig {
-  double max_force{0.0};          ///< magnitude limit [N]; 0 = the device's max_force
+  double max_force{0.0};  ///< magnitude limit [N]; 0 = the device's max_force
   bool slew_enabled{true};
-  double slew_rate{1000.0};       ///< largest change of the force [N/s]
+  double slew_rate{1000.0};  ///< largest change of the force [N/s]
   bool soft_start_enabled{true};
-  double soft_start{0.25};        ///< ramp time of the force limit after arming [s]
+  double soft_start{0.25};  ///< ramp time of the force limit after arming [s]
   bool watchdog_enabled{true};
-  double max_state_age{10e-3};    ///< state older than this zeroes, disarms and latches [s]
-  int max_ticks_without_state{2}; ///< this many ticks in a row without a new state zero the force (until one arrives)
-  int max_missed_deadlines{3};    ///< this many overrunning ticks in a row zero and disarm (a late wake is one, however many periods it skipped)
+  double max_state_age{10e-3};     ///< state older than this zeroes, disarms and latches [s]
+  int max_ticks_without_state{2};  ///< this many ticks in a row without a new state zero the force (until one arrives)
+  int max_missed_deadlines{3};    ///< this many overrunning ticks in a row zero and disarm (a late wake is one, however
+                                  ///< many periods it skipped)
   bool passivity_enabled{false};  ///< Hannaford & Ryu passivity observer/controller
   double passivity_max_damping{50.0};  ///< cap on the controller's damping alpha [N s/m]
 
   /// @throws std::invalid_argument naming the first bad parameter.
   void validate(double device_max_force) const {
     const auto pos = [](double v) { return std::isfinite(v) && v > 0.0; };
-    if (!pos(device_max_force)) throw std::invalid_argument("SafetyConfig: the device max_force must be finite and > 0 [N]");
+    if (!pos(device_max_force))
+      throw std::invalid_argument("SafetyConfig: the device max_force must be finite and > 0 [N]");
     if (!std::isfinite(max_force) || max_force < 0.0 || max_force > device_max_force)
-      throw std::invalid_argument("SafetyConfig: max_force must be finite, >= 0 (0: device limit) and <= the device max_force [N]");
-    if (slew_enabled && !pos(slew_rate)) throw std::invalid_argument("SafetyConfig: slew_rate must be finite and > 0 [N/s]");
-    if (soft_start_enabled && !pos(soft_start)) throw std::invalid_argument("SafetyConfig: soft_start must be finite and > 0 [s]");
+      throw std::invalid_argument(
+          "SafetyConfig: max_force must be finite, >= 0 (0: device limit) and <= the device max_force [N]");
+    if (slew_enabled && !pos(slew_rate))
+      throw std::invalid_argument("SafetyConfig: slew_rate must be finite and > 0 [N/s]");
+    if (soft_start_enabled && !pos(soft_start))
+      throw std::invalid_argument("SafetyConfig: soft_start must be finite and > 0 [s]");
     if (watchdog_enabled) {
       if (!pos(max_state_age)) throw std::invalid_argument("SafetyConfig: max_state_age must be finite and > 0 [s]");
-      if (max_ticks_without_state < 1) throw std::invalid_argument("SafetyConfig: max_ticks_without_state must be >= 1");
+      if (max_ticks_without_state < 1)
+        throw std::invalid_argument("SafetyConfig: max_ticks_without_state must be >= 1");
       if (max_missed_deadlines < 1) throw std::invalid_argument("SafetyConfig: max_missed_deadlines must be >= 1");
     }
     if (passivity_enabled && !pos(passivity_max_damping))
@@ -104,16 +122,16 @@ struct SafetyConfig {
 
 /// What the chain needs to know about this tick.
 struct SafetyInput {
-  glm::dvec3 force{0.0};         ///< force the field or callback asked for [N]
-  glm::dvec3 velocity{0.0};      ///< handle velocity [m/s] (passivity observer)
-  double period{1e-3};           ///< nominal tick period [s]
-  double state_age{0.0};         ///< now - arrival of the newest state [s]
-  int ticks_without_state{0};    ///< ticks in a row with no new state
-  int missed_in_a_row{0};        ///< overrunning ticks in a row (one per late tick)
-  double time_since_armed{-1.0}; ///< [s]; negative while the device is not armed
-  bool device_fault{false};      ///< the device reports a fault bit
-  bool disconnected{false};      ///< the transport reports the device gone
-  bool link_resync{false};       ///< the report stream jumped and is not yet consistent
+  glm::dvec3 force{0.0};          ///< force the field or callback asked for [N]
+  glm::dvec3 velocity{0.0};       ///< handle velocity [m/s] (passivity observer)
+  double period{1e-3};            ///< nominal tick period [s]
+  double state_age{0.0};          ///< now - arrival of the newest state [s]
+  int ticks_without_state{0};     ///< ticks in a row with no new state
+  int missed_in_a_row{0};         ///< overrunning ticks in a row (one per late tick)
+  double time_since_armed{-1.0};  ///< [s]; negative while the device is not armed
+  bool device_fault{false};       ///< the device reports a fault bit
+  bool disconnected{false};       ///< the transport reports the device gone
+  bool link_resync{false};        ///< the report stream jumped and is not yet consistent
 };
 
 class SafetyChain {
@@ -200,11 +218,17 @@ class SafetyChain {
   /// Latches a fault from outside (a throwing callback).
   void latch(std::uint32_t bits) noexcept { latched_ |= bits; }
   /// Clears the latch; the next force starts from zero.
-  void clear() noexcept { latched_ = 0; restart(); }
+  void clear() noexcept {
+    latched_ = 0;
+    restart();
+  }
   /// Starts again from what the device really has after a stop: zero force
   /// commanded (the slew limit ramps from zero), observer energy zero. The
   /// latch is kept.
-  void restart() noexcept { previous_ = glm::dvec3{0.0}; energy_ = 0.0; }
+  void restart() noexcept {
+    previous_ = glm::dvec3{0.0};
+    energy_ = 0.0;
+  }
   /// Observed energy into the virtual environment [J] (passivity observer).
   [[nodiscard]] double observed_energy() const noexcept { return energy_; }
   [[nodiscard]] double limit() const noexcept { return limit_; }

@@ -56,7 +56,8 @@ class DurationHistogram {
     return n ? static_cast<double>(sum_.load(std::memory_order_relaxed)) / static_cast<double>(n) : 0.0;
   }
   void reset() noexcept {
-    for (auto& c : counts_) c.store(0, std::memory_order_relaxed);
+    for (auto& c : counts_)
+      c.store(0, std::memory_order_relaxed);
     count_.store(0, std::memory_order_relaxed);
     sum_.store(0, std::memory_order_relaxed);
     max_.store(0, std::memory_order_relaxed);
@@ -71,27 +72,29 @@ class DurationHistogram {
 
 /// A copy of the loop statistics at one moment (durations in seconds).
 struct LoopSnapshot {
-  std::uint64_t ticks{0};            ///< ticks run
-  std::uint64_t missed_deadlines{0}; ///< periods skipped after overruns
-  std::uint64_t overruns{0};         ///< ticks that ended after their deadline (a late wake is one)
-  std::uint64_t safety_events{0};    ///< ticks on which the safety chain intervened
-  std::uint64_t latches{0};          ///< times the watchdog latched (zero force, disarmed)
-  std::uint32_t last_latch{0};       ///< safety_events bits of the most recent latch (0: none yet)
-  std::uint64_t recoveries{0};       ///< latches cleared by LoopConfig::recover_after
-  double rate{0.0};                  ///< achieved rate [Hz] = (ticks - 1) / (last - first wake)
+  std::uint64_t ticks{0};             ///< ticks run
+  std::uint64_t missed_deadlines{0};  ///< periods skipped after overruns
+  std::uint64_t overruns{0};          ///< ticks that ended after their deadline (a late wake is one)
+  std::uint64_t safety_events{0};     ///< ticks on which the safety chain intervened
+  std::uint64_t latches{0};           ///< times the watchdog latched (zero force, disarmed)
+  std::uint32_t last_latch{0};        ///< safety_events bits of the most recent latch (0: none yet)
+  std::uint64_t recoveries{0};        ///< latches cleared by LoopConfig::recover_after
+  double rate{0.0};                   ///< achieved rate [Hz] = (ticks - 1) / (last - first wake)
   double period_p50{0.0}, period_p99{0.0}, period_p999{0.0}, period_max{0.0};  ///< [s]
-  double period_mean{0.0};           ///< [s]
-  double wake_p50{0.0}, wake_p99{0.0}, wake_max{0.0};  ///< wake latency after the deadline [s]
+  double period_mean{0.0};                                                     ///< [s]
+  double wake_p50{0.0}, wake_p99{0.0}, wake_max{0.0};                          ///< wake latency after the deadline [s]
   double compute_p50{0.0}, compute_p99{0.0}, compute_max{0.0}, compute_mean{0.0};  ///< tick work [s]
-  double peak_force{0.0};            ///< largest commanded |F| [N]
+  double peak_force{0.0};                                                          ///< largest commanded |F| [N]
 };
 
 /// Everything the loop records per tick.
 class LoopStatistics {
  public:
   void record(std::int64_t wake, std::int64_t period, std::int64_t wake_latency, std::int64_t compute) noexcept {
-    if (ticks_.load(std::memory_order_relaxed) == 0) first_wake_.store(wake, std::memory_order_relaxed);
-    else period_.record(period);
+    if (ticks_.load(std::memory_order_relaxed) == 0)
+      first_wake_.store(wake, std::memory_order_relaxed);
+    else
+      period_.record(period);
     last_wake_.store(wake, std::memory_order_relaxed);
     wake_.record(wake_latency);
     compute_.record(compute);

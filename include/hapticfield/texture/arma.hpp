@@ -27,7 +27,8 @@ namespace hapticfield::texture {
     k[m - 1] = km;
     if (!(std::fabs(km) < 1.0)) return k;  // unstable; later ones irrelevant
     std::vector<double> next(m - 1);
-    for (std::size_t i = 1; i < m; ++i) next[i - 1] = (cur[i - 1] - km * cur[m - 1 - i]) / (1.0 - km * km);
+    for (std::size_t i = 1; i < m; ++i)
+      next[i - 1] = (cur[i - 1] - km * cur[m - 1 - i]) / (1.0 - km * km);
     cur = next;
   }
   return k;
@@ -63,14 +64,18 @@ class Arma {
   [[nodiscard]] double process(double x) noexcept {
     // shift histories (P, Q are small; a ring buffer costs more branches)
     double y = b_[0] * x;
-    for (std::size_t k = 1; k <= Q; ++k) y += b_[k] * x_[k - 1];
-    for (std::size_t k = 1; k <= P; ++k) y -= a_[k - 1] * y_[k - 1];
+    for (std::size_t k = 1; k <= Q; ++k)
+      y += b_[k] * x_[k - 1];
+    for (std::size_t k = 1; k <= P; ++k)
+      y -= a_[k - 1] * y_[k - 1];
     if constexpr (Q > 0) {
-      for (std::size_t k = Q - 1; k > 0; --k) x_[k] = x_[k - 1];
+      for (std::size_t k = Q - 1; k > 0; --k)
+        x_[k] = x_[k - 1];
       x_[0] = x;
     }
     if constexpr (P > 0) {
-      for (std::size_t k = P - 1; k > 0; --k) y_[k] = y_[k - 1];
+      for (std::size_t k = P - 1; k > 0; --k)
+        y_[k] = y_[k - 1];
       y_[0] = y;
     }
     return y;
@@ -85,7 +90,8 @@ class Arma {
     Arma copy = *this;
     copy.reset();
     std::vector<double> h(n);
-    for (std::size_t i = 0; i < n; ++i) h[i] = copy.process(i == 0 ? 1.0 : 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      h[i] = copy.process(i == 0 ? 1.0 : 0.0);
     return h;
   }
 

@@ -123,7 +123,8 @@ class LabelMap {
   [[nodiscard]] int height() const noexcept { return height_; }
   [[nodiscard]] std::uint16_t max_label() const noexcept {
     std::uint16_t m = 0;
-    for (auto l : labels_) m = l > m ? l : m;
+    for (auto l : labels_)
+      m = l > m ? l : m;
     return m;
   }
   [[nodiscard]] const PlaneMapping& mapping() const noexcept { return mapping_; }
@@ -152,7 +153,8 @@ class FalseTexture {
     return textures_[static_cast<std::size_t>(l)].force(probe);
   }
   void reset() noexcept {
-    for (auto& t : textures_) t.reset();
+    for (auto& t : textures_)
+      t.reset();
   }
   [[nodiscard]] int region(const glm::dvec3& position) const noexcept { return labels_.label(position); }
   [[nodiscard]] const LabelMap& labels() const noexcept { return labels_; }

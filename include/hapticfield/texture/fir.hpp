@@ -25,8 +25,7 @@ enum class Window {
 
 /// FIR filter with Taps coefficients (fixed at compile time).
 template <std::size_t Taps>
-  requires(Taps >= 1)
-class FirFilter {
+requires(Taps >= 1) class FirFilter {
  public:
   FirFilter() { taps_[0] = 1.0; }
   /// Arbitrary taps h[0..Taps-1].
@@ -43,8 +42,10 @@ class FirFilter {
     detail::require_below_nyquist(cutoff, fs, "FirFilter", "cutoff");
     FirFilter f(ideal_low_pass(cutoff / fs, w));
     double sum = 0.0;
-    for (double t : f.taps_) sum += t;
-    for (double& t : f.taps_) t /= sum;
+    for (double t : f.taps_)
+      sum += t;
+    for (double& t : f.taps_)
+      t /= sum;
     return f;
   }
   /// High-pass by spectral inversion (delta - low-pass), gain 1 at Nyquist.
@@ -53,7 +54,8 @@ class FirFilter {
   [[nodiscard]] static FirFilter high_pass(double cutoff, double fs, Window w = Window::hamming) {
     if (Taps % 2 == 0) throw std::invalid_argument("FirFilter: a high-pass needs an odd number of taps");
     FirFilter f = low_pass(cutoff, fs, w);
-    for (double& t : f.taps_) t = -t;
+    for (double& t : f.taps_)
+      t = -t;
     f.taps_[(Taps - 1) / 2] += 1.0;
     return f;
   }
@@ -67,11 +69,13 @@ class FirFilter {
     const auto hi = ideal_low_pass(high / fs, w);
     const auto lo = ideal_low_pass(low / fs, w);
     std::array<double, Taps> taps{};
-    for (std::size_t i = 0; i < Taps; ++i) taps[i] = hi[i] - lo[i];
+    for (std::size_t i = 0; i < Taps; ++i)
+      taps[i] = hi[i] - lo[i];
     FirFilter f(taps);
     const double g = std::abs(f.response((low + high) / 2.0, fs));
     if (g > 0.0)
-      for (double& t : f.taps_) t /= g;
+      for (double& t : f.taps_)
+        t /= g;
     return f;
   }
 
@@ -82,10 +86,14 @@ class FirFilter {
     history_[pos_] = x;
     history_[pos_ + Taps] = x;
     double y = 0.0;
-    for (std::size_t i = 0; i < Taps; ++i) y += taps_[i] * history_[pos_ + i];
+    for (std::size_t i = 0; i < Taps; ++i)
+      y += taps_[i] * history_[pos_ + i];
     return y;
   }
-  void reset() noexcept { history_.fill(0.0); pos_ = 0; }
+  void reset() noexcept {
+    history_.fill(0.0);
+    pos_ = 0;
+  }
 
   [[nodiscard]] const std::array<double, Taps>& taps() const noexcept { return taps_; }
   /// Group delay of a symmetric (linear-phase) design [samples].
@@ -103,7 +111,8 @@ class FirFilter {
     const double m = (Taps - 1) / 2.0;
     for (std::size_t n = 0; n < Taps; ++n) {
       const double k = static_cast<double>(n) - m;
-      const double sinc = k == 0.0 ? 2.0 * fc_norm : std::sin(2.0 * std::numbers::pi * fc_norm * k) / (std::numbers::pi * k);
+      const double sinc =
+          k == 0.0 ? 2.0 * fc_norm : std::sin(2.0 * std::numbers::pi * fc_norm * k) / (std::numbers::pi * k);
       const double x = Taps == 1 ? 0.0 : 2.0 * std::numbers::pi * static_cast<double>(n) / (Taps - 1);
       double win = 1.0;
       if (w == Window::hamming) win = 0.54 - 0.46 * std::cos(x);

@@ -30,10 +30,10 @@
 namespace hapticfield::texture {
 
 struct FrictionConfig {
-  double coulomb{0.0};          ///< c: Coulomb force [N], or mu [-] when scaled by |Fc|
-  double viscous{0.0};          ///< b [N s/m]
-  double drag{0.0};             ///< d [N s^2/m^2]
-  double smoothing_speed{2e-3}; ///< u0 [m/s]: width of the smoothed stick region
+  double coulomb{0.0};                  ///< c: Coulomb force [N], or mu [-] when scaled by |Fc|
+  double viscous{0.0};                  ///< b [N s/m]
+  double drag{0.0};                     ///< d [N s^2/m^2]
+  double smoothing_speed{2e-3};         ///< u0 [m/s]: width of the smoothed stick region
   bool scale_with_normal_force{false};  ///< Coulomb force = c |Fc|
   glm::dvec3 surface_normal{0.0};       ///< unit normal used when the probe has none: tangent-plane friction; zero: 3D
 };
@@ -46,7 +46,8 @@ class Friction {
     const double v[] = {p.coulomb, p.viscous, p.drag};
     for (double x : v)
       if (!std::isfinite(x) || x < 0.0)
-        throw std::invalid_argument("Friction: coulomb [N or -], viscous [N s/m] and drag [N s^2/m^2] must be finite and >= 0");
+        throw std::invalid_argument(
+            "Friction: coulomb [N or -], viscous [N s/m] and drag [N s^2/m^2] must be finite and >= 0");
     if (!std::isfinite(p.smoothing_speed) || p.smoothing_speed <= 0.0)
       throw std::invalid_argument("Friction: smoothing_speed must be finite and > 0 [m/s]");
     const double n = glm::length(p.surface_normal);
@@ -61,7 +62,8 @@ class Friction {
     const glm::dvec3 v = probe.velocity - glm::dot(probe.velocity, n) * n;  // tangential velocity [m/s]
     const double speed = glm::length(v);
     if (speed == 0.0) return glm::dvec3{0.0};
-    const double c = config_.scale_with_normal_force ? config_.coulomb * std::fabs(probe.normal_force) : config_.coulomb;
+    const double c =
+        config_.scale_with_normal_force ? config_.coulomb * std::fabs(probe.normal_force) : config_.coulomb;
     const double u0 = config_.smoothing_speed;
     // c s(u)/u = c / sqrt(u^2 + u0^2): finite as u -> 0, so no division by 0
     const double per_speed = c / std::sqrt(speed * speed + u0 * u0) + config_.viscous + config_.drag * speed;
@@ -74,13 +76,12 @@ class Friction {
   FrictionConfig config_;
 };
 
-
 /// Parameters of the stick-slip (spring-anchor) friction model.
 struct StickSlipConfig {
-  double stiffness{2000.0};           ///< k of the stick spring [N/m]
-  double static_coefficient{0.5};     ///< breakaway: mu_s [-] (x |Fc|) or force [N]
-  double kinetic_coefficient{0.4};    ///< sliding: mu_k [-] (x |Fc|) or force [N], <= static
-  bool scale_with_normal_force{true}; ///< limits proportional to |Fc|
+  double stiffness{2000.0};                  ///< k of the stick spring [N/m]
+  double static_coefficient{0.5};            ///< breakaway: mu_s [-] (x |Fc|) or force [N]
+  double kinetic_coefficient{0.4};           ///< sliding: mu_k [-] (x |Fc|) or force [N], <= static
+  bool scale_with_normal_force{true};        ///< limits proportional to |Fc|
   glm::dvec3 surface_normal{0.0, 0.0, 1.0};  ///< unit normal used when the probe has none; zero: 3D
 };
 

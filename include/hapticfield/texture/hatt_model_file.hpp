@@ -68,8 +68,10 @@ template <class... Parts>
 
 inline std::string_view hatt_trim(std::string_view t) noexcept {
   const auto space = [](char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; };
-  while (!t.empty() && space(t.front())) t.remove_prefix(1);
-  while (!t.empty() && space(t.back())) t.remove_suffix(1);
+  while (!t.empty() && space(t.front()))
+    t.remove_prefix(1);
+  while (!t.empty() && space(t.back()))
+    t.remove_suffix(1);
   return t;
 }
 
@@ -123,7 +125,8 @@ inline std::size_t hatt_count(const pugi::xml_node& parent, const char* name, st
 /// the list and converts nothing.
 inline std::size_t hatt_list_size(const pugi::xml_node& list) {
   std::size_t n = 0;
-  for (pugi::xml_node v = list.child("value"); v; v = v.next_sibling("value")) ++n;
+  for (pugi::xml_node v = list.child("value"); v; v = v.next_sibling("value"))
+    ++n;
   if (n > 0) return n;
   std::string_view t = list.text().get();
   bool in_token = false;
@@ -147,9 +150,11 @@ inline std::vector<double> hatt_list(const pugi::xml_node& list, std::string_vie
   std::string_view t = list.text().get();
   std::size_t i = 0;
   while (i < t.size()) {
-    while (i < t.size() && (t[i] == ' ' || t[i] == '\n' || t[i] == '\r' || t[i] == '\t')) ++i;
+    while (i < t.size() && (t[i] == ' ' || t[i] == '\n' || t[i] == '\r' || t[i] == '\t'))
+      ++i;
     std::size_t j = i;
-    while (j < t.size() && !(t[j] == ' ' || t[j] == '\n' || t[j] == '\r' || t[j] == '\t')) ++j;
+    while (j < t.size() && !(t[j] == ' ' || t[j] == '\n' || t[j] == '\r' || t[j] == '\t'))
+      ++j;
     if (j > i) out.push_back(hatt_number_text(t.substr(i, j - i), source, field));
     i = j;
   }
@@ -172,7 +177,9 @@ inline void hatt_check_lsf(const std::vector<double>& lsf, std::string_view sour
       hatt_fail(source, what + " must increase strictly within (0, pi) [rad]");
 }
 
-inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt_trim(n.text().get())); }
+inline std::string hatt_units(const pugi::xml_node& n) {
+  return std::string(hatt_trim(n.text().get()));
+}
 
 }  // namespace detail
 
@@ -201,7 +208,8 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
       doc.load_buffer(text.data(), text.size(), pugi::parse_default, pugi::encoding_utf8);
   if (parsed_xml.status == pugi::status_no_document_element) hatt_fail(source, "no root element, expected <modelSet>");
   if (!parsed_xml)
-    hatt_fail(source, cat("malformed XML: ", parsed_xml.description(), " (at byte ", std::to_string(parsed_xml.offset), ")"));
+    hatt_fail(source,
+              cat("malformed XML: ", parsed_xml.description(), " (at byte ", std::to_string(parsed_xml.offset), ")"));
   pugi::xml_node root;
   for (pugi::xml_node n = doc.first_child(); n; n = n.next_sibling()) {
     if (n.type() != pugi::node_element) continue;
@@ -214,8 +222,10 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
 
   HattModelSet set;
   set.name = std::string(source);
-  if (const auto n = root.child("htmlName")) set.name = std::string(hatt_trim(n.text().get()));
-  else if (const auto m = root.child("material")) set.name = std::string(hatt_trim(m.text().get()));
+  if (const auto n = root.child("htmlName"))
+    set.name = std::string(hatt_trim(n.text().get()));
+  else if (const auto m = root.child("material"))
+    set.name = std::string(hatt_trim(m.text().get()));
   set.mu = hatt_number(hatt_required(root, "mu", source), source, "<mu>");
   if (set.mu < 0.0) hatt_fail(source, "<mu> must be >= 0");
   const std::size_t num_mod = hatt_count(root, "numMod", source, max_hatt_models);
@@ -230,29 +240,38 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
   }
   if (const auto n = hatt_either(root, "SpeedUnits", "speedUnits", source)) {
     const std::string u = hatt_units(n);
-    if (u == "mm/s") set.speed_to_file = 1000.0;
-    else if (u == "m/s") set.speed_to_file = 1.0;
-    else hatt_fail(source, cat("<", n.name(), "> must be mm/s or m/s, not '", hatt_excerpt(u), "'"));
+    if (u == "mm/s")
+      set.speed_to_file = 1000.0;
+    else if (u == "m/s")
+      set.speed_to_file = 1.0;
+    else
+      hatt_fail(source, cat("<", n.name(), "> must be mm/s or m/s, not '", hatt_excerpt(u), "'"));
   }
   if (const auto n = hatt_either(root, "AccelUnits", "accelUnits", source)) {
     const std::string u = hatt_units(n);
-    if (u == "m/s^2") set.acceleration_to_si = 1.0;
-    else if (u == "g") set.acceleration_to_si = 9.80665;
-    else hatt_fail(source, cat("<", n.name(), "> must be m/s^2 or g, not '", hatt_excerpt(u), "'"));
+    if (u == "m/s^2")
+      set.acceleration_to_si = 1.0;
+    else if (u == "g")
+      set.acceleration_to_si = 9.80665;
+    else
+      hatt_fail(source, cat("<", n.name(), "> must be m/s^2 or g, not '", hatt_excerpt(u), "'"));
   }
   if (const auto n = hatt_either(root, "ForceUnits", "forceUnits", source)) {
-    if (hatt_units(n) != "N") hatt_fail(source, cat("<", n.name(), "> must be N, not '", hatt_excerpt(hatt_units(n)), "'"));
+    if (hatt_units(n) != "N")
+      hatt_fail(source, cat("<", n.name(), "> must be N, not '", hatt_excerpt(hatt_units(n)), "'"));
   }
   set.speeds = hatt_list_of(hatt_required(root, "speedList", source), num_mod, source, {}, "numMod");
   set.forces = hatt_list_of(hatt_required(root, "forceList", source), num_mod, source, {}, "numMod");
   double max_s = 0, max_f = 0;
-  for (std::size_t i = 0; i < num_mod; ++i) max_s = std::max(max_s, set.speeds[i]), max_f = std::max(max_f, set.forces[i]);
+  for (std::size_t i = 0; i < num_mod; ++i)
+    max_s = std::max(max_s, set.speeds[i]), max_f = std::max(max_f, set.forces[i]);
   set.max_speed = root.child("maxSpeed") ? hatt_number(root.child("maxSpeed"), source, "<maxSpeed>") : max_s;
   set.max_force = root.child("maxForce") ? hatt_number(root.child("maxForce"), source, "<maxForce>") : max_f;
 
   // --- triangles: count first, then convert
   std::size_t tri_count = 0;
-  for (auto t = root.child("tri"); t; t = t.next_sibling("tri")) ++tri_count;
+  for (auto t = root.child("tri"); t; t = t.next_sibling("tri"))
+    ++tri_count;
   if (tri_count != num_tri)
     hatt_fail(source, cat("found ", std::to_string(tri_count), " <tri>, <numTri> says ", std::to_string(num_tri)));
   if (num_mod >= 3 && num_tri < 1) hatt_fail(source, cat("no <tri> for ", std::to_string(num_mod), " models"));
@@ -285,13 +304,15 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
     const double bx = s(t[2]) - s(t[0]), by = f(t[2]) - f(t[0]);
     const double det = ax * by - ay * bx;
     if (!std::isfinite(det) || std::fabs(det) <= 1e-12 * (std::fabs(ax * by) + std::fabs(ay * bx) + 1e-300))
-      hatt_fail(source, cat("<tri> ", std::to_string(i + 1), ": degenerate (its vertices are collinear or too far apart)"));
+      hatt_fail(source,
+                cat("<tri> ", std::to_string(i + 1), ": degenerate (its vertices are collinear or too far apart)"));
     set.triangles.push_back(t);
   }
 
   // --- models: count first, then convert each list after checking its size
   std::size_t model_count = 0;
-  for (auto m = root.child("model"); m; m = m.next_sibling("model")) ++model_count;
+  for (auto m = root.child("model"); m; m = m.next_sibling("model"))
+    ++model_count;
   if (model_count != num_mod)
     hatt_fail(source, cat("found ", std::to_string(model_count), " <model>, <numMod> says ", std::to_string(num_mod)));
   std::vector<HattModel> parsed;
@@ -309,8 +330,8 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
     const auto read_coeff = [&](const pugi::xml_node& n, std::size_t order, const char* count_name) {
       const std::size_t size = hatt_list_size(n);
       if (size != order && size != order + 1)
-        hatt_fail(source, cat(where, ": <", n.name(), "> holds ", std::to_string(size), " values, ", count_name,
-                              " = ", std::to_string(order), " (expected ", std::to_string(order), " or ",
+        hatt_fail(source, cat(where, ": <", n.name(), "> holds ", std::to_string(size), " values, ", count_name, " = ",
+                              std::to_string(order), " (expected ", std::to_string(order), " or ",
                               std::to_string(order + 1), ")"));
       return hatt_list(n, source, where);
     };
@@ -363,7 +384,8 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
           std::fabs(parsed[j].force - set.forces[v]) <= 1e-6 * (1.0 + std::fabs(set.forces[v])))
         found = j;
     }
-    if (found == num_mod && !used[v]) found = v;  // no value match: the file's order (the toolkit writes both in the same order)
+    if (found == num_mod && !used[v])
+      found = v;  // no value match: the file's order (the toolkit writes both in the same order)
     if (found == num_mod) hatt_fail(source, cat("no <model> for vertex ", std::to_string(v + 1), " of the lists"));
     used[found] = true;
     set.models[v] = parsed[found];
@@ -387,7 +409,8 @@ inline std::string hatt_units(const pugi::xml_node& n) { return std::string(hatt
   std::error_code ec;
   const auto st = std::filesystem::status(dir, ec);
   if (!std::filesystem::exists(st)) throw FileError(detail::cat("cannot open '", dir.string(), "': no such directory"));
-  if (!std::filesystem::is_directory(st)) throw FileError(detail::cat("cannot open '", dir.string(), "': not a directory"));
+  if (!std::filesystem::is_directory(st))
+    throw FileError(detail::cat("cannot open '", dir.string(), "': not a directory"));
   std::vector<std::filesystem::path> files;
   for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code e2;

@@ -33,12 +33,12 @@
 namespace hapticfield::texture {
 
 struct HattConfig {
-  double effective_mass{0.05};            ///< acceleration [m/s^2] -> force [N] (stylus + hand) [kg]
+  double effective_mass{0.05};               ///< acceleration [m/s^2] -> force [N] (stylus + hand) [kg]
   glm::dvec3 surface_normal{0.0, 0.0, 1.0};  ///< unit; vibration along it, speed and friction in the tangent plane
-  std::uint32_t seed{1};                  ///< noise seed
-  int update_every{1};                    ///< ticks between coefficient updates (>= 1)
-  double velocity_threshold{1e-3};        ///< silent below this tangential speed [m/s]
-  bool friction{true};                    ///< add mu |Fc| Coulomb friction
+  std::uint32_t seed{1};                     ///< noise seed
+  int update_every{1};                       ///< ticks between coefficient updates (>= 1)
+  double velocity_threshold{1e-3};           ///< silent below this tangential speed [m/s]
+  bool friction{true};                       ///< add mu |Fc| Coulomb friction
   /// Run the model at its own sample rate: round(sample rate x tick period)
   /// AR steps per tick (at most max_hatt_steps_per_tick), output the newest,
   /// so a 10 kHz model in a 1 kHz loop keeps its spectrum below the loop's
@@ -62,8 +62,13 @@ class HattTexture {
   /// @throws std::invalid_argument for orders above MaxOrder, a bad
   ///         effective mass, normal or update period, or an invalid set.
   HattTexture(const HattModelSet& set, const HattConfig& params)
-      : tri_(set.speeds, set.forces, set.triangles), config_(params), p_order_(set.ar_order), q_order_(set.ma_order),
-        mu_(set.mu), speed_to_file_(set.speed_to_file), accel_to_si_(set.acceleration_to_si),
+      : tri_(set.speeds, set.forces, set.triangles),
+        config_(params),
+        p_order_(set.ar_order),
+        q_order_(set.ma_order),
+        mu_(set.mu),
+        speed_to_file_(set.speed_to_file),
+        accel_to_si_(set.acceleration_to_si),
         sample_rate_(set.sample_rate) {
     if (set.ar_order < 1 || set.ar_order > MaxOrder || set.ma_order > MaxOrder)
       throw std::invalid_argument("HattTexture: AR/MA order above MaxOrder");
@@ -101,7 +106,8 @@ class HattTexture {
     }
     const int steps = steps_per_tick(probe.period);
     double y = 0.0;
-    for (int i = 0; i < steps; ++i) y = step();
+    for (int i = 0; i < steps; ++i)
+      y = step();
     acceleration_ = y * accel_to_si_;
     glm::dvec3 f = config_.effective_mass * acceleration_ * n;
     if (config_.friction) f -= (mu_ * fn / speed) * vt;
@@ -136,26 +142,32 @@ class HattTexture {
     for (int k = 0; k < 3; ++k) {
       const auto v = static_cast<std::size_t>(where_.vertex[static_cast<std::size_t>(k)]);
       const double w = where_.weight[static_cast<std::size_t>(k)];
-      for (std::size_t i = 0; i < p_order_; ++i) lsf[i] += w * ar_lsf_[v * p_order_ + i];
+      for (std::size_t i = 0; i < p_order_; ++i)
+        lsf[i] += w * ar_lsf_[v * p_order_ + i];
       cur_variance_ += w * variance_[v];
       cur_gain_ += w * gain_[v];
     }
-    (void)lsf_to_ar<MaxOrder>(std::span<const double>(lsf.data(), p_order_), std::span<double>(ar_.data(), p_order_ + 1));
+    (void)lsf_to_ar<MaxOrder>(std::span<const double>(lsf.data(), p_order_),
+                              std::span<double>(ar_.data(), p_order_ + 1));
     if (q_order_ > 0) {
       std::array<double, MaxOrder> mlsf{};
       for (int k = 0; k < 3; ++k) {
         const auto v = static_cast<std::size_t>(where_.vertex[static_cast<std::size_t>(k)]);
         const double w = where_.weight[static_cast<std::size_t>(k)];
-        for (std::size_t i = 0; i < q_order_; ++i) mlsf[i] += w * ma_lsf_[v * q_order_ + i];
+        for (std::size_t i = 0; i < q_order_; ++i)
+          mlsf[i] += w * ma_lsf_[v * q_order_ + i];
       }
-      (void)lsf_to_ar<MaxOrder>(std::span<const double>(mlsf.data(), q_order_), std::span<double>(ma_.data(), q_order_ + 1));
+      (void)lsf_to_ar<MaxOrder>(std::span<const double>(mlsf.data(), q_order_),
+                                std::span<double>(ma_.data(), q_order_ + 1));
     }
   }
 
   /// Current AR polynomial a_0 = 1, a_1..a_p.
   [[nodiscard]] std::span<const double> ar_coefficients() const noexcept { return {ar_.data(), p_order_ + 1}; }
   /// Current MA polynomial b_0..b_q (empty for AR models).
-  [[nodiscard]] std::span<const double> ma_coefficients() const noexcept { return {ma_.data(), q_order_ > 0 ? q_order_ + 1 : 0}; }
+  [[nodiscard]] std::span<const double> ma_coefficients() const noexcept {
+    return {ma_.data(), q_order_ > 0 ? q_order_ + 1 : 0};
+  }
   [[nodiscard]] double variance() const noexcept { return cur_variance_; }
   [[nodiscard]] const Barycentric& location() const noexcept { return where_; }
   /// Last synthesised acceleration [m/s^2].
@@ -168,13 +180,17 @@ class HattTexture {
     double y = x;
     if (q_order_ > 0) {
       y = ma_[0] * x;
-      for (std::size_t k = 1; k <= q_order_; ++k) y += ma_[k] * x_hist_[k - 1];
+      for (std::size_t k = 1; k <= q_order_; ++k)
+        y += ma_[k] * x_hist_[k - 1];
       y *= cur_gain_;
-      for (std::size_t k = q_order_; k-- > 1;) x_hist_[k] = x_hist_[k - 1];
+      for (std::size_t k = q_order_; k-- > 1;)
+        x_hist_[k] = x_hist_[k - 1];
       x_hist_[0] = x;
     }
-    for (std::size_t k = 1; k <= p_order_; ++k) y -= ar_[k] * y_hist_[k - 1];
-    for (std::size_t k = p_order_; k-- > 1;) y_hist_[k] = y_hist_[k - 1];
+    for (std::size_t k = 1; k <= p_order_; ++k)
+      y -= ar_[k] * y_hist_[k - 1];
+    for (std::size_t k = p_order_; k-- > 1;)
+      y_hist_[k] = y_hist_[k - 1];
     y_hist_[0] = y;
     return y;
   }
@@ -186,9 +202,9 @@ class HattTexture {
   double mu_;
   double speed_to_file_;
   double accel_to_si_;
-  double sample_rate_;  ///< [Hz]
-  std::vector<double> ar_lsf_;    // models x p
-  std::vector<double> ma_lsf_;    // models x q
+  double sample_rate_;          ///< [Hz]
+  std::vector<double> ar_lsf_;  // models x p
+  std::vector<double> ma_lsf_;  // models x q
   std::vector<double> variance_;
   std::vector<double> gain_;
   Barycentric where_{};

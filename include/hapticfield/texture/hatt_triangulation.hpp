@@ -16,10 +16,10 @@ namespace hapticfield::texture {
 
 /// Barycentric location of a point in the triangulation.
 struct Barycentric {
-  std::array<int, 3> vertex{0, 0, 0};       ///< model indices
+  std::array<int, 3> vertex{0, 0, 0};           ///< model indices
   std::array<double, 3> weight{1.0, 0.0, 0.0};  ///< >= 0, sum 1
-  bool inside{true};                        ///< false: projected from outside the hull
-  std::size_t triangle{0};                  ///< index of the triangle used
+  bool inside{true};                            ///< false: projected from outside the hull
+  std::size_t triangle{0};                      ///< index of the triangle used
 };
 
 /// Point location in the (speed, force) Delaunay triangulation.
@@ -27,7 +27,8 @@ class HattTriangulation {
  public:
   HattTriangulation() = default;
   /// @throws std::invalid_argument for an index out of range or a degenerate triangle.
-  HattTriangulation(std::vector<double> speeds, std::vector<double> forces, const std::vector<std::array<int, 3>>& triangles)
+  HattTriangulation(std::vector<double> speeds, std::vector<double> forces,
+                    const std::vector<std::array<int, 3>>& triangles)
       : speeds_(std::move(speeds)), forces_(std::move(forces)) {
     if (speeds_.size() != forces_.size() || speeds_.empty())
       throw std::invalid_argument("HattTriangulation: need as many speeds as forces (>= 1)");
@@ -39,10 +40,13 @@ class HattTriangulation {
       tri.v = t;
       tri.s0 = speeds_[static_cast<std::size_t>(t[0])];
       tri.f0 = forces_[static_cast<std::size_t>(t[0])];
-      const double a = speeds_[static_cast<std::size_t>(t[1])] - tri.s0, b = speeds_[static_cast<std::size_t>(t[2])] - tri.s0;
-      const double c = forces_[static_cast<std::size_t>(t[1])] - tri.f0, d = forces_[static_cast<std::size_t>(t[2])] - tri.f0;
+      const double a = speeds_[static_cast<std::size_t>(t[1])] - tri.s0,
+                   b = speeds_[static_cast<std::size_t>(t[2])] - tri.s0;
+      const double c = forces_[static_cast<std::size_t>(t[1])] - tri.f0,
+                   d = forces_[static_cast<std::size_t>(t[2])] - tri.f0;
       const double det = a * d - b * c;
-      if (!(std::fabs(det) > 0.0) || !std::isfinite(det)) throw std::invalid_argument("HattTriangulation: degenerate triangle");
+      if (!(std::fabs(det) > 0.0) || !std::isfinite(det))
+        throw std::invalid_argument("HattTriangulation: degenerate triangle");
       tri.inv = {d / det, -b / det, -c / det, a / det};
       tris_.push_back(tri);
     }
@@ -72,9 +76,11 @@ class HattTriangulation {
     out.triangle = best_i;
     out.inside = best >= -1e-12;
     double total = 0.0;
-    for (double& w : best_w) total += (w = std::max(w, 0.0));
+    for (double& w : best_w)
+      total += (w = std::max(w, 0.0));
     if (!(total > 0.0)) best_w = {1.0, 0.0, 0.0}, total = 1.0;
-    for (int k = 0; k < 3; ++k) out.weight[static_cast<std::size_t>(k)] = best_w[static_cast<std::size_t>(k)] / total;
+    for (int k = 0; k < 3; ++k)
+      out.weight[static_cast<std::size_t>(k)] = best_w[static_cast<std::size_t>(k)] / total;
     return out;
   }
 

@@ -66,7 +66,8 @@ class Biquad {
   /// Complex frequency response at f [Hz] for sample rate fs [Hz].
   [[nodiscard]] std::complex<double> response(double f, double fs) const noexcept {
     const std::complex<double> z1 = std::polar(1.0, -2.0 * std::numbers::pi * f / fs);  // z^-1
-    return (coefficients_.b0 + z1 * (coefficients_.b1 + z1 * coefficients_.b2)) / (1.0 + z1 * (coefficients_.a1 + z1 * coefficients_.a2));
+    return (coefficients_.b0 + z1 * (coefficients_.b1 + z1 * coefficients_.b2)) /
+           (1.0 + z1 * (coefficients_.a1 + z1 * coefficients_.a2));
   }
   [[nodiscard]] const BiquadCoefficients& coefficients() const noexcept { return coefficients_; }
 
@@ -78,26 +79,29 @@ class Biquad {
 
 /// Up to N biquads in series (N fixed at compile time).
 template <std::size_t N>
-  requires(N >= 1)
-class BiquadCascade {
+requires(N >= 1) class BiquadCascade {
  public:
   BiquadCascade() = default;
   /// @throws std::invalid_argument for more than N sections or an unstable one.
   explicit BiquadCascade(const std::vector<BiquadCoefficients>& sections) {
     if (sections.size() > N) throw std::invalid_argument("BiquadCascade: more sections than capacity N");
-    for (std::size_t i = 0; i < sections.size(); ++i) s_[i] = Biquad(sections[i]);
+    for (std::size_t i = 0; i < sections.size(); ++i)
+      s_[i] = Biquad(sections[i]);
     used_ = sections.size();
   }
   [[nodiscard]] double process(double x) noexcept {
-    for (std::size_t i = 0; i < used_; ++i) x = s_[i].process(x);
+    for (std::size_t i = 0; i < used_; ++i)
+      x = s_[i].process(x);
     return x;
   }
   void reset() noexcept {
-    for (auto& s : s_) s.reset();
+    for (auto& s : s_)
+      s.reset();
   }
   [[nodiscard]] std::complex<double> response(double f, double fs) const noexcept {
     std::complex<double> h{1.0, 0.0};
-    for (std::size_t i = 0; i < used_; ++i) h *= s_[i].response(f, fs);
+    for (std::size_t i = 0; i < used_; ++i)
+      h *= s_[i].response(f, fs);
     return h;
   }
   [[nodiscard]] std::size_t size() const noexcept { return used_; }
@@ -139,8 +143,7 @@ enum class FilterBand { low_pass, high_pass, band_pass };
 /// band edges prewarped, W = 2 fs tan(pi f / fs), so the magnitude is exactly
 /// 1/sqrt(2) (-3.0103 dB) at each band edge. Passband gain 1.
 template <int Order>
-  requires(Order >= 1 && Order <= 8)
-class Butterworth {
+requires(Order >= 1 && Order <= 8) class Butterworth {
  public:
   Butterworth() = default;
 
@@ -244,17 +247,16 @@ class Butterworth {
 
 /// One band of a parametric equaliser.
 struct EqualiserBand {
-  double centre{100.0};    ///< centre frequency [Hz]
-  double bandwidth{1.0};   ///< bandwidth [octaves] between the half-gain (dB) points
-  double gain_db{0.0};     ///< gain at the centre [dB]
+  double centre{100.0};   ///< centre frequency [Hz]
+  double bandwidth{1.0};  ///< bandwidth [octaves] between the half-gain (dB) points
+  double gain_db{0.0};    ///< gain at the centre [dB]
 };
 
 /// Parametric equaliser: Bands peaking biquads in series (RBJ cookbook:
 /// A = 10^(g/40), alpha = sin w0 sinh(ln2/2 BW w0 / sin w0)). Each band has
 /// exactly gain_db at its centre and unity gain far from it.
 template <std::size_t Bands>
-  requires(Bands >= 1)
-class Equaliser {
+requires(Bands >= 1) class Equaliser {
  public:
   Equaliser() = default;
   /// @throws std::invalid_argument for a centre not in (0, fs/2), a

@@ -21,10 +21,14 @@ namespace detail {
 inline cv::Mat to_gray8(const cv::Mat& image, const char* who) {
   if (image.empty()) throw std::invalid_argument(std::string(who) + ": empty image");
   cv::Mat gray;
-  if (image.channels() == 3) cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);  // Y = .299R + .587G + .114B
-  else if (image.channels() == 4) cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
-  else if (image.channels() == 1) gray = image;
-  else throw std::invalid_argument(std::string(who) + ": image must have 1, 3 or 4 channels");
+  if (image.channels() == 3)
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);  // Y = .299R + .587G + .114B
+  else if (image.channels() == 4)
+    cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+  else if (image.channels() == 1)
+    gray = image;
+  else
+    throw std::invalid_argument(std::string(who) + ": image must have 1, 3 or 4 channels");
   if (gray.depth() != CV_8U) gray.convertTo(gray, CV_8U);
   return gray;
 }
@@ -44,7 +48,8 @@ inline cv::Mat to_gray8(const cv::Mat& image, const char* who) {
 
 /// Quantises gray levels into `levels` equal bands (label = gray * levels / 256).
 /// @throws std::invalid_argument for an empty image or levels outside 1..256.
-[[nodiscard]] inline LabelMap label_map_from_gray_levels(const cv::Mat& image, int levels, const PlaneMapping& mapping) {
+[[nodiscard]] inline LabelMap label_map_from_gray_levels(const cv::Mat& image, int levels,
+                                                         const PlaneMapping& mapping) {
   if (levels < 1 || levels > 256) throw std::invalid_argument("label_map_from_gray_levels: levels must be in 1..256");
   const cv::Mat gray = detail::to_gray8(image, "label_map_from_gray_levels");
   std::vector<std::uint16_t> labels(static_cast<std::size_t>(gray.rows) * static_cast<std::size_t>(gray.cols));
@@ -58,8 +63,7 @@ inline cv::Mat to_gray8(const cv::Mat& image, const char* who) {
 /// Loads an image file (any format OpenCV reads) as 8-bit BGR.
 /// @throws std::invalid_argument when the file cannot be read.
 [[nodiscard]] inline cv::Mat load_image(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path))
-    throw std::invalid_argument("load_image: no such file '" + path + "'");
+  if (!std::filesystem::is_regular_file(path)) throw std::invalid_argument("load_image: no such file '" + path + "'");
   cv::Mat m = cv::imread(path, cv::IMREAD_COLOR);
   if (m.empty()) throw std::invalid_argument("load_image: cannot read image '" + path + "'");
   return m;

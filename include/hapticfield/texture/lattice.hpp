@@ -29,8 +29,8 @@ namespace detail {
 
 /// Offsets and weights along one axis for coordinate u [cells].
 struct AxisWeights {
-  std::int64_t first{0};        ///< first lattice index used
-  int count{1};                 ///< 1, 2 or 4 lattice points
+  std::int64_t first{0};  ///< first lattice index used
+  int count{1};           ///< 1, 2 or 4 lattice points
   std::array<double, 4> w{1.0, 0.0, 0.0, 0.0};
 };
 
@@ -39,8 +39,8 @@ struct AxisWeights {
 [[nodiscard]] inline std::array<double, 4> catmull_rom(double t) noexcept {
   const double t2 = t * t;
   const double t3 = t2 * t;
-  return {0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
-          0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2)};
+  return {0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0), 0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+          0.5 * (t3 - t2)};
 }
 
 [[nodiscard]] inline AxisWeights axis_weights(double u, Interpolation mode) noexcept {
@@ -80,13 +80,11 @@ inline constexpr double max_cells = 1e15;
 /// the Catmull-Rom weights sum to 1 with sum |w| <= 1.25, so |value| <=
 /// 1.25^Dim max |sample|.
 template <NoiseSource Noise, int Dim = 3>
-  requires(Dim == 2 || Dim == 3)
-class NoiseLattice {
+requires(Dim == 2 || Dim == 3) class NoiseLattice {
  public:
   /// @param grain  lattice spacing per axis [m] (> 0; z unused when Dim = 2)
   /// @throws std::invalid_argument for a non-positive or non-finite grain.
-  NoiseLattice(Noise noise, std::uint32_t seed, glm::dvec3 grain,
-               Interpolation mode = Interpolation::linear)
+  NoiseLattice(Noise noise, std::uint32_t seed, glm::dvec3 grain, Interpolation mode = Interpolation::linear)
       : noise_(std::move(noise)), seed_(seed), inv_grain_(1.0 / grain), mode_(mode) {
     const int axes = Dim;
     for (int i = 0; i < axes; ++i)
@@ -96,9 +94,7 @@ class NoiseLattice {
   }
 
   /// Interpolated value at a position [m]; zero for a non-finite position.
-  [[nodiscard]] glm::dvec3 operator()(const glm::dvec3& position) const noexcept {
-    return at(position, seed_);
-  }
+  [[nodiscard]] glm::dvec3 operator()(const glm::dvec3& position) const noexcept { return at(position, seed_); }
 
   /// Same lattice with another seed (used by fBm octaves).
   [[nodiscard]] glm::dvec3 at(const glm::dvec3& position, std::uint32_t seed) const noexcept {
@@ -108,8 +104,7 @@ class NoiseLattice {
       return glm::dvec3{0.0};
     const detail::AxisWeights ax = detail::axis_weights(u.x, mode_);
     const detail::AxisWeights ay = detail::axis_weights(u.y, mode_);
-    const detail::AxisWeights az =
-        Dim == 3 ? detail::axis_weights(u.z, mode_) : detail::AxisWeights{};
+    const detail::AxisWeights az = Dim == 3 ? detail::axis_weights(u.z, mode_) : detail::AxisWeights{};
     glm::dvec3 sum{0.0};
     for (int k = 0; k < az.count; ++k) {
       const auto cz = static_cast<std::uint32_t>(static_cast<std::uint64_t>(az.first + k));
@@ -139,7 +134,8 @@ class NoiseLattice {
 /// A spatial texture generator: a const, noexcept map position [m] -> vector.
 template <class G>
 concept SpatialGenerator = requires(const G& g, const glm::dvec3& p) {
-  { g(p) } noexcept -> std::convertible_to<glm::dvec3>;
+  { g(p) }
+  noexcept->std::convertible_to<glm::dvec3>;
 };
 
 static_assert(SpatialGenerator<NoiseLattice<GaussianNoise, 2>>);

@@ -58,8 +58,10 @@ template <std::size_t MaxOrder>
   sum[0] = diff[0] = 1.0;
   for (std::size_t i = 0; i < p; ++i) {
     const double c = -2.0 * std::cos(lsf[i]);
-    if (i % 2 == 0) detail::multiply_quadratic(sum, ns, c);
-    else detail::multiply_quadratic(diff, nd, c);
+    if (i % 2 == 0)
+      detail::multiply_quadratic(sum, ns, c);
+    else
+      detail::multiply_quadratic(diff, nd, c);
   }
   if (p % 2 == 1) {
     // odd order: z = 1 and z = -1 are both roots of the difference polynomial
@@ -68,7 +70,8 @@ template <std::size_t MaxOrder>
     detail::multiply_linear(diff, nd, -1.0);  // root z = 1
     detail::multiply_linear(sum, ns, 1.0);    // root z = -1
   }
-  for (std::size_t k = 0; k <= p; ++k) a[k] = 0.5 * (sum[k] + diff[k]);
+  for (std::size_t k = 0; k <= p; ++k)
+    a[k] = 0.5 * (sum[k] + diff[k]);
   return true;
 }
 
@@ -138,8 +141,10 @@ template <std::size_t MaxOrder>
         for (int it = 0; it < 60; ++it) {
           const double m = 0.5 * (a0 + a1);
           const double fm = f(m);
-          if ((fa < 0.0) == (fm < 0.0)) a0 = m, fa = fm;
-          else a1 = m;
+          if ((fa < 0.0) == (fm < 0.0))
+            a0 = m, fa = fm;
+          else
+            a1 = m;
         }
         roots.push_back(0.5 * (a0 + a1));
       }

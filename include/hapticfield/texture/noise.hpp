@@ -33,7 +33,8 @@ namespace detail {
 /// true permutation by construction).
 consteval std::array<std::uint8_t, 256> make_permutation() {
   std::array<std::uint8_t, 256> p{};
-  for (std::size_t i = 0; i < 256; ++i) p[i] = static_cast<std::uint8_t>(i);
+  for (std::size_t i = 0; i < 256; ++i)
+    p[i] = static_cast<std::uint8_t>(i);
   std::uint32_t state = 0x2545F491u;
   for (std::size_t i = 255; i > 0; --i) {
     state = state * 1664525u + 1013904223u;  // Numerical Recipes LCG
@@ -66,12 +67,11 @@ inline constexpr std::array<std::uint8_t, 256> permutation = make_permutation();
 
 /// Hash of (seed, lattice point x, y, z, stream) to a uniformly distributed
 /// uint32. The lattice coordinates are taken modulo 2^32 (uint32 wrap).
-[[nodiscard]] constexpr std::uint32_t hash(std::uint32_t seed, std::uint32_t x, std::uint32_t y,
-                                           std::uint32_t z, std::uint32_t stream = 0) noexcept {
+[[nodiscard]] constexpr std::uint32_t hash(std::uint32_t seed, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                                           std::uint32_t stream = 0) noexcept {
   // Perlin's nested table lookup on the low 8 bits of each coordinate ...
   const std::uint32_t p =
-      detail::permutation[(detail::permutation[(detail::permutation[x & 255u] + y) & 255u] + z) &
-                          255u];
+      detail::permutation[(detail::permutation[(detail::permutation[x & 255u] + y) & 255u] + z) & 255u];
   // ... then a full-width mix of every bit so the lattice does not repeat.
   std::uint32_t h = detail::mix(seed ^ (stream * 0x9E3779B9u));
   h = detail::mix(h ^ x);
@@ -121,7 +121,8 @@ struct Cell {
 /// 3-vector per lattice point.
 template <class N>
 concept NoiseSource = requires(const N& n, std::uint32_t seed, Cell c) {
-  { n.sample(seed, c) } noexcept -> std::same_as<glm::dvec3>;
+  { n.sample(seed, c) }
+  noexcept->std::same_as<glm::dvec3>;
 };
 
 namespace detail {
@@ -141,33 +142,33 @@ inline void require_finite(const glm::dvec3& v, const char* what) {
 inline glm::dmat3 cholesky(const glm::dmat3& c, const char* what) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
-      if (!std::isfinite(c[j][i]))
-        throw std::invalid_argument(std::string(what) + ": covariance must be finite");
+      if (!std::isfinite(c[j][i])) throw std::invalid_argument(std::string(what) + ": covariance must be finite");
       const double scale = std::fmax(1.0, std::fmax(std::fabs(c[i][j]), std::fabs(c[j][i])));
       if (std::fabs(c[j][i] - c[i][j]) > 1e-12 * scale)
         throw std::invalid_argument(std::string(what) + ": covariance must be symmetric");
     }
   double largest = 0.0;
-  for (int i = 0; i < 3; ++i) largest = std::fmax(largest, c[i][i]);
+  for (int i = 0; i < 3; ++i)
+    largest = std::fmax(largest, c[i][i]);
   const double tolerance = 1e-12 * std::fmax(largest, 1e-300);
   // element (row r, column k) of a GLM matrix is m[k][r]
   glm::dmat3 l{0.0};
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k <= r; ++k) {
       double s = c[k][r];
-      for (int m = 0; m < k; ++m) s -= l[m][r] * l[m][k];
+      for (int m = 0; m < k; ++m)
+        s -= l[m][r] * l[m][k];
       if (r == k) {
         if (s < -tolerance)
-          throw std::invalid_argument(std::string(what) +
-                                      ": covariance is not positive (semi-)definite [unit^2]");
+          throw std::invalid_argument(std::string(what) + ": covariance is not positive (semi-)definite [unit^2]");
         if (s <= tolerance) {
           // zero pivot: the rest of this column must vanish too
           for (int below = r + 1; below < 3; ++below) {
             double t = c[r][below];
-            for (int m = 0; m < r; ++m) t -= l[m][below] * l[m][r];
+            for (int m = 0; m < r; ++m)
+              t -= l[m][below] * l[m][r];
             if (std::fabs(t) > std::sqrt(tolerance) * std::sqrt(std::fmax(largest, 1e-300)))
-              throw std::invalid_argument(std::string(what) +
-                                          ": covariance is not positive (semi-)definite [unit^2]");
+              throw std::invalid_argument(std::string(what) + ": covariance is not positive (semi-)definite [unit^2]");
           }
           l[r][r] = 0.0;
         } else {
@@ -263,9 +264,7 @@ class MultivariateGaussianNoise {
       : mean_(mean), l_(detail::cholesky(covariance, "MultivariateGaussianNoise")) {
     detail::require_finite(mean, "MultivariateGaussianNoise: mean");
   }
-  [[nodiscard]] glm::dvec3 sample(std::uint32_t seed, Cell c) const noexcept {
-    return mean_ + l_ * gaussian3(seed, c);
-  }
+  [[nodiscard]] glm::dvec3 sample(std::uint32_t seed, Cell c) const noexcept { return mean_ + l_ * gaussian3(seed, c); }
   /// The Cholesky factor L (lower triangular).
   [[nodiscard]] const glm::dmat3& factor() const noexcept { return l_; }
 
@@ -276,9 +275,9 @@ class MultivariateGaussianNoise {
 
 /// One component of a Gaussian mixture.
 struct MixtureComponent {
-  double weight{1.0};           ///< relative weight (>= 0; normalised at setup)
-  glm::dvec3 mean{0.0};         ///< component mean
-  glm::dmat3 covariance{1.0};   ///< component covariance (symmetric PSD)
+  double weight{1.0};          ///< relative weight (>= 0; normalised at setup)
+  glm::dvec3 mean{0.0};        ///< component mean
+  glm::dmat3 covariance{1.0};  ///< component covariance (symmetric PSD)
 };
 
 /// Gaussian mixture: a component is chosen with probability w_k / sum w, then
@@ -307,7 +306,8 @@ class GaussianMixtureNoise {
   [[nodiscard]] glm::dvec3 sample(std::uint32_t seed, Cell c) const noexcept {
     const double u = uniform01(seed, c, 7u);
     std::size_t k = 0;
-    while (k + 1 < parts_.size() && u > parts_[k].cumulative) ++k;
+    while (k + 1 < parts_.size() && u > parts_[k].cumulative)
+      ++k;
     return parts_[k].mean + parts_[k].l * gaussian3(seed, c);
   }
   [[nodiscard]] std::size_t size() const noexcept { return parts_.size(); }
@@ -330,8 +330,7 @@ class GaussianMixtureNoise {
 /// distribution's transcendental functions (see bench_texture). The table is
 /// shared, read-only, between copies.
 template <NoiseSource Noise, std::size_t Size = 4096>
-  requires(Size >= 16 && (Size & (Size - 1)) == 0)
-class TabulatedNoise {
+requires(Size >= 16 && (Size & (Size - 1)) == 0) class TabulatedNoise {
  public:
   explicit TabulatedNoise(const Noise& noise, std::uint32_t table_seed = 0x5EEDu)
       : table_(make_table(noise, table_seed)) {}
@@ -343,7 +342,8 @@ class TabulatedNoise {
  private:
   static std::shared_ptr<const std::vector<glm::dvec3>> make_table(const Noise& noise, std::uint32_t table_seed) {
     auto t = std::make_shared<std::vector<glm::dvec3>>(Size);
-    for (std::size_t i = 0; i < Size; ++i) (*t)[i] = noise.sample(table_seed, Cell{static_cast<std::uint32_t>(i), 0, 0});
+    for (std::size_t i = 0; i < Size; ++i)
+      (*t)[i] = noise.sample(table_seed, Cell{static_cast<std::uint32_t>(i), 0, 0});
     return t;
   }
   std::shared_ptr<const std::vector<glm::dvec3>> table_;

@@ -37,7 +37,8 @@ class Fbm {
       throw std::invalid_argument("Fbm: self-similarity h must be in [0, 2]");
     if (octaves < 1 || octaves > 24) throw std::invalid_argument("Fbm: octaves must be in 1..24");
     double sum = 0.0;
-    for (int o = 0; o < octaves; ++o) sum += std::pow(2.0, -2.0 * h * o);
+    for (int o = 0; o < octaves; ++o)
+      sum += std::pow(2.0, -2.0 * h * o);
     inv_norm_ = 1.0 / std::sqrt(sum);
     gain_ = std::pow(2.0, -h);
   }
@@ -75,10 +76,10 @@ enum class Waveform {
 /// One term of a Fourier synthesis: a * w(2 pi f (d . p) + phi).
 struct FourierTerm {
   Waveform waveform{Waveform::sine};
-  double amplitude{1.0};                      ///< a [N or unit of the texture]
-  double frequency{100.0};                    ///< spatial frequency f [1/m]
-  double phase{0.0};                          ///< phi [rad]
-  glm::dvec3 direction{1.0, 0.0, 0.0};        ///< unit wave direction d
+  double amplitude{1.0};                ///< a [N or unit of the texture]
+  double frequency{100.0};              ///< spatial frequency f [1/m]
+  double phase{0.0};                    ///< phi [rad]
+  glm::dvec3 direction{1.0, 0.0, 0.0};  ///< unit wave direction d
 };
 
 namespace detail {

@@ -38,7 +38,8 @@ namespace hapticfield::texture {
 /// Something that yields a texture vector each tick (may keep state).
 template <class S>
 concept TextureSource = requires(S& s, const Probe& p) {
-  { s.sample(p) } noexcept -> std::convertible_to<glm::dvec3>;
+  { s.sample(p) }
+  noexcept->std::convertible_to<glm::dvec3>;
 };
 
 /// Spatial sampling: the generator evaluated at the HIP position (repeatable
@@ -100,8 +101,10 @@ class TemporalSource {
 /// A scalar filter: process(double) -> double, noexcept, with reset().
 template <class F>
 concept ScalarFilter = requires(F& f, double x) {
-  { f.process(x) } noexcept -> std::convertible_to<double>;
-  { f.reset() } noexcept;
+  { f.process(x) }
+  noexcept->std::convertible_to<double>;
+  { f.reset() }
+  noexcept;
 };
 
 /// The identity filter.
@@ -121,7 +124,8 @@ class PerComponent {
     return glm::dvec3{f_[0].process(v.x), f_[1].process(v.y), f_[2].process(v.z)};
   }
   void reset() noexcept {
-    for (auto& f : f_) f.reset();
+    for (auto& f : f_)
+      f.reset();
   }
   [[nodiscard]] F& component(std::size_t i) noexcept { return f_[i]; }
 
@@ -132,8 +136,8 @@ class PerComponent {
 // --- texture field ------------------------------------------------------------
 
 struct TextureConfig {
-  double gain{1.0};                  ///< force per texture unit [N] (or [N/N] when scaled by |Fc|)
-  double velocity_threshold{1e-3};   ///< below this speed the texture is silent [m/s]
+  double gain{1.0};                     ///< force per texture unit [N] (or [N/N] when scaled by |Fc|)
+  double velocity_threshold{1e-3};      ///< below this speed the texture is silent [m/s]
   bool scale_with_normal_force{false};  ///< Ft proportional to |Fc| (Probe::normal_force)
   glm::dvec3 axes{1.0, 1.0, 1.0};       ///< weights along (t1, t2, n) of the surface frame ({1,1,0}: tangential only)
 };

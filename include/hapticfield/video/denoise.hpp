@@ -23,19 +23,23 @@ enum class DenoiseMode { none, temporal, spatial, both };
 
 [[nodiscard]] constexpr const char* to_string(DenoiseMode mode) noexcept {
   switch (mode) {
-    case DenoiseMode::none: return "none";
-    case DenoiseMode::temporal: return "temporal";
-    case DenoiseMode::spatial: return "spatial";
-    case DenoiseMode::both: return "both";
+    case DenoiseMode::none:
+      return "none";
+    case DenoiseMode::temporal:
+      return "temporal";
+    case DenoiseMode::spatial:
+      return "spatial";
+    case DenoiseMode::both:
+      return "both";
   }
   return "?";
 }
 
 struct DenoiseConfig {
   DenoiseMode mode = DenoiseMode::temporal;
-  double weight = 0.25;            ///< temporal: weight w of the newest frame, (0, 1]
-  double motion_threshold = 12.0;  ///< temporal: |g - a| above this follows g at once [gray levels]
-  int spatial_diameter = 5;        ///< spatial: bilateral neighbourhood [px], odd 3..15
+  double weight = 0.25;               ///< temporal: weight w of the newest frame, (0, 1]
+  double motion_threshold = 12.0;     ///< temporal: |g - a| above this follows g at once [gray levels]
+  int spatial_diameter = 5;           ///< spatial: bilateral neighbourhood [px], odd 3..15
   double spatial_sigma_color = 10.0;  ///< spatial: bilateral range sigma [gray levels]
   double spatial_sigma_space = 2.0;   ///< spatial: bilateral space sigma [px]
 

@@ -30,8 +30,7 @@ struct PrepareConfig {
 class FramePreparer {
  public:
   /// @throws std::invalid_argument for a bad mask size or denoise / cut setting.
-  explicit FramePreparer(const PrepareConfig& config)
-      : config_(config), denoiser_(config.denoise), cuts_(config.cuts) {
+  explicit FramePreparer(const PrepareConfig& config) : config_(config), denoiser_(config.denoise), cuts_(config.cuts) {
     validate_mask_size(config.tangible.mask, config.tangible.size);
   }
 
@@ -55,7 +54,8 @@ class FramePreparer {
     for (int y = 0; y < gray_.rows; ++y) {
       const float* src = gray_.ptr<float>(y);
       double* dst = g.row(y);
-      for (int x = 0; x < gray_.cols; ++x) dst[x] = static_cast<double>(src[x]);
+      for (int x = 0; x < gray_.cols; ++x)
+        dst[x] = static_cast<double>(src[x]);
     }
     auto frame = std::make_shared<VideoFrame>(
         VideoFrame{index, time, cut && index_ >= 0, cuts_.last_difference(), TangibleImage(g, config_.tangible)});
@@ -80,7 +80,9 @@ class FramePreparer {
   /// Gray levels with the paper's weights, as float [0, 255].
   static void to_gray32(const cv::Mat& image, cv::Mat& out) {
     switch (image.channels()) {
-      case 1: image.convertTo(out, CV_32F); return;
+      case 1:
+        image.convertTo(out, CV_32F);
+        return;
       case 3:
       case 4: {  // one pass: B, G, R bytes to Y = 0.11 B + 0.59 G + 0.3 R
         const int n = image.channels();
@@ -94,7 +96,8 @@ class FramePreparer {
         }
         return;
       }
-      default: throw std::invalid_argument("FramePreparer: expected 1, 3 or 4 channels");
+      default:
+        throw std::invalid_argument("FramePreparer: expected 1, 3 or 4 channels");
     }
   }
 

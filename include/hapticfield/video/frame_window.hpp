@@ -31,21 +31,21 @@ inline constexpr double default_cut_fade = 0.1;
 
 /// One prepared frame: its tables and where it sits in the video.
 struct VideoFrame {
-  long index = 0;          ///< frame number in the source, from 0
-  double time = 0.0;       ///< timestamp [s of video time]
-  bool cut = false;        ///< first frame of a new scene
-  double difference = 0.0; ///< scene-cut measure against the frame before [gray levels]
-  TangibleImage image;     ///< the frame's force source (normalised, a black/white edge = 1)
+  long index = 0;           ///< frame number in the source, from 0
+  double time = 0.0;        ///< timestamp [s of video time]
+  bool cut = false;         ///< first frame of a new scene
+  double difference = 0.0;  ///< scene-cut measure against the frame before [gray levels]
+  TangibleImage image;      ///< the frame's force source (normalised, a black/white edge = 1)
 };
 
 /// The frames that bracket video time t, and the fade state. Its at() is on
 /// the servo path: noexcept, no allocation.
 struct FrameWindow {
-  std::shared_ptr<const VideoFrame> current;     ///< frame k (never null in a published window)
-  std::shared_ptr<const VideoFrame> next;        ///< frame k + 1, or null at the end of the stream
-  std::shared_ptr<const VideoFrame> before_cut;  ///< last frame of the old scene while fading out
-  double t0 = 0.0;  ///< when current is fully felt [s of video time]
-  double t1 = std::numeric_limits<double>::infinity();  ///< when next is fully felt [s]
+  std::shared_ptr<const VideoFrame> current;                   ///< frame k (never null in a published window)
+  std::shared_ptr<const VideoFrame> next;                      ///< frame k + 1, or null at the end of the stream
+  std::shared_ptr<const VideoFrame> before_cut;                ///< last frame of the old scene while fading out
+  double t0 = 0.0;                                             ///< when current is fully felt [s of video time]
+  double t1 = std::numeric_limits<double>::infinity();         ///< when next is fully felt [s]
   double cut_time = -std::numeric_limits<double>::infinity();  ///< start of the last fade [s]
   double fade = default_cut_fade;                              ///< fade time T [s]
   double max_hold = 0.5;  ///< past t1 + max_hold (a stalled source) the force is zero [s]

@@ -18,9 +18,9 @@ inline constexpr double max_playback_rate = 16.0;  ///< [video s per loop s]
 static_assert(std::atomic<double>::is_always_lock_free, "the servo thread reads playback controls without a lock");
 
 struct PlaybackConfig {
-  double rate = 1.0;    ///< video seconds per loop second, in (0, 16]
-  double start = 0.0;   ///< video time at the first tick [s]
-  bool loop = false;    ///< start again at 0 after the end
+  double rate = 1.0;                                          ///< video seconds per loop second, in (0, 16]
+  double start = 0.0;                                         ///< video time at the first tick [s]
+  bool loop = false;                                          ///< start again at 0 after the end
   double duration = std::numeric_limits<double>::infinity();  ///< length of the video [s]
 
   /// @throws std::invalid_argument naming the bad value.

@@ -73,8 +73,10 @@ class SceneCutDetector {
       next_ = 0;
     } else {
       ++scene_frames_;
-      if (count_ == history) sum_ -= recent_[next_];
-      else ++count_;
+      if (count_ == history)
+        sum_ -= recent_[next_];
+      else
+        ++count_;
       recent_[next_] = last_difference_;
       sum_ += last_difference_;
       next_ = (next_ + 1) % history;

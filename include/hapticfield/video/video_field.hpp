@@ -60,7 +60,7 @@ struct WindowField {
 
 struct VideoFieldConfig {
   PrepareConfig prepare{};
-  PlaybackConfig playback{};  ///< a file's duration is filled in from the source when left infinite
+  PlaybackConfig playback{};       ///< a file's duration is filled in from the source when left infinite
   double fade = default_cut_fade;  ///< fade time across a cut [s], [0, 10]
   double gain = 1.0;               ///< force at a black/white edge [N], finite, >= 0
   /// Called on the worker thread before each frame is prepared (tests use
@@ -70,12 +70,12 @@ struct VideoFieldConfig {
 
 /// Counters, readable from any thread.
 struct VideoStatistics {
-  long prepared = 0;   ///< frames prepared
-  long dropped = 0;    ///< frames skipped because preparation lagged
-  long bad = 0;        ///< frames that failed to decode
-  long published = 0;  ///< windows handed to the servo thread
-  long cuts = 0;       ///< scene cuts detected
-  bool ended = false;  ///< the stream ended (the last frame is held)
+  long prepared = 0;        ///< frames prepared
+  long dropped = 0;         ///< frames skipped because preparation lagged
+  long bad = 0;             ///< frames that failed to decode
+  long published = 0;       ///< windows handed to the servo thread
+  long cuts = 0;            ///< scene cuts detected
+  bool ended = false;       ///< the stream ended (the last frame is held)
   double video_time = 0.0;  ///< the servo thread's latest video time [s]
 };
 
@@ -179,8 +179,10 @@ class VideoField {
 
     void run() noexcept {
       try {
-        if (source->live()) run_live();
-        else run_file();
+        if (source->live())
+          run_live();
+        else
+          run_file();
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(cuts_mutex);
         error = e.what();

@@ -11,8 +11,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
@@ -157,7 +157,8 @@ class VideoSource {
     long index = 0;
     bool ok = false;
     try {
-      for (int i = 0; i < config_.max_bad_frames && !ok; ++i) ok = capture_.read(first_) && !first_.empty();
+      for (int i = 0; i < config_.max_bad_frames && !ok; ++i)
+        ok = capture_.read(first_) && !first_.empty();
     } catch (const cv::Exception&) {
       ok = false;
     }

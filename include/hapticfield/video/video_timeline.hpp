@@ -38,7 +38,8 @@ class VideoTimeline {
   void advance(double t) {
     if (t < last_t_) throw std::invalid_argument("VideoTimeline: video times must not decrease");
     last_t_ = t;
-    while (!ended_ && (!window_ || window_->t1 <= t)) step();
+    while (!ended_ && (!window_ || window_->t1 <= t))
+      step();
   }
 
   [[nodiscard]] const std::vector<SceneCut>& cuts() const noexcept { return cuts_; }
@@ -51,7 +52,8 @@ class VideoTimeline {
 
   /// Prepares the rest of the stream (to find every cut).
   void run_to_end() {
-    while (!ended_) step();
+    while (!ended_)
+      step();
   }
 
  private:
