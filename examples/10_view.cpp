@@ -198,7 +198,7 @@ Arguments parse(cli::Parser& p) {
   if (!size_given)
     o.scene.size = std::clamp(o.scene.size, r.lo, r.hi);
   else if (o.scene.size < r.lo || o.scene.size > r.hi || (r.step == 2 && o.scene.size % 2 == 0))
-    usage(std::string("--size ") + std::to_string(o.scene.size) + " does not suit mask " + mask_name(o.scene.mask) +
+    usage(std::string("--size ") + std::to_string(o.scene.size) + " does not suit mask " + to_string(o.scene.mask) +
           " (" + (r.lo == r.hi ? std::to_string(r.lo) : "odd " + std::to_string(r.lo) + ".." + std::to_string(r.hi)) +
           ")");
   if (o.scene.kind == FieldKind::normals && o.scene.faces.empty()) usage("--field normals needs at least one --face");

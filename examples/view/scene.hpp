@@ -42,36 +42,6 @@ enum class FieldKind { tangible, normals, texture };
   }
   return "?";
 }
-[[nodiscard]] inline const char* mask_name(MaskKind m) noexcept {
-  switch (m) {
-    case MaskKind::prewitt:
-      return "prewitt";
-    case MaskKind::sobel:
-      return "sobel";
-    case MaskKind::scharr:
-      return "scharr";
-    case MaskKind::roberts:
-      return "roberts";
-    case MaskKind::gaussian:
-      return "gauss";
-    case MaskKind::emboss:
-      return "emboss";
-  }
-  return "?";
-}
-[[nodiscard]] inline const char* border_name(Border b) noexcept {
-  switch (b) {
-    case Border::suspend:
-      return "suspend";
-    case Border::clamp:
-      return "clamp";
-    case Border::reflect:
-      return "reflect";
-    case Border::fade:
-      return "fade";
-  }
-  return "?";
-}
 
 /// The field and its main parameters; the viewer's keys change them.
 struct SceneConfig {
@@ -214,7 +184,7 @@ inline AnyField texture_field(const cv::Mat& frame, const SceneConfig& c, const 
     case FieldKind::tangible:
       s.field = detail::tangible(frame, c, mapping, s.underlay);
       std::snprintf(label, sizeof label, "tangible: %s %d px, border %s, denoise %.1f px, %.2f N at an edge",
-                    mask_name(c.mask), c.size, border_name(c.border), c.denoise_px, c.gain);
+                    to_string(c.mask), c.size, to_string(c.border), c.denoise_px, c.gain);
       break;
     case FieldKind::normals:
       s.field = detail::normals(frame, c, mapping, s.underlay);

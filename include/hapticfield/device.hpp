@@ -10,6 +10,7 @@
 #include "hapticfield/device/inverse3.hpp"
 #include "hapticfield/device/inverse3_codec.hpp"
 #include "hapticfield/device/kinematics.hpp"
+#include "hapticfield/device/link_faults.hpp"
 #include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/recording.hpp"
 #include "hapticfield/device/simulated_arm.hpp"

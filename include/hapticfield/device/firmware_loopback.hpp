@@ -19,9 +19,9 @@
 
 #include <glm/vec3.hpp>
 
+#include "hapticfield/device/link_faults.hpp"
 #include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/simulated_arm.hpp"
-#include "hapticfield/device/simulated_transport.hpp"
 #include "hapticfield/device/transport.hpp"
 #include "hapticfield/firmware/core.hpp"
 
@@ -130,8 +130,8 @@ class FirmwareArm {
 /// firmware side at chosen firmware ticks (LinkFault, as SimulatedTransport).
 class FirmwareLoopback final : public Transport {
  public:
-  static constexpr std::size_t queue_capacity = 64;  ///< state reports in flight
-  static constexpr std::size_t max_faults = 32;
+  static constexpr std::size_t queue_capacity = ReportQueue::capacity;  ///< state reports in flight
+  static constexpr std::size_t max_faults = LinkFaultSchedule::max_faults;
 
   /// @param now  time source [ns]; firmware tick k runs at start + (k + phase) periods
   FirmwareLoopback(FirmwareArm& arm, TimeSource now, double phase = 0.5) : arm_(&arm), now_(std::move(now)) {
@@ -144,53 +144,26 @@ class FirmwareLoopback final : public Transport {
 
   /// Schedules a fault at firmware tick `tick` (1-based) for `ticks` ticks.
   /// @throws std::invalid_argument when more than max_faults are scheduled.
-  void inject(LinkFault fault, std::int64_t tick, std::int64_t ticks = 1) {
-    if (fault_count_ == max_faults) throw std::invalid_argument("FirmwareLoopback: too many faults scheduled");
-    if (ticks < 1) throw std::invalid_argument("FirmwareLoopback: fault duration must be >= 1 tick");
-    faults_[fault_count_++] = Scheduled{fault, tick, ticks};
-  }
+  void inject(LinkFault fault, std::int64_t tick, std::int64_t ticks = 1) { faults_.inject(fault, tick, ticks); }
 
   /// Runs the firmware up to the time source's now.
   void advance() noexcept {
     const std::int64_t now = now_();
     while (start_ns_ + arm_->ticks() * period_ns_ <= now) {
       const std::int64_t k = arm_->ticks() + 1;
-      if (starts(LinkFault::reboot, k)) arm_->reboot();
-      if (active(LinkFault::unplug, k)) unplugged_ = true;
-      stalled_ = !unplugged_ && active(LinkFault::stall, k);
+      if (faults_.starts(LinkFault::reboot, k)) arm_->reboot();
+      if (faults_.active(LinkFault::unplug, k)) unplugged_ = true;
+      stalled_ = !unplugged_ && faults_.active(LinkFault::stall, k);
       arm_->step();
       if (unplugged_ || stalled_) continue;
-      const std::span<const std::uint8_t> report = arm_->core().report();
-      Slot slot;
-      std::memcpy(slot.bytes.data(), report.data(), report.size());
-      slot.size = report.size();
-      if (active(LinkFault::drop, k)) continue;
-      if (active(LinkFault::corrupt, k)) slot.bytes[protocol::offset::state::encoder] ^= 0x5A;
-      if (active(LinkFault::reorder, k)) {
-        held_ = slot;
-        holding_ = true;
-        continue;
-      }
-      push(slot);
-      if (active(LinkFault::duplicate, k)) push(slot);
-      if (holding_) {
-        push(held_);
-        holding_ = false;
-      }
+      queue_.send(arm_->core().report(), faults_, k);
     }
   }
 
   Status read(std::span<std::uint8_t> buffer, std::size_t& size, int /*timeout_us*/) noexcept override {
     advance();
     if (unplugged_) return Status::disconnected;
-    if (count_ == 0) return Status::no_data;
-    const Slot& s = queue_[head_];
-    if (buffer.size() < s.size) return Status::short_report;
-    std::memcpy(buffer.data(), s.bytes.data(), s.size);
-    size = s.size;
-    head_ = (head_ + 1) % queue_capacity;
-    --count_;
-    return Status::ok;
+    return queue_.receive(buffer, size);
   }
 
   Status write(std::span<const std::uint8_t> report) noexcept override {
@@ -217,49 +190,12 @@ class FirmwareLoopback final : public Transport {
   [[nodiscard]] bool unplugged() const noexcept { return unplugged_; }
 
  private:
-  struct Slot {
-    std::array<std::uint8_t, protocol::max_report_size> bytes{};
-    std::size_t size{0};
-  };
-  struct Scheduled {
-    LinkFault fault{LinkFault::drop};
-    std::int64_t tick{0};
-    std::int64_t ticks{1};
-  };
-
-  [[nodiscard]] bool active(LinkFault f, std::int64_t k) const noexcept {
-    for (std::size_t i = 0; i < fault_count_; ++i) {
-      const Scheduled& s = faults_[i];
-      if (s.fault != f) continue;
-      if (f == LinkFault::unplug ? k >= s.tick : (k >= s.tick && k < s.tick + s.ticks)) return true;
-    }
-    return false;
-  }
-  [[nodiscard]] bool starts(LinkFault f, std::int64_t k) const noexcept {
-    for (std::size_t i = 0; i < fault_count_; ++i)
-      if (faults_[i].fault == f && faults_[i].tick == k) return true;
-    return false;
-  }
-  void push(const Slot& s) noexcept {
-    if (count_ == queue_capacity) {
-      head_ = (head_ + 1) % queue_capacity;
-      --count_;
-    }
-    queue_[(head_ + count_) % queue_capacity] = s;
-    ++count_;
-  }
-
   FirmwareArm* arm_;
   TimeSource now_;
   std::int64_t period_ns_{1'000'000};
   std::int64_t start_ns_{0};
-  std::array<Slot, queue_capacity> queue_{};
-  std::size_t head_{0};
-  std::size_t count_{0};
-  Slot held_{};
-  bool holding_{false};
-  std::array<Scheduled, max_faults> faults_{};
-  std::size_t fault_count_{0};
+  ReportQueue queue_;
+  LinkFaultSchedule faults_{"FirmwareLoopback"};
   bool unplugged_{false};
   bool stalled_{false};
 };
