@@ -23,6 +23,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
+#include "common/picture.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
 #include "hapticfield/texture/image_maps.hpp"
@@ -46,9 +47,7 @@ constexpr const char* usage =
 
 int run(const std::string& image_path, const fs::path& out, int levels) {
   {
-    check_file(image_path, std::uintmax_t{1} << 34);
-    const cv::Mat image = cli::quiet_stderr([&] { return cv::imread(image_path, cv::IMREAD_COLOR); });
-    if (image.empty()) throw FileError("cannot decode '" + image_path + "': not a picture OpenCV can read, or corrupt");
+    const cv::Mat image = cli::load_bgr8(image_path);  // the library's loader: ImageError naming the file
     const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, 100.0);
     const LabelMap labels = label_map_from_gray_levels(image, levels, mapping);
 

@@ -32,6 +32,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
+#include "common/picture.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
 #include "hapticfield/image.hpp"
@@ -204,28 +205,6 @@ Arguments parse(cli::Parser& p) {
   if (o.scene.kind == FieldKind::normals && o.scene.faces.empty()) usage("--field normals needs at least one --face");
   p.finish();  // output paths, before any work
   return o;
-}
-
-/// Any picture as 8-bit BGR.
-cv::Mat to_bgr8(const cv::Mat& in) {
-  cv::Mat eight;
-  if (in.depth() == CV_8U)
-    eight = in;
-  else if (in.depth() == CV_16U)
-    in.convertTo(eight, CV_8U, 1.0 / 257.0);
-  else
-    in.convertTo(eight, CV_8U, 255.0);  // float pictures in [0, 1]
-  cv::Mat out;
-  if (eight.channels() == 1)
-    cv::cvtColor(eight, out, cv::COLOR_GRAY2BGR);
-  else if (eight.channels() == 4)
-    cv::cvtColor(eight, out, cv::COLOR_BGRA2BGR);
-  else if (eight.channels() == 3)
-    out = eight;
-  else
-    throw FileError("'" + std::string("picture") + "' has " + std::to_string(in.channels()) +
-                    " channels (1, 3 or 4 expected)");
-  return out;
 }
 
 /// The live field as a part of a composition (the LiveField stays put).
@@ -444,7 +423,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
 }
 
 int run(const Arguments& o) {
-  const cv::Mat picture = to_bgr8(cli::quiet_stderr([&] { return load_image(o.source); }));
+  const cv::Mat picture = cli::load_bgr8(o.source);
   if (o.screenshot.empty() && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
     throw Error(
         "no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "
