@@ -26,6 +26,8 @@ run(${CMAKE_COMMAND} --build "${WORK_DIR}/build")
 run("${WORK_DIR}/build/consumer_core")
 run("${WORK_DIR}/build/consumer_hatt" "${SOURCE_DIR}/tests/data/hatt/Models_Toolkit 1kHz ARMA.xml")
 run("${WORK_DIR}/build/consumer_image" "${SOURCE_DIR}/examples/data/coffee.png")
+file(MAKE_DIRECTORY "${WORK_DIR}/frames")
+run("${WORK_DIR}/build/consumer_video" "${WORK_DIR}/frames")
 if(MODE STREQUAL "find_package")
   # The pkg-config file must name the installed headers.
   file(GLOB pc "${WORK_DIR}/prefix/*/pkgconfig/hapticfield.pc" "${WORK_DIR}/prefix/*/*/pkgconfig/hapticfield.pc")
