@@ -15,8 +15,12 @@
 
 #include "hapticfield/device.hpp"
 #include "hapticfield/servo/clock.hpp"
+#include "tick_cost.hpp"
 
 using namespace hapticfield;
+using hapticfield::bench::Cost;
+using hapticfield::bench::ForceArmLoopback;
+using hapticfield::bench::measure;
 
 namespace {
 
@@ -54,58 +58,6 @@ class Inverse3Loopback final : public Transport {
   int owed_{0};
   volatile std::uint8_t last_{0};
 };
-
-/// One pre-encoded state report per read, writes swallowed (as bench_servo).
-class ForceArmLoopback final : public Transport {
- public:
-  Status read(std::span<std::uint8_t> buffer, std::size_t& size, int) noexcept override {
-    if (served_) return Status::no_data;
-    served_ = true;
-    report_.sequence = ++sequence_;
-    report_.timestamp_us += 1000;
-    report_.encoder[0] = static_cast<std::int32_t>(sequence_ % 200);
-    size = protocol::encode(report_, buffer);
-    return Status::ok;
-  }
-  Status write(std::span<const std::uint8_t> r) noexcept override {
-    served_ = false;
-    last_ = r[5];
-    return Status::ok;
-  }
-  Status get_feature(std::span<std::uint8_t>, std::size_t&) noexcept override { return Status::unsupported; }
-  Status send_feature(std::span<const std::uint8_t>) noexcept override { return Status::ok; }
-
- private:
-  protocol::StateReport report_{};
-  std::uint16_t sequence_{0};
-  bool served_{false};
-  volatile std::uint8_t last_{0};
-};
-
-struct Cost {
-  double mean_ns{0.0}, p99_ns{0.0}, worst_ns{0.0};
-};
-
-/// Mean from an untimed pass; p99 and worst from a pass timing every tick.
-template <class Tick>
-Cost measure(long n, Tick&& tick) {
-  SteadyClock clock;
-  const std::int64_t t0 = clock.now();
-  for (long i = 0; i < n; ++i)
-    tick();
-  Cost c;
-  c.mean_ns = static_cast<double>(clock.now() - t0) / static_cast<double>(n);
-  std::vector<std::int64_t> d(static_cast<std::size_t>(n));
-  for (long i = 0; i < n; ++i) {
-    const std::int64_t a = clock.now();
-    tick();
-    d[static_cast<std::size_t>(i)] = clock.now() - a;
-  }
-  std::sort(d.begin(), d.end());
-  c.p99_ns = static_cast<double>(d[static_cast<std::size_t>(0.99 * static_cast<double>(n - 1))]);
-  c.worst_ns = static_cast<double>(d.back());
-  return c;
-}
 
 }  // namespace
 
