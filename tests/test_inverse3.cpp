@@ -7,7 +7,6 @@
 
 #include <fcntl.h>
 #include <poll.h>
-#include <pty.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -30,6 +29,7 @@
 #include "hapticfield/device/simulated_inverse3.hpp"
 #include "hapticfield/device/stream_framer.hpp"
 #include "hapticfield/servo.hpp"
+#include "pty_pair.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
@@ -40,25 +40,7 @@ using namespace std::chrono_literals;
 using Bytes = std::vector<std::uint8_t>;
 constexpr auto hard_timeout = 5s;  // no wait in these tests lasts longer
 
-/// A pseudo-terminal pair; the master is non-blocking.
-struct Pty {
-  int master{-1};
-  int slave{-1};
-  std::string path;
-  Pty() {
-    char name[128]{};
-    REQUIRE(::openpty(&master, &slave, name, nullptr, nullptr) == 0);
-    path = name;
-    ::fcntl(master, F_SETFL, ::fcntl(master, F_GETFL) | O_NONBLOCK);
-  }
-  ~Pty() {
-    if (master >= 0) ::close(master);
-    if (slave >= 0) ::close(slave);
-  }
-  void write_master(std::span<const std::uint8_t> b) const {
-    REQUIRE(::write(master, b.data(), b.size()) == static_cast<ssize_t>(b.size()));
-  }
-};
+using testing::Pty;
 
 /// SimulatedInverse3 on the master side of a pty, in its own thread.
 class PtyInverse3 {

@@ -6,7 +6,6 @@
 
 #include <fcntl.h>
 #include <poll.h>
-#include <pty.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -24,6 +23,7 @@
 #include "hapticfield/device/serial_transport.hpp"
 #include "hapticfield/firmware/stream_port.hpp"
 #include "hapticfield/servo.hpp"
+#include "pty_pair.hpp"
 
 using namespace hapticfield;
 
@@ -32,32 +32,7 @@ namespace {
 using namespace std::chrono_literals;
 constexpr auto hard_timeout = 5s;  // no wait in these tests lasts longer
 
-/// A pseudo-terminal pair; the master is non-blocking.
-struct Pty {
-  int master{-1};
-  int slave{-1};
-  std::string path;
-  Pty() {
-    char name[128]{};
-    REQUIRE(::openpty(&master, &slave, name, nullptr, nullptr) == 0);
-    path = name;
-    ::fcntl(master, F_SETFL, ::fcntl(master, F_GETFL) | O_NONBLOCK);
-  }
-  ~Pty() {
-    if (master >= 0) ::close(master);
-    if (slave >= 0) ::close(slave);
-  }
-  void close_master() {
-    ::close(master);
-    master = -1;
-  }
-  void write_master(std::span<const std::uint8_t> b) const {
-    REQUIRE(::write(master, b.data(), b.size()) == static_cast<ssize_t>(b.size()));
-  }
-  void write_master(const std::string& s) const {
-    write_master(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()));
-  }
-};
+using testing::Pty;
 
 /// The firmware on the master side of the pty, in its own thread: it serves
 /// feature requests as they come and runs firmware ticks up to a target the
