@@ -66,22 +66,14 @@ Arguments parse(hf::cli::Parser& p) {
   Arguments a;
   while (p.next()) {
     if (p.is("--mask")) {
-      a.options.mask = p.choice<hf::MaskKind>("mask", {{"prewitt", hf::MaskKind::prewitt},
-                                                       {"sobel", hf::MaskKind::sobel},
-                                                       {"scharr", hf::MaskKind::scharr},
-                                                       {"roberts", hf::MaskKind::roberts},
-                                                       {"gauss", hf::MaskKind::gaussian},
-                                                       {"emboss", hf::MaskKind::emboss}});
+      a.options.mask = p.named("mask", hf::mask_kinds);
     } else if (p.is("--size")) {
       a.options.size = static_cast<int>(p.integer(1, 1000));
       a.size_given = true;
     } else if (p.is("--sigma")) {
       a.options.sigma = p.real(hf::cli::open_closed(0.0, 1000.0));
     } else if (p.is("--border")) {
-      a.options.border = p.choice<hf::Border>("border", {{"suspend", hf::Border::suspend},
-                                                         {"clamp", hf::Border::clamp},
-                                                         {"reflect", hf::Border::reflect},
-                                                         {"fade", hf::Border::fade}});
+      a.options.border = p.named("border", hf::border_kinds);
     } else if (p.is("--gray")) {
       a.gray = p.choice<hf::GrayWeights>("gray weights",
                                          {{"paper", hf::GrayWeights::paper}, {"bt601", hf::GrayWeights::bt601}});
@@ -103,10 +95,8 @@ Arguments parse(hf::cli::Parser& p) {
   }
   if (a.image.empty()) throw hf::cli::UsageError("no IMAGE given");
   if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
-  // Fixed-size masks take their only size unless one was given.
-  if (!a.size_given && a.options.mask == hf::MaskKind::roberts) a.options.size = 2;
-  if (!a.size_given && (a.options.mask == hf::MaskKind::scharr || a.options.mask == hf::MaskKind::sobel))
-    a.options.size = 3;
+  // Without --size each mask takes its own default (a fixed-size mask its only size).
+  if (!a.size_given) a.options.size = hf::default_mask_size(a.options.mask);
   try {
     hf::validate_mask_size(a.options.mask, a.options.size);
   } catch (const std::invalid_argument& e) {

@@ -99,20 +99,12 @@ Arguments parse(hf::cli::Parser& p) {
   Arguments a;
   while (p.next()) {
     if (p.is("--mask")) {
-      a.options.mask = p.choice<hf::MaskKind>("mask", {{"prewitt", hf::MaskKind::prewitt},
-                                                       {"sobel", hf::MaskKind::sobel},
-                                                       {"scharr", hf::MaskKind::scharr},
-                                                       {"roberts", hf::MaskKind::roberts},
-                                                       {"gauss", hf::MaskKind::gaussian},
-                                                       {"emboss", hf::MaskKind::emboss}});
+      a.options.mask = p.named("mask", hf::mask_kinds);
     } else if (p.is("--size")) {
       a.options.size = static_cast<int>(p.integer(1, 1000));
       a.size_given = true;
     } else if (p.is("--border")) {
-      a.options.border = p.choice<hf::Border>("border", {{"suspend", hf::Border::suspend},
-                                                         {"clamp", hf::Border::clamp},
-                                                         {"reflect", hf::Border::reflect},
-                                                         {"fade", hf::Border::fade}});
+      a.options.border = p.named("border", hf::border_kinds);
     } else if (p.is("--denoise")) {
       a.denoise = p.choice<hf::DenoiseMode>("denoise mode", {{"none", hf::DenoiseMode::none},
                                                              {"temporal", hf::DenoiseMode::temporal},
@@ -151,9 +143,7 @@ Arguments parse(hf::cli::Parser& p) {
   if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
   if (a.probes && (a.trace || a.seconds))
     throw hf::cli::UsageError("--trace and --seconds are for play mode, not --probes");
-  if (!a.size_given && a.options.mask == hf::MaskKind::roberts) a.options.size = 2;
-  if (!a.size_given && (a.options.mask == hf::MaskKind::scharr || a.options.mask == hf::MaskKind::sobel))
-    a.options.size = 3;
+  if (!a.size_given) a.options.size = hf::default_mask_size(a.options.mask);
   try {
     hf::validate_mask_size(a.options.mask, a.options.size);
   } catch (const std::invalid_argument& e) {

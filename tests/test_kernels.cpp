@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,24 @@ constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
 constexpr double infinity = std::numeric_limits<double>::infinity();
 
 }  // namespace
+
+TEST_CASE("every mask kind has a name and a default size that it accepts") {
+  std::set<std::string> names;
+  for (const MaskKind kind : mask_kinds) {
+    names.insert(to_string(kind));
+    CHECK_NOTHROW(validate_mask_size(kind, default_mask_size(kind)));
+  }
+  CHECK(names.size() == mask_kinds.size());
+  CHECK(names.count("?") == 0);
+  CHECK(default_mask_size(MaskKind::roberts) == 2);
+  CHECK(default_mask_size(MaskKind::scharr) == 3);
+  CHECK(default_mask_size(MaskKind::prewitt) == TangibleConfig{}.size);
+  std::set<std::string> borders;
+  for (const Border b : border_kinds)
+    borders.insert(to_string(b));
+  CHECK(borders.size() == border_kinds.size());
+  CHECK(borders.count("?") == 0);
+}
 
 TEST_CASE("Prewitt weights are column - centre, y the transpose") {
   const auto m = Mask<5>::prewitt();

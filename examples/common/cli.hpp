@@ -21,6 +21,7 @@
 /// 1 bad input (files, pictures, devices, anything that fails later). Every
 /// error is one line on stderr: "TOOL: message".
 
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -274,6 +275,19 @@ class Parser {
     for (const auto& [name, result] : choices) {
       if (v == name) return result;
       names += (names.empty() ? "" : ", ") + std::string(name);
+    }
+    throw UsageError(flag_ + ": unknown " + std::string(noun) + " " + detail::quoted(v) + " (one of " + names + ")");
+  }
+
+  /// The value as one of `values`, each spelled as to_string(value) spells
+  /// it (the library's masks and borders: mask_kinds, border_kinds).
+  template <class T, std::size_t N>
+  T named(std::string_view noun, const std::array<T, N>& values) {
+    const std::string& v = value();
+    std::string names;
+    for (const T& t : values) {
+      if (v == to_string(t)) return t;
+      names += (names.empty() ? "" : ", ") + std::string(to_string(t));
     }
     throw UsageError(flag_ + ": unknown " + std::string(noun) + " " + detail::quoted(v) + " (one of " + names + ")");
   }

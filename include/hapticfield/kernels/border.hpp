@@ -3,6 +3,7 @@
 /// What a mask sees where it would leave the image.
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -16,6 +17,9 @@ enum class Border {
   reflect,  ///< mirror about the edge pixel (cb|abc, OpenCV's BORDER_REFLECT_101)
   fade,     ///< as suspend, with the force ramped to zero over the last k px
 };
+
+/// Every border policy, in the order the tools list them.
+inline constexpr std::array<Border, 4> border_kinds{Border::suspend, Border::clamp, Border::reflect, Border::fade};
 
 [[nodiscard]] constexpr const char* to_string(Border border) noexcept {
   switch (border) {

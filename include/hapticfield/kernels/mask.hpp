@@ -31,6 +31,24 @@ enum class MaskKind {
   emboss,    ///< sign mask: right half minus left half (a block emboss); odd 3..129
 };
 
+/// Every mask kind, in the order the tools list them.
+inline constexpr std::array<MaskKind, 6> mask_kinds{MaskKind::prewitt, MaskKind::sobel,    MaskKind::scharr,
+                                                    MaskKind::roberts, MaskKind::gaussian, MaskKind::emboss};
+
+/// The size a mask takes when none is given [px]: a fixed-size mask's only
+/// size (Roberts 2, Scharr 3), Sobel's smallest aperture (3), else 17.
+[[nodiscard]] constexpr int default_mask_size(MaskKind kind) noexcept {
+  switch (kind) {
+    case MaskKind::roberts:
+      return 2;
+    case MaskKind::scharr:
+    case MaskKind::sobel:
+      return 3;
+    default:
+      return 17;
+  }
+}
+
 /// Template argument for a mask size chosen at run time.
 inline constexpr int dynamic_size = 0;
 inline constexpr int min_mask_size = 3;    ///< smallest odd mask [px]
