@@ -140,8 +140,15 @@ inline constexpr double integer_tolerance = 1e-6;
   // would void the force bound of the narrow route: take the wide one.
   for (const double v : p)
     if (!(v >= 0.0 && v <= gray_full_scale)) return 16777216.0;
-  for (const double d : {1.0, 100.0, 1000.0})
-    if (max_off_integer(p.data(), p.size(), d) <= integer_tolerance) return d;
+  // Blocks of 1024 keep the inner loop vectorised and stop early on a
+  // picture that is not integer at this D (most frames of a video).
+  constexpr std::size_t block = 1024;
+  for (const double d : {1.0, 100.0, 1000.0}) {
+    bool fits = true;
+    for (std::size_t i = 0; fits && i < p.size(); i += block)
+      fits = max_off_integer(p.data() + i, std::min(block, p.size() - i), d) <= integer_tolerance;
+    if (fits) return d;
+  }
   return 16777216.0;  // 2^24
 }
 
@@ -228,20 +235,33 @@ class IntegralKernel {
     table = detail::LargeArray<Cell<U>>(static_cast<std::size_t>(stride_) * static_cast<std::size_t>(ph + 1));
     std::memset(table.data(), 0, static_cast<std::size_t>(stride_) * sizeof(Cell<U>));  // row 0
     const bool fill = !needs_full_mask(border_);  // suspend / fade read no pixel beyond the picture
-    // One padded row of Q, built from the picture through the border policy.
+    // One padded row of Q, built from the picture through the border policy:
+    // the picture's own columns straight from the row, the pads through
+    // border_index (suspend and fade leave them zero).
     std::vector<S> q(static_cast<std::size_t>(pw));
+    const auto quantised = [d](double level) noexcept {
+      const double v = level * d;
+      // Exact rounding, half away from zero as llround; the common case
+      // (v >= 0) without the library call. v - trunc(v) is exact.
+      if (!(v >= 0.0)) return static_cast<S>(std::llround(v));
+      const S whole = static_cast<S>(v);
+      return v - static_cast<double>(whole) >= 0.5 ? static_cast<S>(whole + 1) : whole;
+    };
     for (int r = 0; r < ph; ++r) {
       const int sy = r - pad_;
       const bool row_inside = sy >= 0 && sy < height_;
       std::fill(q.begin(), q.end(), S{0});
       if (row_inside || fill) {
         const double* src = inverted.row(detail::border_index(sy, height_, border_));
-        for (int c = 0; c < pw; ++c) {
-          const int sx = c - pad_;
-          if (!fill && (sx < 0 || sx >= width_)) continue;
-          q[static_cast<std::size_t>(c)] = static_cast<S>(
-              std::llround(src[detail::border_index(sx, width_, border_)] * d));  // setup: exact rounding
-        }
+        S* inside = q.data() + pad_;
+        for (int x = 0; x < width_; ++x)
+          inside[x] = quantised(src[x]);
+        if (fill)
+          for (int c = 0; c < pad_; ++c) {
+            q[static_cast<std::size_t>(c)] = quantised(src[detail::border_index(c - pad_, width_, border_)]);
+            const int right = pad_ + width_ + c;
+            q[static_cast<std::size_t>(right)] = quantised(src[detail::border_index(width_ + c, width_, border_)]);
+          }
       }
       Cell<U>* above = table.data() + static_cast<std::size_t>(r) * stride_;
       Cell<U>* here = above + stride_;
