@@ -232,10 +232,10 @@ class SerialTransport final : public Transport {
   /// Fixed framing, waiting: fills until a whole frame is there or the
   /// deadline passes (setup and request/reply exchanges, not the servo path).
   Status read_fixed(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept {
-    using clock = std::chrono::steady_clock;
-    const auto deadline = clock::now() + std::chrono::microseconds(timeout_us);
+    using Clock = std::chrono::steady_clock;
+    const auto deadline = Clock::now() + std::chrono::microseconds(timeout_us);
     for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::microseconds>(deadline - clock::now()).count();
+      const auto left = std::chrono::duration_cast<std::chrono::microseconds>(deadline - Clock::now()).count();
       if (left <= 0) break;
       if (fill(static_cast<int>(left)) == Status::disconnected) return Status::disconnected;
       if (framer_.next(buffer, size) == Status::ok) return Status::ok;
@@ -257,8 +257,8 @@ class SerialTransport final : public Transport {
 
   /// Waits for the feature report `id` (get) or a FeatureReply for it.
   Status await(std::uint8_t id, std::span<std::uint8_t> buffer, std::size_t& size, bool get) noexcept {
-    using clock = std::chrono::steady_clock;
-    const auto deadline = clock::now() + std::chrono::microseconds(config_.feature_timeout_us);
+    using Clock = std::chrono::steady_clock;
+    const auto deadline = Clock::now() + std::chrono::microseconds(config_.feature_timeout_us);
     std::array<std::uint8_t, protocol::max_report_size> frame{};
     for (;;) {
       std::size_t n = 0;
@@ -275,7 +275,7 @@ class SerialTransport final : public Transport {
           return get && reply.status == Status::ok ? Status::bad_value : reply.status;
         ++dropped_waiting_;
       }
-      if (clock::now() >= deadline) return Status::timeout;
+      if (Clock::now() >= deadline) return Status::timeout;
     }
   }
 
