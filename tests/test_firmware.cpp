@@ -12,11 +12,13 @@
 #include "hapticfield/device.hpp"
 #include "hapticfield/firmware/board.hpp"
 #include "hapticfield/servo.hpp"
+#include "test_fields.hpp"
 
 using namespace hapticfield;
 using firmware::BoardInputs;
 using firmware::FirmwareConfig;
 using firmware::FirmwareCore;
+using testing::Constant;
 
 namespace {
 
@@ -299,11 +301,6 @@ SimulatedArmConfig free_arm() {
   c.hand.holding = false;
   return c;
 }
-
-struct Constant {
-  glm::dvec3 f{0.0};
-  glm::dvec3 force(const Probe&) const noexcept { return f; }
-};
 
 /// ForceArm -> FirmwareLoopback -> FirmwareCore on ArmPlant, ServoLoop on one virtual clock.
 struct Rig {

@@ -30,9 +30,11 @@
 #include "hapticfield/device/stream_framer.hpp"
 #include "hapticfield/servo.hpp"
 #include "pty_pair.hpp"
+#include "test_fields.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
+using testing::Constant;
 
 namespace {
 
@@ -137,11 +139,6 @@ SerialConfig fixed_framing() {
 Inverse3Frame test_frame() {
   return Inverse3Frame::axes({1, 3, -2}, glm::dvec3{0.0, 0.1, 0.05});
 }
-
-struct Constant {
-  glm::dvec3 f{0.0};
-  glm::dvec3 force(const Probe&) const noexcept { return f; }
-};
 
 LoopConfig quiet() {
   LoopConfig c;

@@ -24,8 +24,10 @@
 #include "hapticfield/firmware/stream_port.hpp"
 #include "hapticfield/servo.hpp"
 #include "pty_pair.hpp"
+#include "test_fields.hpp"
 
 using namespace hapticfield;
+using testing::Constant;
 
 namespace {
 
@@ -166,11 +168,6 @@ SimulatedArmConfig free_arm() {
   c.hand.holding = false;
   return c;
 }
-
-struct Constant {
-  glm::dvec3 f{0.0};
-  glm::dvec3 force(const Probe&) const noexcept { return f; }
-};
 
 SerialConfig test_serial() {
   SerialConfig c;

@@ -18,9 +18,12 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
+#include "test_fields.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
+using testing::Constant;
+using testing::Wall;
 
 namespace {
 
@@ -37,21 +40,6 @@ std::uint32_t property_seed() {
   const unsigned s = Catch::getCurrentContext().getConfig()->rngSeed();
   return s ? s : 1u;
 }
-
-/// A stiff virtual wall: the half-space y < wall_y pushes back along +y.
-struct Wall {
-  double wall_y{0.0};
-  double stiffness{2000.0};  // [N/m]
-  glm::dvec3 force(const Probe& p) const noexcept {
-    const double depth = wall_y - p.position.y;
-    return depth > 0.0 ? glm::dvec3{0.0, stiffness * depth, 0.0} : glm::dvec3{0.0};
-  }
-};
-
-struct Constant {
-  glm::dvec3 f{0.0};
-  glm::dvec3 force(const Probe&) const noexcept { return f; }
-};
 
 /// Simulated arm, link, ForceArm and loop on one virtual clock.
 struct Rig {

@@ -22,9 +22,12 @@
 #include "hapticfield/device/woody_codec.hpp"
 #include "hapticfield/device/woody_kinematics.hpp"
 #include "hapticfield/servo.hpp"
+#include "test_fields.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
+using testing::Constant;
+using testing::Wall;
 using woody::Generation;
 
 namespace {
@@ -37,21 +40,6 @@ Bytes bytes_of(std::span<const std::uint8_t> s) {
 std::span<const std::uint8_t> text(const std::string& s) {
   return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
 }
-
-/// A wall: the half-space y < wall_y pushes back along +y.
-struct Wall {
-  double wall_y{0.0};
-  double stiffness{2000.0};  // [N/m]
-  glm::dvec3 force(const Probe& p) const noexcept {
-    const double depth = wall_y - p.position.y;
-    return depth > 0.0 ? glm::dvec3{0.0, stiffness * depth, 0.0} : glm::dvec3{0.0};
-  }
-};
-
-struct Constant {
-  glm::dvec3 f{0.0};
-  glm::dvec3 force(const Probe&) const noexcept { return f; }
-};
 
 SimulatedWoodyConfig sim_config(Generation g) {
   SimulatedWoodyConfig c;
