@@ -114,6 +114,31 @@ const char* opencv_doc_dir() {
 
 }  // namespace
 
+TEST_CASE("a prepared colour frame feels exactly like the same still picture", "[video]") {
+  // The paper's weights give gray levels in exact hundredths; the preparer's
+  // float gray, rounded to 1/100 level, holds the same numbers, so its
+  // integer tables equal the still picture's to the last bit.
+  cv::RNG rng(7);
+  cv::Mat frame(90, 120, CV_8UC3);
+  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(frame, frame, cv::Size(0, 0), 1.5);
+  for (const int size : {5, 17, 65}) {
+    PrepareConfig c = plain_config(size);
+    FramePreparer preparer(c);
+    const auto prepared = preparer.prepare(frame, 0, 0.0);
+    const TangibleImage oracle = still(frame, c.tangible);
+    REQUIRE(prepared->image.uses_integral_kernel());
+    int compared = 0;
+    for (int y = 0; y < frame.rows; y += 4)
+      for (int x = 0; x < frame.cols; x += 4, ++compared) {
+        CAPTURE(size, x, y);
+        REQUIRE(prepared->image.at_pixel(x, y).x == oracle.at_pixel(x, y).x);
+        REQUIRE(prepared->image.at_pixel(x, y).y == oracle.at_pixel(x, y).y);
+      }
+    CHECK(compared > 600);
+  }
+}
+
 TEST_CASE("between cuts the force is the linear blend of the two bracketing frames", "[video]") {
   std::vector<cv::Mat> frames;
   for (int k = 0; k < 6; ++k)
