@@ -372,11 +372,18 @@ namespace {
 /// packages (OpenCV samples, scikit-image data).
 std::vector<std::string> real_photographs() {
   std::vector<std::string> found = {std::string(HAPTICFIELD_SOURCE_DIR) + "/examples/data/coffee.png"};
-  const char* candidates[] = {
-      "/usr/share/opencv4/samples/data/fruits.jpg", "/usr/share/opencv4/samples/data/baboon.jpg",
-      "/usr/share/opencv4/samples/data/building.jpg", "/usr/lib/python3/dist-packages/skimage/data/astronaut.png",
-      "/usr/lib/python3/dist-packages/skimage/data/camera.png"};
-  for (const char* c : candidates)
+  // opencv-doc installs the samples under /usr/share/doc; older packages
+  // under /usr/share/opencv4. One folder is enough.
+  const char* folders[] = {"/usr/share/doc/opencv-doc/examples/data", "/usr/share/opencv4/samples/data"};
+  for (const char* folder : folders) {
+    const std::size_t before = found.size();
+    for (const char* name : {"fruits.jpg", "baboon.jpg", "building.jpg"})
+      if (std::filesystem::exists(std::filesystem::path(folder) / name))
+        found.push_back((std::filesystem::path(folder) / name).string());
+    if (found.size() > before) break;
+  }
+  for (const char* c : {"/usr/lib/python3/dist-packages/skimage/data/astronaut.png",
+                        "/usr/lib/python3/dist-packages/skimage/data/camera.png"})
     if (std::filesystem::exists(c)) found.emplace_back(c);
   if (found.size() == 1)
     WARN("only examples/data/coffee.png is stroked: no OpenCV sample or scikit-image pictures are installed");
