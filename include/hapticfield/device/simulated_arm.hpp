@@ -18,6 +18,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/device/joint_dynamics.hpp"
 #include "hapticfield/device/kinematics.hpp"
 #include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/state.hpp"
@@ -238,29 +239,8 @@ class ArmPlant {
       hand_force_ = config_.hand.stiffness * (target - p) + config_.hand.damping * (target_v - v);
       tau_hand = kin_.torques(q_, hand_force_);
     }
-    for (int i = 0; i < 3; ++i) {
-      const double drive = applied[i] + tau_hand[i] - config_.viscous[i] * qd_[i];
-      double qd = qd_[i] + h * drive / config_.inertia[i];
-      // Coulomb friction: opposes motion, sticks when it would reverse it.
-      const double dv = h * config_.coulomb[i] / config_.inertia[i];
-      if (qd > dv)
-        qd -= dv;
-      else if (qd < -dv)
-        qd += dv;
-      else
-        qd = 0.0;
-      double q = q_[i] + h * qd;
-      if (q < config_.kinematics.q_min[i]) {
-        q = config_.kinematics.q_min[i];
-        qd = std::fmax(qd, 0.0);
-      }
-      if (q > config_.kinematics.q_max[i]) {
-        q = config_.kinematics.q_max[i];
-        qd = std::fmin(qd, 0.0);
-      }
-      q_[i] = q;
-      qd_[i] = qd;
-    }
+    step_joints({config_.inertia, config_.viscous, config_.coulomb, config_.kinematics.q_min, config_.kinematics.q_max},
+                applied + tau_hand, h, q_, qd_);
   }
 
   SimulatedArmConfig config_;

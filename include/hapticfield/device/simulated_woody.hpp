@@ -235,28 +235,8 @@ class SimulatedWoody {
                     config_.hand.damping * (target_v - kin_.velocity(q_, qd_));
       tau_hand = kin_.torques(q_, hand_force_);
     }
-    for (int i = 0; i < 3; ++i) {  // the joint model of SimulatedArm
-      const double drive = tau_motor[i] + tau_hand[i] - config_.viscous[i] * qd_[i];
-      double qd = qd_[i] + h * drive / config_.inertia[i];
-      const double dv = h * config_.coulomb[i] / config_.inertia[i];
-      if (qd > dv)
-        qd -= dv;
-      else if (qd < -dv)
-        qd += dv;
-      else
-        qd = 0.0;
-      double q = q_[i] + h * qd;
-      if (q < config_.q_min[i]) {
-        q = config_.q_min[i];
-        qd = std::fmax(qd, 0.0);
-      }
-      if (q > config_.q_max[i]) {
-        q = config_.q_max[i];
-        qd = std::fmin(qd, 0.0);
-      }
-      q_[i] = q;
-      qd_[i] = qd;
-    }
+    step_joints({config_.inertia, config_.viscous, config_.coulomb, config_.q_min, config_.q_max}, tau_motor + tau_hand,
+                h, q_, qd_);
   }
 
   SimulatedWoodyConfig config_;
