@@ -37,12 +37,12 @@
 namespace hapticfield::view {
 
 struct VideoPlayerConfig {
-  double speed{1.0};       ///< video seconds per loop second, in (0, 16]
-  double from{0.0};        ///< video time at the start [s], at most the video's length
-  bool loop{false};        ///< start again at 0 after the end
+  double speed{1.0};              ///< video seconds per loop second, in (0, 16]
+  double from{0.0};               ///< video time at the start [s], at most the video's length
+  bool loop{false};               ///< start again at 0 after the end
   double fade{default_cut_fade};  ///< fade out and in across a scene cut [s]
-  double seek_step{5.0};   ///< what one seek key moves [s]
-  int display_frames{8};   ///< decoded frames the worker keeps for display
+  double seek_step{5.0};          ///< what one seek key moves [s]
+  int display_frames{8};          ///< decoded frames the worker keeps for display
 };
 
 /// What the status panel shows about the video.
@@ -51,9 +51,9 @@ struct VideoStatus {
   double duration{0.0};  ///< [s], infinity when unknown
   long frame{-1};        ///< index of the frame shown
   bool paused{false};
-  long dropped{0};       ///< frames the worker skipped (it lagged behind the video time)
-  long cuts{0};          ///< scene cuts detected
-  std::string error;     ///< the worker's error, if it stopped on one
+  long dropped{0};    ///< frames the worker skipped (it lagged behind the video time)
+  long cuts{0};       ///< scene cuts detected
+  std::string error;  ///< the worker's error, if it stopped on one
 };
 
 class VideoPlayer {
@@ -75,7 +75,8 @@ class VideoPlayer {
                   std::to_string(duration_) + " s)");
     long index = 0;
     if (config.from > 0.0) source.seek(static_cast<long>(std::floor(config.from * fps_ + 1e-9)));
-    if (!source.read(shown_, index)) throw VideoError("cannot decode '" + path_ + "' at " + std::to_string(config.from) + " s");
+    if (!source.read(shown_, index))
+      throw VideoError("cannot decode '" + path_ + "' at " + std::to_string(config.from) + " s");
     shown_index_ = index;
     time_ = config.from;
     last_.time = time_;
