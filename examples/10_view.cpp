@@ -503,7 +503,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   if (video) {
     if (video->playing()) (void)video->settle(std::chrono::milliseconds(1000));  // the last tick's frame
     drain();
-    std::printf("video: %.4f s of %.2f s, frame %ld shown, %ld frames dropped, %ld scene cuts%s\n", status.video_time,
+    std::printf("video: %.6f s of %.2f s, frame %ld shown, %ld frames dropped, %ld scene cuts%s\n", status.video_time,
                 status.video_duration, status.video_frame, status.frames_dropped, status.scene_cuts,
                 status.paused ? ", paused" : "");
   }
