@@ -350,6 +350,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   status.device = device.info().name;
   status.field = scene.label;
   const bool window = o.screenshot.empty();
+  double note_until = 0.0;  // [s of loop time]
   const auto drain = [&] {
     ViewSample s;
     while (ring.pop(s)) {
@@ -370,13 +371,15 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
       status.frames_dropped = v.dropped;
       status.scene_cuts = v.cuts;
       status.paused = v.paused;
-      if (!v.error.empty()) status.note = "video: " + v.error;
+      if (!v.error.empty()) {  // the worker stopped: the last window is held
+        status.note = "video: " + v.error;
+        note_until = now.t + 3.0;
+      }
     }
   };
   cv::Mat canvas;
   Pointer pointer{&layout, std::move(mouse_moved), picture.size()};
   int shot = 0;
-  double note_until = 0.0;
   // Fields are built here, on the viewer's thread, and handed to the loop,
   // which picks them up on its next tick; the LiveField destroys replaced
   // ones here too (a VideoField joins its worker when destroyed).
