@@ -7,11 +7,14 @@
 // never waits for drawing: ticks hand samples to the window through a
 // lock-free ring, the window hands new fields to the loop through a
 // LiveField. --screenshot draws the same view off-screen (no display).
+// A video is felt through a VideoField, and the window shows the frame
+// being felt (the newest decoded frame at the loop's video time).
 //
-//   hapticfield_view SOURCE [--field tangible|normals|texture] [field options]
+//   hapticfield_view SOURCE [--field tangible|video|normals|texture] [field options]
 //       [--device mouse|sim|hid[:VID:PID]] [--screenshot OUT.png --seconds S]
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +28,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/highgui.hpp>
@@ -37,10 +41,12 @@
 #include "hapticfield/device.hpp"
 #include "hapticfield/image.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/video.hpp"
 #include "view/mouse_device.hpp"
 #include "view/sample_ring.hpp"
 #include "view/scene.hpp"
 #include "view/scope.hpp"
+#include "view/video_player.hpp"
 #include "view/view_frame.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
 #include "hapticfield/device/hid_transport.hpp"
@@ -56,14 +62,22 @@ constexpr const char* usage_text =
     "A live window showing what the arm feels: the picture under the probe, the probe as a\n"
     "cursor, the force as an arrow, a rolling scope of Fx, Fy, |F| and the loop's timing and\n"
     "safety events. The servo loop runs on its own thread and never waits for drawing.\n"
-    "  SOURCE               picture file (any format OpenCV reads)\n"
-    "  --field F            tangible (default), normals or texture\n"
-    "tangible images:\n"
+    "  SOURCE               a picture file (any format OpenCV reads), or a video file or an\n"
+    "                       image sequence (a printf pattern such as frames/%04d.png)\n"
+    "  --field F            tangible (the default for a picture), video (the default for a\n"
+    "                       video; a video only), normals or texture (of the frame shown)\n"
+    "tangible pictures and video:\n"
     "  --mask M             prewitt (default), sobel, scharr, roberts, gauss or emboss\n"
     "  --size M             mask size [px]: odd 3..129 (sobel 3..31, scharr 3, roberts 2)\n"
     "  --border B           suspend, clamp, reflect or fade (default)\n"
-    "  --denoise SIGMA      blur the picture first, sigma [px] in [0, 20] (default 0: none)\n"
+    "  --denoise SIGMA|D    a picture: blur it first, sigma [px] in [0, 20] (default 0: none);\n"
+    "                       video: none, temporal (default), spatial or both (compression noise)\n"
     "  --gain N             force at a black/white edge [N], in [0, 10] (default 1)\n"
+    "video only:\n"
+    "  --speed R            playback rate [video s per s], in (0, 16] (default 1)\n"
+    "  --from S             start at video time S [s], in [0, the video's length] (default 0)\n"
+    "  --loop               start again at 0 after the end (default: hold the last frame)\n"
+    "  --fade-ms MS         fade out and in across a scene cut [ms], in [0, 10000] (default 100)\n"
     "normals from a picture (Kim & Kwon):\n"
     "  --face CORNERS       \"x1,y1 x2,y2 x3,y3 x4,y4\" [px] around a planar face; repeat per face\n"
     "  --focal F            focal length [px] in [1, 1e6] (default: a 60 degree field of view)\n"
@@ -82,12 +96,16 @@ constexpr const char* usage_text =
     "  --shots DIR          where the s key saves screenshots (default: the current folder)\n"
     "  -h, --help           this text\n"
     "Keys: f field, m mask, + / - size (texture: grain), b border, d denoise, space pause and\n"
-    "[ ] seek (moving pictures), s screenshot, q or Esc quit.\n"
+    "resume, [ ] seek -5 s / +5 s (the video field), s screenshot, q or Esc quit.\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
 
 struct Arguments {
   std::string source;
   SceneConfig scene;
+  bool kind_given{false};
+  bool blur_given{false};  ///< --denoise with a sigma above 0 (pictures)
+  VideoPlayerConfig video;
+  std::vector<std::string> video_only;  ///< the video-only options given
   std::string device{"mouse"};
   std::optional<glm::dvec2> start;
   double rate{1000.0};
@@ -99,6 +117,28 @@ struct Arguments {
 
 [[noreturn]] void usage(const std::string& error) {
   throw cli::UsageError(error);
+}
+
+std::optional<DenoiseMode> denoise_mode(const std::string& v) {
+  for (const DenoiseMode m : {DenoiseMode::none, DenoiseMode::temporal, DenoiseMode::spatial, DenoiseMode::both})
+    if (v == to_string(m)) return m;
+  return std::nullopt;
+}
+
+/// A still picture (else a video): by the name's ending, or by the file's
+/// first bytes when a picture decoder knows them.
+bool is_still_picture(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  for (const char* e : {".png", ".jpg", ".jpeg", ".jpe", ".bmp", ".dib", ".tif", ".tiff", ".webp", ".pgm", ".ppm",
+                        ".pbm", ".pnm", ".pxm",  ".pfm", ".sr",  ".ras", ".exr", ".hdr",  ".pic",  ".jp2"})
+    if (ext == e) return true;
+  if (path.find('%') != std::string::npos) return false;  // an image sequence
+  try {
+    return std::filesystem::is_regular_file(path) && cv::haveImageReader(path);
+  } catch (const std::exception&) {
+    return false;
+  }
 }
 
 bool valid_device(const std::string& d) {
@@ -132,9 +172,11 @@ Arguments parse(cli::Parser& p) {
   bool size_given = false;
   while (p.next()) {
     if (p.is("--field")) {
-      o.scene.kind = p.choice<FieldKind>(
-          "field",
-          {{"tangible", FieldKind::tangible}, {"normals", FieldKind::normals}, {"texture", FieldKind::texture}});
+      o.scene.kind = p.choice<FieldKind>("field", {{"tangible", FieldKind::tangible},
+                                                   {"video", FieldKind::video},
+                                                   {"normals", FieldKind::normals},
+                                                   {"texture", FieldKind::texture}});
+      o.kind_given = true;
     } else if (p.is("--mask")) {
       o.scene.mask = p.choice<MaskKind>("mask", {{"prewitt", MaskKind::prewitt},
                                                  {"sobel", MaskKind::sobel},
@@ -151,7 +193,33 @@ Arguments parse(cli::Parser& p) {
                                                    {"reflect", Border::reflect},
                                                    {"fade", Border::fade}});
     } else if (p.is("--denoise")) {
-      o.scene.denoise_px = p.real(cli::closed(0.0, 20.0));
+      const std::string v = p.value();
+      if (const auto mode = denoise_mode(v)) {
+        o.scene.video_denoise = *mode;
+        if (*mode != DenoiseMode::none) o.video_only.push_back("--denoise " + v);
+      } else {
+        double sigma = 0.0;
+        try {
+          sigma = cli::parse_real(v, "--denoise");
+        } catch (const cli::UsageError&) {
+          usage("--denoise expects a blur sigma [px] or a video's none, temporal, spatial or both, got '" + v + "'");
+        }
+        if (!cli::closed(0.0, 20.0).contains(sigma)) usage("--denoise must be in [0, 20] px, got '" + v + "'");
+        o.scene.denoise_px = sigma;
+        o.blur_given = o.blur_given || sigma > 0.0;
+      }
+    } else if (p.is("--speed")) {
+      o.video.speed = p.real(cli::open_closed(0.0, max_playback_rate));
+      o.video_only.emplace_back("--speed");
+    } else if (p.is("--from")) {
+      o.video.from = p.real(cli::closed(0.0, 1e6));
+      o.video_only.emplace_back("--from");
+    } else if (p.is("--loop")) {
+      o.video.loop = true;
+      o.video_only.emplace_back("--loop");
+    } else if (p.is("--fade-ms")) {
+      o.video.fade = p.real(cli::closed(0.0, 10000.0)) * 1e-3;
+      o.video_only.emplace_back("--fade-ms");
     } else if (p.is("--gain")) {
       o.scene.gain = p.real(cli::closed(0.0, 10.0));
     } else if (p.is("--face")) {
@@ -187,7 +255,7 @@ Arguments parse(cli::Parser& p) {
       p.unknown();
     }
   }
-  if (o.source.empty()) usage("missing SOURCE (a picture file)");
+  if (o.source.empty()) usage("missing SOURCE (a picture or a video file)");
   if (!o.screenshot.empty() && !o.seconds) usage("--screenshot needs --seconds (how long the loop runs first)");
   if (o.seconds && std::llround(*o.seconds * o.rate) < 1) {
     char text[160];
@@ -233,10 +301,12 @@ void on_mouse(int event, int x, int y, int /*flags*/, void* user) {
 constexpr const char* window_title = "hapticfield_view";
 
 /// Runs the loop on its own thread and the view on this one.
-template <Device D, HapticField F, class Source>
-int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live, Source& source, Scene& scene,
-             SceneConfig cfg, const PlaneMapping& mapping, SteadyClock& clock, bool hardware,
-             std::function<void(glm::dvec2)> mouse_moved) {
+/// `picture` is the still picture, or for a video (`video` set) its first
+/// frame shown.
+template <Device D, HapticField F>
+int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live, const cv::Mat& picture,
+             VideoPlayer* video, Scene& scene, SceneConfig cfg, const PlaneMapping& mapping, SteadyClock& clock,
+             bool hardware, std::function<void(glm::dvec2)> mouse_moved) {
   LoopConfig config;
   config.rate = o.rate;
   config.realtime = o.realtime;
@@ -271,15 +341,16 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     done.store(true, std::memory_order_release);
   });
 
-  const ViewLayout layout = ViewLayout::for_picture(source.frame().cols, source.frame().rows);
+  const ViewLayout layout = ViewLayout::for_picture(picture.cols, picture.rows);
   Scope scope;
   ViewSample now{};
-  now.pixel = o.start ? *o.start : glm::dvec2{source.frame().cols / 2.0, source.frame().rows / 2.0};
+  now.pixel = o.start ? *o.start : glm::dvec2{picture.cols / 2.0, picture.rows / 2.0};
   ViewStatus status;
   status.source = std::filesystem::path(o.source).filename().string();
   status.device = device.info().name;
   status.field = scene.label;
   const bool window = o.screenshot.empty();
+  double note_until = 0.0;  // [s of loop time]
   const auto drain = [&] {
     ViewSample s;
     while (ring.pop(s)) {
@@ -290,18 +361,41 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     status.latched = loop.safety().latched() != 0;
     status.latch_bits = loop.safety().latched();
     status.dropped = ring.dropped();
+    if (video) {  // the frame being felt, and where the video is
+      if (video->playing()) scene.underlay = video->frame();
+      const VideoStatus v = video->status();
+      status.video = true;
+      status.video_time = v.time;
+      status.video_duration = v.duration;
+      status.video_frame = v.frame;
+      status.frames_dropped = v.dropped;
+      status.scene_cuts = v.cuts;
+      status.paused = v.paused;
+      if (!v.error.empty()) {  // the worker stopped: the last window is held
+        status.note = "video: " + v.error;
+        note_until = now.t + 3.0;
+      }
+    }
   };
   cv::Mat canvas;
-  Pointer pointer{&layout, std::move(mouse_moved), source.frame().size()};
+  Pointer pointer{&layout, std::move(mouse_moved), picture.size()};
   int shot = 0;
-  double note_until = 0.0;
-  bool paused = false;
+  // Fields are built here, on the viewer's thread, and handed to the loop,
+  // which picks them up on its next tick; the LiveField destroys replaced
+  // ones here too (a VideoField joins its worker when destroyed).
   const auto rebuild = [&](const SceneConfig& next) {
     try {
-      Scene fresh = build_scene(source.frame(), next, mapping);
-      live.publish(std::move(fresh.field));  // the loop picks it up on its next tick
-      scene.underlay = std::move(fresh.underlay);
-      scene.label = fresh.label;
+      if (next.kind == FieldKind::video) {  // a new VideoField at the current video time
+        live.publish(video->start(next, mapping));
+        scene.underlay = video->frame();
+        scene.label = scene_label(next);
+      } else {  // a still field of the picture, or of the video frame shown now
+        Scene fresh = build_scene(video ? video->frame() : picture, next, mapping);
+        if (video) video->stop();
+        live.publish(std::move(fresh.field));
+        scene.underlay = std::move(fresh.underlay);
+        scene.label = fresh.label;
+      }
       status.field = scene.label;
       cfg = next;
     } catch (const std::exception& e) {
@@ -318,18 +412,13 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     cv::namedWindow(window_title, cv::WINDOW_AUTOSIZE);
     cv::setMouseCallback(window_title, on_mouse, &pointer);
   }
-  auto last_frame = std::chrono::steady_clock::now();
   while (!done.load(std::memory_order_acquire)) {
     drain();
     if (!window) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       continue;
     }
-    const auto t = std::chrono::steady_clock::now();
-    if (source.advance(std::chrono::duration<double>(t - last_frame).count())) rebuild(cfg);
-    last_frame = t;
     if (now.t > note_until) status.note.clear();
-    status.paused = paused;
     draw_view(canvas, layout, scene.underlay, scope, now, status);
     cv::imshow(window_title, canvas);
     const int key = cv::waitKey(15) & 0xff;
@@ -340,14 +429,10 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
       case 27:
         loop.request_stop();
         break;
-      case 'f': {
-        next.kind = next.kind == FieldKind::tangible  ? FieldKind::normals
-                    : next.kind == FieldKind::normals ? FieldKind::texture
-                                                      : FieldKind::tangible;
-        if (next.kind == FieldKind::normals && next.faces.empty()) next.kind = FieldKind::texture;
+      case 'f':
+        next.kind = next_kind(next.kind, !next.faces.empty(), video != nullptr);
         rebuild(next);
         break;
-      }
       case 'm': {
         next.mask = static_cast<MaskKind>((static_cast<int>(next.mask) + 1) % 6);
         const SizeRange r = size_range(next.mask);
@@ -371,21 +456,28 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
         rebuild(next);
         break;
       case 'd':
-        next.denoise_px = next.denoise_px == 0.0 ? 1.0 : next.denoise_px >= 4.0 ? 0.0 : next.denoise_px * 2.0;
+        next_denoise(next);
         rebuild(next);
         break;
       case ' ':
-        if (!source.moving())
+        if (!video)
           say("a still picture: nothing to pause");
+        else if (!video->playing())
+          say("a still of the video: f to the video field to play");
         else
-          source.pause(paused = !paused);
+          say(video->toggle_pause() ? "paused" : "playing");
         break;
       case '[':
       case ']':
-        if (!source.moving())
+        if (!video) {
           say("a still picture: nothing to seek");
-        else
-          source.seek(key == '[' ? -1.0 : 1.0);
+        } else if (!video->playing()) {
+          say("a still of the video: f to the video field to seek");
+        } else {
+          char text[64];
+          std::snprintf(text, sizeof text, "seek to %.2f s", video->seek_by(key == '[' ? -1 : 1));
+          say(text);
+        }
         break;
       case 's': {
         const std::string path =
@@ -411,6 +503,13 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
       static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
       static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines),
       static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
+  if (video) {
+    if (video->playing()) (void)video->settle(std::chrono::milliseconds(1000));  // the last tick's frame
+    drain();
+    std::printf("video: %.6f s of %.2f s, frame %ld shown, %ld frames dropped, %ld scene cuts%s\n", status.video_time,
+                status.video_duration, status.video_frame, status.frames_dropped, status.scene_cuts,
+                status.paused ? ", paused" : "");
+  }
   if (!o.screenshot.empty()) {
     status.note.clear();
     draw_view(canvas, layout, scene.underlay, scope, now, status);
@@ -423,15 +522,41 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
 }
 
 int run(const Arguments& o) {
-  const cv::Mat picture = cli::load_bgr8(o.source);
+  SceneConfig first = o.scene;
+  const bool still = is_still_picture(o.source);
+  if (still) {
+    if (o.kind_given && first.kind == FieldKind::video)
+      usage("'" + o.source + "' is a still picture: --field video needs a video file");
+    if (!o.video_only.empty()) usage(o.video_only.front() + " is for a video; '" + o.source + "' is a still picture");
+  } else if (!o.kind_given) {
+    first.kind = FieldKind::video;
+  }
+  if (first.kind == FieldKind::video && o.blur_given)
+    usage("--denoise SIGMA blurs a picture; the video field takes --denoise none, temporal, spatial or both");
+  std::optional<VideoPlayer> video;
+  cv::Mat picture;
+  if (still) {
+    picture = cli::load_bgr8(o.source);
+  } else {
+    quiet_video_logs(false);
+    video.emplace(o.source, o.video);
+    picture = video->frame();
+  }
   if (o.screenshot.empty() && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
     throw Error(
         "no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "
         "--seconds S");
   const PlaneMapping mapping = PlaneMapping::fit(picture.cols, picture.rows, 80.0);  // the picture spans 80 mm
-  StillPicture source(picture);
-  Scene scene = build_scene(source.frame(), o.scene, mapping);
+  Scene scene;
+  if (first.kind == FieldKind::video) {
+    scene.field = video->start(first, mapping);
+    scene.underlay = picture;
+    scene.label = scene_label(first);
+  } else {
+    scene = build_scene(picture, first, mapping);
+  }
   LiveField<AnyField> live(std::move(scene.field));
+  VideoPlayer* player = video ? &*video : nullptr;
   LiveRef live_ref{&live};
   SteadyClock clock;
   const auto now = [&clock] { return clock.now(); };
@@ -440,7 +565,7 @@ int run(const Arguments& o) {
     MouseDevice<SteadyClock> mouse(mapping, clock);
     const glm::dvec2 start = o.start ? *o.start : glm::dvec2{picture.cols / 2.0, picture.rows / 2.0};
     mouse.set_pixel(start.x, start.y);
-    return run_view(o, mouse, live_ref, live, source, scene, o.scene, mapping, clock, false,
+    return run_view(o, mouse, live_ref, live, picture, player, scene, first, mapping, clock, false,
                     [&mouse](glm::dvec2 p) { mouse.set_pixel(p.x, p.y); });
   }
 
@@ -475,7 +600,7 @@ int run(const Arguments& o) {
 #endif
   }
   ForceArm device(*transport);
-  return run_view(o, device, felt, live, source, scene, o.scene, mapping, clock, hardware, {});
+  return run_view(o, device, felt, live, picture, player, scene, first, mapping, clock, hardware, {});
 }
 
 }  // namespace

@@ -505,6 +505,61 @@ TEST_CASE("hapticfield_view: bad command lines exit 2, bad pictures and paths ex
     check_error(c);
   CHECK_FALSE(fs::exists(shot));  // no case drew anything
 }
+
+TEST_CASE("hapticfield_view --field video: video options on a picture, bad videos, bad video options") {
+  const BadFiles b = make_bad_files();
+  const std::string picture = make_step_picture();
+  const std::string shot = in_tmp("view_video.png");
+  fs::remove(shot);
+  // a 10-frame MJPG clip, 64 x 48 px at 10 fps (1 s)
+  const std::string clip = in_tmp("view_clip.avi");
+  {
+    cv::VideoWriter w(clip, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(64, 48));
+    REQUIRE(w.isOpened());
+    for (int k = 0; k < 10; ++k)
+      w.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(20 * k)));
+  }
+  const std::string text_avi = in_tmp("text.avi");
+  write(text_avi, "this is not a video\n");
+  const std::string empty_avi = in_tmp("empty.avi");
+  write(empty_avi, "");
+  const std::vector<std::string> offscreen = {"--seconds", "0.01", "--screenshot", shot};
+  const auto with = [&](std::string source, std::vector<std::string> args) {
+    args.insert(args.begin(), source);
+    args.insert(args.end(), offscreen.begin(), offscreen.end());
+    return args;
+  };
+  std::vector<Case> cases = {
+      {"hapticfield_view", with(picture, {"--field", "video"}), usage,
+       "is a still picture: --field video needs a video"},
+      {"hapticfield_view", with(picture, {"--speed", "2"}), usage, "--speed is for a video"},
+      {"hapticfield_view", with(picture, {"--from", "1"}), usage, "--from is for a video"},
+      {"hapticfield_view", with(picture, {"--loop"}), usage, "--loop is for a video"},
+      {"hapticfield_view", with(picture, {"--fade-ms", "50"}), usage, "--fade-ms is for a video"},
+      {"hapticfield_view", with(picture, {"--denoise", "temporal"}), usage, "--denoise temporal is for a video"},
+      {"hapticfield_view", with(picture, {"--denoise", "fancy"}), usage, "--denoise expects a blur sigma"},
+      {"hapticfield_view", with(clip, {"--denoise", "2"}), usage, "--denoise SIGMA blurs a picture"},
+      {"hapticfield_view", with(clip, {"--field", "video", "--denoise", "0.5"}), usage, "--denoise SIGMA"},
+      {"hapticfield_view", with(clip, {"--from", "1.5"}), bad_input, "past the end"},
+      {"hapticfield_view", with(text_avi, {}), bad_input, "text.avi"},
+      {"hapticfield_view", with(in_tmp("no_such_clip.avi"), {"--field", "video"}), bad_input, "no_such_clip.avi"},
+      {"hapticfield_view", with(empty_avi, {"--field", "video"}), bad_input, empty_avi},
+      {"hapticfield_view", with(b.folder, {"--field", "video"}), bad_input, b.folder},
+  };
+  add_numeric(cases, "hapticfield_view", {clip}, "--speed", {}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", {clip}, "--from", {"0"}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", {clip}, "--fade-ms", {"0"}, "", "", offscreen);
+  cases.push_back({"hapticfield_view", with(clip, {"--speed", "17"}), usage, "(0, 16]"});
+  for (const Case& c : cases)
+    check_error(c);
+  CHECK_FALSE(fs::exists(shot));  // no case drew anything
+  // and the clip itself plays
+  const Result r = run("hapticfield_view", with(clip, {"--from", "0.5", "--loop"}));
+  CAPTURE(r.out, r.err);
+  CHECK(r.status == ok);
+  CHECK(r.out.find("frame 5 shown") != std::string::npos);
+  CHECK(fs::exists(shot));
+}
 #endif
 
 #ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO

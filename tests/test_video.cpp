@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
@@ -399,6 +400,86 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
   CHECK(nonzero > 50);
   CHECK(s.dropped > 0);
   field.stop();
+}
+
+TEST_CASE("display frames: the frame kept for video time t is the frame being felt, seeks included", "[video]") {
+  // 40 lossless frames at 25 fps, a bar moving 2 px per frame: each frame differs.
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 40; ++k)
+    frames.push_back(scene_frame(0, k));
+  const std::string seq = write_sequence("display", frames);
+  const PlaneMapping mapping(1.0, glm::dvec2{48.0, 32.0});
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.display_frames = 3;
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
+  Probe probe;
+  probe.position = {0.0, 0.0, 0.0};
+  // Loop time set by hand (the servo thread's part), then the display asks
+  // for the frame at the video time the loop reached.
+  const auto tick_at = [&](double t) {
+    probe.time = t;
+    (void)field.force(probe);
+  };
+  const auto shown_at_video_time = [&]() -> std::optional<DisplayFrame> {
+    const double vt = field.statistics().video_time;
+    const long expected = static_cast<long>(std::floor(vt * 25.0 + 1e-9));
+    for (int i = 0; i < 2000; ++i) {  // the worker decodes on its own thread: up to 2 s
+      std::optional<DisplayFrame> f = field.display_frame(vt);
+      if (f && f->index == expected) return f;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return field.display_frame(vt);
+  };
+  for (const double t : {0.0, 0.05, 0.13, 0.2, 0.41, 0.79}) {
+    tick_at(t);
+    const std::optional<DisplayFrame> f = shown_at_video_time();
+    REQUIRE(f);
+    CAPTURE(t, f->index, f->time);
+    CHECK(f->index == static_cast<long>(std::floor(t * 25.0 + 1e-9)));
+    CHECK(f->time <= t + 1e-9);
+    CHECK(f->image.size() == frames[0].size());
+    CHECK(cv::norm(f->image, frames[static_cast<std::size_t>(f->index)], cv::NORM_INF) == 0.0);  // lossless
+    // never a frame later than asked, and only the newest few are kept
+    CHECK_FALSE(field.display_frame(-0.5));
+  }
+  // a seek back: the frames kept before it are forgotten
+  field.playback().seek(0.3);
+  tick_at(0.8);
+  const std::optional<DisplayFrame> after = shown_at_video_time();
+  REQUIRE(after);
+  CHECK(after->index == 7);  // 0.3 s at 25 fps
+  CHECK(cv::norm(after->image, frames[7], cv::NORM_INF) == 0.0);
+
+  // the servo path with display frames kept: still no allocation (paused,
+  // so that the worker, which allocates on its own thread, idles)
+  if (test::allocations_counted) {
+    field.playback().pause();
+    double t = 0.8;
+    tick_at(t);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const long allocations = test::count_allocations([&] {
+      for (int i = 0; i < 2000; ++i) {
+        probe.time = t += 1e-4;
+        (void)field.force(probe);
+      }
+    });
+    CHECK(allocations == 0);
+  }
+  field.stop();
+
+  // none kept by default; a bad count is refused
+  VideoField plain(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping,
+                   VideoFieldConfig{.prepare = plain_config(5)});
+  tick_at(0.0);
+  (void)plain.force(probe);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  CHECK_FALSE(plain.display_frame(10.0));
+  for (const int bad : {-1, 65}) {
+    VideoFieldConfig c;
+    c.display_frames = bad;
+    CHECK_THROWS_AS(VideoField(std::make_unique<VideoSource>(seq), mapping, c), std::invalid_argument);
+  }
 }
 
 TEST_CASE("a video field composes with a plane, textures and friction like a still picture", "[video]") {

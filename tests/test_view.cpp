@@ -1,12 +1,20 @@
 // The live viewer's pieces (examples/view/): nice axis ticks, the servo ->
 // viewer sample ring, the mouse as a device, the scene builder, the layout
 // and the drawing (cursor at the probe, arrow along the force), and the
-// viewer's tick path without allocation. Timing runs on a virtual clock.
+// viewer's tick path without allocation, the video player (the frame shown
+// is the frame felt; pause, seek and rebuilds keep the video time) and the
+// thread that destroys replaced fields. Timing runs on virtual or manual
+// loop times.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <mutex>
 #include <thread>
 #include <vector>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include <opencv2/imgproc.hpp>
 
@@ -16,6 +24,7 @@
 #include "view/sample_ring.hpp"
 #include "view/scene.hpp"
 #include "view/scope.hpp"
+#include "view/video_player.hpp"
 #include "view/view_frame.hpp"
 
 using namespace hapticfield;
@@ -28,6 +37,30 @@ cv::Mat step_picture() {
   cv::Mat m(80, 120, CV_8UC3, cv::Scalar::all(255));
   m(cv::Rect(60, 0, 60, 80)).setTo(cv::Scalar::all(0));
   return m;
+}
+
+/// Frame k of a 40-frame clip (96 x 64 px): a white square on a dark
+/// gradient, 2 px further right in each frame.
+cv::Mat clip_frame(int k) {
+  cv::Mat m(64, 96, CV_8UC3);
+  for (int x = 0; x < 96; ++x)
+    m.col(x).setTo(cv::Scalar::all(20 + x));
+  cv::rectangle(m, cv::Rect(4 + 2 * k, 20, 12, 12), cv::Scalar::all(255), cv::FILLED);
+  return m;
+}
+
+/// The clip as a lossless PNG sequence (25 fps: the fallback rate); its printf pattern.
+std::string write_clip() {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(HAPTICFIELD_TEST_TMP) / "view_clip";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (int k = 0; k < 40; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%04d.png", k);
+    REQUIRE(cv::imwrite((dir / name).string(), clip_frame(k)));
+  }
+  return (dir / "%04d.png").string();
 }
 
 }  // namespace
@@ -250,4 +283,181 @@ TEST_CASE("the viewer's tick: mouse read, live field, sample push, command, with
     }
   });
   CHECK(allocations == 0);
+}
+
+TEST_CASE("the f key's cycle, the d key's steps and the labels, video included") {
+  CHECK(next_kind(FieldKind::tangible, false, false) == FieldKind::texture);  // normals need faces
+  CHECK(next_kind(FieldKind::tangible, true, false) == FieldKind::normals);
+  CHECK(next_kind(FieldKind::texture, true, false) == FieldKind::tangible);  // video needs a video
+  CHECK(next_kind(FieldKind::texture, false, true) == FieldKind::video);
+  CHECK(next_kind(FieldKind::video, false, true) == FieldKind::tangible);
+  SceneConfig c;
+  next_denoise(c);
+  CHECK(c.denoise_px == 1.0);
+  CHECK(c.video_denoise == DenoiseMode::temporal);  // untouched by a still field
+  c.kind = FieldKind::video;
+  next_denoise(c);
+  CHECK(c.video_denoise == DenoiseMode::spatial);
+  next_denoise(c);
+  next_denoise(c);
+  CHECK(c.video_denoise == DenoiseMode::none);
+  CHECK(c.denoise_px == 1.0);
+  CHECK(scene_label(c) == "video: prewitt 17 px, border fade, denoise none, 1.00 N at an edge");
+  CHECK_THROWS_AS(build_scene(step_picture(), c, PlaneMapping::fit(120, 80, 80.0)), std::invalid_argument);
+}
+
+TEST_CASE("VideoPlayer: the frame shown is the frame at the loop's video time; pause, seek and rebuilds") {
+  const std::string clip = write_clip();
+  const PlaneMapping mapping = PlaneMapping::fit(96, 64, 80.0);
+  VideoPlayerConfig pc;
+  pc.seek_step = 0.4;
+  VideoPlayer player(clip, pc);
+  CHECK(player.fps() == 25.0);
+  CHECK(player.duration() == Catch::Detail::Approx(1.6));
+  CHECK(cv::norm(player.frame(), clip_frame(0), cv::NORM_INF) == 0.0);  // the first view, before any field
+  SceneConfig c;
+  c.kind = FieldKind::video;
+  c.size = 5;
+  c.video_denoise = DenoiseMode::none;
+  LiveField<AnyField> live(player.start(c, mapping));
+  REQUIRE(player.playing());
+  // The servo thread's part by hand: the live field at chosen loop times.
+  Probe probe;
+  probe.position = mapping.to_device(glm::dvec2{48.0, 40.0});
+  const auto tick_at = [&](double loop_time) {
+    probe.time = loop_time;
+    (void)live.force(probe);
+  };
+  const auto shows = [&](int k) {
+    const cv::Mat& shown = player.settle(std::chrono::milliseconds(2000));
+    CAPTURE(k, player.time(), player.status().frame);
+    CHECK(player.status().frame == k);
+    CHECK(cv::norm(shown, clip_frame(k), cv::NORM_INF) == 0.0);
+  };
+  tick_at(10.0);  // the clock anchors: video time 0
+  tick_at(10.5);
+  CHECK(player.time() == Catch::Detail::Approx(0.5));
+  shows(12);  // 0.5 s at 25 fps
+  tick_at(10.61);
+  shows(15);
+
+  // pause: the video time stays where it was, whatever the loop's clock does
+  CHECK(player.toggle_pause());
+  tick_at(10.7);
+  tick_at(13.0);
+  CHECK(player.time() == Catch::Detail::Approx(0.61));
+  CHECK(player.status().paused);
+  shows(15);
+  CHECK_FALSE(player.toggle_pause());
+  tick_at(13.1);  // the loop takes up the resume here
+  tick_at(13.2);
+  CHECK(player.time() == Catch::Detail::Approx(0.71));
+
+  // a rebuild (another mask, paused) starts at the current video time
+  CHECK(player.toggle_pause());
+  c.mask = MaskKind::sobel;
+  c.size = 3;
+  live.publish(player.start(c, mapping));
+  CHECK(player.time() == Catch::Detail::Approx(0.71));  // before the new field's first tick
+  tick_at(20.0);
+  tick_at(21.0);
+  CHECK(player.time() == Catch::Detail::Approx(0.71));  // still paused
+  CHECK_FALSE(player.toggle_pause());
+  tick_at(21.2);
+  tick_at(21.4);
+  CHECK(player.time() == Catch::Detail::Approx(0.91));
+  shows(22);
+
+  // seek: one step on, then clamped to the end and to 0 (applied at the next tick)
+  CHECK(player.seek_by(1) == Catch::Detail::Approx(1.31));
+  tick_at(21.4);
+  CHECK(player.time() == Catch::Detail::Approx(1.31));
+  shows(32);
+  CHECK(player.seek_by(5) == Catch::Detail::Approx(1.6));
+  tick_at(21.4);
+  CHECK(player.time() == Catch::Detail::Approx(1.6));
+  CHECK(player.seek_by(-10) == 0.0);
+  tick_at(21.5);
+  CHECK(player.time() == 0.0);
+  shows(0);
+  tick_at(21.7);
+  shows(5);
+
+  // a still field of the frame shown: the video stops there and starts there again
+  const cv::Mat still = player.frame().clone();
+  SceneConfig sc = c;
+  sc.kind = FieldKind::tangible;
+  Scene fresh = build_scene(still, sc, mapping);
+  player.stop();
+  live.publish(std::move(fresh.field));
+  CHECK_FALSE(player.playing());
+  tick_at(30.0);
+  CHECK(player.time() == Catch::Detail::Approx(0.2));
+  CHECK(player.seek_by(1) == Catch::Detail::Approx(0.6));  // remembered for the next start
+  live.publish(player.start(c, mapping));
+  tick_at(40.0);
+  CHECK(player.time() == Catch::Detail::Approx(0.6));
+  shows(15);
+}
+
+TEST_CASE("VideoPlayer: a missing video, a start past the end, a bad speed") {
+  namespace fs = std::filesystem;
+  const std::string clip = write_clip();
+  CHECK_THROWS_AS(VideoPlayer((fs::path(HAPTICFIELD_TEST_TMP) / "no_such.avi").string(), {}), FileError);
+  CHECK_THROWS_AS(VideoPlayer(clip, VideoPlayerConfig{.from = 2.0}), Error);
+  CHECK_THROWS_AS(VideoPlayer(clip, VideoPlayerConfig{.speed = 0.0}), std::invalid_argument);
+  CHECK_THROWS_AS(VideoPlayer(clip, VideoPlayerConfig{.speed = 17.0}), std::invalid_argument);
+  const VideoPlayer late(clip, VideoPlayerConfig{.from = 1.0});
+  CHECK(late.expected_index() == 25);
+}
+
+namespace {
+/// A field that records the thread that destroys it.
+struct Witness {
+  std::mutex* mutex;
+  std::vector<std::thread::id>* destroyed_on;
+  bool moved_from{false};
+  Witness(std::mutex* m, std::vector<std::thread::id>* d) : mutex(m), destroyed_on(d) {}
+  Witness(Witness&& o) noexcept : mutex(o.mutex), destroyed_on(o.destroyed_on) { o.moved_from = true; }
+  Witness& operator=(Witness&&) = delete;
+  ~Witness() {
+    if (moved_from) return;
+    std::lock_guard<std::mutex> lock(*mutex);
+    destroyed_on->push_back(std::this_thread::get_id());
+  }
+  [[nodiscard]] glm::dvec3 force(const Probe& /*p*/) const noexcept { return glm::dvec3{1.0, 0.0, 0.0}; }
+};
+}  // namespace
+
+TEST_CASE("LiveField destroys replaced fields on the publishing thread, never in the servo thread's tick") {
+  // The viewer publishes a new VideoField (which joins its worker when
+  // destroyed) while the loop runs: the old one must die on the viewer's
+  // thread. Here the fields record who destroys them.
+  std::mutex mutex;
+  std::vector<std::thread::id> destroyed_on;
+  {
+    LiveField<AnyField> live(AnyField(Witness(&mutex, &destroyed_on)));
+    std::atomic<bool> stop{false};
+    std::atomic<long> ticks{0};
+    std::thread servo([&] {
+      Probe p;
+      while (!stop.load()) {
+        (void)live.force(p);
+        ticks.fetch_add(1);
+      }
+    });
+    for (int i = 0; i < 200; ++i) {
+      live.publish(AnyField(Witness(&mutex, &destroyed_on)));
+      const long seen = ticks.load();
+      while (ticks.load() < seen + 3)  // the loop takes it up
+        std::this_thread::yield();
+    }
+    stop.store(true);
+    servo.join();
+    std::lock_guard<std::mutex> lock(mutex);
+    CHECK(destroyed_on.size() >= 190);  // all but the three in the buffer
+    for (const std::thread::id id : destroyed_on)
+      CHECK(id == std::this_thread::get_id());
+  }
+  CHECK(destroyed_on.size() == 201);  // the rest with the LiveField, here
 }

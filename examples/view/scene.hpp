@@ -1,18 +1,18 @@
 #pragma once
 /// @file scene.hpp
 /// What the viewer shows and the servo loop feels: a field chosen by name
-/// with its main parameters (SceneConfig), built from the current frame of a
-/// FrameSource into a Scene (the field plus the picture drawn under the
+/// with its main parameters (SceneConfig), built from a picture (or the
+/// frame of a video shown now) into a Scene (the field plus the picture drawn under the
 /// probe). Built on the viewer's thread (allocates, may throw); the field is
 /// then handed to the servo thread through a LiveField.
 ///
-/// A moving picture plugs in as another FrameSource: frame() returns the
-/// current frame, advance() says when a new one is due (the viewer then
-/// rebuilds the scene from it), pause() and seek() serve the viewer's keys.
+/// A video is felt through its own VideoField (see video_player.hpp); the
+/// still fields can be built from any of its frames.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -26,10 +26,13 @@
 #include "hapticfield/texture/lattice.hpp"
 #include "hapticfield/texture/noise.hpp"
 #include "hapticfield/texture/texture_field.hpp"
+#include "hapticfield/video/denoise.hpp"
 
 namespace hapticfield::view {
 
-enum class FieldKind { tangible, normals, texture };
+/// video: a video file felt frame by frame (VideoField); the others are
+/// still fields of a picture or of the video frame shown.
+enum class FieldKind { tangible, normals, texture, video };
 
 [[nodiscard]] inline const char* field_name(FieldKind k) noexcept {
   switch (k) {
@@ -39,6 +42,8 @@ enum class FieldKind { tangible, normals, texture };
       return "normals";
     case FieldKind::texture:
       return "texture";
+    case FieldKind::video:
+      return "video";
   }
   return "?";
 }
@@ -51,7 +56,8 @@ struct SceneConfig {
   int size{17};  ///< mask size [px]
   Border border{Border::fade};
   double denoise_px{0.0};  ///< Gaussian blur of the picture before the masks, sigma [px]; 0: none
-  double gain{1.0};        ///< force at a black/white edge [N]
+  DenoiseMode video_denoise{DenoiseMode::temporal};  ///< the video's compression-noise filter
+  double gain{1.0};                                  ///< force at a black/white edge [N]
   // normals from a picture
   std::vector<std::vector<glm::dvec2>> faces;    ///< 4 corners per face [px]
   double focal_px{0.0};                          ///< focal length [px]; 0: a 60 degree field of view
@@ -93,20 +99,49 @@ struct Scene {
   std::string label;  ///< one line: the field and its parameters
 };
 
-/// A still picture as a frame source (a video source has the same shape).
-class StillPicture {
- public:
-  explicit StillPicture(cv::Mat picture) : picture_(std::move(picture)) {}
-  [[nodiscard]] const cv::Mat& frame() const noexcept { return picture_; }
-  /// True when a new frame is due after `dt` [s]: never for a still.
-  bool advance(double /*dt*/) noexcept { return false; }
-  void pause(bool /*on*/) noexcept {}
-  void seek(double /*seconds*/) noexcept {}
-  [[nodiscard]] bool moving() const noexcept { return false; }
+/// The field the f key goes to after `k`: tangible, normals (with faces),
+/// texture, video (for a video source), and round again.
+[[nodiscard]] inline FieldKind next_kind(FieldKind k, bool have_faces, bool have_video) noexcept {
+  for (int i = 1; i <= 4; ++i) {
+    const auto next = static_cast<FieldKind>((static_cast<int>(k) + i) % 4);
+    if ((next == FieldKind::normals && !have_faces) || (next == FieldKind::video && !have_video)) continue;
+    return next;
+  }
+  return k;
+}
 
- private:
-  cv::Mat picture_;
-};
+/// What the d key does: the video's denoise mode goes none, temporal,
+/// spatial, both, none; a picture's blur sigma goes 0, 1, 2, 4, 0 px.
+inline void next_denoise(SceneConfig& c) noexcept {
+  if (c.kind == FieldKind::video)
+    c.video_denoise = static_cast<DenoiseMode>((static_cast<int>(c.video_denoise) + 1) % 4);
+  else
+    c.denoise_px = c.denoise_px == 0.0 ? 1.0 : c.denoise_px >= 4.0 ? 0.0 : c.denoise_px * 2.0;
+}
+
+/// One line naming the field and its parameters.
+[[nodiscard]] inline std::string scene_label(const SceneConfig& c) {
+  char label[160];
+  switch (c.kind) {
+    case FieldKind::tangible:
+      std::snprintf(label, sizeof label, "tangible: %s %d px, border %s, denoise %.1f px, %.2f N at an edge",
+                    to_string(c.mask), c.size, to_string(c.border), c.denoise_px, c.gain);
+      break;
+    case FieldKind::normals:
+      std::snprintf(label, sizeof label, "normals: %zu face(s), up to %.2f N along the motion", c.faces.size(),
+                    c.normals_max_force);
+      break;
+    case FieldKind::texture:
+      std::snprintf(label, sizeof label, "texture: Gaussian lattice %.2f mm, cubic, %.2f N", c.grain_mm,
+                    c.texture_gain);
+      break;
+    case FieldKind::video:
+      std::snprintf(label, sizeof label, "video: %s %d px, border %s, denoise %s, %.2f N at an edge", to_string(c.mask),
+                    c.size, to_string(c.border), to_string(c.video_denoise), c.gain);
+      break;
+  }
+  return label;
+}
 
 namespace detail {
 
@@ -175,29 +210,26 @@ inline AnyField texture_field(const cv::Mat& frame, const SceneConfig& c, const 
 
 }  // namespace detail
 
-/// Builds the scene for `frame` (BGR) in the picture's mapping.
-/// @throws std::invalid_argument for parameters the field refuses.
+/// Builds the scene for `frame` (BGR) in the picture's mapping; a video
+/// field is built by a VideoPlayer instead.
+/// @throws std::invalid_argument for parameters the field refuses, and for
+///         FieldKind::video.
 [[nodiscard]] inline Scene build_scene(const cv::Mat& frame, const SceneConfig& c, const PlaneMapping& mapping) {
   Scene s;
-  char label[160];
   switch (c.kind) {
     case FieldKind::tangible:
       s.field = detail::tangible(frame, c, mapping, s.underlay);
-      std::snprintf(label, sizeof label, "tangible: %s %d px, border %s, denoise %.1f px, %.2f N at an edge",
-                    to_string(c.mask), c.size, to_string(c.border), c.denoise_px, c.gain);
       break;
     case FieldKind::normals:
       s.field = detail::normals(frame, c, mapping, s.underlay);
-      std::snprintf(label, sizeof label, "normals: %zu face(s), up to %.2f N along the motion", c.faces.size(),
-                    c.normals_max_force);
       break;
     case FieldKind::texture:
       s.field = detail::texture_field(frame, c, mapping, s.underlay);
-      std::snprintf(label, sizeof label, "texture: Gaussian lattice %.2f mm, cubic, %.2f N", c.grain_mm,
-                    c.texture_gain);
       break;
+    case FieldKind::video:
+      throw std::invalid_argument("a video field is built from a video, not from one frame");
   }
-  s.label = label;
+  s.label = scene_label(c);
   return s;
 }
 

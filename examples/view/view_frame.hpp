@@ -46,7 +46,7 @@ struct ViewLayout {
     l.scale = std::min({1.0, static_cast<double>(max_picture_width) / w, static_cast<double>(max_picture_height) / h});
     const int pw = std::max(1, static_cast<int>(std::lround(w * l.scale)));
     const int ph = std::max(1, static_cast<int>(std::lround(h * l.scale)));
-    const int body_h = std::max(ph, 330);
+    const int body_h = std::max(ph, 400);  // room for the status lines
     l.picture = {margin, margin, pw, ph};
     l.panel = {margin * 2 + pw, margin, panel_width, body_h};
     l.canvas = {margin * 3 + pw + panel_width, margin * 3 + body_h + scope_height};
@@ -73,7 +73,14 @@ struct ViewStatus {
   std::uint32_t latch_bits{0};
   std::uint64_t dropped{0};  ///< samples the viewer missed
   bool paused{false};
-  std::string note;  ///< a transient message (a saved screenshot, a refused key)
+  // a video source
+  bool video{false};           ///< show the video lines below
+  double video_time{0.0};      ///< [s]
+  double video_duration{0.0};  ///< [s], infinity when unknown
+  long video_frame{-1};        ///< index of the frame shown
+  long frames_dropped{0};      ///< frames the video's worker skipped
+  long scene_cuts{0};          ///< scene cuts detected
+  std::string note;            ///< a transient message (a saved screenshot, a refused key)
 };
 
 /// Settings of the drawing.
@@ -155,6 +162,16 @@ inline void draw_view(cv::Mat& canvas, const ViewLayout& layout, const cv::Mat& 
   line(text);
   if (status.dropped > 0) {
     std::snprintf(text, sizeof text, "viewer missed %llu samples", static_cast<unsigned long long>(status.dropped));
+    line(text);
+  }
+  if (status.video) {
+    if (std::isfinite(status.video_duration))
+      std::snprintf(text, sizeof text, "video %.2f / %.2f s   frame %ld", status.video_time, status.video_duration,
+                    status.video_frame);
+    else
+      std::snprintf(text, sizeof text, "video %.2f s   frame %ld", status.video_time, status.video_frame);
+    line(text);
+    std::snprintf(text, sizeof text, "frames dropped %ld   scene cuts %ld", status.frames_dropped, status.scene_cuts);
     line(text);
   }
   if (status.paused) line("PAUSED", {0, 0, 220});

@@ -65,3 +65,51 @@ execute_process(COMMAND ${CMAKE_COMMAND} -E env --unset=DISPLAY --unset=WAYLAND_
 if(NOT rc EQUAL 1 OR NOT err MATCHES "^hapticfield_view: no display")
   message(FATAL_ERROR "without a display: exit ${rc}, '${err}'")
 endif()
+
+# --field video on a clip whose frames differ visibly (a square moving 12 px
+# per frame at 10 fps): the screenshot shows the frame of the loop's video
+# time, which went from --from at --speed for --seconds; view_check decodes
+# the clip itself.
+execute_process(COMMAND ${CHECK} --make-clip ${WORK_DIR}/clip.avi RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "view_check could not write the test clip")
+endif()
+execute_process(COMMAND ${VIEW} ${WORK_DIR}/clip.avi --from 1 --speed 2 --seconds 0.52 --start 200,250
+                        --realtime off --screenshot ${WORK_DIR}/video.png
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "hapticfield_view (video) failed (${rc}): ${out}${err}")
+endif()
+message(STATUS "${out}")
+string(REGEX MATCH "video: ([0-9.]+) s of 3.00 s, frame ([0-9]+) shown" found "${out}")
+if(NOT found)
+  message(FATAL_ERROR "hapticfield_view (video) did not say its video time: ${out}")
+endif()
+set(video_time ${CMAKE_MATCH_1})
+# 1 s + 2 x 0.52 s of loop time (a late loop only adds)
+execute_process(COMMAND ${CHECK} ${WORK_DIR}/video.png ${WORK_DIR}/clip.avi 200,250 ${video_time} 2.03,2.6
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "${out}${err}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the video screenshot does not show the frame of its video time")
+endif()
+# the check can fail: the same screenshot is not the frame at --from
+execute_process(COMMAND ${CHECK} ${WORK_DIR}/video.png ${WORK_DIR}/clip.avi 200,250 1.0 0,3 RESULT_VARIABLE rc
+                OUTPUT_QUIET)
+if(rc EQUAL 0)
+  message(FATAL_ERROR "view_check took the frame at 1 s for the frame at ${video_time} s")
+endif()
+
+# a still field of a video: the frame at --from, held
+execute_process(COMMAND ${VIEW} ${WORK_DIR}/clip.avi --field tangible --from 2.5 --seconds 0.2 --start 200,250
+                        --realtime off --screenshot ${WORK_DIR}/video_still.png
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "video: 2.500000 s of 3.00 s, frame 25 shown")
+  message(FATAL_ERROR "hapticfield_view (a still of a video) failed (${rc}): ${out}${err}")
+endif()
+execute_process(COMMAND ${CHECK} ${WORK_DIR}/video_still.png ${WORK_DIR}/clip.avi 200,250 2.5 2.5,2.5
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "${out}${err}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the still of the video is not the frame at --from")
+endif()

@@ -2,7 +2,10 @@
 # hapticfield_view in a real window under Xvfb: the window opens, runs for
 # two seconds with the mouse probe held at 150,120 px, the X server's whole
 # screen is grabbed (ImageMagick's import) and view_check finds the picture
-# and the cursor at the probe's position in it.
+# and the cursor at the probe's position in it. Then the same with a video
+# from 0.5 s at 4x: the 3 s test clip ends after 0.625 s, so two seconds in
+# the window must have followed it from frame 5 to the last frame, held (the
+# frame of video time 2.95 s).
 #   tests/view/run_xvfb.sh BUILD_DIR
 set -euo pipefail
 build=${1:?usage: run_xvfb.sh BUILD_DIR}
@@ -10,11 +13,18 @@ here=$(cd "$(dirname "$0")" && pwd)
 picture="$here/../../examples/data/coffee.png"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+"$build/tests/view_check" --make-clip "$work/clip.avi"
 xvfb-run -a -s "-screen 0 1280x1024x24" bash -c '
   "$1" "$2" --start 150,120 --seconds 3 --realtime off > "$3/view.log" 2>&1 &
   view=$!
   sleep 2
   import -window root "$3/screen.png"
+  wait "$view"
+  "$1" "$3/clip.avi" --from 0.5 --speed 4 --start 200,250 --seconds 3 --realtime off > "$3/video.log" 2>&1 &
+  view=$!
+  sleep 2
+  import -window root "$3/video.png"
   wait "$view"' _ "$build/examples/hapticfield_view" "$picture" "$work"
-cat "$work/view.log"
+cat "$work/view.log" "$work/video.log"
 "$build/tests/view_check" "$work/screen.png" "$picture" 150,120
+"$build/tests/view_check" "$work/video.png" "$work/clip.avi" 200,250 2.95 2.95,2.95

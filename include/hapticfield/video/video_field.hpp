@@ -12,11 +12,18 @@
 /// published in order only, so the rendered field never goes back in time
 /// (except by an explicit seek or loop). A live camera blends the previous
 /// and the newest frame, one frame late.
+///
+/// For a display (a viewer showing the frame under the probe), the worker
+/// can keep copies of the newest decoded frames (VideoFieldConfig::
+/// display_frames); display_frame(t) returns the newest kept frame at or
+/// before video time t. It locks and copies on the worker's and the
+/// caller's threads only: the servo path does not change.
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -45,6 +52,15 @@ struct SceneCut {
   double time = 0.0;  ///< its timestamp [s of video time]
 };
 
+/// A decoded frame kept for display (see VideoField::display_frame).
+struct DisplayFrame {
+  long index = 0;     ///< frame index in the source
+  double time = 0.0;  ///< its timestamp [s of video time]
+  cv::Mat image;      ///< as decoded (BGR, 8-bit), never written again
+};
+
+inline constexpr int max_display_frames = 64;
+
 /// One published window as a field: the probe's time is video time.
 struct WindowField {
   FrameWindow window;
@@ -66,6 +82,9 @@ struct VideoFieldConfig {
   /// Called on the worker thread before each frame is prepared (tests use
   /// it to make the worker slow); may be empty.
   std::function<void(long)> before_prepare{};
+  /// How many of the newest decoded frames the worker keeps for
+  /// display_frame(), in [0, 64]; 0 (the default) keeps none, copies nothing.
+  int display_frames = 0;
 };
 
 /// Counters, readable from any thread.
@@ -125,6 +144,19 @@ class VideoField {
     return state_->cuts;
   }
 
+  /// The newest frame kept for display whose time is at most `t` [s of video
+  /// time] (VideoFieldConfig::display_frames); nullopt when none is (none
+  /// kept, or none decoded yet since the start, a seek or a loop). Pass
+  /// statistics().video_time to get the frame being felt. Not for the servo
+  /// thread: it locks.
+  [[nodiscard]] std::optional<DisplayFrame> display_frame(double t) const {
+    std::lock_guard<std::mutex> lock(state_->display_mutex);
+    const auto& kept = state_->display;
+    for (auto it = kept.rbegin(); it != kept.rend(); ++it)
+      if (it->time <= t + 1e-9) return *it;
+    return std::nullopt;
+  }
+
   /// The worker's error, if it stopped on one (empty otherwise).
   [[nodiscard]] std::string error() const {
     std::lock_guard<std::mutex> lock(state_->cuts_mutex);
@@ -152,6 +184,8 @@ class VideoField {
           height(source->height()) {
       if (!std::isfinite(config.gain) || config.gain < 0.0)
         throw std::invalid_argument("VideoField: gain must be finite and non-negative [N]");
+      if (config.display_frames < 0 || config.display_frames > max_display_frames)
+        throw std::invalid_argument("VideoField: display_frames must be in [0, 64]");
       video_time.store(config.playback.start);
     }
 
@@ -175,6 +209,21 @@ class VideoField {
       cut_count.fetch_add(1);
       std::lock_guard<std::mutex> lock(cuts_mutex);
       cuts.push_back({f.index, f.time});
+    }
+
+    /// Keeps a copy of a decoded frame for display (worker thread).
+    void keep_for_display(const cv::Mat& image, long index, double time) {
+      if (config.display_frames == 0) return;
+      DisplayFrame f{index, time, image.clone()};  // the source reuses `image`
+      std::lock_guard<std::mutex> lock(display_mutex);
+      display.push_back(std::move(f));
+      while (static_cast<int>(display.size()) > config.display_frames)
+        display.pop_front();
+    }
+
+    void forget_display() {
+      std::lock_guard<std::mutex> lock(display_mutex);
+      display.clear();
     }
 
     void run() noexcept {
@@ -208,6 +257,7 @@ class VideoField {
           preparer.restart();
           builder.reset();
           pending.reset();
+          forget_display();
           end = have_frame = false;
           ended.store(false);
         }
@@ -226,6 +276,7 @@ class VideoField {
             dropped.fetch_add(1);
             continue;
           }
+          keep_for_display(image, index, source->time_of(index));
           if (config.before_prepare) config.before_prepare(index);
           std::shared_ptr<const VideoFrame> f = preparer.prepare(image, index, source->time_of(index));
           prepared.fetch_add(1);
@@ -252,6 +303,7 @@ class VideoField {
         bad.store(source->bad_frames());
         if (config.before_prepare) config.before_prepare(index);
         const double now = video_time.load(std::memory_order_acquire);
+        keep_for_display(image, index, now);
         std::shared_ptr<const VideoFrame> f = preparer.prepare(image, index, now);
         prepared.fetch_add(1);
         if (f->cut) record_cut(*f);
@@ -276,6 +328,8 @@ class VideoField {
     mutable std::mutex cuts_mutex;
     std::vector<SceneCut> cuts;
     std::string error;
+    mutable std::mutex display_mutex;
+    std::deque<DisplayFrame> display;  ///< oldest first
     std::thread worker;
   };
 
