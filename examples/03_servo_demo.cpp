@@ -25,6 +25,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
+#include "common/hid_device.hpp"
 #include "common/plots.hpp"
 
 #include "hapticfield/core.hpp"
@@ -119,14 +120,7 @@ bool valid_device(const std::string& d) {
   if (d == "sim" || d == "hid" || parse_woody(d, woody_spec)) return true;
   if (d.rfind("serial:", 0) == 0) return d.size() > 7;
   if (d.rfind("inverse3:", 0) == 0) return d.size() > 9;
-  if (d.rfind("hid:", 0) != 0) return false;
-  const std::string ids = d.substr(4);
-  const auto colon = ids.find(':');
-  if (colon == std::string::npos) return false;
-  const auto hex = [](const std::string& t) {
-    return !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos;
-  };
-  return hex(ids.substr(0, colon)) && hex(ids.substr(colon + 1));
+  return cli::hid_device(d).has_value();
 }
 
 Arguments parse(cli::Parser& p) {
@@ -394,15 +388,8 @@ int run(const Arguments& o) {
     hardware = true;
   } else if (o.device.rfind("hid", 0) == 0) {
 #if HAPTICFIELD_EXAMPLE_HID
-    std::uint16_t vid = default_vendor_id, pid = default_product_id;
-    if (o.device.size() > 3) {
-      unsigned v = 0, p = 0;
-      if (std::sscanf(o.device.c_str(), "hid:%x:%x", &v, &p) != 2 || v > 0xFFFF || p > 0xFFFF)
-        usage("--device hid:VID:PID takes hexadecimal ids, e.g. hid:1209:0001");
-      vid = static_cast<std::uint16_t>(v);
-      pid = static_cast<std::uint16_t>(p);
-    }
-    transport = std::make_unique<HidTransport>(vid, pid);
+    const cli::HidIds ids = *cli::hid_device(o.device);  // checked by parse()
+    transport = std::make_unique<HidTransport>(ids.vendor, ids.product);
     hardware = true;
 #else
     throw std::runtime_error("this build has no hidapi: --device hid is unavailable");

@@ -37,6 +37,7 @@
 
 #include "common/cli.hpp"
 #include "common/csv.hpp"
+#include "common/hid_device.hpp"
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -85,14 +86,7 @@ struct Arguments {
 };
 
 bool valid_device(const std::string& d) {
-  if (d == "sim" || d == "hid") return true;
-  if (d.rfind("hid:", 0) != 0) return false;
-  const std::string ids = d.substr(4);
-  const auto colon = ids.find(':');
-  const auto hex = [](const std::string& t) {
-    return !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos;
-  };
-  return colon != std::string::npos && hex(ids.substr(0, colon)) && hex(ids.substr(colon + 1));
+  return d == "sim" || hf::cli::hid_device(d).has_value();
 }
 
 Arguments parse(hf::cli::Parser& p) {
@@ -290,14 +284,8 @@ int run_play(const Arguments& a) {
     transport = std::make_unique<hf::SimulatedTransport>(*arm, now);
   } else {
 #if HAPTICFIELD_EXAMPLE_HID
-    std::uint16_t vid = hf::default_vendor_id, pid = hf::default_product_id;
-    if (a.device.size() > 3) {
-      unsigned v = 0, p = 0;
-      (void)std::sscanf(a.device.c_str(), "hid:%x:%x", &v, &p);
-      vid = static_cast<std::uint16_t>(v);
-      pid = static_cast<std::uint16_t>(p);
-    }
-    transport = std::make_unique<hf::HidTransport>(vid, pid);
+    const hf::cli::HidIds ids = *hf::cli::hid_device(a.device);  // checked by parse()
+    transport = std::make_unique<hf::HidTransport>(ids.vendor, ids.product);
     hardware = true;
 #else
     throw std::runtime_error("this build has no hidapi: --device hid is unavailable");

@@ -36,6 +36,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
+#include "common/hid_device.hpp"
 #include "common/picture.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -142,15 +143,7 @@ bool is_still_picture(const std::string& path) {
 }
 
 bool valid_device(const std::string& d) {
-  if (d == "mouse" || d == "sim" || d == "hid") return true;
-  if (d.rfind("hid:", 0) != 0) return false;
-  const std::string ids = d.substr(4);
-  const auto colon = ids.find(':');
-  if (colon == std::string::npos) return false;
-  const auto hex = [](const std::string& t) {
-    return !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos;
-  };
-  return hex(ids.substr(0, colon)) && hex(ids.substr(colon + 1));
+  return d == "mouse" || d == "sim" || cli::hid_device(d).has_value();
 }
 
 /// "x1,y1 x2,y2 x3,y3 x4,y4": four finite corners.
@@ -178,20 +171,12 @@ Arguments parse(cli::Parser& p) {
                                                    {"texture", FieldKind::texture}});
       o.kind_given = true;
     } else if (p.is("--mask")) {
-      o.scene.mask = p.choice<MaskKind>("mask", {{"prewitt", MaskKind::prewitt},
-                                                 {"sobel", MaskKind::sobel},
-                                                 {"scharr", MaskKind::scharr},
-                                                 {"roberts", MaskKind::roberts},
-                                                 {"gauss", MaskKind::gaussian},
-                                                 {"emboss", MaskKind::emboss}});
+      o.scene.mask = p.named("mask", mask_kinds);
     } else if (p.is("--size")) {
       o.scene.size = static_cast<int>(p.integer(2, 129));
       size_given = true;
     } else if (p.is("--border")) {
-      o.scene.border = p.choice<Border>("border", {{"suspend", Border::suspend},
-                                                   {"clamp", Border::clamp},
-                                                   {"reflect", Border::reflect},
-                                                   {"fade", Border::fade}});
+      o.scene.border = p.named("border", border_kinds);
     } else if (p.is("--denoise")) {
       const std::string v = p.value();
       if (const auto mode = denoise_mode(v)) {
@@ -586,14 +571,8 @@ int run(const Arguments& o) {
     transport = std::make_unique<SimulatedTransport>(*arm, now);
   } else {
 #if HAPTICFIELD_EXAMPLE_HID
-    std::uint16_t vid = default_vendor_id, pid = default_product_id;
-    if (o.device.size() > 3) {
-      unsigned v = 0, p = 0;
-      if (std::sscanf(o.device.c_str(), "hid:%x:%x", &v, &p) != 2) usage("--device hid:VID:PID takes hexadecimal ids");
-      vid = static_cast<std::uint16_t>(v);
-      pid = static_cast<std::uint16_t>(p);
-    }
-    transport = std::make_unique<HidTransport>(vid, pid);
+    const cli::HidIds ids = *cli::hid_device(o.device);  // checked by parse()
+    transport = std::make_unique<HidTransport>(ids.vendor, ids.product);
     hardware = true;
 #else
     throw std::runtime_error("this build has no hidapi: --device hid is unavailable");

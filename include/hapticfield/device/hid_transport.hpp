@@ -37,10 +37,6 @@
 
 namespace hapticfield {
 
-/// Placeholder USB ids of the reference firmware (pid.codes test VID);
-/// a product ships its own.
-inline constexpr std::uint16_t default_vendor_id = 0x1209;
-inline constexpr std::uint16_t default_product_id = 0x0001;
 /// The shipped udev rule that gives users access to the hidraw node.
 inline constexpr const char* udev_rule_name = "udev/70-hapticfield.rules";
 

@@ -12,6 +12,15 @@
 
 #include "hapticfield/device/status.hpp"
 
+namespace hapticfield {
+
+/// Placeholder USB ids of the reference firmware (pid.codes test VID);
+/// a product ships its own.
+inline constexpr std::uint16_t default_vendor_id = 0x1209;
+inline constexpr std::uint16_t default_product_id = 0x0001;
+
+}  // namespace hapticfield
+
 namespace hapticfield::protocol {
 
 inline constexpr std::uint8_t version = 1;           ///< protocol version this code speaks
