@@ -4,12 +4,15 @@
 /// helpers that turn numpy arrays into probes and back.
 
 #include <hapticfield/core.hpp>
+#include <hapticfield/kernels.hpp>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
 #include <array>
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -65,6 +68,26 @@ inline py::ssize_t rows_of(const Array& a, py::ssize_t cols, const char* what) {
   return a.shape(0);
 }
 
+/// The option called `name` among `options`; a ValueError naming them all otherwise.
+template <class E>
+inline E choose(const std::string& what, const std::string& name, const std::map<std::string, E>& options) {
+  const auto it = options.find(name);
+  if (it != options.end()) return it->second;
+  std::string names;
+  for (const auto& [k, v] : options)
+    names += (names.empty() ? "" : ", ") + k;
+  throw py::value_error(what + ": unknown '" + name + "' (choose " + names + ")");
+}
+
+/// Mask, border and tangible options as tangible_forces() takes them (image.cpp).
+MaskKind mask_kind(const std::string& name);
+Border border_kind(const std::string& name);
+TangibleConfig tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
+                                double sigma);
+/// The picture centred on the origin at px_per_mm [px/mm] (default Kim & Kwon's 6.4) or fitted so that its
+/// longer side spans workspace_mm [mm].
+PlaneMapping mapping_for(int width, int height, std::optional<double> px_per_mm, std::optional<double> workspace_mm);
+
 using V3 = std::array<double, 3>;
 inline glm::dvec3 glm3(const V3& a) {
   return {a[0], a[1], a[2]};
@@ -79,5 +102,6 @@ void bind_core(py::module_& m);
 void bind_image(py::module_& m);
 void bind_texture(py::module_& m);
 void bind_servo(py::module_& m);
+void bind_video(py::module_& m);
 
 }  // namespace hapticfield::python

@@ -174,7 +174,9 @@ PYBIND11_MODULE(hapticfield, m) {
   m.attr("__version__") = std::to_string(HAPTICFIELD_VERSION_MAJOR) + "." + std::to_string(HAPTICFIELD_VERSION_MINOR) +
                           "." + std::to_string(HAPTICFIELD_VERSION_PATCH);
   static py::exception<hapticfield::Error> error(m, "Error", PyExc_RuntimeError);
-  static py::exception<hapticfield::FileError> file_error(m, "FileError", error.ptr());
+  // A FileError is also an OSError, so `except OSError` catches a missing or unreadable file.
+  static py::exception<hapticfield::FileError> file_error(m, "FileError",
+                                                          py::make_tuple(error, py::handle(PyExc_OSError)));
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -188,4 +190,5 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_image(m);
   hp::bind_texture(m);
   hp::bind_servo(m);
+  hp::bind_video(m);
 }

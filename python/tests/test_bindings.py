@@ -295,6 +295,9 @@ def test_bad_input_raises_with_the_library_message(call, error, message):
 
 def test_file_errors_are_library_errors():
     assert issubclass(hf.FileError, hf.Error) and issubclass(hf.Error, RuntimeError)
+    assert issubclass(hf.FileError, OSError)  # `except OSError` catches a missing file too
+    with pytest.raises(OSError, match="no such file"):
+        hf.tangible_forces("/no/such.png", np.zeros((1, 2)))
 
 
 def test_hatt_file_that_is_not_xml(tmp_path):
