@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <cstdlib>
 
 namespace hapticfield::python {
 
@@ -85,6 +86,17 @@ Field contact_with(C constraint, const std::vector<Field>& parts, const std::str
   return make_field(contact(std::move(constraint), std::move(s)), "contact(" + d + ")");
 }
 
+/// For the allocation proof's own test: allocates and frees on every
+/// evaluation, so a counter that misses it is shown to be broken.
+struct AllocatingField {
+  static inline void* volatile sink = nullptr;
+  glm::dvec3 force(const Probe&) noexcept {
+    sink = std::malloc(64);
+    std::free(sink);
+    return glm::dvec3{0.0};
+  }
+};
+
 }  // namespace
 
 void bind_core(py::module_& m) {
@@ -138,6 +150,10 @@ void bind_core(py::module_& m) {
       },
       py::arg("field"), py::arg("limit"),
       "|F| limited to limit [N] keeping the direction; a non-finite force becomes zero.");
+  m.def(
+      "_allocating_field", [] { return make_field(AllocatingField{}, "allocating (for tests)"); },
+      "For tests only: a zero field that allocates and frees 64 bytes on every evaluation (the allocation "
+      "proof in python/tests/test_alloc.py shows that it catches such a field).");
   m.def(
       "zero", [] { return make_field(ZeroField{}, "zero"); }, "A field that is always zero.");
 

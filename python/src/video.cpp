@@ -75,8 +75,8 @@ py::array_t<double> video_forces(const py::object& path, const Array& t, const A
   const double* times = t.data();
   for (py::ssize_t i = 0; i < n; ++i)
     if (!(std::isfinite(times[i]) && times[i] >= 0.0 && times[i] <= 1e6))
-      throw py::value_error("t: video times must be finite and within [0, 1e6] [s], got " +
-                            std::to_string(times[i]) + " at " + std::to_string(i));
+      throw py::value_error("t: video times must be finite and within [0, 1e6] [s], got " + std::to_string(times[i]) +
+                            " at " + std::to_string(i));
   const PrepareConfig config = prepare_config(mask, size, border, denoise);
   auto source = open_video(path);
   auto out = matrix(n, 2);
@@ -134,8 +134,8 @@ VideoHandle video_field(const py::object& path, const std::string& mask, std::op
   VideoHandle h;
   h.video = std::make_shared<VideoField>(std::move(source), mapping, std::move(config));
   h.impl = std::make_shared<AnyField>(SharedVideo{h.video});
-  h.description = "video " + name + " " + std::to_string(h.video->width()) + " x " +
-                  std::to_string(h.video->height()) + " px";
+  h.description =
+      "video " + name + " " + std::to_string(h.video->width()) + " x " + std::to_string(h.video->height()) + " px";
   return h;
 }
 
@@ -173,10 +173,13 @@ void bind_video(py::module_& m) {
                                  "servo thread maps its loop time [s] to video time and blends the two frames "
                                  "that bracket it (never waiting, locking or allocating). Use it like any Field "
                                  "(forces, composition, run_servo); the probes' time is the loop time [s].")
-      .def("pause", [](VideoHandle& h) { h.video->playback().pause(); }, "Holds the video time where it is.")
-      .def("resume", [](VideoHandle& h) { h.video->playback().resume(); }, "Lets the video time advance again.")
       .def(
-          "seek", [](VideoHandle& h, double t) {
+          "pause", [](VideoHandle& h) { h.video->playback().pause(); }, "Holds the video time where it is.")
+      .def(
+          "resume", [](VideoHandle& h) { h.video->playback().resume(); }, "Lets the video time advance again.")
+      .def(
+          "seek",
+          [](VideoHandle& h, double t) {
             if (!std::isfinite(t)) throw py::value_error("seek: time must be finite [s]");
             h.video->playback().seek(t);
           },
@@ -195,14 +198,18 @@ void bind_video(py::module_& m) {
           "error", [](const VideoHandle& h) { return h.video->error(); },
           "The worker's error message if it stopped on one, else ''.")
       .def(
-          "stop", [](VideoHandle& h) {
+          "stop",
+          [](VideoHandle& h) {
             py::gil_scoped_release release;
             h.video->stop();
           },
           "Stops the worker thread (the field keeps its last window).")
-      .def_property_readonly("fps", [](const VideoHandle& h) { return h.video->fps(); }, "Frames per second [1/s].")
-      .def_property_readonly("width", [](const VideoHandle& h) { return h.video->width(); }, "Frame width [px].")
-      .def_property_readonly("height", [](const VideoHandle& h) { return h.video->height(); }, "Frame height [px].");
+      .def_property_readonly(
+          "fps", [](const VideoHandle& h) { return h.video->fps(); }, "Frames per second [1/s].")
+      .def_property_readonly(
+          "width", [](const VideoHandle& h) { return h.video->width(); }, "Frame width [px].")
+      .def_property_readonly(
+          "height", [](const VideoHandle& h) { return h.video->height(); }, "Frame height [px].");
   m.def("video_field", &video_field, py::arg("path"), py::arg("mask") = "prewitt", py::arg("size") = py::none(),
         py::arg("border") = "suspend", py::arg("denoise") = "temporal", py::arg("fade") = default_cut_fade,
         py::arg("gain") = 1.0, py::arg("rate") = 1.0, py::arg("start") = 0.0, py::arg("loop") = false,

@@ -1,59 +1,26 @@
 """Tangible video from Python against the tangible_video tool, still pictures and itself.
 
-The clips are PNG sequences written here (lossless, so the gray levels are
-known): a dark bar moving right on a light ground, then a cut to a light disc
-on black. Image sequences play at 25 frames/s.
+The clips are PNG sequences written by clips.py (lossless, so the gray levels
+are known): a dark bar moving right on a light ground, then a cut to a light
+disc on black.
 """
 import os
-import struct
 import subprocess
 import time
-import zlib
 
 import numpy as np
 import pytest
 
 import hapticfield as hf
+from clips import CUT, FPS, frame, write_clip, write_png
 
 pytestmark = pytest.mark.skipif(not hf.has_video, reason="the module was built without OpenCV videoio")
-
-FPS = 25.0  # an image sequence's rate [frames/s]
-CUT = 8     # the first frame of the second scene
-
-
-def write_png(path, gray):
-    """An 8-bit gray PNG from an H x W array of levels [0, 255]."""
-    h, w = gray.shape
-    rows = b"".join(b"\x00" + bytes(row) for row in gray.astype(np.uint8))
-
-    def chunk(kind, data):
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
-
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0)) +
-                chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
-
-
-def frame(k, w=96, h=64):
-    """Frame k [gray levels]: scene 0 a dark bar moving 2 px a frame, scene 1 a light disc."""
-    if k < CUT:
-        m = np.full((h, w), 230.0)
-        x = 20 + 2 * k
-        m[10:h - 10, x:x + 12] = 30.0
-    else:
-        y, x = np.mgrid[0:h, 0:w]
-        m = np.where((x - w / 2) ** 2 + (y - h / 2) ** 2 <= 18 ** 2, 220.0, 20.0)
-    return m
 
 
 @pytest.fixture
 def clip(tmp_path):
     """A 16-frame PNG sequence with one cut at frame CUT; returns its printf pattern."""
-    d = tmp_path / "clip"
-    d.mkdir()
-    for k in range(16):
-        write_png(d / f"{k:04d}.png", frame(k))
-    return str(d / "%04d.png")
+    return write_clip(tmp_path / "clip")
 
 
 PLAIN = dict(size=5, border="clamp", denoise="none")
