@@ -2,6 +2,7 @@
 #include "field.hpp"
 
 #include <hapticfield/core.hpp>
+#include <hapticfield/texture.hpp>
 #include <hapticfield/version.hpp>
 
 #include <pybind11/stl.h>
@@ -37,25 +38,22 @@ py::array_t<double> forces(Field& self, const Array& positions, const std::optio
   } else {
     out = matrix(n, 3);
   }
-  const double* p = positions.data();
-  const double* v = velocities ? velocities->data() : nullptr;
-  const double* nf = normal_forces ? normal_forces->data() : nullptr;
-  const double* sn = surface_normals ? surface_normals->data() : nullptr;
-  double* f = out.mutable_data();
+  ProbeArrays a;
+  a.positions = positions.data();
+  a.velocities = velocities ? velocities->data() : nullptr;
+  a.normal_forces = normal_forces ? normal_forces->data() : nullptr;
+  a.surface_normals = surface_normals ? surface_normals->data() : nullptr;
+  a.forces = out.mutable_data();
+  a.n = n;
+  a.period = period;
+  a.start_time = start_time;
   std::shared_ptr<AnyField> field = self.impl;
   {
     py::gil_scoped_release release;
-    Probe probe;
-    probe.period = period;
-    for (py::ssize_t i = 0; i < n; ++i) {
-      probe.position = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
-      if (v) probe.velocity = {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
-      if (nf) probe.normal_force = nf[i];
-      if (sn) probe.surface_normal = {sn[3 * i], sn[3 * i + 1], sn[3 * i + 2]};
-      probe.time = start_time + static_cast<double>(i) * period;
-      const glm::dvec3 r = field->force(probe);
-      f[3 * i] = r.x, f[3 * i + 1] = r.y, f[3 * i + 2] = r.z;
-    }
+    if (self.batch)
+      self.batch(*field, a);
+    else
+      evaluate(*field, a);
   }
   return out;
 }
@@ -74,9 +72,14 @@ Field sum_of(const std::vector<Field>& fields) {
 /// F = Fc + parts: the constraint first, the parts see |Fc| and the normal.
 template <class C>
 Field contact_with(C constraint, const std::vector<Field>& parts, const std::string& name) {
-  if (parts.size() == 1)  // one part: no sum in between
-    return make_field(contact(std::move(constraint), SharedField{parts[0].impl}),
-                      "contact(" + name + " + " + parts[0].description + ")");
+  if (parts.size() == 1) {  // one part: no sum in between
+    const std::string d = "contact(" + name + " + " + parts[0].description + ")";
+    // A stateless part (its force() is const) is copied in: a copy behaves as the shared part would, and
+    // the contact calls it directly instead of through a second type-erased field.
+    if (const auto* friction = parts[0].impl->target<texture::Friction>())
+      return make_field(contact(std::move(constraint), texture::Friction(*friction)), d);
+    return make_field(contact(std::move(constraint), SharedField{parts[0].impl}), d);
+  }
   FieldSum s;
   std::string d = name;
   for (const Field& f : parts) {

@@ -103,6 +103,18 @@ def test_vectorised_forces_equal_one_probe_at_a_time():
     np.testing.assert_array_equal(batch, single)
 
 
+def test_a_single_stateless_part_copied_into_the_contact_gives_the_shared_parts_forces():
+    positions, velocities = stroke(800)
+    positions[::7, 2] = 0.001  # some probes off the plane
+    friction = hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)
+    light = hf.plane_contact([friction], stiffness=1500.0, damping=2.0)  # friction copied in, evaluated inline
+    shared = hf.plane_contact([friction, hf.zero()], stiffness=1500.0, damping=2.0)  # through the shared part
+    batch = light.forces(positions, velocities)
+    np.testing.assert_array_equal(batch, shared.forces(positions, velocities))
+    np.testing.assert_array_equal(batch, np.array([light.force(p, v) for p, v in zip(positions, velocities)]))
+    assert np.count_nonzero(batch[:, 0]) > 600
+
+
 def test_forces_write_into_a_given_array():
     positions, velocities = stroke(300)
     out = np.full((300, 3), np.nan)
