@@ -209,7 +209,10 @@ void bind_video(py::module_& m) {
       .def_property_readonly(
           "width", [](const VideoHandle& h) { return h.video->width(); }, "Frame width [px].")
       .def_property_readonly(
-          "height", [](const VideoHandle& h) { return h.video->height(); }, "Frame height [px].");
+          "height", [](const VideoHandle& h) { return h.video->height(); }, "Frame height [px].")
+      .def_property_readonly(
+          "duration", [](VideoHandle& h) { return h.video->playback().config().duration; },
+          "Length of the video [s] (frames / fps; inf when the container does not say).");
   m.def("video_field", &video_field, py::arg("path"), py::arg("mask") = "prewitt", py::arg("size") = py::none(),
         py::arg("border") = "suspend", py::arg("denoise") = "temporal", py::arg("fade") = default_cut_fade,
         py::arg("gain") = 1.0, py::arg("rate") = 1.0, py::arg("start") = 0.0, py::arg("loop") = false,

@@ -312,6 +312,14 @@ def test_file_errors_are_library_errors():
         hf.tangible_forces("/no/such.png", np.zeros((1, 2)))
 
 
+@pytest.mark.skipif(hf.has_video, reason="this build has tangible video (tests in test_video.py)")
+def test_without_videoio_the_video_calls_raise():
+    for call in (lambda: hf.video_forces("clip.mp4", [0.0], [[0.0, 0.0]]), lambda: hf.video_cuts("clip.mp4"),
+                 lambda: hf.video_field("clip.mp4")):
+        with pytest.raises(hf.Error, match="no OpenCV videoio"):
+            call()
+
+
 def test_hatt_file_that_is_not_xml(tmp_path):
     bad = tmp_path / "bad.xml"
     bad.write_text("not xml at all <")

@@ -85,6 +85,7 @@ def test_between_frames_the_force_blends_linearly(clip):
 def test_video_field_properties_and_composition(clip):
     video = hf.video_field(clip, workspace_mm=60.0, **PLAIN)
     assert (video.width, video.height, video.fps) == (96, 64, FPS)
+    assert video.duration == pytest.approx(16 / FPS)
     assert isinstance(video, hf.Field) and "video" in video.description
     scene = hf.plane_contact([video, hf.friction(coulomb=0.2)])
     assert "video" in scene.description
