@@ -62,12 +62,14 @@ def test_a_tick_allocates_nothing_for_a_full_composition(tmp_path, coffee, hatt_
 
 
 def test_a_field_that_allocates_every_tick_is_caught():
-    runs = counted_runs("allocating", "--short", 0.1, "--long", 0.3)
+    runs = counted_runs("allocating", "--short", 0.2, "--long", 0.4)
     short, long = runs
     assert long["ticks"] - short["ticks"] == 200
-    # One call a tick once the arm is armed (the first few ticks command zero without the field).
-    assert long["loop_malloc"] - short["loop_malloc"] == 200 and long["loop_free"] - short["loop_free"] == 200, runs
-    assert short["loop_malloc"] > 50, runs
+    # One malloc and one free a tick once the arm is armed: the first ticks (about 12, more on a loaded
+    # machine) command zero without evaluating the field.
+    for run in runs:
+        assert run["loop_free"] == run["loop_malloc"] and run["ticks"] - 60 <= run["loop_malloc"] <= run["ticks"], runs
+    assert 160 <= long["loop_malloc"] - short["loop_malloc"] <= 240, runs
     assert long["malloc"] - short["malloc"] >= 200 and long["free"] - short["free"] >= 200, runs
 
 
