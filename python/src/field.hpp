@@ -4,12 +4,15 @@
 /// helpers that turn numpy arrays into probes and back.
 
 #include <hapticfield/core.hpp>
+#include <hapticfield/kernels.hpp>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
 #include <array>
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,10 +20,53 @@ namespace hapticfield::python {
 
 namespace py = pybind11;
 
+/// N probes as numpy arrays (row-major) and the N x 3 forces [N] to write.
+struct ProbeArrays {
+  const double* positions = nullptr;        ///< N x 3 [m]
+  const double* velocities = nullptr;       ///< N x 3 [m/s], or null: zero
+  const double* normal_forces = nullptr;    ///< N [N], or null: zero
+  const double* surface_normals = nullptr;  ///< N x 3, or null: none
+  double* forces = nullptr;                 ///< N x 3 [N]
+  py::ssize_t n = 0;
+  double period = servo_period;  ///< [s] between consecutive probes
+  double start_time = 0.0;       ///< time of the first probe [s]
+};
+
+/// Evaluates `field` at the probes in order, as consecutive ticks.
+template <class F>
+void evaluate(F& field, const ProbeArrays& a) noexcept {
+  Probe probe;
+  probe.period = a.period;
+  const double *p = a.positions, *v = a.velocities, *nf = a.normal_forces, *sn = a.surface_normals;
+  double* f = a.forces;
+  for (py::ssize_t i = 0; i < a.n; ++i) {
+    probe.position = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+    if (v) probe.velocity = {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
+    if (nf) probe.normal_force = nf[i];
+    if (sn) probe.surface_normal = {sn[3 * i], sn[3 * i + 1], sn[3 * i + 2]};
+    probe.time = a.start_time + static_cast<double>(i) * a.period;
+    const glm::dvec3 r = field.force(probe);
+    f[3 * i] = r.x, f[3 * i + 1] = r.y, f[3 * i + 2] = r.z;
+  }
+}
+
+/// The batch evaluator of a field of concrete type F held in an AnyField:
+/// one type check a call instead of one virtual call a probe, and the
+/// field's force() inlined into the loop.
+template <class F>
+void evaluate_as(AnyField& any, const ProbeArrays& a) noexcept {
+  if (F* f = any.target<F>())
+    evaluate(*f, a);
+  else
+    evaluate(any, a);
+}
+
 /// A field built in Python. Fields made of fields share their parts.
 struct Field {
   std::shared_ptr<AnyField> impl;
   std::string description;
+  /// Evaluates impl over arrays knowing its type (set by make_field; null: through AnyField).
+  void (*batch)(AnyField&, const ProbeArrays&) noexcept = nullptr;
 };
 
 /// A part held by a composed field: forwards to the shared field.
@@ -47,7 +93,8 @@ struct FieldSum {
 
 template <HapticField F>
 Field make_field(F&& f, std::string description) {
-  return Field{std::make_shared<AnyField>(std::forward<F>(f)), std::move(description)};
+  using T = std::remove_cvref_t<F>;
+  return Field{std::make_shared<AnyField>(std::forward<F>(f)), std::move(description), &evaluate_as<T>};
 }
 
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
@@ -65,6 +112,26 @@ inline py::ssize_t rows_of(const Array& a, py::ssize_t cols, const char* what) {
   return a.shape(0);
 }
 
+/// The option called `name` among `options`; a ValueError naming them all otherwise.
+template <class E>
+inline E choose(const std::string& what, const std::string& name, const std::map<std::string, E>& options) {
+  const auto it = options.find(name);
+  if (it != options.end()) return it->second;
+  std::string names;
+  for (const auto& [k, v] : options)
+    names += (names.empty() ? "" : ", ") + k;
+  throw py::value_error(what + ": unknown '" + name + "' (choose " + names + ")");
+}
+
+/// Mask, border and tangible options as tangible_forces() takes them (image.cpp).
+MaskKind mask_kind(const std::string& name);
+Border border_kind(const std::string& name);
+TangibleConfig tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
+                                double sigma);
+/// The picture centred on the origin at px_per_mm [px/mm] (default Kim & Kwon's 6.4) or fitted so that its
+/// longer side spans workspace_mm [mm].
+PlaneMapping mapping_for(int width, int height, std::optional<double> px_per_mm, std::optional<double> workspace_mm);
+
 using V3 = std::array<double, 3>;
 inline glm::dvec3 glm3(const V3& a) {
   return {a[0], a[1], a[2]};
@@ -79,5 +146,6 @@ void bind_core(py::module_& m);
 void bind_image(py::module_& m);
 void bind_texture(py::module_& m);
 void bind_servo(py::module_& m);
+void bind_video(py::module_& m);
 
 }  // namespace hapticfield::python

@@ -16,32 +16,6 @@ namespace {
 /// Largest picture accepted as an array [px] (int sizes, 8 bytes a pixel: 2 GiB).
 constexpr py::ssize_t max_array_pixels = py::ssize_t{1} << 28;
 
-template <class E>
-E choose(const std::string& what, const std::string& name, const std::map<std::string, E>& options) {
-  const auto it = options.find(name);
-  if (it != options.end()) return it->second;
-  std::string names;
-  for (const auto& [k, v] : options)
-    names += (names.empty() ? "" : ", ") + k;
-  throw py::value_error(what + ": unknown '" + name + "' (choose " + names + ")");
-}
-
-MaskKind mask_kind(const std::string& name) {
-  return choose<MaskKind>("mask", name,
-                          {{"prewitt", MaskKind::prewitt},
-                           {"sobel", MaskKind::sobel},
-                           {"scharr", MaskKind::scharr},
-                           {"roberts", MaskKind::roberts},
-                           {"gauss", MaskKind::gaussian},
-                           {"emboss", MaskKind::emboss}});
-}
-
-Border border_kind(const std::string& name) {
-  return choose<Border>(
-      "border", name,
-      {{"suspend", Border::suspend}, {"clamp", Border::clamp}, {"reflect", Border::reflect}, {"fade", Border::fade}});
-}
-
 GrayWeights gray_weights(const std::string& name) {
   return choose<GrayWeights>("gray", name, {{"paper", GrayWeights::paper}, {"bt601", GrayWeights::bt601}});
 }
@@ -75,21 +49,6 @@ GrayImage gray_from(const py::object& image, GrayWeights weights) {
   return gray;
 }
 
-TangibleConfig tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
-                                double sigma) {
-  TangibleConfig o;
-  o.mask = mask_kind(mask);
-  o.size = size                                                        ? *size
-           : o.mask == MaskKind::roberts                               ? 2
-           : (o.mask == MaskKind::scharr || o.mask == MaskKind::sobel) ? 3
-                                                                       : 17;
-  o.border = border_kind(border);
-  if (!(std::isfinite(sigma) && sigma >= 0.0))
-    throw py::value_error("sigma: must be finite and >= 0 [px] (0: size / 6)");
-  o.sigma = sigma;
-  return o;
-}
-
 py::array_t<double> tangible_forces(const py::object& image, const Array& xy, const std::string& mask,
                                     std::optional<int> size, const std::string& border, double sigma,
                                     const std::string& gray) {
@@ -106,13 +65,6 @@ py::array_t<double> tangible_forces(const py::object& image, const Array& xy, co
     }
   }
   return out;
-}
-
-PlaneMapping mapping_for(int width, int height, std::optional<double> px_per_mm, std::optional<double> workspace_mm) {
-  if (px_per_mm && workspace_mm) throw py::value_error("give px_per_mm or workspace_mm, not both");
-  if (workspace_mm) return PlaneMapping::fit(width, height, *workspace_mm);
-  if (px_per_mm) return PlaneMapping(*px_per_mm, glm::dvec2{(width - 1) / 2.0, (height - 1) / 2.0});
-  return PlaneMapping::kim_kwon(width, height);
 }
 
 py::dict pose_dict(const FacePose& pose) {
@@ -152,6 +104,44 @@ Camera camera_of(const Array& K) {
 }
 
 }  // namespace
+
+MaskKind mask_kind(const std::string& name) {
+  return choose<MaskKind>("mask", name,
+                          {{"prewitt", MaskKind::prewitt},
+                           {"sobel", MaskKind::sobel},
+                           {"scharr", MaskKind::scharr},
+                           {"roberts", MaskKind::roberts},
+                           {"gauss", MaskKind::gaussian},
+                           {"emboss", MaskKind::emboss}});
+}
+
+Border border_kind(const std::string& name) {
+  return choose<Border>(
+      "border", name,
+      {{"suspend", Border::suspend}, {"clamp", Border::clamp}, {"reflect", Border::reflect}, {"fade", Border::fade}});
+}
+
+TangibleConfig tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
+                                double sigma) {
+  TangibleConfig o;
+  o.mask = mask_kind(mask);
+  o.size = size                                                        ? *size
+           : o.mask == MaskKind::roberts                               ? 2
+           : (o.mask == MaskKind::scharr || o.mask == MaskKind::sobel) ? 3
+                                                                       : 17;
+  o.border = border_kind(border);
+  if (!(std::isfinite(sigma) && sigma >= 0.0))
+    throw py::value_error("sigma: must be finite and >= 0 [px] (0: size / 6)");
+  o.sigma = sigma;
+  return o;
+}
+
+PlaneMapping mapping_for(int width, int height, std::optional<double> px_per_mm, std::optional<double> workspace_mm) {
+  if (px_per_mm && workspace_mm) throw py::value_error("give px_per_mm or workspace_mm, not both");
+  if (workspace_mm) return PlaneMapping::fit(width, height, *workspace_mm);
+  if (px_per_mm) return PlaneMapping(*px_per_mm, glm::dvec2{(width - 1) / 2.0, (height - 1) / 2.0});
+  return PlaneMapping::kim_kwon(width, height);
+}
 
 void bind_image(py::module_& m) {
   m.def("tangible_forces", &tangible_forces, py::arg("image"), py::arg("xy"), py::arg("mask") = "prewitt",

@@ -2,11 +2,13 @@
 #include "field.hpp"
 
 #include <hapticfield/core.hpp>
+#include <hapticfield/texture.hpp>
 #include <hapticfield/version.hpp>
 
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <cstdlib>
 
 namespace hapticfield::python {
 
@@ -36,25 +38,22 @@ py::array_t<double> forces(Field& self, const Array& positions, const std::optio
   } else {
     out = matrix(n, 3);
   }
-  const double* p = positions.data();
-  const double* v = velocities ? velocities->data() : nullptr;
-  const double* nf = normal_forces ? normal_forces->data() : nullptr;
-  const double* sn = surface_normals ? surface_normals->data() : nullptr;
-  double* f = out.mutable_data();
+  ProbeArrays a;
+  a.positions = positions.data();
+  a.velocities = velocities ? velocities->data() : nullptr;
+  a.normal_forces = normal_forces ? normal_forces->data() : nullptr;
+  a.surface_normals = surface_normals ? surface_normals->data() : nullptr;
+  a.forces = out.mutable_data();
+  a.n = n;
+  a.period = period;
+  a.start_time = start_time;
   std::shared_ptr<AnyField> field = self.impl;
   {
     py::gil_scoped_release release;
-    Probe probe;
-    probe.period = period;
-    for (py::ssize_t i = 0; i < n; ++i) {
-      probe.position = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
-      if (v) probe.velocity = {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
-      if (nf) probe.normal_force = nf[i];
-      if (sn) probe.surface_normal = {sn[3 * i], sn[3 * i + 1], sn[3 * i + 2]};
-      probe.time = start_time + static_cast<double>(i) * period;
-      const glm::dvec3 r = field->force(probe);
-      f[3 * i] = r.x, f[3 * i + 1] = r.y, f[3 * i + 2] = r.z;
-    }
+    if (self.batch)
+      self.batch(*field, a);
+    else
+      evaluate(*field, a);
   }
   return out;
 }
@@ -73,9 +72,14 @@ Field sum_of(const std::vector<Field>& fields) {
 /// F = Fc + parts: the constraint first, the parts see |Fc| and the normal.
 template <class C>
 Field contact_with(C constraint, const std::vector<Field>& parts, const std::string& name) {
-  if (parts.size() == 1)  // one part: no sum in between
-    return make_field(contact(std::move(constraint), SharedField{parts[0].impl}),
-                      "contact(" + name + " + " + parts[0].description + ")");
+  if (parts.size() == 1) {  // one part: no sum in between
+    const std::string d = "contact(" + name + " + " + parts[0].description + ")";
+    // A stateless part (its force() is const) is copied in: a copy behaves as the shared part would, and
+    // the contact calls it directly instead of through a second type-erased field.
+    if (const auto* friction = parts[0].impl->target<texture::Friction>())
+      return make_field(contact(std::move(constraint), texture::Friction(*friction)), d);
+    return make_field(contact(std::move(constraint), SharedField{parts[0].impl}), d);
+  }
   FieldSum s;
   std::string d = name;
   for (const Field& f : parts) {
@@ -84,6 +88,17 @@ Field contact_with(C constraint, const std::vector<Field>& parts, const std::str
   }
   return make_field(contact(std::move(constraint), std::move(s)), "contact(" + d + ")");
 }
+
+/// For the allocation proof's own test: allocates and frees on every
+/// evaluation, so a counter that misses it is shown to be broken.
+struct AllocatingField {
+  static inline void* volatile sink = nullptr;
+  glm::dvec3 force(const Probe&) noexcept {
+    sink = std::malloc(64);
+    std::free(sink);
+    return glm::dvec3{0.0};
+  }
+};
 
 }  // namespace
 
@@ -139,6 +154,10 @@ void bind_core(py::module_& m) {
       py::arg("field"), py::arg("limit"),
       "|F| limited to limit [N] keeping the direction; a non-finite force becomes zero.");
   m.def(
+      "_allocating_field", [] { return make_field(AllocatingField{}, "allocating (for tests)"); },
+      "For tests only: a zero field that allocates and frees 64 bytes on every evaluation (the allocation "
+      "proof in python/tests/test_alloc.py shows that it catches such a field).");
+  m.def(
       "zero", [] { return make_field(ZeroField{}, "zero"); }, "A field that is always zero.");
 
   m.def(
@@ -174,7 +193,9 @@ PYBIND11_MODULE(hapticfield, m) {
   m.attr("__version__") = std::to_string(HAPTICFIELD_VERSION_MAJOR) + "." + std::to_string(HAPTICFIELD_VERSION_MINOR) +
                           "." + std::to_string(HAPTICFIELD_VERSION_PATCH);
   static py::exception<hapticfield::Error> error(m, "Error", PyExc_RuntimeError);
-  static py::exception<hapticfield::FileError> file_error(m, "FileError", error.ptr());
+  // A FileError is also an OSError, so `except OSError` catches a missing or unreadable file.
+  static py::exception<hapticfield::FileError> file_error(m, "FileError",
+                                                          py::make_tuple(error, py::handle(PyExc_OSError)));
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -188,4 +209,5 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_image(m);
   hp::bind_texture(m);
   hp::bind_servo(m);
+  hp::bind_video(m);
 }

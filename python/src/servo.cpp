@@ -10,6 +10,7 @@
 
 #include <pybind11/stl.h>
 
+#include <dlfcn.h>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -55,6 +56,13 @@ py::dict snapshot_dict(const LoopSnapshot& s) {
   return d;
 }
 
+/// An allocation counter preloaded into the process (python/tests/alloc/alloc_counter.c)
+/// exports these: malloc and free calls made so far on the calling thread. Null without one.
+using AllocationCount = unsigned long (*)();
+AllocationCount counter_function(const char* name) {
+  return reinterpret_cast<AllocationCount>(dlsym(RTLD_DEFAULT, name));
+}
+
 template <Device D>
 py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, double rate, RealTime realtime) {
   LoopConfig config;
@@ -74,9 +82,15 @@ py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, dou
     return f->force(in.probe);
   };
   StopReason reason = StopReason::requested;
+  static const AllocationCount mallocs = counter_function("hapticfield_malloc_calls");
+  static const AllocationCount frees = counter_function("hapticfield_free_calls");
+  const bool counted = mallocs && frees;
+  unsigned long loop_mallocs = 0, loop_frees = 0;
   {
     py::gil_scoped_release release;  // Python never runs inside a tick
+    const unsigned long mallocs_before = counted ? mallocs() : 0, frees_before = counted ? frees() : 0;
     reason = loop.run(callback, {.max_ticks = ticks});
+    if (counted) loop_mallocs = mallocs() - mallocs_before, loop_frees = frees() - frees_before;
   }
   if (!rows.empty()) rows.back().force = loop.last_command();
   const py::ssize_t n = static_cast<py::ssize_t>(rows.size());
@@ -104,6 +118,13 @@ py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, dou
   result["histogram_bin_s"] = DurationHistogram::bin_ns * 1e-9;
   result["nominal_period_s"] = loop.period();
   result["max_force_n"] = device.info().max_force;
+  if (counted) {
+    result["loop_allocations"] = loop_mallocs;
+    result["loop_frees"] = loop_frees;
+  } else {
+    result["loop_allocations"] = py::none();
+    result["loop_frees"] = py::none();
+  }
   result["stop_reason"] = reason == StopReason::tick_limit     ? "tick_limit"
                           : reason == StopReason::disconnected ? "disconnected"
                                                                : "requested";
@@ -170,7 +191,9 @@ void bind_servo(py::module_& m) {
         "Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] "
         "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace "
         "(t [s], position N x 3 [m], force N x 3 [N] as commanded after the safety chain), period_histogram "
-        "(counts per histogram_bin_s) and stop_reason. device sim: the simulated arm, held by a scripted hand "
+        "(counts per histogram_bin_s), stop_reason, and loop_allocations / loop_frees (malloc / free calls on this "
+        "thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None "
+        "otherwise). device sim: the simulated arm, held by a scripted hand "
         "(raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm "
         "(needs confirm_hardware=True). The field is evaluated in C++; the GIL is released while the loop runs.");
 }

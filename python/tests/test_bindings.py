@@ -103,6 +103,18 @@ def test_vectorised_forces_equal_one_probe_at_a_time():
     np.testing.assert_array_equal(batch, single)
 
 
+def test_a_single_stateless_part_copied_into_the_contact_gives_the_shared_parts_forces():
+    positions, velocities = stroke(800)
+    positions[::7, 2] = 0.001  # some probes off the plane
+    friction = hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)
+    light = hf.plane_contact([friction], stiffness=1500.0, damping=2.0)  # friction copied in, evaluated inline
+    shared = hf.plane_contact([friction, hf.zero()], stiffness=1500.0, damping=2.0)  # through the shared part
+    batch = light.forces(positions, velocities)
+    np.testing.assert_array_equal(batch, shared.forces(positions, velocities))
+    np.testing.assert_array_equal(batch, np.array([light.force(p, v) for p, v in zip(positions, velocities)]))
+    assert np.count_nonzero(batch[:, 0]) > 600
+
+
 def test_forces_write_into_a_given_array():
     positions, velocities = stroke(300)
     out = np.full((300, 3), np.nan)
@@ -295,6 +307,17 @@ def test_bad_input_raises_with_the_library_message(call, error, message):
 
 def test_file_errors_are_library_errors():
     assert issubclass(hf.FileError, hf.Error) and issubclass(hf.Error, RuntimeError)
+    assert issubclass(hf.FileError, OSError)  # `except OSError` catches a missing file too
+    with pytest.raises(OSError, match="no such file"):
+        hf.tangible_forces("/no/such.png", np.zeros((1, 2)))
+
+
+@pytest.mark.skipif(hf.has_video, reason="this build has tangible video (tests in test_video.py)")
+def test_without_videoio_the_video_calls_raise():
+    for call in (lambda: hf.video_forces("clip.mp4", [0.0], [[0.0, 0.0]]), lambda: hf.video_cuts("clip.mp4"),
+                 lambda: hf.video_field("clip.mp4")):
+        with pytest.raises(hf.Error, match="no OpenCV videoio"):
+            call()
 
 
 def test_hatt_file_that_is_not_xml(tmp_path):

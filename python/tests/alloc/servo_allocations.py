@@ -1,0 +1,65 @@
+"""Counts the allocation calls of run_servo on this thread (run under LD_PRELOAD=alloc_counter.so).
+
+    servo_allocations.py SCENE [--clip PATTERN] [--hatt MODEL] [--coffee PNG] [--short S] [--long S] [--pairs N]
+
+Builds SCENE (full: plane contact with a tangible image, a lattice texture,
+friction, a HaTT texture and a video; allocating: the test-only field that
+allocates every tick), warms up, then runs the loop for S_short and S_long
+seconds, N times each, and prints one JSON line: for each run its ticks and
+the malloc/free calls made on this thread: by the whole run_servo call, and
+by the loop alone (run_servo reports those when this counter is preloaded).
+"""
+import argparse
+import ctypes
+import json
+
+import hapticfield as hf
+
+counter = ctypes.CDLL(None)  # the preloaded counter's symbols are global
+counter.hapticfield_malloc_calls.restype = ctypes.c_ulong
+counter.hapticfield_free_calls.restype = ctypes.c_ulong
+
+
+def scene(a):
+    if a.scene == "allocating":
+        return hf.plane_contact([hf._allocating_field()])
+    parts = [hf.tangible_field(a.coffee, workspace_mm=80.0),
+             hf.lattice_texture(noise="gaussian", sigma=0.5, gain=0.3, scale_with_normal_force=True, axes=(1, 1, 0)),
+             hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)]
+    if a.hatt:
+        parts.append(hf.hatt_texture(a.hatt))
+    if a.clip:
+        parts.append(hf.video_field(a.clip, workspace_mm=80.0, size=5, loop=True))
+    return hf.plane_contact(parts, stiffness=1500.0)
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("scene", choices=["full", "allocating"])
+    p.add_argument("--clip")
+    p.add_argument("--hatt")
+    p.add_argument("--coffee")
+    p.add_argument("--short", type=float, default=0.5)
+    p.add_argument("--long", type=float, default=2.5)
+    p.add_argument("--pairs", type=int, default=1)
+    a = p.parse_args()
+    field = scene(a)
+    hf.run_servo(field, seconds=0.3)  # warm-up: first-use allocations (lazy tables, caches)
+    runs = []
+    for _ in range(a.pairs):
+        for seconds in (a.short, a.long):
+            counter.hapticfield_count_here(1)
+            result = hf.run_servo(field, seconds=seconds)
+            runs.append({"seconds": seconds, "ticks": result["statistics"]["ticks"],
+                         "malloc": counter.hapticfield_malloc_calls(), "free": counter.hapticfield_free_calls(),
+                         "peak_force_n": result["statistics"]["peak_force_n"],
+                         "loop_malloc": result["loop_allocations"], "loop_free": result["loop_frees"],
+                         "missed": result["statistics"]["missed_deadlines"],
+                         "safety_events": result["statistics"]["safety_events"]})
+            counter.hapticfield_count_here(0)
+            del result
+    print(json.dumps(runs))
+
+
+if __name__ == "__main__":
+    main()

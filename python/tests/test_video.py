@@ -1,0 +1,180 @@
+"""Tangible video from Python against the tangible_video tool, still pictures and itself.
+
+The clips are PNG sequences written by clips.py (lossless, so the gray levels
+are known): a dark bar moving right on a light ground, then a cut to a light
+disc on black.
+"""
+import os
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+import hapticfield as hf
+from clips import CUT, FPS, frame, write_clip, write_png
+
+pytestmark = pytest.mark.skipif(not hf.has_video, reason="the module was built without OpenCV videoio")
+
+
+@pytest.fixture
+def clip(tmp_path):
+    """A 16-frame PNG sequence with one cut at frame CUT; returns its printf pattern."""
+    return write_clip(tmp_path / "clip")
+
+
+PLAIN = dict(size=5, border="clamp", denoise="none")
+
+
+# --- offline forces and cuts -------------------------------------------------------
+
+@pytest.mark.skipif(not os.environ.get("HAPTICFIELD_TANGIBLE_VIDEO"), reason="tangible_video not built")
+@pytest.mark.parametrize("options", [dict(size=5, border="clamp", denoise="none", fade=0.1),
+                                     dict(mask="sobel", border="reflect", denoise="temporal", fade=0.04),
+                                     dict(mask="prewitt", size=9, border="suspend", denoise="both", fade=0.0)])
+def test_video_forces_equal_the_tangible_video_tool(tmp_path, clip, options):
+    rng = np.random.default_rng(11)
+    n = 600
+    t = rng.uniform(0.0, 16 / FPS, n)  # unsorted on purpose
+    t[:40] = np.round(t[:40] * FPS) / FPS  # frame times too
+    xy = np.column_stack([rng.uniform(-3, 99, n), rng.uniform(-3, 67, n)])
+    probes, forces, cuts = tmp_path / "probes.csv", tmp_path / "forces.csv", tmp_path / "cuts.csv"
+    np.savetxt(probes, np.column_stack([t, xy]), delimiter=",", fmt="%.17g", header="t,x,y", comments="")
+    args = [os.environ["HAPTICFIELD_TANGIBLE_VIDEO"], clip, "--probes", str(probes), "--forces", str(forces),
+            "--cuts", str(cuts), "--fade-ms", repr(options["fade"] * 1e3)]
+    for key in ("mask", "size", "border", "denoise"):
+        if key in options:
+            args += ["--" + key, str(options[key])]
+    subprocess.run(args, check=True, capture_output=True)
+    tool = np.loadtxt(forces, delimiter=",", skiprows=1)
+    ours = hf.video_forces(clip, t, xy, **options)
+    np.testing.assert_array_equal(tool[:, :3], np.column_stack([t, xy]))  # the tool kept the input order too
+    np.testing.assert_array_equal(ours, tool[:, 3:])  # the same numbers, bit for bit
+    assert np.count_nonzero(ours) > 30  # the probes met edges
+    tool_cuts = np.loadtxt(cuts, delimiter=",", skiprows=1, ndmin=2)
+    found = hf.video_cuts(clip)
+    assert [c[0] for c in found] == [int(r[0]) for r in tool_cuts]
+    np.testing.assert_allclose([c[1] for c in found], tool_cuts[:, 1], rtol=1e-8)
+
+
+def test_video_cuts_find_the_written_cut(clip):
+    assert hf.video_cuts(clip) == [(CUT, pytest.approx(CUT / FPS, abs=1e-12))]
+
+
+def test_at_a_frame_time_the_force_is_that_frames_still_picture_force(clip):
+    xy = np.array([[x, y] for x in np.arange(14.0, 60.0, 0.75) for y in (20.0, 31.5, 50.0)])
+    for k in (3, 5, 12):  # past the fade-in of the first frame and of the cut
+        t = np.full(len(xy), k / FPS)
+        video = hf.video_forces(clip, t, xy, **PLAIN)
+        still = hf.tangible_forces(frame(k), xy, size=5, border="clamp")
+        np.testing.assert_allclose(video, still, atol=1e-6)  # the frame's gray levels went through float32
+        assert np.max(np.abs(still)) > 0.5
+
+
+def test_between_frames_the_force_blends_linearly(clip):
+    xy = np.array([[x, 32.0] for x in np.arange(18.0, 40.0, 0.5)])
+    k, w = 4, 0.25
+    a = hf.video_forces(clip, np.full(len(xy), k / FPS), xy, **PLAIN)
+    b = hf.video_forces(clip, np.full(len(xy), (k + 1) / FPS), xy, **PLAIN)
+    mid = hf.video_forces(clip, np.full(len(xy), (k + w) / FPS), xy, **PLAIN)
+    np.testing.assert_allclose(mid, (1 - w) * a + w * b, atol=1e-9)
+
+
+# --- the live field ------------------------------------------------------------------
+
+def test_video_field_properties_and_composition(clip):
+    video = hf.video_field(clip, workspace_mm=60.0, **PLAIN)
+    assert (video.width, video.height, video.fps) == (96, 64, FPS)
+    assert video.duration == pytest.approx(16 / FPS)
+    assert isinstance(video, hf.Field) and "video" in video.description
+    scene = hf.plane_contact([video, hf.friction(coulomb=0.2)])
+    assert "video" in scene.description
+    assert video.error() == ""
+
+
+def test_playback_controls_move_the_video_time(clip):
+    video = hf.video_field(clip, **PLAIN)
+    p = np.zeros((1, 3))
+
+    def video_time_at(loop_time):
+        video.forces(p, start_time=loop_time)
+        return video.statistics()["video_time_s"]
+
+    assert video_time_at(10.0) == pytest.approx(0.0)  # the first tick anchors loop time to the start
+    assert video_time_at(10.2) == pytest.approx(0.2)
+    video.pause()
+    assert video_time_at(10.4) == pytest.approx(0.2)
+    video.resume()  # a change of state applies from the next tick on
+    assert video_time_at(10.5) == pytest.approx(0.2)
+    assert video_time_at(10.6) == pytest.approx(0.3)
+    video.set_rate(2.0)
+    assert video_time_at(10.7) == pytest.approx(0.3)
+    assert video_time_at(10.8) == pytest.approx(0.5)  # two video seconds a loop second
+    video.seek(0.1)
+    assert video_time_at(10.9) == pytest.approx(0.1)
+
+
+def test_run_servo_on_a_video_field_gives_forces_and_statistics(clip):
+    video = hf.video_field(clip, workspace_mm=60.0, gain=1.0, loop=True, **PLAIN)
+    scene = hf.plane_contact([video], stiffness=1500.0)
+    result = hf.run_servo(scene, seconds=0.6, rate=1000.0, hand="raster", hand_size=0.02)
+    assert result["statistics"]["ticks"] == 600
+    tangential = np.linalg.norm(result["trace"]["force"][:, :2], axis=1)
+    assert np.max(tangential) > 0.05  # the video's edges were felt [N]
+    s = video.statistics()
+    assert s["prepared"] > 0 and s["published"] > 0 and s["video_time_s"] > 0.3
+    assert video.error() == ""
+    video.stop()
+
+
+def test_a_frame_smaller_than_the_mask_is_the_workers_error(tmp_path):
+    d = tmp_path / "tiny"
+    d.mkdir()
+    for k in range(3):
+        write_png(d / f"{k:04d}.png", np.full((6, 6), 100.0))
+    video = hf.video_field(str(d / "%04d.png"), size=17)
+    for _ in range(500):  # the worker stops on its error [10 ms steps]
+        if video.statistics()["ended"]:
+            break
+        time.sleep(0.01)
+    assert video.statistics()["ended"] and video.statistics()["prepared"] == 0
+    np.testing.assert_array_equal(video.forces(np.zeros((5, 3))), 0.0)  # no frame: zero force
+    assert "smaller" in video.error() or "mask" in video.error()
+
+
+# --- bad input ------------------------------------------------------------------------
+
+@pytest.mark.parametrize("call,error,message", [
+    (lambda c: hf.video_forces("/no/such.mp4", [0.0], [[0.0, 0.0]]), hf.FileError, "no such file"),
+    (lambda c: hf.video_field("/no/such.mp4"), OSError, "no such file"),
+    (lambda c: hf.video_cuts("/no/such.mp4"), hf.FileError, "no such file"),
+    (lambda c: hf.video_forces(c, [0.0, 0.1], [[0.0, 0.0]]), ValueError, "as many rows"),
+    (lambda c: hf.video_forces(c, [[0.0]], [[0.0, 0.0]]), ValueError, "1-D"),
+    (lambda c: hf.video_forces(c, [-0.1], [[0.0, 0.0]]), ValueError, "video times"),
+    (lambda c: hf.video_forces(c, [np.nan], [[0.0, 0.0]]), ValueError, "video times"),
+    (lambda c: hf.video_forces(c, [0.0], [[0.0, 0.0]], mask="box"), ValueError, "unknown 'box'"),
+    (lambda c: hf.video_forces(c, [0.0], [[0.0, 0.0]], size=4), ValueError, "size 4 px"),
+    (lambda c: hf.video_forces(c, [0.0], [[0.0, 0.0]], denoise="median"), ValueError, "unknown 'median'"),
+    (lambda c: hf.video_forces(c, [0.0], [[0.0, 0.0]], fade=20.0), ValueError, "fade"),
+    (lambda c: hf.video_field(c, rate=0.0), ValueError, "rate"),
+    (lambda c: hf.video_field(c, rate=17.0), ValueError, "rate"),
+    (lambda c: hf.video_field(c, start=-1.0), ValueError, "start"),
+    (lambda c: hf.video_field(c, gain=-1.0), ValueError, "gain"),
+    (lambda c: hf.video_field(c, fade=-0.1), ValueError, "fade"),
+    (lambda c: hf.video_field(c, px_per_mm=2.0, workspace_mm=50.0), ValueError, "not both"),
+    (lambda c: hf.video_field(c, px_per_mm=0.0), ValueError, "px_per_mm"),
+    (lambda c: hf.video_field(c).set_rate(0.0), ValueError, "rate"),
+    (lambda c: hf.video_field(c).seek(float("nan")), ValueError, "seek"),
+])
+def test_bad_video_input_raises_with_the_library_message(clip, call, error, message):
+    with pytest.raises(error, match=message):
+        call(clip)
+
+
+def test_a_file_that_is_not_a_video(tmp_path):
+    bad = tmp_path / "notes.mp4"
+    bad.write_text("not a video\n" * 100)
+    with pytest.raises(hf.FileError, match="cannot decode"):
+        hf.video_field(str(bad))
+    with pytest.raises(OSError):
+        hf.video_forces(str(bad), [0.0], [[0.0, 0.0]])
