@@ -205,6 +205,35 @@ TEST_CASE("decoders reject short, unknown, bad-version and bad-CRC reports") {
   CHECK(protocol::decode(std::span<const std::uint8_t>(one), d) == Status::short_report);
 }
 
+TEST_CASE("a report whose reserved bytes are not zero is refused, even with a valid CRC") {
+  // The bytes marked "reserved, 0" make a version-1 report; a report that
+  // sets them (and seals a matching CRC) is not one, and would not survive
+  // a decode / encode round trip.
+  std::array<std::uint8_t, 64> b{};
+  protocol::StateReport state;
+  protocol::encode(protocol::StateReport{}, b);
+  b[protocol::offset::state::reserved] = 2;
+  protocol::detail::seal(b, protocol::state_size);
+  CHECK(protocol::decode(std::span<const std::uint8_t>(b.data(), protocol::state_size), state) == Status::bad_value);
+  protocol::CommandReport command;
+  for (std::size_t at = protocol::offset::command::reserved; at < protocol::command_size - 2; ++at) {
+    b.fill(0);
+    protocol::encode(protocol::CommandReport{}, b);
+    b[at] = 0x80;
+    protocol::detail::seal(b, protocol::command_size);
+    CHECK(protocol::decode(std::span<const std::uint8_t>(b.data(), protocol::command_size), command) ==
+          Status::bad_value);
+  }
+  b.fill(0);
+  protocol::ConfigurationReport configuration;
+  configuration.watchdog_us = 20000;
+  protocol::encode(configuration, b);
+  b[protocol::offset::configuration::reserved + 1] = 1;
+  protocol::detail::seal(b, protocol::configuration_size);
+  CHECK(protocol::decode(std::span<const std::uint8_t>(b.data(), protocol::configuration_size), configuration) ==
+        Status::bad_value);
+}
+
 TEST_CASE("command, device-info, configuration and control reports round trip") {
   std::array<std::uint8_t, 64> b{};
   protocol::CommandReport c;

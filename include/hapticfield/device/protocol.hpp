@@ -258,7 +258,7 @@ inline std::size_t encode(const StateReport& r, std::span<std::uint8_t> out) noe
   r.buttons = in[at::buttons];
   for (std::size_t i = 0; i < 3; ++i)
     r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
-  return Status::ok;
+  return in[at::reserved] == 0 ? Status::ok : Status::bad_value;  // not a version-1 report
 }
 
 inline std::size_t encode(const CommandReport& r, std::span<std::uint8_t> out) noexcept {
@@ -286,6 +286,8 @@ inline std::size_t encode(const CommandReport& r, std::span<std::uint8_t> out) n
   if ((r.flags & ~(command_flags::arm | command_flags::home)) != 0) return Status::bad_value;
   for (std::size_t i = 0; i < 3; ++i)
     r.torque_mnm[i] = get_i16(in, at::torque + 2 * i);
+  for (std::size_t i = at::reserved; i < command_size - 2; ++i)
+    if (in[i] != 0) return Status::bad_value;  // not a version-1 report
   return Status::ok;
 }
 
@@ -352,6 +354,7 @@ inline std::size_t encode(const ConfigurationReport& r, std::span<std::uint8_t> 
   using namespace detail;
   if (const Status s = check(in, ReportId::configuration, configuration_size); s != Status::ok) return s;
   r.watchdog_us = get_u16(in, offset::configuration::watchdog);
+  if (get_u16(in, offset::configuration::reserved) != 0) return Status::bad_value;  // not a version-1 report
   return r.watchdog_us == 0 ? Status::bad_value : Status::ok;
 }
 
