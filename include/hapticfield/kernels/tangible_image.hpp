@@ -47,6 +47,13 @@ class TangibleImage {
   TangibleImage(const GrayImage& gray, const TangibleConfig& options)
       : options_(options), force_(build(inverted_checked(gray, options), options)) {}
 
+  /// The same from an image already inverted as inverted(gray) inverts it
+  /// (255 - Y): no copy (video frames are prepared this way).
+  /// @throws std::invalid_argument as the constructor.
+  [[nodiscard]] static TangibleImage from_inverted(const GrayImage& inverted, const TangibleConfig& options) {
+    return TangibleImage(checked(inverted, options), options, Inverted{});
+  }
+
   /// Normalised force at image position (x, y) [px]; see ImageForce::at().
   [[nodiscard]] glm::dvec2 at(double x, double y) const noexcept {
     return std::visit([x, y](const auto& f) noexcept { return f.at(x, y); }, force_);
@@ -68,10 +75,17 @@ class TangibleImage {
   [[nodiscard]] bool uses_integral_kernel() const noexcept { return std::holds_alternative<Integral>(force_); }
 
  private:
-  static GrayImage inverted_checked(const GrayImage& gray, const TangibleConfig& options) {
+  struct Inverted {};
+  TangibleImage(const GrayImage& inverted, const TangibleConfig& options, Inverted)
+      : options_(options), force_(build(inverted, options)) {}
+
+  static const GrayImage& checked(const GrayImage& gray, const TangibleConfig& options) {
     validate_mask_size(options.mask, options.size);
     validate_image_for_mask(gray, options.size);
-    return inverted(gray);
+    return gray;
+  }
+  static GrayImage inverted_checked(const GrayImage& gray, const TangibleConfig& options) {
+    return inverted(checked(gray, options));
   }
 
   static std::variant<Direct, Integral> build(const GrayImage& inv, const TangibleConfig& o) {

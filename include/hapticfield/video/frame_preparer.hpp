@@ -52,15 +52,16 @@ class FramePreparer {
     denoiser_.apply(gray_, cut || !started_);
     started_ = true;
 
-    GrayImage g(gray_.cols, gray_.rows);
+    // The inverted levels 255 - Y, as TangibleImage would invert them.
+    GrayImage inverted(gray_.cols, gray_.rows);
     for (int y = 0; y < gray_.rows; ++y) {
       const float* src = gray_.ptr<float>(y);
-      double* dst = g.row(y);
+      double* dst = inverted.row(y);
       for (int x = 0; x < gray_.cols; ++x)
-        dst[x] = quantised_level(src[x]);
+        dst[x] = gray_full_scale - quantised_level(src[x]);
     }
-    auto frame = std::make_shared<VideoFrame>(
-        VideoFrame{index, time, cut && index_ >= 0, cuts_.last_difference(), TangibleImage(g, config_.tangible)});
+    auto frame = std::make_shared<VideoFrame>(VideoFrame{index, time, cut && index_ >= 0, cuts_.last_difference(),
+                                                         TangibleImage::from_inverted(inverted, config_.tangible)});
     size_ = image.size();
     index_ = index;
     return frame;
@@ -79,14 +80,31 @@ class FramePreparer {
   [[nodiscard]] const cv::Mat& last_gray() const noexcept { return gray_; }
   [[nodiscard]] const PrepareConfig& config() const noexcept { return config_; }
 
-  /// A gray level [0, 255] rounded to 1/100 level: the paper's colour
-  /// weights give exact hundredths, which float arithmetic and denoising
-  /// blur by ~1e-5 level. On hundredths the tables hold 32-bit integers
-  /// (12 bytes a cell up to m = 65, see integral_kernel.hpp) instead of
-  /// 2^24 fixed point in 64 bits; the force moves by at most 2e-5 of full scale.
+  /// A gray level rounded to 1/100 level: the paper's colour weights give
+  /// exact hundredths, which float arithmetic and denoising blur by ~1e-5
+  /// level. On hundredths the tables hold 32-bit integers (12 bytes a cell
+  /// up to m = 65, see integral_kernel.hpp) instead of 2^24 fixed point in
+  /// 64 bits; the force moves by at most 2e-5 of full scale.
+  /// @pre level in [0, 255]: the weights sum to 1 and both denoisers average,
+  ///      so every prepared level is (no clamp, so the loop vectorises).
   [[nodiscard]] static double quantised_level(float level) noexcept {
-    const float hundredths = std::clamp(level, 0.0f, 255.0f) * 100.0f + 0.5f;
+    const float hundredths = level * 100.0f + 0.5f;
     return static_cast<double>(static_cast<int>(hundredths)) / 100.0;
+  }
+
+  /// One pass: B, G, R bytes to Y = 0.11 B + 0.59 G + 0.3 R; the channel
+  /// count fixed at compile time so the loop vectorises.
+  template <int Channels>
+  static void paper_gray(const cv::Mat& image, cv::Mat& out) {
+    out.create(image.size(), CV_32FC1);
+    for (int y = 0; y < image.rows; ++y) {
+      const unsigned char* src = image.ptr<unsigned char>(y);
+      float* dst = out.ptr<float>(y);
+      for (int x = 0; x < image.cols; ++x) {
+        const unsigned char* p = src + Channels * x;
+        dst[x] = 0.11f * static_cast<float>(p[0]) + 0.59f * static_cast<float>(p[1]) + 0.3f * static_cast<float>(p[2]);
+      }
+    }
   }
 
   /// Gray levels with the paper's weights, as float [0, 255].
@@ -96,18 +114,11 @@ class FramePreparer {
         image.convertTo(out, CV_32F);
         return;
       case 3:
-      case 4: {  // one pass: B, G, R bytes to Y = 0.11 B + 0.59 G + 0.3 R
-        const int n = image.channels();
-        out.create(image.size(), CV_32FC1);
-        for (int y = 0; y < image.rows; ++y) {
-          const unsigned char* src = image.ptr<unsigned char>(y);
-          float* dst = out.ptr<float>(y);
-          for (int x = 0; x < image.cols; ++x, src += n)
-            dst[x] = 0.11f * static_cast<float>(src[0]) + 0.59f * static_cast<float>(src[1]) +
-                     0.3f * static_cast<float>(src[2]);
-        }
+        paper_gray<3>(image, out);
         return;
-      }
+      case 4:
+        paper_gray<4>(image, out);
+        return;
       default:
         throw std::invalid_argument("FramePreparer: expected 1, 3 or 4 channels");
     }
