@@ -26,6 +26,7 @@
 
 #include "common/cli.hpp"
 #include "common/hid_device.hpp"
+#include "common/loop_thread.hpp"
 #include "common/plots.hpp"
 
 #include "hapticfield/core.hpp"
@@ -412,14 +413,7 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
   config.recover_after = 0.5;
   ServoLoop<D, SteadyClock> loop(device, clock, config);
 
-  if (hardware) {
-    std::printf(
-        "WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
-        "Press Enter to start (Ctrl-C to abort)... ");
-    std::fflush(stdout);
-    std::string line;
-    std::getline(std::cin, line);
-  }
+  if (hardware) cli::wait_for_operator();
 
   const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * o.rate));
   std::vector<Row> rows;
@@ -434,21 +428,11 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
     return field.force(in.probe);
   };
 
-  std::atomic<bool> done{false};
-  std::exception_ptr failure;
-  StopReason reason = StopReason::requested;
-  std::thread servo([&] {
-    try {
-      reason = loop.run(callback, {.max_ticks = ticks});
-    } catch (...) {
-      failure = std::current_exception();
-    }
-    done.store(true);
-  });
+  cli::LoopThread servo(loop, callback, {.max_ticks = ticks});
   const auto t0 = std::chrono::steady_clock::now();
   std::uint64_t latches_shown = 0;
   const auto elapsed = [&t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
-  while (!done.load()) {
+  while (!servo.done()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const LoopSnapshot s = loop.statistics();
     if (s.latches > latches_shown) {  // every latch gets a line of its own
@@ -463,8 +447,7 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
   servo.join();
   print_status(loop.statistics(), loop.safety().latched(), elapsed());
   std::printf("\n");
-  if (failure) std::rethrow_exception(failure);
-  if (reason == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  if (servo.outcome() == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
 
   const LoopSnapshot s = loop.statistics();
   std::printf(

@@ -38,6 +38,7 @@
 #include "common/cli.hpp"
 #include "common/csv.hpp"
 #include "common/hid_device.hpp"
+#include "common/loop_thread.hpp"
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -295,14 +296,7 @@ int run_play(const Arguments& a) {
   hf::LoopConfig loop_config;
   loop_config.recover_after = 0.5;
   hf::ServoLoop<hf::ForceArm, hf::SteadyClock> loop(device, clock, loop_config);
-  if (hardware) {
-    std::printf(
-        "WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
-        "Press Enter to start (Ctrl-C to abort)... ");
-    std::fflush(stdout);
-    std::string line;
-    std::getline(std::cin, line);
-  }
+  if (hardware) hf::cli::wait_for_operator();
   std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s\n", name.c_str(), width,
               height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise), a.fade_s * 1e3,
               seconds);
@@ -317,16 +311,7 @@ int run_play(const Arguments& a) {
     }
     return field.force(in.probe);
   };
-  std::atomic<bool> done{false};
-  std::exception_ptr failure;
-  std::thread servo([&] {
-    try {
-      (void)loop.run(callback, {.max_ticks = ticks});
-    } catch (...) {
-      failure = std::current_exception();
-    }
-    done.store(true);
-  });
+  hf::cli::LoopThread servo(loop, callback, {.max_ticks = ticks});
   const auto status = [&] {
     const hf::LoopSnapshot s = loop.statistics();
     const hf::VideoStatistics v = video_ptr->statistics();
@@ -337,14 +322,14 @@ int run_play(const Arguments& a) {
         loop.safety().latched() ? " | ZERO FORCE" : "");
     std::fflush(stdout);
   };
-  while (!done.load()) {
+  while (!servo.done()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     status();
   }
   servo.join();
   status();
   std::printf("\n");
-  if (failure) std::rethrow_exception(failure);
+  (void)servo.outcome();  // rethrows what the loop threw
   const hf::VideoStatistics v = video_ptr->statistics();
   const std::vector<hf::SceneCut> cuts = video_ptr->cuts();
   video_ptr->stop();

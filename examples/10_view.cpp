@@ -37,6 +37,7 @@
 
 #include "common/cli.hpp"
 #include "common/hid_device.hpp"
+#include "common/loop_thread.hpp"
 #include "common/picture.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -299,14 +300,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   ServoLoop<D, SteadyClock> loop(device, clock, config);
   SampleRing<8192> ring;
 
-  if (hardware) {
-    std::printf(
-        "WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
-        "Press Enter to start (Ctrl-C to abort)... ");
-    std::fflush(stdout);
-    std::string line;
-    std::getline(std::cin, line);
-  }
+  if (hardware) cli::wait_for_operator();
 
   // the tick: tell the viewer where the probe is and what was commanded
   auto tick = [&](const TickInput& in) noexcept {
@@ -314,17 +308,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     return field.force(in.probe);
   };
   const std::uint64_t ticks = o.seconds ? static_cast<std::uint64_t>(std::llround(*o.seconds * o.rate)) : no_tick_limit;
-  std::atomic<bool> done{false};
-  std::exception_ptr failure;
-  StopReason reason = StopReason::requested;
-  std::thread servo([&] {
-    try {
-      reason = loop.run(tick, {.max_ticks = ticks});
-    } catch (...) {
-      failure = std::current_exception();
-    }
-    done.store(true, std::memory_order_release);
-  });
+  cli::LoopThread servo(loop, tick, {.max_ticks = ticks});
 
   const ViewLayout layout = ViewLayout::for_picture(picture.cols, picture.rows);
   Scope scope;
@@ -397,7 +381,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     cv::namedWindow(window_title, cv::WINDOW_AUTOSIZE);
     cv::setMouseCallback(window_title, on_mouse, &pointer);
   }
-  while (!done.load(std::memory_order_acquire)) {
+  while (!servo.done()) {
     drain();
     if (!window) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -478,8 +462,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   servo.join();
   drain();
   if (window) cv::destroyAllWindows();
-  if (failure) std::rethrow_exception(failure);
-  if (reason == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  if (servo.outcome() == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
 
   const LoopSnapshot& s = status.loop;
   std::printf(

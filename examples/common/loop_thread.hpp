@@ -1,0 +1,67 @@
+#pragma once
+/// @file loop_thread.hpp
+/// What the tools that drive an arm share: the operator's go-ahead before a
+/// real arm moves, and a servo loop's run() on a thread of its own while
+/// the calling thread shows its status.
+
+#include <atomic>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <string>
+#include <thread>
+
+#include "hapticfield/servo/loop.hpp"
+
+namespace hapticfield::cli {
+
+/// Warns that a real arm will move and waits for Enter (Ctrl-C aborts).
+inline void wait_for_operator() {
+  std::printf(
+      "WARNING: a real arm will move and push. Hold the handle, keep the workspace clear.\n"
+      "Press Enter to start (Ctrl-C to abort)... ");
+  std::fflush(stdout);
+  std::string line;
+  std::getline(std::cin, line);
+}
+
+/// loop.run(callback, limits) on a thread of its own. The loop and the
+/// callback must outlive it; the destructor joins.
+class LoopThread {
+ public:
+  template <class Loop, class Callback>
+  LoopThread(Loop& loop, Callback& callback, RunLimits limits)
+      : thread_([this, &loop, &callback, limits] {
+          try {
+            reason_ = loop.run(callback, limits);
+          } catch (...) {
+            failure_ = std::current_exception();
+          }
+          done_.store(true, std::memory_order_release);
+        }) {}
+  LoopThread(const LoopThread&) = delete;
+  LoopThread& operator=(const LoopThread&) = delete;
+  ~LoopThread() {
+    if (thread_.joinable()) thread_.join();
+  }
+
+  /// True once run() has returned or thrown.
+  [[nodiscard]] bool done() const noexcept { return done_.load(std::memory_order_acquire); }
+  /// Waits for run() to end.
+  void join() {
+    if (thread_.joinable()) thread_.join();
+  }
+  /// After join(): why run() returned. @throws what run() threw.
+  [[nodiscard]] StopReason outcome() const {
+    if (failure_) std::rethrow_exception(failure_);
+    return reason_;
+  }
+
+ private:
+  std::atomic<bool> done_{false};
+  StopReason reason_{StopReason::requested};
+  std::exception_ptr failure_;
+  std::thread thread_;  ///< last: starts once the members above exist
+};
+
+}  // namespace hapticfield::cli
