@@ -14,6 +14,24 @@ function(check_shot shot probe)
   endif()
 endfunction()
 
+# hapticfield_view on the simulated arm for 1.5 s, its screenshot in
+# ${WORK_DIR}/${name}.png; `probe_var` gets where the tool says the scripted
+# hand left the probe ("x,y" [px]).
+function(screenshot_sim name probe_var)
+  execute_process(COMMAND ${VIEW} ${PICTURE} --device sim --seconds 1.5 --realtime off ${ARGN}
+                          --screenshot ${WORK_DIR}/${name}.png
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "hapticfield_view (sim) failed (${rc}): ${out}${err}")
+  endif()
+  string(REGEX MATCH "probe at ([-0-9.]+),([-0-9.]+) px" found "${out}")
+  if(NOT found)
+    message(FATAL_ERROR "hapticfield_view (sim) did not say where the probe was: ${out}")
+  endif()
+  message(STATUS "${out}")
+  set(${probe_var} "${CMAKE_MATCH_1},${CMAKE_MATCH_2}" PARENT_SCOPE)
+endfunction()
+
 # the mouse probe, held at 150,120 px
 execute_process(COMMAND ${VIEW} ${PICTURE} --start 150,120 --seconds 0.3 --realtime off
                         --screenshot ${WORK_DIR}/mouse.png
@@ -30,34 +48,16 @@ if(rc EQUAL 0)
 endif()
 
 # the simulated arm: the tool says where its scripted hand left the probe
-execute_process(COMMAND ${VIEW} ${PICTURE} --device sim --seconds 1.5 --realtime off --field texture
-                        --screenshot ${WORK_DIR}/sim_texture.png
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "hapticfield_view (sim) failed (${rc}): ${out}${err}")
-endif()
-string(REGEX MATCH "probe at ([-0-9.]+),([-0-9.]+) px" found "${out}")
-if(NOT found)
-  message(FATAL_ERROR "hapticfield_view (sim) did not say where the probe was: ${out}")
-endif()
-message(STATUS "${out}")
+screenshot_sim(sim_texture probe --field texture)
 # the texture field's underlay is not the picture: view_check must not find it
-execute_process(COMMAND ${CHECK} ${WORK_DIR}/sim_texture.png ${PICTURE} ${CMAKE_MATCH_1},${CMAKE_MATCH_2}
+execute_process(COMMAND ${CHECK} ${WORK_DIR}/sim_texture.png ${PICTURE} ${probe}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out)
 if(rc EQUAL 0)
   message(FATAL_ERROR "the texture view shows the picture itself: ${out}")
 endif()
 
-execute_process(COMMAND ${VIEW} ${PICTURE} --device sim --seconds 1.5 --realtime off --screenshot ${WORK_DIR}/sim.png
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "hapticfield_view (sim) failed (${rc}): ${out}${err}")
-endif()
-string(REGEX MATCH "probe at ([-0-9.]+),([-0-9.]+) px" found "${out}")
-if(NOT found)
-  message(FATAL_ERROR "hapticfield_view (sim) did not say where the probe was: ${out}")
-endif()
-check_shot(${WORK_DIR}/sim.png ${CMAKE_MATCH_1},${CMAKE_MATCH_2})
+screenshot_sim(sim probe)
+check_shot(${WORK_DIR}/sim.png ${probe})
 
 # no display and no --screenshot: one clear line, exit 1, no crash
 execute_process(COMMAND ${CMAKE_COMMAND} -E env --unset=DISPLAY --unset=WAYLAND_DISPLAY ${VIEW} ${PICTURE}
