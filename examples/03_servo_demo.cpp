@@ -3,7 +3,7 @@
 // the loop's rate and jitter live, writes a CSV trace and PNG plots.
 //
 //   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
-//              [--realtime off|best_effort|enforce] [--trace OUT.csv] [--plots DIR]
+//              [--realtime off|best_effort|enforce] [--clock wall|virtual] [--trace OUT.csv] [--plots DIR]
 //              [--device sim|hid[:VID:PID]|serial:PATH|woody:p1|p2|p4[:PRESET][:sim|:PATH]|inverse3:PATH]
 #include <algorithm>
 #include <atomic>
@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <opencv2/core/utils/logger.hpp>
@@ -28,6 +29,7 @@
 #include "common/hid_device.hpp"
 #include "common/loop_thread.hpp"
 #include "common/plots.hpp"
+#include "common/stop_signal.hpp"
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -52,6 +54,7 @@ struct Arguments {
   std::string trace;
   std::string plots;
   std::string device{"sim"};
+  bool virtual_clock{false};  ///< --clock virtual: simulated time, as fast as the CPU allows
 };
 
 constexpr const char* usage_text =
@@ -64,6 +67,9 @@ constexpr const char* usage_text =
     "  --rate HZ             servo rate [Hz], in [1, 10000] (default 1000)\n"
     "  --realtime R          off, best_effort (default: ask for SCHED_FIFO, warn if refused)\n"
     "                        or enforce (refuse to start without real-time scheduling)\n"
+    "  --clock C             wall (default) or virtual: simulated time for a simulated arm (sim or\n"
+    "                        woody:GEN[:PRESET]:sim), as fast as the CPU allows, the same ticks, safety\n"
+    "                        chain and trace whatever the machine's load\n"
     "  --trace OUT.csv       write t, position [m], force [N] and period [s] per tick\n"
     "  --plots DIR           write force.png and periods.png into DIR (created if needed), drawn with\n"
     "                        matplotlib when python3 has it, else simpler plots\n"
@@ -74,7 +80,9 @@ constexpr const char* usage_text =
     "                        aluhaptics_v2 or vintage; :sim simulates it; inverse3:PATH: a Haply\n"
     "                        Inverse3 on the tty PATH (never run on a real one: check its frame)\n"
     "  -h, --help            this text\n"
-    "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
+    "Ctrl-C or SIGTERM stops the loop through its stop (zero force, then disarm).\n"
+    "Exit status: 0 done, 1 bad input or failure, 2 usage error, 128 + N stopped by signal N\n"
+    "(130 for Ctrl-C).\n";
 
 /// A usage error found while setting up (an unknown field or device).
 [[noreturn]] void usage(const std::string& error) {
@@ -139,6 +147,8 @@ Arguments parse(cli::Parser& p) {
       o.realtime = p.choice<RealTime>(
           "real-time mode",
           {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
+    } else if (p.is("--clock")) {
+      o.virtual_clock = p.choice<bool>("clock", {{"wall", false}, {"virtual", true}});
     } else if (p.is("--trace")) {
       o.trace = p.output_file();
     } else if (p.is("--plots")) {
@@ -157,6 +167,12 @@ Arguments parse(cli::Parser& p) {
       p.unknown();
     }
   }
+  WoodySpec woody_spec;
+  const bool simulated = o.device == "sim" || (parse_woody(o.device, woody_spec) && woody_spec.simulated);
+  if (o.virtual_clock && !simulated)
+    usage(
+        "--clock virtual needs a simulated arm (--device sim or woody:GEN[:PRESET]:sim); a real arm runs on the "
+        "wall clock");
   // 0 ticks would mean "no limit" to the loop: insist on at least one.
   if (std::llround(o.seconds * o.rate) < 1) {
     char text[160];
@@ -323,8 +339,23 @@ void print_link(const WoodyArm& device) {
               static_cast<unsigned long long>(c.malformed), static_cast<unsigned long long>(c.commands));
 }
 
+/// The clocks a run may use: the wall clock, or simulated time (--clock virtual).
+struct Clocks {
+  SteadyClock wall;
+  VirtualClock simulated;
+  bool use_simulated{false};
+  [[nodiscard]] std::int64_t now() const noexcept { return use_simulated ? simulated.now() : wall.now(); }
+};
+
+template <Device D, ServoClock C>
+int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hardware);
+
+/// run_demo on the clock --clock chose.
 template <Device D>
-int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock, bool hardware);
+int run_on_clock(const Arguments& o, D& device, AnyField& field, Clocks& clocks, bool hardware) {
+  if (clocks.use_simulated) return run_demo(o, device, field, clocks.simulated, hardware);
+  return run_demo(o, device, field, clocks.wall, hardware);
+}
 
 int run(const Arguments& o) {
   const cv::Mat image = cv::imread(o.image, cv::IMREAD_COLOR);
@@ -333,8 +364,9 @@ int run(const Arguments& o) {
   const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, workspace_mm);
   AnyField field = make_field(o.field, image, mapping);
 
-  SteadyClock clock;
-  const auto now = [&clock] { return clock.now(); };
+  Clocks clocks;
+  clocks.use_simulated = o.virtual_clock;
+  const auto now = [&clocks] { return clocks.now(); };
   const double width = image.cols / mapping.px_per_mm() * 1e-3, height = image.rows / mapping.px_per_mm() * 1e-3;
   // The hand aims 8 mm behind the picture plane (its spring then presses
   // with up to 300 N/m * 8 mm = 2.4 N) and raster-scans the picture.
@@ -345,7 +377,7 @@ int run(const Arguments& o) {
   if (o.device.rfind("inverse3:", 0) == 0) {
     SerialTransport port(o.device.substr(9), SerialConfig{.framing = Framing::fixed});
     Inverse3 device(port);  // throws hapticfield::Error naming the port when it stays silent
-    return run_demo(o, device, field, clock, true);
+    return run_on_clock(o, device, field, clocks, true);
   }
 
   WoodySpec woody_spec;
@@ -373,7 +405,7 @@ int run(const Arguments& o) {
       woody_link = std::make_unique<SerialTransport>(woody_spec.port, SerialConfig{.framing = Framing::lines});
     }
     WoodyArm device(*woody_link, wc);
-    return run_demo(o, device, field, clock, !woody_spec.simulated);
+    return run_on_clock(o, device, field, clocks, !woody_spec.simulated);
   }
 
   std::unique_ptr<SimulatedArm> arm;
@@ -400,20 +432,26 @@ int run(const Arguments& o) {
   }
 
   ForceArm device(*transport);
-  return run_demo(o, device, field, clock, hardware);
+  return run_on_clock(o, device, field, clocks, hardware);
 }
 
-template <Device D>
-int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock, bool hardware) {
+template <Device D, ServoClock C>
+int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hardware) {
+  constexpr bool simulated_time = std::is_same_v<C, VirtualClock>;
   LoopConfig config;
   config.rate = o.rate;
-  config.realtime = o.realtime;
+  config.realtime = simulated_time ? RealTime::off : o.realtime;  // simulated time never sleeps: no SCHED_FIFO
   // A stall of the machine (a late wake, a stale state) latches zero force;
   // the demo re-arms through the soft start once states are fresh for 0.5 s.
   config.recover_after = 0.5;
-  ServoLoop<D, SteadyClock> loop(device, clock, config);
+  ServoLoop<D, C> loop(device, clock, config);
+  cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm through the loop's stop
 
   if (hardware) cli::wait_for_operator();
+  if (stop.caught()) {
+    std::printf("stopped by signal %d before the loop started; no force was commanded\n", stop.caught());
+    return stop.exit_status();
+  }
 
   const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * o.rate));
   std::vector<Row> rows;
@@ -430,8 +468,15 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
 
   cli::LoopThread servo(loop, callback, {.max_ticks = ticks});
   const auto t0 = std::chrono::steady_clock::now();
+  const std::int64_t loop_start = clock.now();
   std::uint64_t latches_shown = 0;
-  const auto elapsed = [&t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  const auto wall_elapsed = [&t0] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  // Status lines show the loop's own time: simulated seconds on the virtual clock.
+  const auto elapsed = [&] {
+    return simulated_time ? static_cast<double>(clock.now() - loop_start) * 1e-9 : wall_elapsed();
+  };
   while (!servo.done()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const LoopSnapshot s = loop.statistics();
@@ -448,6 +493,12 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
   print_status(loop.statistics(), loop.safety().latched(), elapsed());
   std::printf("\n");
   if (servo.outcome() == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
+  if (simulated_time) {
+    const double simulated = static_cast<double>(loop.statistics().ticks) * loop.period();
+    std::printf("simulated time: %.3f s in %.3f s of wall time (%.0f x real time)\n", simulated, servo.wall_seconds(),
+                simulated / std::max(servo.wall_seconds(), 1e-9));
+  }
 
   const LoopSnapshot s = loop.statistics();
   std::printf(
@@ -487,7 +538,7 @@ int run_demo(const Arguments& o, D& device, AnyField& field, SteadyClock& clock,
                   why.c_str());
     }
   }
-  return 0;
+  return stop.caught() ? stop.exit_status() : 0;
 }
 
 }  // namespace

@@ -39,6 +39,7 @@
 #include "common/hid_device.hpp"
 #include "common/loop_thread.hpp"
 #include "common/picture.hpp"
+#include "common/stop_signal.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
 #include "hapticfield/image.hpp"
@@ -99,7 +100,8 @@ constexpr const char* usage_text =
     "  -h, --help           this text\n"
     "Keys: f field, m mask, + / - size (texture: grain), b border, d denoise, space pause and\n"
     "resume, [ ] seek -5 s / +5 s (the video field), s screenshot, q or Esc quit.\n"
-    "Exit status: 0 done, 1 bad input or failure, 2 usage error.\n";
+    "Ctrl-C or SIGTERM stops the loop through its stop (zero force, then disarm).\n"
+    "Exit status: 0 done, 1 bad input or failure, 2 usage error, 128 + N stopped by signal N.\n";
 
 struct Arguments {
   std::string source;
@@ -298,9 +300,13 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   config.realtime = o.realtime;
   config.recover_after = 0.5;  // re-arm through the soft start after a stall
   ServoLoop<D, SteadyClock> loop(device, clock, config);
+  cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm through the loop's stop
   SampleRing<8192> ring;
 
   if (hardware) cli::wait_for_operator();
+  if (stop.caught()) return stop.exit_status();
+  std::printf("%s on %s (Ctrl-C stops; so do q and Esc in the window)\n", o.source.c_str(), device.info().name.c_str());
+  std::fflush(stdout);
 
   // the tick: tell the viewer where the probe is and what was commanded
   auto tick = [&](const TickInput& in) noexcept {
@@ -463,6 +469,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   drain();
   if (window) cv::destroyAllWindows();
   if (servo.outcome() == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
 
   const LoopSnapshot& s = status.loop;
   std::printf(
@@ -486,7 +493,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     std::printf("screenshot: %s, probe at %.2f,%.2f px of the picture (%d,%d on the screenshot)\n",
                 o.screenshot.c_str(), now.pixel.x, now.pixel.y, at.x, at.y);
   }
-  return 0;
+  return stop.caught() ? stop.exit_status() : 0;
 }
 
 int run(const Arguments& o) {

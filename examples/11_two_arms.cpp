@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/cli.hpp"
+#include "common/stop_signal.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
@@ -27,7 +28,8 @@ constexpr const char* usage_text =
     "                   stop_all (zero and latch both)\n"
     "  --fault          stall the student's link for 30 ms at 1 s (stale state latches it)\n"
     "  -h, --help       this text\n"
-    "Exit status: 0 done, 1 failure, 2 usage error.\n";
+    "Ctrl-C or SIGTERM stops both arms through the loop's stop (zero force, then disarm).\n"
+    "Exit status: 0 done, 1 failure, 2 usage error, 128 + N stopped by signal N.\n";
 
 struct Arguments {
   double seconds{3.0};
@@ -93,6 +95,9 @@ int run(const Arguments& o) {
   } tracking{&guidance};
 
   const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * 1000.0));
+  cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm both arms through the loop's stop
+  std::printf("two arms on one 1 kHz deadline for %.2f s (Ctrl-C stops)\n", o.seconds);
+  std::fflush(stdout);
   loop.run({.max_ticks = ticks}, free, tracking);
   const LoopSnapshot s = loop.statistics();
   std::printf("%llu ticks at %.2f Hz, period p99 %.3f ms, max %.3f ms, late ticks %llu\n",
@@ -103,6 +108,10 @@ int run(const Arguments& o) {
                 1e3 * std::sqrt(tracking.sum_sq / static_cast<double>(tracking.samples)), 1e3 * tracking.worst);
   print_arm("teacher", loop.arm(0));
   print_arm("student", loop.arm(1));
+  if (stop.caught()) {
+    std::printf("stopped by signal %d: zero force commanded to both arms, then both disarmed\n", stop.caught());
+    return stop.exit_status();
+  }
   return 0;
 }
 

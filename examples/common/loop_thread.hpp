@@ -5,6 +5,7 @@
 /// the calling thread shows its status.
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -37,6 +38,7 @@ class LoopThread {
           } catch (...) {
             failure_ = std::current_exception();
           }
+          ran_for_ = std::chrono::steady_clock::now() - started_;
           done_.store(true, std::memory_order_release);
         }) {}
   LoopThread(const LoopThread&) = delete;
@@ -51,6 +53,8 @@ class LoopThread {
   void join() {
     if (thread_.joinable()) thread_.join();
   }
+  /// After join(): how long run() took on the wall clock [s].
+  [[nodiscard]] double wall_seconds() const noexcept { return std::chrono::duration<double>(ran_for_).count(); }
   /// After join(): why run() returned. @throws what run() threw.
   [[nodiscard]] StopReason outcome() const {
     if (failure_) std::rethrow_exception(failure_);
@@ -59,6 +63,8 @@ class LoopThread {
 
  private:
   std::atomic<bool> done_{false};
+  const std::chrono::steady_clock::time_point started_{std::chrono::steady_clock::now()};
+  std::chrono::steady_clock::duration ran_for_{};
   StopReason reason_{StopReason::requested};
   std::exception_ptr failure_;
   std::thread thread_;  ///< last: starts once the members above exist

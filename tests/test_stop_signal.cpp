@@ -1,0 +1,308 @@
+// Ctrl-C and SIGTERM on the tools that drive an arm: the tool stops through
+// the loop's stop (zero force, then disarm) and exits 128 + the signal.
+//
+// The arms on a serial line (our protocol, WoodenHaptics P4, Inverse3) are
+// played by their simulated firmware on the master side of a pseudo-terminal
+// in this process; the tool runs as a child on the slave side. Once the arm
+// is armed and pushing, the child gets SIGINT, and what the firmware last
+// received must be zero force, disarmed. The tools that run simulated arms
+// inside themselves are checked by their exit status and their report.
+//
+// Real time, on a possibly loaded machine: every wait is bounded generously
+// (tens of seconds) and nothing here asserts how fast anything happens.
+#include <catch2/catch.hpp>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#endif
+
+#include "child_process.hpp"
+#include "hapticfield/device/firmware_loopback.hpp"
+#include "hapticfield/device/simulated_inverse3.hpp"
+#include "hapticfield/device/simulated_woody.hpp"
+#include "hapticfield/device/woody_codec.hpp"
+#include "hapticfield/firmware/stream_port.hpp"
+#include "pty_pair.hpp"
+
+using namespace hapticfield;
+using testing::Child;
+namespace fs = std::filesystem;
+
+namespace {
+
+using namespace std::chrono_literals;
+constexpr auto patience = 60s;  // the longest any wait here may take, on a loaded machine
+
+const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / "stop_signal";
+
+/// A simulated arm's firmware on the master side of a pty, in its own
+/// thread: `serve` gets the bytes the host wrote and answers on the pty;
+/// `tick` runs every millisecond of wall time. Both run under the lock that
+/// `inspect` takes.
+class PtyPeer {
+ public:
+  using Serve = std::function<void(std::span<const std::uint8_t>, int master)>;
+  using Tick = std::function<void(int master)>;
+  PtyPeer(testing::Pty& pty, Serve serve, Tick tick = {})
+      : pty_(pty), serve_(std::move(serve)), tick_(std::move(tick)), thread_([this] { run(); }) {}
+  ~PtyPeer() { stop(); }
+  void stop() {
+    stop_.store(true);
+    if (thread_.joinable()) thread_.join();
+  }
+  /// Runs f on the peer's state, between its steps.
+  void inspect(const std::function<void()>& f) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    f();
+  }
+  /// Waits until pred (checked under the lock) holds; false after `patience`.
+  bool wait_for(const std::function<bool()>& pred) {
+    const auto give_up = std::chrono::steady_clock::now() + patience;
+    while (std::chrono::steady_clock::now() < give_up) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (pred()) return true;
+      }
+      std::this_thread::sleep_for(2ms);
+    }
+    return false;
+  }
+
+ private:
+  void run() {
+    std::array<std::uint8_t, 512> rx{};
+    auto next_tick = std::chrono::steady_clock::now();
+    while (!stop_.load()) {
+      pollfd p{pty_.master, POLLIN, 0};
+      (void)::poll(&p, 1, 1);
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (;;) {
+        const ssize_t n = ::read(pty_.master, rx.data(), rx.size());
+        if (n <= 0) break;
+        serve_(std::span<const std::uint8_t>(rx.data(), static_cast<std::size_t>(n)), pty_.master);
+      }
+      if (tick_ && std::chrono::steady_clock::now() >= next_tick) {
+        next_tick = std::chrono::steady_clock::now() + 1ms;
+        tick_(pty_.master);
+      }
+    }
+  }
+
+  testing::Pty& pty_;
+  Serve serve_;
+  Tick tick_;
+  std::mutex mutex_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+void send(int master, std::span<const std::uint8_t> bytes) {
+  (void)!::write(master, bytes.data(), bytes.size());
+}
+
+/// servo_demo with a centring spring, for a long time, on a serial device.
+std::vector<std::string> demo_args(const std::string& device) {
+  return {"--field", "spring", "--seconds", "3000", "--realtime", "off", "--device", device};
+}
+
+/// The checks every signalled tool passes: it exited by itself, 128 + the
+/// signal, and said it stopped through the loop.
+void check_stopped(Child& child, int signal) {
+  CAPTURE(child.out(), child.err());
+  REQUIRE(child.wait());
+  CHECK(child.killed_by() == 0);
+  CHECK(child.exited_normally());
+  CHECK(child.status() == 128 + signal);
+  CHECK(child.out().find("stopped by signal " + std::to_string(signal)) != std::string::npos);
+}
+
+/// A hand holding the handle 25 mm right of the centre: the spring pushes back.
+Hand offset_hand() {
+  Hand h;
+  h.path = HandPath::hold({0.025, 0.0, 0.0});
+  return h;
+}
+
+}  // namespace
+
+TEST_CASE("Ctrl-C on servo_demo over our protocol on a pty: the last command is zero force, disarmed") {
+  for (const int signal : {SIGINT, SIGTERM}) {
+    CAPTURE(signal);
+    testing::Pty pty;
+    SimulatedArmConfig arm_config;
+    arm_config.hand = offset_hand();
+    FirmwareArm arm(arm_config, 50000);  // a 50 ms watchdog: slow scheduling of the tool does not trip it
+    firmware::StreamPort<256> port;
+    const auto reply = [&](std::span<const std::uint8_t> r) { send(pty.master, r); };
+    PtyPeer peer(
+        pty,
+        [&](std::span<const std::uint8_t> bytes, int) {
+          port.feed(bytes);
+          port.service(arm.core(), reply);
+        },
+        [&](int master) {
+          arm.step();
+          send(master, arm.core().report());
+        });
+    Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("serial:" + pty.path), tmp, "ours");
+    const auto pushing = [&] {
+      const protocol::CommandReport& c = arm.core().last_command();
+      return arm.core().armed() && (c.flags & protocol::command_flags::arm) &&
+             (c.torque_mnm[0] != 0 || c.torque_mnm[1] != 0 || c.torque_mnm[2] != 0);
+    };
+    REQUIRE(peer.wait_for(pushing));  // armed, and the spring pushes
+    tool.signal(signal);
+    check_stopped(tool, signal);
+    peer.stop();
+    const protocol::CommandReport& last = arm.core().last_command();
+    CHECK(last.torque_mnm == std::array<std::int16_t, 3>{0, 0, 0});
+    CHECK((last.flags & protocol::command_flags::arm) == 0);
+    CHECK_FALSE(arm.core().armed());
+    CHECK((arm.core().faults() & status_bits::watchdog_tripped) == 0);  // the host disarmed, not the watchdog
+  }
+}
+
+TEST_CASE("Ctrl-C on servo_demo with a WoodenHaptics P4 arm on a pty: the last currents are zero") {
+  testing::Pty pty;
+  SimulatedWoodyConfig sc;
+  sc.generation = woody::Generation::p4_text;
+  sc.hand = offset_hand();
+  SimulatedWoody firmware(sc);
+  std::string line;
+  std::array<std::int32_t, 3> last_ma{};
+  long nonzero_frames = 0;
+  PtyPeer peer(pty, [&](std::span<const std::uint8_t> bytes, int master) {
+    for (const std::uint8_t c : bytes) {
+      if (c == '\0') continue;
+      if (c != '\n') {
+        line += static_cast<char>(c);
+        continue;
+      }
+      const std::span<const std::uint8_t> frame(reinterpret_cast<const std::uint8_t*>(line.data()), line.size());
+      std::array<std::int32_t, 3> ma{};
+      if (woody::parse_p4_command(frame, ma) == 0) {
+        last_ma = ma;
+        if (ma[0] != 0 || ma[1] != 0 || ma[2] != 0) ++nonzero_frames;
+      }
+      firmware.tick();
+      const woody::P4Reply r = firmware.receive_p4(frame);
+      std::array<std::uint8_t, woody::p4_max_line> out{};
+      send(master, std::span<const std::uint8_t>(out.data(), woody::encode(r, out)));
+      line.clear();
+    }
+  });
+  Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("woody:p4:" + pty.path), tmp, "p4");
+  REQUIRE(peer.wait_for([&] { return nonzero_frames > 50; }));  // the spring drives the motors
+  tool.signal(SIGINT);
+  check_stopped(tool, SIGINT);
+  peer.stop();
+  CHECK(last_ma == std::array<std::int32_t, 3>{0, 0, 0});
+  CHECK(firmware.applied_current() == glm::dvec3{0.0});
+}
+
+TEST_CASE("Ctrl-C on servo_demo with an Inverse3 on a pty: the last force request is zero") {
+  testing::Pty pty;
+  SimulatedInverse3 device;
+  PtyPeer peer(pty, [&](std::span<const std::uint8_t> bytes, int master) {
+    device.feed(bytes, [master](std::span<const std::uint8_t> r) { send(master, r); });
+  });
+  Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("inverse3:" + pty.path), tmp, "inverse3");
+  REQUIRE(peer.wait_for([&] { return device.counters().forces > 200 && glm::length(device.force()) > 0.1; }));
+  tool.signal(SIGINT);
+  check_stopped(tool, SIGINT);
+  peer.stop();
+  CHECK(device.force() == glm::dvec3{0.0});
+}
+
+TEST_CASE("Ctrl-C before the operator's go-ahead: servo_demo exits without a force command") {
+  testing::Pty pty;
+  SimulatedArmConfig arm_config;
+  FirmwareArm arm(arm_config, 50000);
+  firmware::StreamPort<256> port;
+  long commands = 0;
+  PtyPeer peer(
+      pty,
+      [&](std::span<const std::uint8_t> bytes, int master) {
+        port.feed(bytes);
+        port.service(arm.core(), [master](std::span<const std::uint8_t> r) { send(master, r); });
+        commands = static_cast<long>(arm.core().counters().commands);
+      },
+      [&](int master) {
+        arm.step();
+        send(master, arm.core().report());
+      });
+  Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("serial:" + pty.path), tmp, "prompt", false);
+  REQUIRE(tool.wait_for_output("Press Enter"));
+  tool.signal(SIGINT);
+  CAPTURE(tool.out(), tool.err());
+  REQUIRE(tool.wait());
+  peer.stop();
+  REQUIRE(tool.exited_normally());
+  CHECK(tool.status() == 130);
+  CHECK(tool.out().find("no force was commanded") != std::string::npos);
+  CHECK(commands == 0);
+  CHECK_FALSE(arm.core().armed());
+}
+
+TEST_CASE("Ctrl-C on the tools that run a simulated arm: stopped through the loop, exit 130") {
+  // Each would run far longer than the test waits; the signal ends it once
+  // the tool says its loop runs (`ready`: its handler is in place by then).
+  struct Tool {
+    std::string name, path;
+    std::vector<std::string> args;
+    std::string ready;
+  };
+  std::vector<Tool> tools = {
+      {"servo_demo", HAPTICFIELD_TOOL_SERVO_DEMO, {"--seconds", "3000", "--realtime", "off"}, "Hz"},
+      {"two_arms", HAPTICFIELD_TOOL_TWO_ARMS, {"--seconds", "60"}, "Ctrl-C stops"},
+  };
+#ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
+  tools.push_back({"hapticfield_view",
+                   HAPTICFIELD_TOOL_HAPTICFIELD_VIEW,
+                   {std::string(HAPTICFIELD_SOURCE_DIR) + "/examples/data/coffee.png", "--seconds", "3000",
+                    "--realtime", "off", "--screenshot", (tmp / "view.png").string()},
+                   "Ctrl-C stops"});
+#endif
+#ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
+  // A short image sequence, looped by nothing: the tool plays it for --seconds.
+  fs::create_directories(tmp / "frames");
+  for (int i = 0; i < 5; ++i) {
+    cv::Mat frame(48, 64, CV_8UC1, cv::Scalar(255));
+    frame(cv::Rect(10 + 4 * i, 0, 20, 48)).setTo(cv::Scalar(0));
+    REQUIRE(cv::imwrite((tmp / "frames" / ("f" + std::to_string(i) + ".png")).string(), frame));
+  }
+  tools.push_back({"tangible_video",
+                   HAPTICFIELD_TOOL_TANGIBLE_VIDEO,
+                   {(tmp / "frames" / "f%d.png").string(), "--size", "9", "--seconds", "3000"},
+                   "Ctrl-C stops"});
+#endif
+  for (Tool& t : tools) {
+    CAPTURE(t.name);
+    Child tool(t.path, t.args, tmp, t.name);
+    REQUIRE(tool.wait_for_output(t.ready));
+    tool.signal(SIGINT);
+    check_stopped(tool, SIGINT);
+  }
+}
