@@ -492,7 +492,8 @@ int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hard
   servo.join();
   print_status(loop.statistics(), loop.safety().latched(), elapsed());
   std::printf("\n");
-  if (servo.outcome() == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  const bool disconnected = servo.outcome() == StopReason::disconnected;
+  if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
   if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
   if (simulated_time) {
     const double simulated = static_cast<double>(loop.statistics().ticks) * loop.period();
@@ -538,6 +539,8 @@ int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hard
                   why.c_str());
     }
   }
+  // A run cut short by the device is a failure (exit 1), after the report above.
+  if (disconnected) throw DeviceError("the device disconnected during the run; zero force was commanded");
   return stop.caught() ? stop.exit_status() : 0;
 }
 

@@ -468,7 +468,8 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   servo.join();
   drain();
   if (window) cv::destroyAllWindows();
-  if (servo.outcome() == StopReason::disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  const bool disconnected = servo.outcome() == StopReason::disconnected;
+  if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
   if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
 
   const LoopSnapshot& s = status.loop;
@@ -493,6 +494,8 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     std::printf("screenshot: %s, probe at %.2f,%.2f px of the picture (%d,%d on the screenshot)\n",
                 o.screenshot.c_str(), now.pixel.x, now.pixel.y, at.x, at.y);
   }
+  // A run cut short by the device is a failure (exit 1), after the report above.
+  if (disconnected) throw DeviceError("the device disconnected during the run; zero force was commanded");
   return stop.caught() ? stop.exit_status() : 0;
 }
 

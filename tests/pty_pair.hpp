@@ -24,6 +24,10 @@ struct Pty {
     REQUIRE(::openpty(&master, &slave, name, nullptr, nullptr) == 0);
     path = name;
     ::fcntl(master, F_SETFL, ::fcntl(master, F_GETFL) | O_NONBLOCK);
+    // Not inherited by a tool started as a child: only this process plays the
+    // device, so closing the master hangs the line up for the child.
+    ::fcntl(master, F_SETFD, FD_CLOEXEC);
+    ::fcntl(slave, F_SETFD, FD_CLOEXEC);
   }
   Pty(const Pty&) = delete;
   Pty& operator=(const Pty&) = delete;

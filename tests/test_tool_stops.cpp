@@ -55,7 +55,7 @@ namespace {
 using namespace std::chrono_literals;
 constexpr auto patience = 60s;  // the longest any wait here may take, on a loaded machine
 
-const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / "stop_signal";
+const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / "tool_stops";
 
 /// A simulated arm's firmware on the master side of a pty, in its own
 /// thread: `serve` gets the bytes the host wrote and answers on the pty;
@@ -305,4 +305,36 @@ TEST_CASE("Ctrl-C on the tools that run a simulated arm: stopped through the loo
     tool.signal(SIGINT);
     check_stopped(tool, SIGINT);
   }
+}
+
+TEST_CASE("servo_demo: a serial arm that hangs up mid-run is one line on stderr and exit 1") {
+  testing::Pty pty;
+  SimulatedArmConfig arm_config;
+  arm_config.hand = offset_hand();
+  FirmwareArm arm(arm_config, 50000);
+  firmware::StreamPort<256> port;
+  long reports = 0;
+  PtyPeer peer(
+      pty,
+      [&](std::span<const std::uint8_t> bytes, int master) {
+        port.feed(bytes);
+        port.service(arm.core(), [master](std::span<const std::uint8_t> r) { send(master, r); });
+      },
+      [&](int master) {
+        arm.step();
+        send(master, arm.core().report());
+        ++reports;
+      });
+  Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("serial:" + pty.path), tmp, "hangup");
+  REQUIRE(peer.wait_for([&] { return arm.core().armed(); }));
+  peer.stop();
+  pty.close_master();  // the cable is pulled
+  CAPTURE(tool.out(), tool.err());
+  REQUIRE(tool.wait());
+  REQUIRE(tool.exited_normally());
+  CHECK(tool.status() == 1);
+  const std::string err = tool.err();
+  CHECK(err == "servo_demo: the device disconnected during the run; zero force was commanded\n");
+  CHECK(tool.out().find("the device disconnected") != std::string::npos);
+  CHECK(reports > 0);
 }
