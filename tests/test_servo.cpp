@@ -894,6 +894,74 @@ TEST_CASE("a device that reboots is taken up again within a few ticks, force zer
   CHECK(rig.loop.statistics().latches == 0);
 }
 
+TEST_CASE("an impossible pose with a valid CRC latches: zero force from that tick on, and the latch says why") {
+  Rig rig(free_arm());
+  rig.link.inject(LinkFault::wild_counts, 600, 40);  // encoders at +-2^31 for 40 ms, CRC valid
+  CommandLog log;
+  std::vector<Status> reads;
+  reads.reserve(1000);
+  auto cb = [&](const TickInput& in) {
+    log.commands.push_back(rig.loop.last_command());  // the command of the tick before
+    reads.push_back(in.read_status);
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 900});
+  const auto first = std::find(reads.begin(), reads.end(), Status::impossible);
+  REQUIRE(first != reads.end());
+  const auto k = static_cast<std::size_t>(first - reads.begin());
+  CHECK(k >= 598);
+  CHECK(k <= 602);
+  CHECK_THAT(log.commands[k].y, WithinAbs(0.6, 1e-12));  // full force on the tick before
+  for (std::size_t i = k + 1; i < log.commands.size(); ++i)
+    CHECK(log.commands[i] == glm::dvec3{0.0});  // zero from that tick on, after the fault too
+  CHECK(rig.loop.last_command() == glm::dvec3{0.0});
+  CHECK((rig.loop.safety().latched() & safety_events::impossible_state) != 0);
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.latches == 1);
+  CHECK(s.last_latch == safety_events::impossible_state);
+  CHECK(safety_events::names(s.last_latch) == "impossible state");
+  CHECK_FALSE(rig.arm.armed());  // the latch disarmed the arm
+  // The wild pose never became the loop's state.
+  CHECK(std::abs(rig.loop.state().joint_angles.x) < 2.0);
+}
+
+TEST_CASE("a non-finite position from a device latches as an impossible state") {
+  /// A device that reports a NaN position from tick 300 on.
+  struct NanDevice {
+    DeviceInfo info_{};
+    std::uint64_t reads{0};
+    glm::dvec3 commanded{0.0};
+    Status read(DeviceState& s) noexcept {
+      ++reads;
+      s.valid = true;
+      s.flags = status_bits::homed | status_bits::armed;
+      s.position = reads >= 300 ? glm::dvec3{std::nan(""), 0.0, 0.0} : glm::dvec3{0.0};
+      return Status::ok;
+    }
+    Status write(const glm::dvec3& f) noexcept {
+      commanded = f;
+      return Status::ok;
+    }
+    Status set_armed(bool) noexcept { return Status::ok; }
+    Status request_home() noexcept { return Status::ok; }
+    const DeviceInfo& info() const noexcept { return info_; }
+  } device;
+  VirtualClock clock;
+  ServoLoop<NanDevice, VirtualClock> loop(device, clock, Rig::quiet({}));
+  std::vector<glm::dvec3> commands;
+  commands.reserve(600);
+  auto cb = [&](const TickInput&) {
+    commands.push_back(device.commanded);
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  loop.run(cb, {.max_ticks = 500});
+  REQUIRE(commands.size() == 500);
+  CHECK_THAT(commands[299].y, WithinAbs(0.6, 1e-12));
+  for (std::size_t i = 300; i < commands.size(); ++i)
+    CHECK(commands[i] == glm::dvec3{0.0});
+  CHECK(loop.statistics().last_latch == safety_events::impossible_state);
+}
+
 TEST_CASE("max_ticks = 0 is an error, not 'no limit'") {
   Rig rig(free_arm());
   ZeroField zero;

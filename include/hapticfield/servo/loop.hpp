@@ -216,6 +216,10 @@ class ServoLoop {
     if (s == Status::ok && fresh_since_ < 0) fresh_since_ = now;
     if (s == Status::disconnected) disconnected_ = true;
     resync_ = s == Status::resync;
+    // A state the device cannot be in (the device says so, or a non-finite
+    // pose from any device) latches: such a pose must steer nothing.
+    impossible_ =
+        s == Status::impossible || (s == Status::ok && !(is_finite(state_.position) && is_finite(state_.velocity)));
     in.state = state_;
     in.read_status = s;
     in.tick = tick_;
@@ -242,6 +246,7 @@ class ServoLoop {
     si.device_fault = state_.faulted();
     si.disconnected = disconnected_;
     si.link_resync = resync_;
+    si.impossible_state = impossible_;
     const std::uint32_t before = safety_.latched();
     const glm::dvec3 out = safety_.process(si);
     if (safety_.latched() && !before) {  // the watchdog disarms, and says so
@@ -289,6 +294,7 @@ class ServoLoop {
     missed_in_a_row_ = 0;
     disconnected_ = false;
     resync_ = false;
+    impossible_ = false;
     state_.valid = false;
     command_ = glm::dvec3{0.0};
     safety_.restart();
@@ -480,6 +486,7 @@ class ServoLoop {
   bool started_{false};
   bool disconnected_{false};
   bool resync_{false};
+  bool impossible_{false};  ///< the last read brought a state the device cannot be in
   bool locked_{false};
   bool realtime_granted_{false};
 };
