@@ -37,15 +37,10 @@ struct Arguments {
 };
 
 /// The student's field: a spring toward where the teacher's handle is now
-/// (read from the teacher's loop, which ticked just before in the same thread).
-struct Guidance {
-  const ServoLoop<ForceArm, SteadyClock>* teacher{nullptr};
-  double stiffness{150.0};  // [N/m]
-  double damping{1.0};      // [N s/m]
-  glm::dvec3 force(const Probe& p) const noexcept {
-    return stiffness * (teacher->state().position - p.position) - damping * p.velocity;
-  }
-};
+/// (read from the teacher's loop, which ticked just before in the same
+/// thread), and nothing while the teacher's pose is not trusted (homing at
+/// start-up or after a reboot, stale, latched).
+using Guidance = GuidanceField<ServoLoop<ForceArm, SteadyClock>>;
 
 /// The teacher feels nothing: its hand leads.
 struct Free {
@@ -74,7 +69,7 @@ int run(const Arguments& o) {
   config.recover_after = 0.5;  // a stall of the machine latches; re-arm through the soft start once fresh again
   MultiArmLoop<ForceArm, 2, SteadyClock> loop({&teacher, &student}, clock, config, o.policy);
   Free free;
-  Guidance guidance{&loop.arm(0), o.stiffness};
+  Guidance guidance{&loop.arm(0), o.stiffness, 1.0};
 
   // The tracking error, recorded inside the tick (no allocation, no I/O).
   struct Tracking {
@@ -82,8 +77,8 @@ int run(const Arguments& o) {
     double sum_sq{0.0}, worst{0.0};
     long samples{0};
     glm::dvec3 force(const Probe& p) noexcept {
-      const double e = glm::length(guidance->teacher->state().position - p.position);
-      if (p.time > 0.5) {  // after the arms have homed and the soft start
+      const double e = glm::length(guidance->leader->state().position - p.position);
+      if (p.time > 0.5 && guidance->leader->trusted()) {  // after homing and the soft start, on real poses
         sum_sq += e * e;
         worst = std::fmax(worst, e);
         ++samples;

@@ -1152,3 +1152,154 @@ TEST_CASE("two arms: no heap allocation per tick") {
   const long allocations = test::count_allocations([&] { rig.loop.run({.max_ticks = 2000}, wall, wall); });
   CHECK(allocations == 0);
 }
+
+// ------------------------------------------------- two arms: trusted poses
+
+namespace {
+using ArmLoop = ServoLoop<ForceArm, VirtualClock>;
+
+/// A teacher whose hand holds its handle at the home pose and a free
+/// student guided toward the teacher's handle, on one virtual clock.
+struct TeacherStudent {
+  VirtualClock clock;
+  SimulatedArm teacher_arm, student_arm;
+  SimulatedTransport teacher_link, student_link;
+  ForceArm teacher, student;
+  MultiArmLoop<ForceArm, 2, VirtualClock> loop;
+  TeacherStudent(SimulatedArmConfig teacher_config, ArmFaultPolicy policy)
+      : teacher_arm(teacher_config),
+        student_arm(free_arm()),
+        teacher_link(teacher_arm, [this] { return clock.now(); }),
+        student_link(
+            student_arm, [this] { return clock.now(); }, 0.25),
+        teacher(teacher_link),
+        student(student_link),
+        loop({&teacher, &student}, clock, Rig::quiet({}), policy) {}
+};
+
+/// The student's field: GuidanceField, recording each tick whether the
+/// teacher was trusted and homed, and the student's command of the tick before.
+struct RecordedGuidance {
+  GuidanceField<ArmLoop> guidance;
+  const ArmLoop* student;
+  const SimulatedArm* teacher_arm;
+  std::vector<glm::dvec3> commands;
+  std::vector<char> trusted, homed;
+  RecordedGuidance(const ArmLoop& t, const ArmLoop& s, const SimulatedArm& a)
+      : guidance{&t, 150.0, 1.0}, student(&s), teacher_arm(&a) {
+    commands.reserve(3000);
+    trusted.reserve(3000);
+    homed.reserve(3000);
+  }
+  glm::dvec3 force(const Probe& p) noexcept {
+    if (commands.size() < commands.capacity()) {
+      commands.push_back(student->last_command());
+      trusted.push_back(guidance.leader->trusted() ? 1 : 0);
+      homed.push_back(teacher_arm->homed() ? 1 : 0);
+    }
+    return guidance.force(p);
+  }
+  /// The student's command on tick i.
+  [[nodiscard]] glm::dvec3 command(std::size_t i) const { return commands.at(i + 1); }
+};
+
+SimulatedArmConfig holding_teacher() {
+  SimulatedArmConfig c;
+  c.hand.path = HandPath::hold({0.0, 0.0, 0.0});  // the teacher's hand holds the handle at home
+  return c;
+}
+}  // namespace
+
+TEST_CASE("ServoLoop::trusted(): false until homed and armed as asked, false while resynchronising or latched") {
+  Rig rig(free_arm());
+  std::vector<char> trusted;
+  std::vector<char> homed_armed;
+  trusted.reserve(700);
+  homed_armed.reserve(700);
+  rig.link.inject(LinkFault::reboot, 400);
+  auto cb = [&](const TickInput& in) {
+    trusted.push_back(in.trusted ? 1 : 0);
+    CHECK(in.trusted == rig.loop.trusted());
+    homed_armed.push_back(in.state.homed() && in.state.armed() ? 1 : 0);
+    return glm::dvec3{0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 700});
+  CHECK(trusted[0] == 0);
+  CHECK(trusted[30] == 0);  // homing: the pose is offset by whatever the encoders held
+  for (std::size_t i = 0; i < trusted.size(); ++i) {
+    INFO("tick " << i);
+    if (trusted[i]) CHECK(homed_armed[i]);  // never an unhomed or unarmed pose
+  }
+  CHECK(trusted[300] == 1);
+  CHECK(std::count(trusted.begin() + 395, trusted.begin() + 460, 0) >= 50);  // the reboot: resync, homing
+  CHECK(trusted.back() == 1);
+  CHECK_FALSE(rig.loop.trusted());  // the run ended: disarmed
+}
+
+TEST_CASE(
+    "two arms: the student feels nothing while the teacher's pose is not trusted, at start-up and after a reboot") {
+  for (const ArmFaultPolicy policy : {ArmFaultPolicy::isolate, ArmFaultPolicy::stop_all}) {
+    INFO("policy " << static_cast<int>(policy));
+    SECTION("start-up: the teacher homes for 300 ms while the student is armed") {
+      SimulatedArmConfig t = holding_teacher();
+      t.homing_ticks = 300;
+      TeacherStudent rig(t, policy);
+      RecordedGuidance guided(rig.loop.arm(0), rig.loop.arm(1), rig.teacher_arm);
+      Constant none{{0.0, 0.0, 0.0}};
+      rig.loop.run({.max_ticks = 800}, none, guided);
+      const std::size_t n = guided.commands.size() - 1;
+      std::size_t homed_at = 0;
+      while (homed_at < n && !guided.homed[homed_at])
+        ++homed_at;
+      REQUIRE(homed_at >= 290);
+      REQUIRE(homed_at < 320);
+      for (std::size_t i = 0; i < n; ++i) {
+        INFO("tick " << i);
+        if (!guided.trusted[i]) CHECK(guided.command(i) == glm::dvec3{0.0});
+        if (i < homed_at) CHECK_FALSE(guided.trusted[i]);
+      }
+      CHECK(rig.loop.arm(1).statistics().latches == 0);
+      CHECK(rig.loop.arm(1).statistics().peak_force < 0.2);  // never pulled toward the unhomed (bogus) pose
+    }
+    SECTION("a reboot of the teacher mid-run") {
+      TeacherStudent rig(holding_teacher(), policy);
+      rig.teacher_link.inject(LinkFault::reboot, 1000);
+      RecordedGuidance guided(rig.loop.arm(0), rig.loop.arm(1), rig.teacher_arm);
+      Constant none{{0.0, 0.0, 0.0}};
+      rig.loop.run({.max_ticks = 1600}, none, guided);
+      CHECK(rig.teacher_arm.boots() == 1);
+      const std::size_t n = guided.commands.size() - 1;
+      std::size_t untrusted_after_start = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        INFO("tick " << i);
+        if (!guided.trusted[i]) CHECK(guided.command(i) == glm::dvec3{0.0});
+        if (i > 900 && i < 1100) untrusted_after_start += guided.trusted[i] ? 0 : 1;
+        if (i > 900 && !guided.homed[i]) CHECK_FALSE(guided.trusted[i]);
+      }
+      CHECK(untrusted_after_start >= 50);  // resynchronising, then homing
+      CHECK(guided.trusted[n - 1] == 1);   // and trusted again
+      CHECK(rig.loop.arm(1).statistics().peak_force < 0.2);
+      CHECK(rig.loop.arm(1).statistics().latches == 0);
+    }
+  }
+}
+
+TEST_CASE("GuidanceField: a spring toward a trusted leader, nothing from an untrusted one") {
+  struct Leader {
+    DeviceState s{};
+    bool ok{true};
+    bool trusted() const noexcept { return ok; }
+    const DeviceState& state() const noexcept { return s; }
+  } leader;
+  leader.s.position = {0.01, 0.0, 0.0};
+  GuidanceField<Leader> g{&leader, 100.0, 2.0};
+  Probe p;
+  p.velocity = {0.0, 0.1, 0.0};
+  const glm::dvec3 f = g.force(p);
+  CHECK_THAT(f.x, WithinAbs(1.0, 1e-12));
+  CHECK_THAT(f.y, WithinAbs(-0.2, 1e-12));
+  leader.ok = false;
+  CHECK(g.force(p) == glm::dvec3{0.0});
+  GuidanceField<Leader> none{};
+  CHECK(none.force(p) == glm::dvec3{0.0});
+}

@@ -82,6 +82,7 @@ struct TickInput {
   DeviceState state{};  ///< newest device state
   Status read_status{Status::no_data};
   std::uint64_t tick{0};  ///< tick index since run() started
+  bool trusted{false};    ///< the state is one to act on (ServoLoop::trusted())
 };
 
 /// Why run() returned.
@@ -220,9 +221,11 @@ class ServoLoop {
     // pose from any device) latches: such a pose must steer nothing.
     impossible_ =
         s == Status::impossible || (s == Status::ok && !(is_finite(state_.position) && is_finite(state_.velocity)));
+    assess_trust();
     in.state = state_;
     in.read_status = s;
     in.tick = tick_;
+    in.trusted = trusted_;
     in.probe = Probe{};  // contact (normal force, surface normal) is the fields' business
     in.probe.position = state_.position;
     in.probe.velocity = state_.velocity;
@@ -250,10 +253,11 @@ class ServoLoop {
     const std::uint32_t before = safety_.latched();
     const glm::dvec3 out = safety_.process(si);
     if (safety_.latched() && !before) {  // the watchdog disarms, and says so
-      device_->set_armed(false);
+      disarm();
       stats_->add_latch(safety_.latched());
     }
     maybe_recover();
+    assess_trust();
     if (safety_.events() & ~(safety_events::device_fault)) stats_->add_safety_event();
     stats_->record_force(glm::length(out));
     command_ = out;
@@ -274,7 +278,16 @@ class ServoLoop {
   [[nodiscard]] const LoopStatistics& detailed_statistics() const noexcept { return *stats_; }
   [[nodiscard]] const SafetyChain& safety() const noexcept { return safety_; }
   [[nodiscard]] glm::dvec3 last_command() const noexcept { return command_; }
+  /// The newest state; check trusted() before steering anything by it.
   [[nodiscard]] const DeviceState& state() const noexcept { return state_; }
+  /// True when state() is a pose to act on (couple another arm to, draw a
+  /// cursor at): a decoded state, homed (an unhomed pose is offset by
+  /// whatever the encoders held at power-up: after a reboot, at start-up),
+  /// free of device faults, armed exactly as the loop asked, fresh (fewer
+  /// than max_ticks_without_state ticks without a new state), not
+  /// resynchronising, not impossible, not disconnected, and no latch.
+  /// Updated by read_once() and write_once().
+  [[nodiscard]] bool trusted() const noexcept { return trusted_; }
   [[nodiscard]] double period() const noexcept { return period_; }
   [[nodiscard]] const LoopConfig& config() const noexcept { return config_; }
   /// True when the last real-time request was fully granted.
@@ -296,17 +309,35 @@ class ServoLoop {
     resync_ = false;
     impossible_ = false;
     state_.valid = false;
+    trusted_ = false;
+    armed_requested_ = false;
     command_ = glm::dvec3{0.0};
     safety_.restart();
     if (config_.auto_home) device_->request_home();
-    if (config_.auto_arm) device_->set_armed(true);
+    if (config_.auto_arm) arm();
   }
 
   void clear_now() noexcept {
     safety_.clear();
     missed_in_a_row_ = 0;
     armed_since_ = -1;  // soft start again from the next armed state
-    if (config_.auto_arm) device_->set_armed(true);
+    if (config_.auto_arm) arm();
+  }
+
+  void arm() noexcept {
+    armed_requested_ = true;
+    device_->set_armed(true);
+  }
+  void disarm() noexcept {
+    armed_requested_ = false;
+    device_->set_armed(false);
+  }
+
+  /// See trusted().
+  void assess_trust() noexcept {
+    trusted_ = state_.valid && state_.homed() && !state_.faulted() && state_.armed() == armed_requested_ &&
+               ticks_without_state_ < config_.safety.max_ticks_without_state && !resync_ && !impossible_ &&
+               !disconnected_ && safety_.latched() == 0 && is_finite(state_.position);
   }
 
   /// LoopConfig::recover_after: a stale-state or missed-deadline latch is
@@ -360,9 +391,10 @@ class ServoLoop {
   void safe_stop() noexcept {
     device_->write(glm::dvec3{0.0});
     if (config_.disarm_on_exit) {
-      device_->set_armed(false);
+      disarm();
       device_->write(glm::dvec3{0.0});
     }
+    trusted_ = false;
     command_ = glm::dvec3{0.0};
     safety_.restart();  // what the device now has
     started_ = false;   // read_once() after a run starts afresh (homing, arming, soft start)
@@ -401,8 +433,9 @@ class ServoLoop {
   void latch_fault(std::uint32_t bits) noexcept {
     const std::uint32_t before = safety_.latched();
     safety_.latch(bits);
+    trusted_ = false;
     if (!before) {
-      device_->set_armed(false);
+      disarm();
       stats_->add_latch(safety_.latched());
     }
   }
@@ -486,7 +519,9 @@ class ServoLoop {
   bool started_{false};
   bool disconnected_{false};
   bool resync_{false};
-  bool impossible_{false};  ///< the last read brought a state the device cannot be in
+  bool impossible_{false};       ///< the last read brought a state the device cannot be in
+  bool armed_requested_{false};  ///< what the loop last asked the device: armed or not
+  bool trusted_{false};          ///< see trusted()
   bool locked_{false};
   bool realtime_granted_{false};
 };
