@@ -25,7 +25,8 @@ constexpr const char* usage_text =
     "  --stiffness K    guidance spring [N/m], in (0, 500] (default 150)\n"
     "  --policy P       what a fault on one arm does: isolate (default: zero that arm) or\n"
     "                   stop_all (zero and latch both)\n"
-    "  --fault          stall the student's link for 30 ms at 1 s (stale state latches it)\n"
+    "  --fault          stall the student's link for 30 ms at 1 s: stale state latches it, its\n"
+    "                   firmware watchdog trips; 0.5 s later the loop clears both and re-arms\n"
     "  -h, --help       this text\n"
     "Exit status: 0 done, 1 failure, 2 usage error.\n";
 
@@ -47,11 +48,23 @@ struct Free {
   glm::dvec3 force(const Probe&) const noexcept { return glm::dvec3{0.0}; }
 };
 
-void print_arm(const char* name, const ServoLoop<ForceArm, SteadyClock>& arm) {
+/// One arm's statistics and, after a latch, what became of it: its reason,
+/// when, whether force came back (a recovery counts only then) and when.
+/// final_force: the arm's command on the last tick [N].
+void print_arm(const char* name, const ServoLoop<ForceArm, SteadyClock>& arm, double final_force) {
   const LoopSnapshot s = arm.statistics();
-  std::printf("%s: peak force %.2f N, latches %llu%s%s\n", name, s.peak_force,
-              static_cast<unsigned long long>(s.latches), s.latches ? " (last: " : "",
-              s.latches ? (safety_events::names(s.last_latch) + ")").c_str() : "");
+  std::printf("%s: peak force %.2f N, latches %llu, recoveries %llu, force at the end %.2f N\n", name, s.peak_force,
+              static_cast<unsigned long long>(s.latches), static_cast<unsigned long long>(s.recoveries), final_force);
+  if (s.latches == 0) return;
+  std::printf("  latched at %.3f s: %s\n", s.last_latch_time, safety_events::names(s.last_latch).c_str());
+  if (const std::uint32_t held = arm.safety().latched())
+    std::printf("  not recovered: still latched (%s), zero force until clear_fault()\n",
+                safety_events::names(held).c_str());
+  else if (s.recoveries > 0 && s.last_recovery_time >= s.last_latch_time)
+    std::printf("  recovered: latch and device fault cleared, re-armed, force back at %.3f s through the soft start\n",
+                s.last_recovery_time);
+  else
+    std::printf("  latch cleared, but no force has come back (the device or the field gives none)\n");
 }
 
 int run(const Arguments& o) {
@@ -71,21 +84,25 @@ int run(const Arguments& o) {
   Free free;
   Guidance guidance{&loop.arm(0), o.stiffness, 1.0};
 
-  // The tracking error, recorded inside the tick (no allocation, no I/O).
+  // The tracking error and the student's last command, recorded inside the
+  // tick (no allocation, no I/O).
   struct Tracking {
     Guidance* guidance;
+    const ServoLoop<ForceArm, SteadyClock>* student;
     double sum_sq{0.0}, worst{0.0};
     long samples{0};
+    double last_force{0.0};  // [N]
     glm::dvec3 force(const Probe& p) noexcept {
+      last_force = glm::length(student->last_command());
       const double e = glm::length(guidance->leader->state().position - p.position);
-      if (p.time > 0.5 && guidance->leader->trusted()) {  // after homing and the soft start, on real poses
+      if (p.time > 0.5 && guidance->leader->trusted() && student->trusted()) {  // both driven, on real poses
         sum_sq += e * e;
         worst = std::fmax(worst, e);
         ++samples;
       }
       return guidance->force(p);
     }
-  } tracking{&guidance};
+  } tracking{&guidance, &loop.arm(1)};
 
   const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * 1000.0));
   loop.run({.max_ticks = ticks}, free, tracking);
@@ -96,8 +113,8 @@ int run(const Arguments& o) {
   if (tracking.samples > 0)
     std::printf("student follows the teacher within %.2f mm rms, %.2f mm worst\n",
                 1e3 * std::sqrt(tracking.sum_sq / static_cast<double>(tracking.samples)), 1e3 * tracking.worst);
-  print_arm("teacher", loop.arm(0));
-  print_arm("student", loop.arm(1));
+  print_arm("teacher", loop.arm(0), 0.0);
+  print_arm("student", loop.arm(1), tracking.last_force);
   return 0;
 }
 

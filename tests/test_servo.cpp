@@ -852,6 +852,65 @@ TEST_CASE("late wakes tick after tick still latch; with recover_after the loop r
   CHECK_THAT(log.commands.back().y, WithinAbs(0.6, 1e-12));
 }
 
+TEST_CASE(
+    "recover_after: a stall that trips the firmware watchdog recovers for real, force back through the soft start") {
+  LoopConfig c;
+  c.recover_after = 0.2;
+  Rig rig(free_arm(), c);
+  rig.link.inject(LinkFault::stall, 300, 30);  // 30 ms: the loop's state age latches, the arm's 20 ms watchdog trips
+  CommandLog log;
+  bool tripped = false, armed_at_end = false;
+  auto cb = [&](const TickInput& in) {
+    log.commands.push_back(rig.loop.last_command());
+    tripped = tripped || (in.state.flags & status_bits::watchdog_tripped) != 0;
+    armed_at_end = in.state.armed() && !in.state.faulted();
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 1200});
+  REQUIRE(tripped);  // the device latched a fault of its own
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.latches == 1);
+  CHECK(s.last_latch == safety_events::stale_state);
+  CHECK(s.recoveries == 1);
+  CHECK(armed_at_end);
+  CHECK(rig.arm.faults() == 0);                              // the loop cleared the watchdog trip while disarmed
+  CHECK_THAT(log.commands.back().y, WithinAbs(0.6, 1e-12));  // force came back
+  std::size_t zero_from = 0, back_at = 0;
+  for (std::size_t i = 300; i < log.commands.size(); ++i) {
+    if (!zero_from && log.commands[i] == glm::dvec3{0.0}) zero_from = i;
+    if (zero_from && !back_at && log.commands[i] != glm::dvec3{0.0}) back_at = i;
+  }
+  REQUIRE(back_at > zero_from + 200);  // recover_after of fresh states first
+  const std::vector<glm::dvec3> after(log.commands.begin() + static_cast<long>(back_at) - 1, log.commands.end());
+  check_gentle_start(after, 3.3, 1.0, 0.25, 1e-3);
+  // The statistics date the latch and the moment force came back.
+  CHECK(s.last_latch_time > 0.29);
+  CHECK(s.last_latch_time < 0.32);
+  CHECK(s.last_recovery_time >= s.last_latch_time + 0.2);
+  CHECK_THAT(s.last_recovery_time, WithinAbs(static_cast<double>(back_at - 1) * 1e-3, 1.5e-3));
+}
+
+TEST_CASE("recover_after claims no recovery while the device's fault cannot be cleared (e-stop held)") {
+  LoopConfig c;
+  c.recover_after = 0.2;
+  Rig rig(free_arm(), c);
+  rig.link.inject(LinkFault::stall, 300, 30);
+  CommandLog log;
+  auto cb = [&](const TickInput& in) {
+    if (in.tick == 310) rig.arm.inject_fault(status_bits::estop);  // pressed during the stall, and held
+    log.commands.push_back(rig.loop.last_command());
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 1200});
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.latches == 1);
+  CHECK(s.recoveries == 0);
+  CHECK(s.last_recovery_time < 0.0);
+  CHECK((rig.loop.safety().latched() & safety_events::stale_state) != 0);  // still latched, and says so
+  for (std::size_t i = 320; i < log.commands.size(); ++i)
+    CHECK(log.commands[i] == glm::dvec3{0.0});
+}
+
 TEST_CASE("a stall longer than the state age limit still latches, and is reported") {
   Rig rig(free_arm());
   rig.link.inject(LinkFault::stall, 300, 15);

@@ -62,8 +62,15 @@ struct LoopConfig {
   bool disarm_on_exit{true};  ///< disarm when run() returns
   /// After a stale-state or missed-deadline latch, clear it and re-arm (with
   /// the soft start) once new states have arrived on time for this long [s];
-  /// 0: never (clear_fault() only). Disconnects and throwing callbacks never
-  /// recover by themselves.
+  /// 0: never (clear_fault() only). Disconnects, impossible states and
+  /// throwing callbacks never recover by themselves. When the device has
+  /// latched a fault of its own meanwhile (its watchdog tripped while no
+  /// command got through), the loop clears it first with the device's
+  /// clear_fault() (the arm is disarmed and at zero force then; that one
+  /// call is a blocking control request, bounded by the transport's
+  /// timeout); a device fault that cannot be cleared (e-stop held, a device
+  /// without clear_fault(), a refused clear) means no recovery. A recovery
+  /// is counted in the statistics only when force has really come back.
   double recover_after{0.0};
 
   /// @throws std::invalid_argument naming the bad parameter.
@@ -254,7 +261,12 @@ class ServoLoop {
     const glm::dvec3 out = safety_.process(si);
     if (safety_.latched() && !before) {  // the watchdog disarms, and says so
       disarm();
-      stats_->add_latch(safety_.latched());
+      stats_->add_latch(safety_.latched(), run_time());
+      recovering_ = false;
+    }
+    if (recovering_ && out != glm::dvec3{0.0}) {  // force is back: now it is a recovery
+      recovering_ = false;
+      stats_->add_recovery(run_time());
     }
     maybe_recover();
     assess_trust();
@@ -308,6 +320,7 @@ class ServoLoop {
     disconnected_ = false;
     resync_ = false;
     impossible_ = false;
+    recovering_ = false;
     state_.valid = false;
     trusted_ = false;
     armed_requested_ = false;
@@ -341,7 +354,9 @@ class ServoLoop {
   }
 
   /// LoopConfig::recover_after: a stale-state or missed-deadline latch is
-  /// cleared once states have arrived on every tick, on time, for that long.
+  /// cleared once states have arrived on every tick, on time, for that long,
+  /// with the device's own latched fault first (it accepts that only while
+  /// disarmed, as the latch left it); counted once force is back.
   void maybe_recover() noexcept {
     constexpr std::uint32_t recoverable = safety_events::stale_state | safety_events::missed_deadlines;
     const std::uint32_t latched = safety_.latched();
@@ -349,9 +364,23 @@ class ServoLoop {
         missed_in_a_row_ > 0)
       return;
     if (static_cast<double>(now_ - fresh_since_) * 1e-9 < config_.recover_after) return;
+    if (state_.faulted()) {
+      if (state_.armed() || (state_.flags & status_bits::estop)) return;  // not yet disarmed, or held: wait
+      if constexpr (requires(D & d) { d.clear_fault(); }) {
+        if (device_->clear_fault() != Status::ok) {
+          fresh_since_ = now_;  // refused: try again after another recover_after
+          return;
+        }
+      } else {
+        return;  // nothing on this device can clear it
+      }
+    }
     clear_now();
-    stats_->add_recovery();
+    recovering_ = true;
   }
+
+  /// Time since the run started [s].
+  [[nodiscard]] double run_time() const noexcept { return static_cast<double>(now_ - start_) * 1e-9; }
 
   std::vector<DeviceState> last_states() const {
     std::vector<DeviceState> v;
@@ -436,7 +465,8 @@ class ServoLoop {
     trusted_ = false;
     if (!before) {
       disarm();
-      stats_->add_latch(safety_.latched());
+      stats_->add_latch(safety_.latched(), run_time());
+      recovering_ = false;
     }
   }
 
@@ -522,6 +552,7 @@ class ServoLoop {
   bool impossible_{false};       ///< the last read brought a state the device cannot be in
   bool armed_requested_{false};  ///< what the loop last asked the device: armed or not
   bool trusted_{false};          ///< see trusted()
+  bool recovering_{false};       ///< recover_after cleared a latch; counted once force is back
   bool locked_{false};
   bool realtime_granted_{false};
 };
