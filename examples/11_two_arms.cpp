@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <type_traits>
 
 #include "common/cli.hpp"
 #include "common/stop_signal.hpp"
@@ -19,14 +20,17 @@ using namespace hapticfield;
 namespace {
 
 constexpr const char* usage_text =
-    "usage: two_arms [--seconds S] [--stiffness K] [--policy isolate|stop_all] [--fault]\n"
+    "usage: two_arms [--seconds S] [--stiffness K] [--policy isolate|stop_all] [--fault] [--clock wall|virtual]\n"
     "Two simulated arms on one 1 kHz deadline: the teacher's hand draws a 2 cm circle, the\n"
     "student's arm is pulled toward the teacher's handle by a spring.\n"
     "  --seconds S      run time [s], in [0.01, 60] (default 3)\n"
     "  --stiffness K    guidance spring [N/m], in (0, 500] (default 150)\n"
     "  --policy P       what a fault on one arm does: isolate (default: zero that arm) or\n"
     "                   stop_all (zero and latch both)\n"
-    "  --fault          stall the student's link for 30 ms at 1 s (stale state latches it)\n"
+    "  --fault          stall the student's link for 30 ms at 1 s: stale state latches it, its\n"
+    "                   firmware watchdog trips; 0.5 s later the loop clears both and re-arms\n"
+    "  --clock C        wall (default) or virtual: simulated time, as fast as the CPU allows, the\n"
+    "                   same ticks and result whatever the machine's load\n"
     "  -h, --help       this text\n"
     "Ctrl-C or SIGTERM stops both arms through the loop's stop (zero force, then disarm).\n"
     "Exit status: 0 done, 1 failure, 2 usage error, 128 + N stopped by signal N.\n";
@@ -36,33 +40,43 @@ struct Arguments {
   double stiffness{150.0};
   ArmFaultPolicy policy{ArmFaultPolicy::isolate};
   bool fault{false};
+  bool virtual_clock{false};
 };
 
 /// The student's field: a spring toward where the teacher's handle is now
-/// (read from the teacher's loop, which ticked just before in the same thread).
-struct Guidance {
-  const ServoLoop<ForceArm, SteadyClock>* teacher{nullptr};
-  double stiffness{150.0};  // [N/m]
-  double damping{1.0};      // [N s/m]
-  glm::dvec3 force(const Probe& p) const noexcept {
-    return stiffness * (teacher->state().position - p.position) - damping * p.velocity;
-  }
-};
+/// (read from the teacher's loop, which ticked just before in the same
+/// thread), and nothing while the teacher's pose is not trusted (homing at
+/// start-up or after a reboot, stale, latched).
+template <ServoClock C>
+using Guidance = GuidanceField<ServoLoop<ForceArm, C>>;
 
 /// The teacher feels nothing: its hand leads.
 struct Free {
   glm::dvec3 force(const Probe&) const noexcept { return glm::dvec3{0.0}; }
 };
 
-void print_arm(const char* name, const ServoLoop<ForceArm, SteadyClock>& arm) {
+/// One arm's statistics and, after a latch, what became of it: its reason,
+/// when, whether force came back (a recovery counts only then) and when.
+/// final_force: the arm's command on the last tick [N].
+template <ServoClock C>
+void print_arm(const char* name, const ServoLoop<ForceArm, C>& arm, double final_force) {
   const LoopSnapshot s = arm.statistics();
-  std::printf("%s: peak force %.2f N, latches %llu%s%s\n", name, s.peak_force,
-              static_cast<unsigned long long>(s.latches), s.latches ? " (last: " : "",
-              s.latches ? (safety_events::names(s.last_latch) + ")").c_str() : "");
+  std::printf("%s: peak force %.2f N, latches %llu, recoveries %llu, force at the end %.2f N\n", name, s.peak_force,
+              static_cast<unsigned long long>(s.latches), static_cast<unsigned long long>(s.recoveries), final_force);
+  if (s.latches == 0) return;
+  std::printf("  latched at %.3f s: %s\n", s.last_latch_time, safety_events::names(s.last_latch).c_str());
+  if (const std::uint32_t held = arm.safety().latched())
+    std::printf("  not recovered: still latched (%s), zero force until clear_fault()\n",
+                safety_events::names(held).c_str());
+  else if (s.recoveries > 0 && s.last_recovery_time >= s.last_latch_time)
+    std::printf("  recovered: latch and device fault cleared, re-armed, force back at %.3f s through the soft start\n",
+                s.last_recovery_time);
+  else
+    std::printf("  latch cleared, but no force has come back (the device or the field gives none)\n");
 }
 
-int run(const Arguments& o) {
-  SteadyClock clock;
+template <ServoClock C>
+int run_on(const Arguments& o, C& clock) {
   const auto now = [&clock] { return clock.now(); };
   SimulatedArmConfig teacher_config;
   teacher_config.hand.path = HandPath::circle({0.0, 0.0, 0.0}, 0.02, 0.3);  // 2 cm circle at 0.3 Hz
@@ -74,25 +88,30 @@ int run(const Arguments& o) {
   ForceArm teacher(teacher_link), student(student_link);
   LoopConfig config;
   config.recover_after = 0.5;  // a stall of the machine latches; re-arm through the soft start once fresh again
-  MultiArmLoop<ForceArm, 2, SteadyClock> loop({&teacher, &student}, clock, config, o.policy);
+  if (std::is_same_v<C, VirtualClock>) config.realtime = RealTime::off;  // simulated time never sleeps
+  MultiArmLoop<ForceArm, 2, C> loop({&teacher, &student}, clock, config, o.policy);
   Free free;
-  Guidance guidance{&loop.arm(0), o.stiffness};
+  Guidance<C> guidance{&loop.arm(0), o.stiffness, 1.0};
 
-  // The tracking error, recorded inside the tick (no allocation, no I/O).
+  // The tracking error and the student's last command, recorded inside the
+  // tick (no allocation, no I/O).
   struct Tracking {
-    Guidance* guidance;
+    Guidance<C>* guidance;
+    const ServoLoop<ForceArm, C>* student;
     double sum_sq{0.0}, worst{0.0};
     long samples{0};
+    double last_force{0.0};  // [N]
     glm::dvec3 force(const Probe& p) noexcept {
-      const double e = glm::length(guidance->teacher->state().position - p.position);
-      if (p.time > 0.5) {  // after the arms have homed and the soft start
+      last_force = glm::length(student->last_command());
+      const double e = glm::length(guidance->leader->state().position - p.position);
+      if (p.time > 0.5 && guidance->leader->trusted() && student->trusted()) {  // both driven, on real poses
         sum_sq += e * e;
         worst = std::fmax(worst, e);
         ++samples;
       }
       return guidance->force(p);
     }
-  } tracking{&guidance};
+  } tracking{&guidance, &loop.arm(1)};
 
   const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * 1000.0));
   cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm both arms through the loop's stop
@@ -106,13 +125,22 @@ int run(const Arguments& o) {
   if (tracking.samples > 0)
     std::printf("student follows the teacher within %.2f mm rms, %.2f mm worst\n",
                 1e3 * std::sqrt(tracking.sum_sq / static_cast<double>(tracking.samples)), 1e3 * tracking.worst);
-  print_arm("teacher", loop.arm(0));
-  print_arm("student", loop.arm(1));
+  print_arm("teacher", loop.arm(0), 0.0);
+  print_arm("student", loop.arm(1), tracking.last_force);
   if (stop.caught()) {
     std::printf("stopped by signal %d: zero force commanded to both arms, then both disarmed\n", stop.caught());
     return stop.exit_status();
   }
   return 0;
+}
+
+int run(const Arguments& o) {
+  if (o.virtual_clock) {
+    VirtualClock clock;
+    return run_on(o, clock);
+  }
+  SteadyClock clock;
+  return run_on(o, clock);
 }
 
 }  // namespace
@@ -130,6 +158,8 @@ int main(int argc, char** argv) {
             "fault policy", {{"isolate", ArmFaultPolicy::isolate}, {"stop_all", ArmFaultPolicy::stop_all}});
       else if (p.is("--fault"))
         o.fault = true;
+      else if (p.is("--clock"))
+        o.virtual_clock = p.choice<bool>("clock", {{"wall", false}, {"virtual", true}});
       else
         p.unknown();
     }

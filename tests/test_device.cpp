@@ -484,6 +484,79 @@ TEST_CASE("ForceArm resynchronises after a device restart or a long loss within 
   }
 }
 
+namespace {
+/// The device-info report of a default SimulatedArm, then the state reports
+/// a test puts in `reports` (CRC valid).
+class CraftedReports final : public Transport {
+ public:
+  SimulatedArm arm{};
+  std::vector<protocol::StateReport> reports;
+  std::size_t next{0};
+  Status read(std::span<std::uint8_t> b, std::size_t& n, int) noexcept override {
+    if (next == reports.size()) return Status::no_data;
+    n = protocol::encode(reports[next++], b);
+    return Status::ok;
+  }
+  Status write(std::span<const std::uint8_t>) noexcept override { return Status::ok; }
+  Status get_feature(std::span<std::uint8_t> b, std::size_t& n) noexcept override { return arm.get_feature(b, n); }
+  Status send_feature(std::span<const std::uint8_t>) noexcept override { return Status::ok; }
+};
+protocol::StateReport crafted(std::uint16_t sequence, glm::dvec3 q, bool homed) {
+  protocol::StateReport r;
+  r.sequence = sequence;
+  r.timestamp_us = sequence * 1000u;
+  r.encoder = PhantomKinematics{}.counts(q);
+  r.status = homed ? status_bits::homed : 0;
+  return r;
+}
+}  // namespace
+
+TEST_CASE("ForceArm holds back a state beyond the device's joint limits (with the margin) and says so") {
+  CraftedReports link;
+  ForceArm device(link);
+  const KinematicsConfig& k = device.kinematics().config();  // from the device-info report
+  REQUIRE(device.joint_margin() > 0.0);
+  const double m = device.joint_margin();
+  DeviceState s;
+  // Homed: the joint limits the device reports, widened by the margin.
+  link.reports = {crafted(1, {0.1, 0.2, 0.3}, true), crafted(2, {k.q_max.x + 0.5 * m, 0.2, 0.3}, true),
+                  crafted(3, {0.1, k.q_min.y - 2.0 * m, 0.3}, true)};
+  CHECK(device.read(s) == Status::impossible);  // one impossible report among the drained ones is enough
+  CHECK(device.counters().impossible == 1);
+  CHECK((device.last_events() & link_events::impossible) != 0);
+  CHECK_FALSE(s.valid);  // untouched
+  // Encoder counts of +-2^31 (valid CRC): thousands of radians.
+  protocol::StateReport wild = crafted(4, {0.0, 0.0, 0.0}, true);
+  wild.encoder = {INT32_MAX, INT32_MIN, INT32_MAX};
+  link.reports.push_back(wild);
+  CHECK(device.read(s) == Status::impossible);
+  CHECK(device.counters().impossible == 2);
+  // Unhomed counts are relative to an unknown pose inside the limits: up to
+  // the span of each joint (plus the margin) either way is possible.
+  link.reports.push_back(crafted(5, {k.q_min.x - k.q_max.x + 0.5 * m, 0.0, 0.0}, false));
+  CHECK(device.read(s) == Status::ok);
+  link.reports.push_back(crafted(6, {0.0, k.q_max.y - k.q_min.y + 2.0 * m, 0.0}, false));
+  CHECK(device.read(s) == Status::impossible);
+  link.reports.push_back(crafted(7, {0.0, 0.3, 0.2}, true));
+  CHECK(device.read(s) == Status::ok);
+  CHECK(s.joint_angles.y == Approx(0.3).margin(1e-3));
+  CHECK(device.counters().impossible == 3);
+  CHECK((device.last_events() & link_events::impossible) == 0);
+}
+
+TEST_CASE("the wild_counts link fault sends encoders of +-2^31 with a valid CRC; ForceArm refuses them") {
+  SimRig rig(still_arm());
+  rig.link.inject(LinkFault::wild_counts, 30, 2);
+  DeviceState s;
+  std::vector<Status> reads;
+  for (int i = 0; i < 40; ++i)
+    reads.push_back(rig.step({0, 0, 0}, s));
+  CHECK(std::count(reads.begin(), reads.end(), Status::impossible) == 2);
+  CHECK(rig.device.counters().corrupt == 0);  // the CRC was right
+  CHECK(rig.device.counters().impossible == 2);
+  CHECK(reads.back() == Status::ok);
+}
+
 TEST_CASE("the scripted hand follows its paths") {
   const HandPath line = HandPath::line({0, 0, 0}, {0.1, 0, 0}, 0.05);
   check_vec(line.at(1.0), {0.05, 0, 0}, 1e-12);

@@ -545,3 +545,62 @@ TEST_CASE("inverse3: a device that stops answering: replies given up on after ma
   CHECK(arm.counters().lost_replies >= 80);
   CHECK(arm.counters().implausible == 0);
 }
+
+TEST_CASE("inverse3: replies cut short are never re-assembled into a pose: no force in a wrong direction, a latch") {
+  // The reply of one request loses its tail on the wire; fixed-size framing
+  // would glue the next reply's head onto it and misalign every later frame.
+  for (const std::size_t keep : {std::size_t{12}, std::size_t{1}, std::size_t{13}, std::size_t{24}}) {
+    INFO("reply cut to " << keep << " of 25 bytes");
+    SimulatedInverse3 sim;
+    SimulatedInverse3Transport link(sim);
+    VirtualClock clock;
+    Inverse3Config c;
+    c.now = [&clock] { return clock.now(); };
+    Inverse3 arm(link, c);  // identity frame: ours = the device's
+    ServoLoop<Inverse3, VirtualClock> loop(arm, clock, quiet());
+    link.truncate_replies(400, keep);
+    const glm::dvec3 target{0.05, 0.1, 0.05};  // 5 cm from the start along x [m]
+    const auto spring = [&target](const glm::dvec3& p) { return 40.0 * (target - p); };
+    std::vector<glm::dvec3> expected, commands;  // per tick: the field at the true pose, the command sent
+    std::vector<std::uint64_t> truncated;
+    std::vector<Status> reads;
+    expected.reserve(1000);
+    commands.reserve(1000);
+    truncated.reserve(1000);
+    reads.reserve(1000);
+    auto cb = [&](const TickInput& in) {
+      if (!expected.empty()) commands.push_back(loop.last_command());
+      expected.push_back(spring(sim.position()));  // the pose the last reply should have carried
+      truncated.push_back(link.truncated());
+      reads.push_back(in.read_status);
+      return spring(in.probe.position);
+    };
+    loop.run(cb, {.max_ticks = 800});
+    commands.push_back(loop.last_command());
+    REQUIRE(commands.size() == expected.size());
+    const auto cut = static_cast<std::size_t>(std::find(truncated.begin(), truncated.end(), 1u) - truncated.begin());
+    REQUIRE(cut < truncated.size());
+    int wrong = 0, nonzero_after = 0;
+    for (std::size_t i = 0; i < commands.size(); ++i) {
+      const double f = glm::length(commands[i]), e = glm::length(expected[i]);
+      if (f == 0.0 || e < 0.1) continue;
+      if (glm::dot(commands[i], expected[i]) < std::cos(0.25 * 3.14159265358979) * f * e) ++wrong;  // > 45 deg off
+      if (i > cut) ++nonzero_after;
+    }
+    CHECK(wrong == 0);
+    // Within a few ticks the loop knew: a latch (impossible motion) or a
+    // resynchronisation (zero force that tick), and it says which.
+    const auto noticed = std::find_if(reads.begin() + static_cast<long>(cut), reads.end(),
+                                      [](Status s) { return s == Status::impossible || s == Status::resync; });
+    REQUIRE(noticed != reads.end());
+    CHECK(noticed - reads.begin() <= static_cast<long>(cut) + 4);
+    const Inverse3Counters& n = arm.counters();
+    CHECK(n.impossible + n.wrong_header + n.implausible >= 1);
+    CHECK(n.resyncs >= 1);
+    if (keep == 12) {  // the header byte is right, the position jumps: latched, and named
+      CHECK(n.impossible >= 1);
+      CHECK(loop.statistics().last_latch == safety_events::impossible_state);
+      CHECK(nonzero_after == 0);
+    }
+  }
+}

@@ -268,6 +268,20 @@ TEST_CASE("serial: a feature request nobody answers times out within the bound")
   CHECK(std::chrono::steady_clock::now() - t0 < hard_timeout);
 }
 
+TEST_CASE("serial: a ForceArm whose device never answers the device-info request names the port") {
+  Pty pty;  // nobody on the master side
+  SerialConfig c;
+  c.feature_timeout_us = 50'000;
+  SerialTransport serial(pty.path, c);
+  std::string what = "no error";
+  try {
+    ForceArm arm(serial);
+  } catch (const std::exception& e) {
+    what = e.what();
+  }
+  CHECK(what == "ForceArm: reading the device-info feature report from " + pty.path + " failed: timeout");
+}
+
 TEST_CASE("serial: line framing returns text lines, strips NUL padding, drops over-long lines") {
   Pty pty;
   SerialConfig c;

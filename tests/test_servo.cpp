@@ -852,6 +852,65 @@ TEST_CASE("late wakes tick after tick still latch; with recover_after the loop r
   CHECK_THAT(log.commands.back().y, WithinAbs(0.6, 1e-12));
 }
 
+TEST_CASE(
+    "recover_after: a stall that trips the firmware watchdog recovers for real, force back through the soft start") {
+  LoopConfig c;
+  c.recover_after = 0.2;
+  Rig rig(free_arm(), c);
+  rig.link.inject(LinkFault::stall, 300, 30);  // 30 ms: the loop's state age latches, the arm's 20 ms watchdog trips
+  CommandLog log;
+  bool tripped = false, armed_at_end = false;
+  auto cb = [&](const TickInput& in) {
+    log.commands.push_back(rig.loop.last_command());
+    tripped = tripped || (in.state.flags & status_bits::watchdog_tripped) != 0;
+    armed_at_end = in.state.armed() && !in.state.faulted();
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 1200});
+  REQUIRE(tripped);  // the device latched a fault of its own
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.latches == 1);
+  CHECK(s.last_latch == safety_events::stale_state);
+  CHECK(s.recoveries == 1);
+  CHECK(armed_at_end);
+  CHECK(rig.arm.faults() == 0);                              // the loop cleared the watchdog trip while disarmed
+  CHECK_THAT(log.commands.back().y, WithinAbs(0.6, 1e-12));  // force came back
+  std::size_t zero_from = 0, back_at = 0;
+  for (std::size_t i = 300; i < log.commands.size(); ++i) {
+    if (!zero_from && log.commands[i] == glm::dvec3{0.0}) zero_from = i;
+    if (zero_from && !back_at && log.commands[i] != glm::dvec3{0.0}) back_at = i;
+  }
+  REQUIRE(back_at > zero_from + 200);  // recover_after of fresh states first
+  const std::vector<glm::dvec3> after(log.commands.begin() + static_cast<long>(back_at) - 1, log.commands.end());
+  check_gentle_start(after, 3.3, 1.0, 0.25, 1e-3);
+  // The statistics date the latch and the moment force came back.
+  CHECK(s.last_latch_time > 0.29);
+  CHECK(s.last_latch_time < 0.32);
+  CHECK(s.last_recovery_time >= s.last_latch_time + 0.2);
+  CHECK_THAT(s.last_recovery_time, WithinAbs(static_cast<double>(back_at - 1) * 1e-3, 1.5e-3));
+}
+
+TEST_CASE("recover_after claims no recovery while the device's fault cannot be cleared (e-stop held)") {
+  LoopConfig c;
+  c.recover_after = 0.2;
+  Rig rig(free_arm(), c);
+  rig.link.inject(LinkFault::stall, 300, 30);
+  CommandLog log;
+  auto cb = [&](const TickInput& in) {
+    if (in.tick == 310) rig.arm.inject_fault(status_bits::estop);  // pressed during the stall, and held
+    log.commands.push_back(rig.loop.last_command());
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 1200});
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.latches == 1);
+  CHECK(s.recoveries == 0);
+  CHECK(s.last_recovery_time < 0.0);
+  CHECK((rig.loop.safety().latched() & safety_events::stale_state) != 0);  // still latched, and says so
+  for (std::size_t i = 320; i < log.commands.size(); ++i)
+    CHECK(log.commands[i] == glm::dvec3{0.0});
+}
+
 TEST_CASE("a stall longer than the state age limit still latches, and is reported") {
   Rig rig(free_arm());
   rig.link.inject(LinkFault::stall, 300, 15);
@@ -892,6 +951,74 @@ TEST_CASE("a device that reboots is taken up again within a few ticks, force zer
   check_gentle_start(after, 3.3, 1.0, 0.25, 1e-3);
   CHECK_THAT(log.commands.back().y, WithinAbs(0.6, 1e-12));
   CHECK(rig.loop.statistics().latches == 0);
+}
+
+TEST_CASE("an impossible pose with a valid CRC latches: zero force from that tick on, and the latch says why") {
+  Rig rig(free_arm());
+  rig.link.inject(LinkFault::wild_counts, 600, 40);  // encoders at +-2^31 for 40 ms, CRC valid
+  CommandLog log;
+  std::vector<Status> reads;
+  reads.reserve(1000);
+  auto cb = [&](const TickInput& in) {
+    log.commands.push_back(rig.loop.last_command());  // the command of the tick before
+    reads.push_back(in.read_status);
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 900});
+  const auto first = std::find(reads.begin(), reads.end(), Status::impossible);
+  REQUIRE(first != reads.end());
+  const auto k = static_cast<std::size_t>(first - reads.begin());
+  CHECK(k >= 598);
+  CHECK(k <= 602);
+  CHECK_THAT(log.commands[k].y, WithinAbs(0.6, 1e-12));  // full force on the tick before
+  for (std::size_t i = k + 1; i < log.commands.size(); ++i)
+    CHECK(log.commands[i] == glm::dvec3{0.0});  // zero from that tick on, after the fault too
+  CHECK(rig.loop.last_command() == glm::dvec3{0.0});
+  CHECK((rig.loop.safety().latched() & safety_events::impossible_state) != 0);
+  const LoopSnapshot s = rig.loop.statistics();
+  CHECK(s.latches == 1);
+  CHECK(s.last_latch == safety_events::impossible_state);
+  CHECK(safety_events::names(s.last_latch) == "impossible state");
+  CHECK_FALSE(rig.arm.armed());  // the latch disarmed the arm
+  // The wild pose never became the loop's state.
+  CHECK(std::abs(rig.loop.state().joint_angles.x) < 2.0);
+}
+
+TEST_CASE("a non-finite position from a device latches as an impossible state") {
+  /// A device that reports a NaN position from tick 300 on.
+  struct NanDevice {
+    DeviceInfo info_{};
+    std::uint64_t reads{0};
+    glm::dvec3 commanded{0.0};
+    Status read(DeviceState& s) noexcept {
+      ++reads;
+      s.valid = true;
+      s.flags = status_bits::homed | status_bits::armed;
+      s.position = reads >= 300 ? glm::dvec3{std::nan(""), 0.0, 0.0} : glm::dvec3{0.0};
+      return Status::ok;
+    }
+    Status write(const glm::dvec3& f) noexcept {
+      commanded = f;
+      return Status::ok;
+    }
+    Status set_armed(bool) noexcept { return Status::ok; }
+    Status request_home() noexcept { return Status::ok; }
+    const DeviceInfo& info() const noexcept { return info_; }
+  } device;
+  VirtualClock clock;
+  ServoLoop<NanDevice, VirtualClock> loop(device, clock, Rig::quiet({}));
+  std::vector<glm::dvec3> commands;
+  commands.reserve(600);
+  auto cb = [&](const TickInput&) {
+    commands.push_back(device.commanded);
+    return glm::dvec3{0.0, 0.6, 0.0};
+  };
+  loop.run(cb, {.max_ticks = 500});
+  REQUIRE(commands.size() == 500);
+  CHECK_THAT(commands[299].y, WithinAbs(0.6, 1e-12));
+  for (std::size_t i = 300; i < commands.size(); ++i)
+    CHECK(commands[i] == glm::dvec3{0.0});
+  CHECK(loop.statistics().last_latch == safety_events::impossible_state);
 }
 
 TEST_CASE("max_ticks = 0 is an error, not 'no limit'") {
@@ -1083,4 +1210,155 @@ TEST_CASE("two arms: no heap allocation per tick") {
   rig.loop.run({.max_ticks = 100}, wall, wall);  // warm up
   const long allocations = test::count_allocations([&] { rig.loop.run({.max_ticks = 2000}, wall, wall); });
   CHECK(allocations == 0);
+}
+
+// ------------------------------------------------- two arms: trusted poses
+
+namespace {
+using ArmLoop = ServoLoop<ForceArm, VirtualClock>;
+
+/// A teacher whose hand holds its handle at the home pose and a free
+/// student guided toward the teacher's handle, on one virtual clock.
+struct TeacherStudent {
+  VirtualClock clock;
+  SimulatedArm teacher_arm, student_arm;
+  SimulatedTransport teacher_link, student_link;
+  ForceArm teacher, student;
+  MultiArmLoop<ForceArm, 2, VirtualClock> loop;
+  TeacherStudent(SimulatedArmConfig teacher_config, ArmFaultPolicy policy)
+      : teacher_arm(teacher_config),
+        student_arm(free_arm()),
+        teacher_link(teacher_arm, [this] { return clock.now(); }),
+        student_link(
+            student_arm, [this] { return clock.now(); }, 0.25),
+        teacher(teacher_link),
+        student(student_link),
+        loop({&teacher, &student}, clock, Rig::quiet({}), policy) {}
+};
+
+/// The student's field: GuidanceField, recording each tick whether the
+/// teacher was trusted and homed, and the student's command of the tick before.
+struct RecordedGuidance {
+  GuidanceField<ArmLoop> guidance;
+  const ArmLoop* student;
+  const SimulatedArm* teacher_arm;
+  std::vector<glm::dvec3> commands;
+  std::vector<char> trusted, homed;
+  RecordedGuidance(const ArmLoop& t, const ArmLoop& s, const SimulatedArm& a)
+      : guidance{&t, 150.0, 1.0}, student(&s), teacher_arm(&a) {
+    commands.reserve(3000);
+    trusted.reserve(3000);
+    homed.reserve(3000);
+  }
+  glm::dvec3 force(const Probe& p) noexcept {
+    if (commands.size() < commands.capacity()) {
+      commands.push_back(student->last_command());
+      trusted.push_back(guidance.leader->trusted() ? 1 : 0);
+      homed.push_back(teacher_arm->homed() ? 1 : 0);
+    }
+    return guidance.force(p);
+  }
+  /// The student's command on tick i.
+  [[nodiscard]] glm::dvec3 command(std::size_t i) const { return commands.at(i + 1); }
+};
+
+SimulatedArmConfig holding_teacher() {
+  SimulatedArmConfig c;
+  c.hand.path = HandPath::hold({0.0, 0.0, 0.0});  // the teacher's hand holds the handle at home
+  return c;
+}
+}  // namespace
+
+TEST_CASE("ServoLoop::trusted(): false until homed and armed as asked, false while resynchronising or latched") {
+  Rig rig(free_arm());
+  std::vector<char> trusted;
+  std::vector<char> homed_armed;
+  trusted.reserve(700);
+  homed_armed.reserve(700);
+  rig.link.inject(LinkFault::reboot, 400);
+  auto cb = [&](const TickInput& in) {
+    trusted.push_back(in.trusted ? 1 : 0);
+    CHECK(in.trusted == rig.loop.trusted());
+    homed_armed.push_back(in.state.homed() && in.state.armed() ? 1 : 0);
+    return glm::dvec3{0.0};
+  };
+  rig.loop.run(cb, {.max_ticks = 700});
+  CHECK(trusted[0] == 0);
+  CHECK(trusted[30] == 0);  // homing: the pose is offset by whatever the encoders held
+  for (std::size_t i = 0; i < trusted.size(); ++i) {
+    INFO("tick " << i);
+    if (trusted[i]) CHECK(homed_armed[i]);  // never an unhomed or unarmed pose
+  }
+  CHECK(trusted[300] == 1);
+  CHECK(std::count(trusted.begin() + 395, trusted.begin() + 460, 0) >= 50);  // the reboot: resync, homing
+  CHECK(trusted.back() == 1);
+  CHECK_FALSE(rig.loop.trusted());  // the run ended: disarmed
+}
+
+TEST_CASE(
+    "two arms: the student feels nothing while the teacher's pose is not trusted, at start-up and after a reboot") {
+  for (const ArmFaultPolicy policy : {ArmFaultPolicy::isolate, ArmFaultPolicy::stop_all}) {
+    INFO("policy " << static_cast<int>(policy));
+    SECTION("start-up: the teacher homes for 300 ms while the student is armed") {
+      SimulatedArmConfig t = holding_teacher();
+      t.homing_ticks = 300;
+      TeacherStudent rig(t, policy);
+      RecordedGuidance guided(rig.loop.arm(0), rig.loop.arm(1), rig.teacher_arm);
+      Constant none{{0.0, 0.0, 0.0}};
+      rig.loop.run({.max_ticks = 800}, none, guided);
+      const std::size_t n = guided.commands.size() - 1;
+      std::size_t homed_at = 0;
+      while (homed_at < n && !guided.homed[homed_at])
+        ++homed_at;
+      REQUIRE(homed_at >= 290);
+      REQUIRE(homed_at < 320);
+      for (std::size_t i = 0; i < n; ++i) {
+        INFO("tick " << i);
+        if (!guided.trusted[i]) CHECK(guided.command(i) == glm::dvec3{0.0});
+        if (i < homed_at) CHECK_FALSE(guided.trusted[i]);
+      }
+      CHECK(rig.loop.arm(1).statistics().latches == 0);
+      CHECK(rig.loop.arm(1).statistics().peak_force < 0.2);  // never pulled toward the unhomed (bogus) pose
+    }
+    SECTION("a reboot of the teacher mid-run") {
+      TeacherStudent rig(holding_teacher(), policy);
+      rig.teacher_link.inject(LinkFault::reboot, 1000);
+      RecordedGuidance guided(rig.loop.arm(0), rig.loop.arm(1), rig.teacher_arm);
+      Constant none{{0.0, 0.0, 0.0}};
+      rig.loop.run({.max_ticks = 1600}, none, guided);
+      CHECK(rig.teacher_arm.boots() == 1);
+      const std::size_t n = guided.commands.size() - 1;
+      std::size_t untrusted_after_start = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        INFO("tick " << i);
+        if (!guided.trusted[i]) CHECK(guided.command(i) == glm::dvec3{0.0});
+        if (i > 900 && i < 1100) untrusted_after_start += guided.trusted[i] ? 0 : 1;
+        if (i > 900 && !guided.homed[i]) CHECK_FALSE(guided.trusted[i]);
+      }
+      CHECK(untrusted_after_start >= 50);  // resynchronising, then homing
+      CHECK(guided.trusted[n - 1] == 1);   // and trusted again
+      CHECK(rig.loop.arm(1).statistics().peak_force < 0.2);
+      CHECK(rig.loop.arm(1).statistics().latches == 0);
+    }
+  }
+}
+
+TEST_CASE("GuidanceField: a spring toward a trusted leader, nothing from an untrusted one") {
+  struct Leader {
+    DeviceState s{};
+    bool ok{true};
+    bool trusted() const noexcept { return ok; }
+    const DeviceState& state() const noexcept { return s; }
+  } leader;
+  leader.s.position = {0.01, 0.0, 0.0};
+  GuidanceField<Leader> g{&leader, 100.0, 2.0};
+  Probe p;
+  p.velocity = {0.0, 0.1, 0.0};
+  const glm::dvec3 f = g.force(p);
+  CHECK_THAT(f.x, WithinAbs(1.0, 1e-12));
+  CHECK_THAT(f.y, WithinAbs(-0.2, 1e-12));
+  leader.ok = false;
+  CHECK(g.force(p) == glm::dvec3{0.0});
+  GuidanceField<Leader> none{};
+  CHECK(none.force(p) == glm::dvec3{0.0});
 }

@@ -519,6 +519,38 @@ TEST_CASE("end to end: the firmware watchdog zeroes the output when the host sto
   }
 }
 
+TEST_CASE(
+    "end to end: encoder counts far beyond the joints' range latch (impossible state), zero current from then on") {
+  for (const Generation g : {Generation::p1_hid8, Generation::p2_hid14, Generation::p4_text}) {
+    INFO(woody::to_string(g));
+    SimulatedWoodyConfig a = sim_config(g);
+    a.hand.holding = false;
+    Rig rig(a);
+    std::vector<std::array<std::int16_t, 3>> sent;  // currents written by the tick before
+    std::vector<Status> reads;
+    sent.reserve(1000);
+    reads.reserve(1000);
+    auto cb = [&](const TickInput& in) {
+      sent.push_back(rig.device.last_milliamps());
+      reads.push_back(in.read_status);
+      if (in.tick == 600) rig.link.set_wild_counts(true);  // P4: +-2^31, P1/P2: +-32767 counts
+      return glm::dvec3{0.0, 0.0, 0.5};
+    };
+    rig.loop.run(cb, {.max_ticks = 800});
+    const auto first = std::find(reads.begin(), reads.end(), Status::impossible);
+    REQUIRE(first != reads.end());
+    const auto k = static_cast<std::size_t>(first - reads.begin());
+    CHECK(k >= 600);
+    CHECK(k <= 602);
+    CHECK(sent[k] != std::array<std::int16_t, 3>{0, 0, 0});  // driving until then
+    for (std::size_t i = k + 1; i < sent.size(); ++i)
+      CHECK(sent[i] == std::array<std::int16_t, 3>{0, 0, 0});
+    CHECK(rig.loop.statistics().last_latch == safety_events::impossible_state);
+    CHECK(safety_events::names(rig.loop.statistics().last_latch) == "impossible state");
+    CHECK(rig.device.counters().impossible >= 1);
+  }
+}
+
 TEST_CASE("end to end P4: a malformed frame gets the error reply; WoodyArm counts it, keeps its state and sends zero") {
   Rig rig(sim_config(Generation::p4_text));
   DeviceState s;

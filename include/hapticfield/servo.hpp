@@ -5,6 +5,7 @@
 /// Knows only the Device and HapticField concepts.
 
 #include "hapticfield/servo/clock.hpp"
+#include "hapticfield/servo/guidance.hpp"
 #include "hapticfield/servo/loop.hpp"
 #include "hapticfield/servo/multi_arm_loop.hpp"
 #include "hapticfield/servo/pacer.hpp"

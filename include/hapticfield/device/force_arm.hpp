@@ -30,6 +30,7 @@ inline constexpr std::uint32_t malformed = 1u << 4;     ///< short, unknown id o
 inline constexpr std::uint32_t device_fault = 1u << 5;  ///< a fault bit is set
 inline constexpr std::uint32_t jumped = 1u << 6;        ///< a report far off the sequence: held back
 inline constexpr std::uint32_t resynced = 1u << 7;      ///< a new, consistent stream was taken up
+inline constexpr std::uint32_t impossible = 1u << 8;    ///< a report beyond the joint limits: refused
 }  // namespace link_events
 
 /// Running counts of link events since construction.
@@ -42,7 +43,8 @@ struct LinkCounters {
   std::uint64_t malformed{0};
   std::uint64_t commands{0};  ///< command reports written
   std::uint64_t write_errors{0};
-  std::uint64_t resyncs{0};  ///< times a new stream was taken up (device restart, long loss)
+  std::uint64_t resyncs{0};     ///< times a new stream was taken up (device restart, long loss)
+  std::uint64_t impossible{0};  ///< reports refused: joint angles the arm cannot reach
 };
 
 struct ForceArmConfig {
@@ -59,6 +61,13 @@ struct ForceArmConfig {
   /// Consecutive reports of a new stream needed to take it up (a device
   /// restart, a long loss); meanwhile read() returns Status::resync [reports].
   int resync_reports{3};
+  /// Joint angles further than this beyond the joint limits (those of the
+  /// device-info report when query_device) are impossible: the report is
+  /// refused and read() returns Status::impossible [rad] (0.1 rad = 5.7 deg).
+  /// Homed: q_min - margin <= q <= q_max + margin. Unhomed the counts are
+  /// relative to an unknown pose within the limits, so |q| <= q_max - q_min
+  /// + margin.
+  double joint_margin{0.1};
 };
 
 class ForceArm {
@@ -75,8 +84,10 @@ class ForceArm {
       Status s = transport_->get_feature(buf, size);
       if (s == Status::ok) s = protocol::decode(std::span<const std::uint8_t>(buf.data(), size), r);
       if (s != Status::ok)
-        throw std::runtime_error("ForceArm: reading the device-info feature report failed: " +
-                                 std::string(to_string(s)));
+        throw std::runtime_error(
+            "ForceArm: reading the device-info feature report" +
+            (transport_->where().empty() ? std::string() : " from " + std::string(transport_->where())) +
+            " failed: " + std::string(to_string(s)));
       apply(r);
     }
     if (!std::isfinite(config_.velocity_cutoff) || config_.velocity_cutoff <= 0.0)
@@ -87,6 +98,8 @@ class ForceArm {
       throw std::invalid_argument("ForceArmConfig: max_sequence_gap must be within 1..30000 [reports]");
     if (config_.resync_reports < 1 || config_.resync_reports > 100)
       throw std::invalid_argument("ForceArmConfig: resync_reports must be within 1..100 [reports]");
+    if (!std::isfinite(config_.joint_margin) || config_.joint_margin < 0.0 || config_.joint_margin > 1.0)
+      throw std::invalid_argument("ForceArmConfig: joint_margin must be within [0, 1] [rad]");
     config_.info.validate();
     kin_ = PhantomKinematics(config_.kinematics);
   }
@@ -94,19 +107,24 @@ class ForceArm {
   [[nodiscard]] const DeviceInfo& info() const noexcept { return config_.info; }
   [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return kin_; }
   [[nodiscard]] const LinkCounters& counters() const noexcept { return counters_; }
+  /// Margin beyond the joint limits before a report is impossible [rad].
+  [[nodiscard]] double joint_margin() const noexcept { return config_.joint_margin; }
   /// link_events bits of the last read().
   [[nodiscard]] std::uint32_t last_events() const noexcept { return events_; }
 
   /// Drains every queued input report and keeps the newest valid one.
   /// Returns ok when a newer state was decoded, no_data when none, resync
   /// while a jump in the sequence (a device restart, a long loss) waits for
-  /// resync_reports consistent reports, and disconnected when the transport
-  /// is gone (state still takes any report that arrived before). state is
-  /// untouched unless ok or disconnected.
+  /// resync_reports consistent reports, impossible when any report drained
+  /// has joint angles beyond the limits (joint_margin; such a report is
+  /// never used), and disconnected when the transport is gone (state still
+  /// takes any report that arrived before). state is untouched unless ok or
+  /// disconnected.
   Status read(DeviceState& state) noexcept {
     events_ = 0;
     bool fresh = false;
     bool held = false;
+    bool impossible = false;
     protocol::StateReport newest{};
     for (int i = 0; i < 256; ++i) {
       std::size_t size = 0;
@@ -135,6 +153,12 @@ class ForceArm {
         continue;
       }
       ++counters_.reports;
+      if (!reachable(r)) {
+        events_ |= link_events::impossible;
+        ++counters_.impossible;
+        impossible = true;
+        continue;
+      }
       const std::uint16_t reference = fresh ? newest.sequence : last_sequence_;
       const auto diff = static_cast<std::int16_t>(static_cast<std::uint16_t>(r.sequence - reference));
       if (have_last_ || fresh) {
@@ -177,6 +201,7 @@ class ForceArm {
       newest = r;
       fresh = true;
     }
+    if (impossible) return Status::impossible;
     if (!fresh) return held ? Status::resync : Status::no_data;
     update(newest, state);
     return Status::ok;
@@ -262,6 +287,20 @@ class ForceArm {
     config_.info.continuous_force = r.continuous_force_mn * 1e-3;
     config_.info.nominal_rate = r.rate_hz;
     config_.torque_unit = r.torque_unit_unm * 1e-6;
+  }
+
+  /// True when the report's joint angles are ones the arm can have (see
+  /// ForceArmConfig::joint_margin).
+  [[nodiscard]] bool reachable(const protocol::StateReport& r) const noexcept {
+    const glm::dvec3 q = kin_.angles(r.encoder);
+    const KinematicsConfig& k = kin_.config();
+    const bool homed = (r.status & status_bits::homed) != 0;
+    for (int i = 0; i < 3; ++i) {
+      const double lo = homed ? k.q_min[i] : k.q_min[i] - k.q_max[i];
+      const double hi = homed ? k.q_max[i] : k.q_max[i] - k.q_min[i];
+      if (!(q[i] >= lo - config_.joint_margin && q[i] <= hi + config_.joint_margin)) return false;
+    }
+    return true;
   }
 
   void update(const protocol::StateReport& r, DeviceState& s) noexcept {

@@ -95,8 +95,17 @@ struct Inverse3Config {
   /// frame, dropped [m].
   double plausible_position{1.0};
   double plausible_velocity{20.0};  ///< same for velocity [m/s]
-  int wake_attempts{3};             ///< wake-up requests sent at construction before giving up
-  int reply_timeout_us{200000};     ///< wait for each setup reply [us]
+  /// Fastest the handle can move [m/s]: ours (a fast hand), Haply publishes
+  /// no figure. A reply whose velocity exceeds it, or whose position is
+  /// further from the last accepted one than max_speed times the time
+  /// between their requests plus jump_tolerance, cannot be the arm's:
+  /// read() returns Status::impossible (the loop latches) and the stream is
+  /// resynchronised. The replies carry no checksum: this continuity is what
+  /// shows a misassembled frame whose header byte happens to be right.
+  double max_speed{3.0};
+  double jump_tolerance{0.002};  ///< [m] on top of max_speed x time (rounding, request-time jitter)
+  int wake_attempts{3};          ///< wake-up requests sent at construction before giving up
+  int reply_timeout_us{200000};  ///< wait for each setup reply [us]
   /// Requests whose replies have not come: beyond this many the replies
   /// count as lost; the stream is resynchronised (pending bytes dropped).
   int max_outstanding{16};
@@ -112,6 +121,8 @@ struct Inverse3Config {
       throw std::invalid_argument("Inverse3Config: max_joint_torque must be finite and > 0 [N mm]");
     if (bad(plausible_position) || bad(plausible_velocity))
       throw std::invalid_argument("Inverse3Config: plausible_position and plausible_velocity must be finite and > 0");
+    if (bad(max_speed) || bad(jump_tolerance))
+      throw std::invalid_argument("Inverse3Config: max_speed [m/s] and jump_tolerance [m] must be finite and > 0");
     if (wake_attempts < 1 || wake_attempts > 100)
       throw std::invalid_argument("Inverse3Config: wake_attempts must be 1..100");
     if (reply_timeout_us < 1000 || reply_timeout_us > 5'000'000)
@@ -125,6 +136,8 @@ struct Inverse3Config {
 struct Inverse3Counters {
   std::uint64_t replies{0};        ///< state and joint replies decoded
   std::uint64_t implausible{0};    ///< replies dropped: non-finite or beyond the plausible bounds
+  std::uint64_t wrong_header{0};   ///< replies dropped: header byte not the one this request's replies carry
+  std::uint64_t impossible{0};     ///< replies refused: faster than max_speed, or a jump (continuity)
   std::uint64_t unexpected{0};     ///< whole frames with no request outstanding
   std::uint64_t resyncs{0};        ///< times pending bytes were dropped
   std::uint64_t dropped_bytes{0};  ///< bytes dropped by those
@@ -136,6 +149,15 @@ struct Inverse3Counters {
 };
 
 class Inverse3 {
+  /// What the frames of one read() were: all in line, one dropped as out
+  /// of line (resynchronised), or one describing an impossible motion.
+  enum class Verdict : std::uint8_t { good, out_of_line, impossible };
+  /// A request in flight: its code and when it was sent [ns].
+  struct Request {
+    std::uint8_t code{0};
+    std::int64_t sent{0};
+  };
+
  public:
   static constexpr std::size_t queue_capacity = 32;  ///< requests tracked in flight
 
@@ -178,9 +200,17 @@ class Inverse3 {
   /// none, disconnected when the transport is gone. A joint reply updates
   /// joint_angles (and joint_velocities()) only. Once every request has its
   /// reply, bytes left over cannot be a reply: they are dropped.
+  /// A frame that cannot be a reply (non-finite, beyond the plausible
+  /// bounds, a header byte other than the one the first reply of its kind
+  /// carried) is dropped and the stream resynchronised (pending bytes
+  /// dropped, outstanding requests given up): resync when no good state
+  /// came. A frame that looks like a reply but describes a motion the arm
+  /// cannot make (Inverse3Config::max_speed) is refused likewise, and
+  /// read() returns impossible: the loop latches rather than guess.
   Status read(DeviceState& state) noexcept {
     bool fresh = pending_;
     pending_ = false;
+    verdict_ = Verdict::good;
     for (int i = 0; i < 256; ++i) {
       std::size_t size = 0;
       const Status s = transport_->read(buf_, size, 0);
@@ -193,7 +223,8 @@ class Inverse3 {
       fresh = take(std::span<const std::uint8_t>(buf_.data(), size)) || fresh;
     }
     if (count_ == 0 && transport_->pending() > 0) resync();
-    if (!fresh) return Status::no_data;
+    if (verdict_ == Verdict::impossible) return Status::impossible;
+    if (!fresh) return verdict_ == Verdict::out_of_line ? Status::resync : Status::no_data;
     publish(state);
     return Status::ok;
   }
@@ -271,7 +302,7 @@ class Inverse3 {
     const Status s = transport_->read(buf_, size, config_.reply_timeout_us);
     if (s == Status::disconnected)
       throw Error("Inverse3: the device" + where + " is gone (disconnected after the wake-up)");
-    if (s != Status::ok || !take(std::span<const std::uint8_t>(buf_.data(), size)))
+    if (s != Status::ok || !take(std::span<const std::uint8_t>(buf_.data(), size)) || verdict_ != Verdict::good)
       throw Error("Inverse3: the device" + where +
                   " answered the wake-up but sent no valid state for a zero force within " +
                   std::to_string(config_.reply_timeout_us / 1000) + " ms");
@@ -293,7 +324,7 @@ class Inverse3 {
       return s;
     }
     ++counters_.commands;
-    queue_[(head_ + count_) % queue_capacity] = code;
+    queue_[(head_ + count_) % queue_capacity] = Request{code, now_ns()};
     ++count_;
     return s;
   }
@@ -305,27 +336,47 @@ class Inverse3 {
     counters_.dropped_bytes += n;
   }
 
+  /// Drops a frame that is not a reply in line: resynchronises the stream
+  /// (pending bytes and outstanding requests go: their bytes would be
+  /// misaligned) and notes the worst verdict of this read.
+  bool refuse(Verdict v) noexcept {
+    if (v == Verdict::impossible || verdict_ == Verdict::good) verdict_ = v;
+    counters_.lost_replies += count_;
+    count_ = 0;
+    resync();
+    return false;
+  }
+
   /// Decodes one whole reply frame against the oldest request in flight.
   /// True when it gave a new end-effector state.
   bool take(std::span<const std::uint8_t> frame) noexcept {
-    std::uint8_t kind = inverse3::code::force;
+    Request request{inverse3::code::force, now_ns()};
     if (count_ > 0) {
-      kind = queue_[head_];
+      request = queue_[head_];
       head_ = (head_ + 1) % queue_capacity;
       --count_;
     } else {
       ++counters_.unexpected;  // a reply nobody asked for: most likely a late one to a request given up on
     }
+    const bool joints = request.code == inverse3::code::joint_torques;
     inverse3::StateReply r;
     if (frame.size() != inverse3::state_reply_size) return false;
     ++counters_.headers[frame[0]];
     if (inverse3::decode_state_reply(frame, r) != Status::ok) {
       ++counters_.implausible;
-      return false;
+      return refuse(Verdict::out_of_line);
+    }
+    // The header values are unpublished: the first reply of each kind
+    // (taken in line, right after the wake-up's resynchronisation) names it.
+    int& header = joints ? joint_header_ : force_header_;
+    if (header < 0) header = r.header;
+    if (r.header != header) {
+      ++counters_.wrong_header;
+      return refuse(Verdict::out_of_line);
     }
     const glm::dvec3 a{r.first[0], r.first[1], r.first[2]};
     const glm::dvec3 b{r.second[0], r.second[1], r.second[2]};
-    if (kind == inverse3::code::joint_torques) {
+    if (joints) {
       constexpr double rad = 3.14159265358979323846 / 180.0;  // [rad/deg]
       joint_angle_ = a * rad;
       joint_velocity_ = b * rad;
@@ -335,8 +386,21 @@ class Inverse3 {
     for (int i = 0; i < 3; ++i)
       if (std::fabs(a[i]) > config_.plausible_position || std::fabs(b[i]) > config_.plausible_velocity) {
         ++counters_.implausible;
-        return false;
+        return refuse(Verdict::out_of_line);
       }
+    if (have_position_) {  // continuity: no faster than the arm can move
+      const double dt = std::fmax(0.0, static_cast<double>(request.sent - last_sent_) * 1e-9);  // [s]
+      const glm::dvec3 d = a - last_device_position_;
+      const double jump = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+      const double speed = std::sqrt(b.x * b.x + b.y * b.y + b.z * b.z);
+      if (!(jump <= config_.max_speed * dt + config_.jump_tolerance) || !(speed <= config_.max_speed)) {
+        ++counters_.impossible;
+        return refuse(Verdict::impossible);
+      }
+    }
+    last_device_position_ = a;
+    last_sent_ = request.sent;
+    have_position_ = true;
     position_ = config_.frame.position_to_ours(a);
     velocity_ = config_.frame.vector_to_ours(b);
     ++counters_.replies;
@@ -374,7 +438,7 @@ class Inverse3 {
   inverse3::Identity identity_{};
   std::array<std::uint8_t, 64> buf_{};
   std::array<std::uint8_t, inverse3::command_request_size> out_{};
-  std::array<std::uint8_t, queue_capacity> queue_{};  ///< request codes in flight, oldest at head_
+  std::array<Request, queue_capacity> queue_{};  ///< requests in flight, oldest at head_
   std::size_t head_{0};
   std::size_t count_{0};
   glm::dvec3 position_{0.0};
@@ -382,6 +446,12 @@ class Inverse3 {
   glm::dvec3 joint_angle_{0.0};
   glm::dvec3 joint_velocity_{0.0};
   glm::dvec3 last_device_force_{0.0};
+  glm::dvec3 last_device_position_{0.0};  ///< of the last accepted force reply, device frame [m]
+  std::int64_t last_sent_{0};             ///< when its request was sent [ns]
+  int force_header_{-1};                  ///< header byte of 0x2A replies; -1: not seen yet
+  int joint_header_{-1};                  ///< header byte of 0x1A replies; -1: not seen yet
+  Verdict verdict_{Verdict::good};
+  bool have_position_{false};
   std::uint16_t sequence_{0};
   bool pending_{false};
   bool armed_{false};

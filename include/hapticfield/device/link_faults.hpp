@@ -26,6 +26,9 @@ enum class LinkFault : std::uint8_t {
   stall,      ///< for `ticks` ticks no report passes either way
   unplug,     ///< from that tick on every call returns disconnected
   reboot,     ///< the firmware restarts at that tick (sequence and timestamp from zero, unhomed)
+  /// The state report of that tick carries encoder counts of +-2^31 with a
+  /// valid CRC (a firmware bug, a bit flip before the CRC was computed).
+  wild_counts,
 };
 
 /// Faults scheduled at device ticks (1-based), fixed capacity.
@@ -86,6 +89,13 @@ class ReportQueue {
     Slot slot;
     slot.size = report.size() < slot.bytes.size() ? report.size() : slot.bytes.size();
     std::memcpy(slot.bytes.data(), report.data(), slot.size);
+    if (faults.active(LinkFault::wild_counts, k) && slot.size == protocol::state_size) {
+      const std::span<std::uint8_t> b(slot.bytes.data(), slot.size);
+      protocol::detail::put_i32(b, protocol::offset::state::encoder, INT32_MAX);
+      protocol::detail::put_i32(b, protocol::offset::state::encoder + 4, INT32_MIN);
+      protocol::detail::put_i32(b, protocol::offset::state::encoder + 8, INT32_MAX);
+      protocol::detail::seal(b, slot.size);
+    }
     if (faults.active(LinkFault::corrupt, k)) slot.bytes[protocol::offset::state::encoder] ^= 0x5A;
     if (faults.active(LinkFault::reorder, k)) {
       held_ = slot;

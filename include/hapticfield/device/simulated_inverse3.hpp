@@ -20,6 +20,8 @@
 #include <glm/vec3.hpp>
 
 #include "hapticfield/device/inverse3_codec.hpp"
+#include "hapticfield/device/stream_framer.hpp"
+#include "hapticfield/device/transport.hpp"
 
 namespace hapticfield {
 
@@ -176,6 +178,73 @@ class SimulatedInverse3 {
   glm::dvec3 q_deg_{0.0};
   glm::dvec3 qd_deg_{0.0};
   bool awake_{false};
+};
+
+/// In-memory link between a host and a SimulatedInverse3: write() hands the
+/// request bytes to the device, which answers at once; its reply bytes go
+/// through the same fixed-size framing as SerialTransport with
+/// Framing::fixed (a read that waits and ends mid-frame drops the partial
+/// frame; a read that does not wait leaves it). Deterministic: no threads,
+/// no clock.
+class SimulatedInverse3Transport final : public Transport {
+ public:
+  explicit SimulatedInverse3Transport(SimulatedInverse3& device) : device_(&device) {}
+
+  /// State replies (0x1A/0x2A, 1-based count) number `reply` and on are cut
+  /// to their first `keep` bytes, `replies` of them: the rest of each is
+  /// lost on the wire (a USB packet lost, a device reset mid-reply).
+  void truncate_replies(std::uint64_t reply, std::size_t keep, std::uint64_t replies = 1) noexcept {
+    truncate_from_ = reply;
+    truncate_count_ = replies;
+    keep_ = keep;
+  }
+
+  Status read(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept override {
+    const Status s = framer_.next(buffer, size);
+    if (s == Status::ok) return s;
+    if (timeout_us > 0 && framer_.pending() > 0) {  // the wait ends mid-frame: what came cannot be a whole reply
+      framer_.drop_pending();
+      return Status::timeout;
+    }
+    return timeout_us > 0 ? Status::timeout : Status::no_data;
+  }
+
+  Status write(std::span<const std::uint8_t> report) noexcept override {
+    device_->feed(report, [this](std::span<const std::uint8_t> reply) {
+      std::size_t n = reply.size();
+      if (n == inverse3::state_reply_size) {
+        ++state_replies_;
+        if (state_replies_ >= truncate_from_ && state_replies_ < truncate_from_ + truncate_count_ && keep_ < n) {
+          n = keep_;
+          ++truncated_;
+        }
+      }
+      framer_.push(reply.first(n));
+    });
+    return Status::ok;
+  }
+
+  Status get_feature(std::span<std::uint8_t>, std::size_t&) noexcept override { return Status::unsupported; }
+  Status send_feature(std::span<const std::uint8_t>) noexcept override { return Status::unsupported; }
+  Status set_frame_size(std::size_t n) noexcept override {
+    return n >= 1 && framer_.set_frame_size(n) ? Status::ok : Status::bad_value;
+  }
+  std::size_t drop_pending() noexcept override { return framer_.drop_pending(); }
+  [[nodiscard]] std::size_t pending() const noexcept override { return framer_.pending(); }
+  [[nodiscard]] std::string_view where() const noexcept override { return "simulated Inverse3"; }
+
+  /// State replies the device sent, and how many of them were cut short.
+  [[nodiscard]] std::uint64_t state_replies() const noexcept { return state_replies_; }
+  [[nodiscard]] std::uint64_t truncated() const noexcept { return truncated_; }
+
+ private:
+  SimulatedInverse3* device_;
+  StreamFramer<512> framer_{Framing::fixed};
+  std::uint64_t state_replies_{0};
+  std::uint64_t truncate_from_{0};
+  std::uint64_t truncate_count_{0};
+  std::uint64_t truncated_{0};
+  std::size_t keep_{inverse3::state_reply_size};
 };
 
 }  // namespace hapticfield

@@ -283,13 +283,13 @@ class SimulatedWoodyTransport final : public Transport {
       const auto g = arm_->config().generation;
       if (g == woody::Generation::p1_hid8 && !stalled_) {
         Slot s;
-        s.size = woody::encode(arm_->p1_report(), s.bytes);
+        s.size = woody::encode(wild(arm_->p1_report()), s.bytes);
         push(s);
       }
       if (g == woody::Generation::p2_hid14 && !booted_) {
         booted_ = true;
         Slot s;
-        s.size = woody::encode(arm_->p2_report(), s.bytes);
+        s.size = woody::encode(wild(arm_->p2_report()), s.bytes);
         push(s);
       }
     }
@@ -318,7 +318,7 @@ class SimulatedWoodyTransport final : public Transport {
       case woody::Generation::p2_hid14:
         if (arm_->receive_p2(report)) {
           Slot s;
-          s.size = woody::encode(arm_->p2_report(), s.bytes);
+          s.size = woody::encode(wild(arm_->p2_report()), s.bytes);
           push(s);
         }
         break;
@@ -343,6 +343,10 @@ class SimulatedWoodyTransport final : public Transport {
 
   /// While stalled nothing passes either way (a hung USB link).
   void set_stalled(bool on) noexcept { stalled_ = on; }
+  /// While on, every report carries encoder counts at the extremes of its
+  /// field (P1/P2: +-32767, P4: +-2^31), well formed otherwise (a firmware
+  /// bug, a corrupted counter).
+  void set_wild_counts(bool on) noexcept { wild_ = on; }
   [[nodiscard]] std::uint64_t writes() const noexcept { return writes_; }
   [[nodiscard]] std::uint64_t overflows() const noexcept { return overflows_; }
   [[nodiscard]] SimulatedWoody& arm() noexcept { return *arm_; }
@@ -353,8 +357,18 @@ class SimulatedWoodyTransport final : public Transport {
     std::size_t size{0};
   };
 
+  template <class Report>
+  [[nodiscard]] Report wild(Report r) const noexcept {
+    if (!wild_) return r;
+    r.encoder[0] = 32767;
+    r.encoder[1] = -32767;
+    r.encoder[2] = 32767;
+    return r;
+  }
+
   void reply(std::span<const std::uint8_t> frame, bool overlong) noexcept {
     woody::P4Reply r = arm_->receive_p4(overlong ? std::span<const std::uint8_t>(overlong_frame_) : frame);
+    if (wild_ && r.error == 0) r.encoder = {INT32_MAX, INT32_MIN, INT32_MAX, r.encoder[3], r.encoder[4], r.encoder[5]};
     Slot s;
     s.size = woody::encode(r, s.bytes);
     push(s);
@@ -389,6 +403,7 @@ class SimulatedWoodyTransport final : public Transport {
   std::uint64_t overflows_{0};
   bool stalled_{false};
   bool booted_{false};
+  bool wild_{false};
 };
 
 }  // namespace hapticfield

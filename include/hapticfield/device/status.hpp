@@ -25,6 +25,7 @@ enum class Status : std::uint8_t {
   overflow,        ///< a buffer or queue was full
   unsupported,     ///< the transport does not implement the call
   resync,          ///< the report stream jumped (device restart, long loss): held back until consistent
+  impossible,      ///< a decoded state the device cannot be in (beyond its joint limits, workspace or speed): held back
 };
 
 /// Status bits of the input state report (see docs/device-protocol.md).
@@ -70,6 +71,8 @@ inline constexpr std::uint16_t any_fault = watchdog_tripped | over_current | ove
       return "unsupported";
     case Status::resync:
       return "resynchronising";
+    case Status::impossible:
+      return "impossible state";
   }
   return "?";
 }

@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include <array>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -51,6 +52,13 @@ struct WoodyArmConfig {
   int wake_attempts{50};                             ///< P2/P4: zero frames sent at construction before giving up
   int wake_timeout_us{10000};                        ///< P2/P4: wait for a reply after each [us]
   std::array<std::int16_t, 6> calibration_counts{};  ///< P2: counters set by the calibrate command [counts]
+  /// The joints' range [rad] as we assume it: the sources publish no joint
+  /// limits, so these are the simulated arm's stops widened by 0.3-0.4 rad;
+  /// set your arm's. A report whose angles lie further than joint_margin
+  /// outside is impossible: refused, read() returns Status::impossible.
+  glm::dvec3 q_min{-1.5, -0.8, -0.4};
+  glm::dvec3 q_max{1.5, 1.8, 2.6};
+  double joint_margin{0.1};  ///< [rad] (5.7 deg)
 
   /// Defaults for a generation: its encoder signs and current limit.
   [[nodiscard]] static WoodyArmConfig defaults(woody::Generation g, WoodyKinematicsConfig k = {}) {
@@ -76,6 +84,11 @@ struct WoodyArmConfig {
       throw std::invalid_argument("WoodyArmConfig: wake_attempts must be 1..10000");
     if (wake_timeout_us < 0 || wake_timeout_us > 1000000)
       throw std::invalid_argument("WoodyArmConfig: wake_timeout_us must be 0..1000000 [us]");
+    for (int i = 0; i < 3; ++i)
+      if (!std::isfinite(q_min[i]) || !std::isfinite(q_max[i]) || !(q_min[i] < q_max[i]))
+        throw std::invalid_argument("WoodyArmConfig: q_min must be finite and < q_max [rad]");
+    if (!std::isfinite(joint_margin) || joint_margin < 0.0 || joint_margin > 1.0)
+      throw std::invalid_argument("WoodyArmConfig: joint_margin must be within [0, 1] [rad]");
   }
 };
 
@@ -87,6 +100,7 @@ struct WoodyCounters {
   std::uint64_t commands{0};       ///< frames written
   std::uint64_t write_errors{0};
   std::uint64_t calibrations{0};  ///< P2 calibrate commands sent
+  std::uint64_t impossible{0};    ///< reports refused: joint angles beyond q_min/q_max and the margin
 };
 
 class WoodyArm {
@@ -119,10 +133,13 @@ class WoodyArm {
   [[nodiscard]] const std::array<std::int16_t, 3>& last_milliamps() const noexcept { return last_milliamps_; }
 
   /// Drains the transport and decodes the newest report. ok when a newer
-  /// state was decoded, no_data when none, disconnected when the transport
-  /// is gone. A P4 reply with error bits is counted and its encoders ignored.
+  /// state was decoded, no_data when none, impossible when any report
+  /// drained has joint angles beyond the range (WoodyArmConfig::q_min,
+  /// q_max, joint_margin; never used), disconnected when the transport is
+  /// gone. A P4 reply with error bits is counted and its encoders ignored.
   Status read(DeviceState& state) noexcept {
     bool fresh = false;
+    bool impossible = false;
     Raw newest{};
     for (int i = 0; i < 256; ++i) {
       std::size_t size = 0;
@@ -134,14 +151,19 @@ class WoodyArm {
       }
       Raw r{};
       if (s != Status::ok || !decode(std::span<const std::uint8_t>(buf_.data(), size), r)) continue;
+      if (!reachable(r)) {
+        impossible = true;
+        continue;
+      }
       newest = r;
       fresh = true;
     }
-    if (!fresh && pending_) {
+    if (!fresh && pending_ && reachable(pending_raw_)) {
       newest = pending_raw_;
       fresh = true;
     }
     pending_ = false;
+    if (impossible) return Status::impossible;
     if (!fresh) return Status::no_data;
     update(newest, state);
     return Status::ok;
@@ -308,10 +330,32 @@ class WoodyArm {
     return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
   }
 
-  void update(const Raw& r, DeviceState& s) noexcept {
+  /// Host counts: sign * raw + home offset, saturated to int32 (never
+  /// overflows, whatever the wire says).
+  [[nodiscard]] std::array<std::int32_t, 3> host_counts(const Raw& r) const noexcept {
     std::array<std::int32_t, 3> counts{};
-    for (std::size_t i = 0; i < 3; ++i)
-      counts[i] = config_.encoder_sign[i] * r.encoder[i] + config_.kinematics.home_offset[i];
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::int64_t c = static_cast<std::int64_t>(config_.encoder_sign[i]) * r.encoder[i] +
+                             static_cast<std::int64_t>(config_.kinematics.home_offset[i]);
+      counts[i] = static_cast<std::int32_t>(c < INT32_MIN ? INT32_MIN : (c > INT32_MAX ? INT32_MAX : c));
+    }
+    return counts;
+  }
+
+  /// True when the report's joint angles lie within the assumed range (and
+  /// the margin); counts the ones that do not.
+  bool reachable(const Raw& r) noexcept {
+    const glm::dvec3 q = kin_.angles(host_counts(r));
+    for (int i = 0; i < 3; ++i)
+      if (!(q[i] >= config_.q_min[i] - config_.joint_margin && q[i] <= config_.q_max[i] + config_.joint_margin)) {
+        ++counters_.impossible;
+        return false;
+      }
+    return true;
+  }
+
+  void update(const Raw& r, DeviceState& s) noexcept {
+    const std::array<std::int32_t, 3> counts = host_counts(r);
     const glm::dvec3 q = kin_.angles(counts);
     const glm::dvec3 p = kin_.forward(q);
     const std::int64_t t = now_ns();

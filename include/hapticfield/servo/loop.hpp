@@ -62,8 +62,15 @@ struct LoopConfig {
   bool disarm_on_exit{true};  ///< disarm when run() returns
   /// After a stale-state or missed-deadline latch, clear it and re-arm (with
   /// the soft start) once new states have arrived on time for this long [s];
-  /// 0: never (clear_fault() only). Disconnects and throwing callbacks never
-  /// recover by themselves.
+  /// 0: never (clear_fault() only). Disconnects, impossible states and
+  /// throwing callbacks never recover by themselves. When the device has
+  /// latched a fault of its own meanwhile (its watchdog tripped while no
+  /// command got through), the loop clears it first with the device's
+  /// clear_fault() (the arm is disarmed and at zero force then; that one
+  /// call is a blocking control request, bounded by the transport's
+  /// timeout); a device fault that cannot be cleared (e-stop held, a device
+  /// without clear_fault(), a refused clear) means no recovery. A recovery
+  /// is counted in the statistics only when force has really come back.
   double recover_after{0.0};
 
   /// @throws std::invalid_argument naming the bad parameter.
@@ -82,6 +89,7 @@ struct TickInput {
   DeviceState state{};  ///< newest device state
   Status read_status{Status::no_data};
   std::uint64_t tick{0};  ///< tick index since run() started
+  bool trusted{false};    ///< the state is one to act on (ServoLoop::trusted())
 };
 
 /// Why run() returned.
@@ -216,9 +224,15 @@ class ServoLoop {
     if (s == Status::ok && fresh_since_ < 0) fresh_since_ = now;
     if (s == Status::disconnected) disconnected_ = true;
     resync_ = s == Status::resync;
+    // A state the device cannot be in (the device says so, or a non-finite
+    // pose from any device) latches: such a pose must steer nothing.
+    impossible_ =
+        s == Status::impossible || (s == Status::ok && !(is_finite(state_.position) && is_finite(state_.velocity)));
+    assess_trust();
     in.state = state_;
     in.read_status = s;
     in.tick = tick_;
+    in.trusted = trusted_;
     in.probe = Probe{};  // contact (normal force, surface normal) is the fields' business
     in.probe.position = state_.position;
     in.probe.velocity = state_.velocity;
@@ -242,13 +256,20 @@ class ServoLoop {
     si.device_fault = state_.faulted();
     si.disconnected = disconnected_;
     si.link_resync = resync_;
+    si.impossible_state = impossible_;
     const std::uint32_t before = safety_.latched();
     const glm::dvec3 out = safety_.process(si);
     if (safety_.latched() && !before) {  // the watchdog disarms, and says so
-      device_->set_armed(false);
-      stats_->add_latch(safety_.latched());
+      disarm();
+      stats_->add_latch(safety_.latched(), run_time());
+      recovering_ = false;
+    }
+    if (recovering_ && out != glm::dvec3{0.0}) {  // force is back: now it is a recovery
+      recovering_ = false;
+      stats_->add_recovery(run_time());
     }
     maybe_recover();
+    assess_trust();
     if (safety_.events() & ~(safety_events::device_fault)) stats_->add_safety_event();
     stats_->record_force(glm::length(out));
     command_ = out;
@@ -269,7 +290,16 @@ class ServoLoop {
   [[nodiscard]] const LoopStatistics& detailed_statistics() const noexcept { return *stats_; }
   [[nodiscard]] const SafetyChain& safety() const noexcept { return safety_; }
   [[nodiscard]] glm::dvec3 last_command() const noexcept { return command_; }
+  /// The newest state; check trusted() before steering anything by it.
   [[nodiscard]] const DeviceState& state() const noexcept { return state_; }
+  /// True when state() is a pose to act on (couple another arm to, draw a
+  /// cursor at): a decoded state, homed (an unhomed pose is offset by
+  /// whatever the encoders held at power-up: after a reboot, at start-up),
+  /// free of device faults, armed exactly as the loop asked, fresh (fewer
+  /// than max_ticks_without_state ticks without a new state), not
+  /// resynchronising, not impossible, not disconnected, and no latch.
+  /// Updated by read_once() and write_once().
+  [[nodiscard]] bool trusted() const noexcept { return trusted_; }
   [[nodiscard]] double period() const noexcept { return period_; }
   [[nodiscard]] const LoopConfig& config() const noexcept { return config_; }
   /// True when the last real-time request was fully granted.
@@ -289,22 +319,44 @@ class ServoLoop {
     missed_in_a_row_ = 0;
     disconnected_ = false;
     resync_ = false;
+    impossible_ = false;
+    recovering_ = false;
     state_.valid = false;
+    trusted_ = false;
+    armed_requested_ = false;
     command_ = glm::dvec3{0.0};
     safety_.restart();
     if (config_.auto_home) device_->request_home();
-    if (config_.auto_arm) device_->set_armed(true);
+    if (config_.auto_arm) arm();
   }
 
   void clear_now() noexcept {
     safety_.clear();
     missed_in_a_row_ = 0;
     armed_since_ = -1;  // soft start again from the next armed state
-    if (config_.auto_arm) device_->set_armed(true);
+    if (config_.auto_arm) arm();
+  }
+
+  void arm() noexcept {
+    armed_requested_ = true;
+    device_->set_armed(true);
+  }
+  void disarm() noexcept {
+    armed_requested_ = false;
+    device_->set_armed(false);
+  }
+
+  /// See trusted().
+  void assess_trust() noexcept {
+    trusted_ = state_.valid && state_.homed() && !state_.faulted() && state_.armed() == armed_requested_ &&
+               ticks_without_state_ < config_.safety.max_ticks_without_state && !resync_ && !impossible_ &&
+               !disconnected_ && safety_.latched() == 0 && is_finite(state_.position);
   }
 
   /// LoopConfig::recover_after: a stale-state or missed-deadline latch is
-  /// cleared once states have arrived on every tick, on time, for that long.
+  /// cleared once states have arrived on every tick, on time, for that long,
+  /// with the device's own latched fault first (it accepts that only while
+  /// disarmed, as the latch left it); counted once force is back.
   void maybe_recover() noexcept {
     constexpr std::uint32_t recoverable = safety_events::stale_state | safety_events::missed_deadlines;
     const std::uint32_t latched = safety_.latched();
@@ -312,9 +364,23 @@ class ServoLoop {
         missed_in_a_row_ > 0)
       return;
     if (static_cast<double>(now_ - fresh_since_) * 1e-9 < config_.recover_after) return;
+    if (state_.faulted()) {
+      if (state_.armed() || (state_.flags & status_bits::estop)) return;  // not yet disarmed, or held: wait
+      if constexpr (requires(D & d) { d.clear_fault(); }) {
+        if (device_->clear_fault() != Status::ok) {
+          fresh_since_ = now_;  // refused: try again after another recover_after
+          return;
+        }
+      } else {
+        return;  // nothing on this device can clear it
+      }
+    }
     clear_now();
-    stats_->add_recovery();
+    recovering_ = true;
   }
+
+  /// Time since the run started [s].
+  [[nodiscard]] double run_time() const noexcept { return static_cast<double>(now_ - start_) * 1e-9; }
 
   std::vector<DeviceState> last_states() const {
     std::vector<DeviceState> v;
@@ -354,9 +420,10 @@ class ServoLoop {
   void safe_stop() noexcept {
     device_->write(glm::dvec3{0.0});
     if (config_.disarm_on_exit) {
-      device_->set_armed(false);
+      disarm();
       device_->write(glm::dvec3{0.0});
     }
+    trusted_ = false;
     command_ = glm::dvec3{0.0};
     safety_.restart();  // what the device now has
     started_ = false;   // read_once() after a run starts afresh (homing, arming, soft start)
@@ -395,9 +462,11 @@ class ServoLoop {
   void latch_fault(std::uint32_t bits) noexcept {
     const std::uint32_t before = safety_.latched();
     safety_.latch(bits);
+    trusted_ = false;
     if (!before) {
-      device_->set_armed(false);
-      stats_->add_latch(safety_.latched());
+      disarm();
+      stats_->add_latch(safety_.latched(), run_time());
+      recovering_ = false;
     }
   }
 
@@ -480,6 +549,10 @@ class ServoLoop {
   bool started_{false};
   bool disconnected_{false};
   bool resync_{false};
+  bool impossible_{false};       ///< the last read brought a state the device cannot be in
+  bool armed_requested_{false};  ///< what the loop last asked the device: armed or not
+  bool trusted_{false};          ///< see trusted()
+  bool recovering_{false};       ///< recover_after cleared a latch; counted once force is back
   bool locked_{false};
   bool realtime_granted_{false};
 };

@@ -8,7 +8,8 @@
 ///   5. slew limit        |F(n) - F(n-1)| <= slew_rate * period
 ///   6. watchdog          K ticks without a new state: zero until one arrives;
 ///                        state older than M or N missed deadlines in a
-///                        row: zero, disarm and latch
+///                        row: zero, disarm and latch; a state the device
+///                        cannot be in (impossible_state): zero, disarm, latch
 /// A stage can be turned off only explicitly, and disabled_stages() names
 /// every stage that is off so the loop can say so.
 
@@ -43,8 +44,13 @@ inline constexpr std::uint32_t link_resync = 1u
                                              << 12;  ///< the device's report stream jumped: zero until it is consistent
 inline constexpr std::uint32_t other_arm = 1u
                                            << 13;  ///< another arm of a MultiArmLoop latched (ArmFaultPolicy::stop_all)
+/// The device sent a state it cannot be in: beyond its joint limits (with
+/// a margin), out of its workspace, faster than it can move, or a
+/// non-finite position or velocity (latches: the pose cannot be trusted).
+inline constexpr std::uint32_t impossible_state = 1u << 14;
 /// Events that latch the watchdog until SafetyChain::clear().
-inline constexpr std::uint32_t latching = stale_state | missed_deadlines | disconnected | callback_threw | other_arm;
+inline constexpr std::uint32_t latching =
+    stale_state | missed_deadlines | disconnected | callback_threw | other_arm | impossible_state;
 /// Events that zero the force for this tick without latching.
 inline constexpr std::uint32_t zeroing =
     non_finite | device_fault | no_new_state | bad_period | energy_overflow | link_resync;
@@ -64,7 +70,8 @@ inline constexpr std::uint32_t zeroing =
                                           "bad period",
                                           "passivity energy overflow",
                                           "link resynchronising",
-                                          "another arm latched"};
+                                          "another arm latched",
+                                          "impossible state"};
   std::string s;
   for (std::uint32_t i = 0; i < sizeof table / sizeof table[0]; ++i)
     if (events & (1u << i)) s += (s.empty() ? "" : ", ") + std::string(table[i]);
@@ -132,6 +139,7 @@ struct SafetyInput {
   bool device_fault{false};       ///< the device reports a fault bit
   bool disconnected{false};       ///< the transport reports the device gone
   bool link_resync{false};        ///< the report stream jumped and is not yet consistent
+  bool impossible_state{false};   ///< the device sent a state it cannot be in (latches)
 };
 
 class SafetyChain {
@@ -155,6 +163,7 @@ class SafetyChain {
     glm::dvec3 f = in.force;
     // 6. watchdog and device faults first: they override everything.
     if (in.disconnected) events_ |= safety_events::disconnected;
+    if (in.impossible_state) events_ |= safety_events::impossible_state;
     if (config_.watchdog_enabled) {
       if (!(in.state_age <= config_.max_state_age)) events_ |= safety_events::stale_state;
       if (in.ticks_without_state >= config_.max_ticks_without_state) events_ |= safety_events::no_new_state;

@@ -78,8 +78,12 @@ struct LoopSnapshot {
   std::uint64_t safety_events{0};     ///< ticks on which the safety chain intervened
   std::uint64_t latches{0};           ///< times the watchdog latched (zero force, disarmed)
   std::uint32_t last_latch{0};        ///< safety_events bits of the most recent latch (0: none yet)
-  std::uint64_t recoveries{0};        ///< latches cleared by LoopConfig::recover_after
-  double rate{0.0};                   ///< achieved rate [Hz] = (ticks - 1) / (last - first wake)
+  double last_latch_time{-1.0};       ///< when the most recent latch happened [s since its run started]; -1: none
+  /// Latches recovered from by LoopConfig::recover_after: counted only once
+  /// force really came back (a non-zero command through the soft start).
+  std::uint64_t recoveries{0};
+  double last_recovery_time{-1.0};  ///< when force came back after the most recent recovery [s since its run started]
+  double rate{0.0};                 ///< achieved rate [Hz] = (ticks - 1) / (last - first wake)
   double period_p50{0.0}, period_p99{0.0}, period_p999{0.0}, period_max{0.0};  ///< [s]
   double period_mean{0.0};                                                     ///< [s]
   double wake_p50{0.0}, wake_p99{0.0}, wake_max{0.0};                          ///< wake latency after the deadline [s]
@@ -102,11 +106,17 @@ class LoopStatistics {
   }
   void add_missed(std::uint64_t n) noexcept { missed_.fetch_add(n, std::memory_order_relaxed); }
   void add_overrun() noexcept { overruns_.fetch_add(1, std::memory_order_relaxed); }
-  void add_latch(std::uint32_t bits) noexcept {
+  /// A latch with its safety_events bits, at time t [s since the run started].
+  void add_latch(std::uint32_t bits, double t = -1.0) noexcept {
     last_latch_.store(bits, std::memory_order_relaxed);
+    last_latch_time_.store(t, std::memory_order_relaxed);
     latches_.fetch_add(1, std::memory_order_relaxed);
   }
-  void add_recovery() noexcept { recoveries_.fetch_add(1, std::memory_order_relaxed); }
+  /// Force came back after a recovery, at time t [s since the run started].
+  void add_recovery(double t = -1.0) noexcept {
+    last_recovery_time_.store(t, std::memory_order_relaxed);
+    recoveries_.fetch_add(1, std::memory_order_relaxed);
+  }
   void add_safety_event() noexcept { safety_.fetch_add(1, std::memory_order_relaxed); }
   void record_force(double magnitude) noexcept {
     double m = peak_force_.load(std::memory_order_relaxed);
@@ -124,6 +134,8 @@ class LoopStatistics {
     s.latches = latches_.load(std::memory_order_relaxed);
     s.last_latch = last_latch_.load(std::memory_order_relaxed);
     s.recoveries = recoveries_.load(std::memory_order_relaxed);
+    s.last_latch_time = last_latch_time_.load(std::memory_order_relaxed);
+    s.last_recovery_time = last_recovery_time_.load(std::memory_order_relaxed);
     const std::int64_t span = last_wake_.load(std::memory_order_relaxed) - first_wake_.load(std::memory_order_relaxed);
     s.rate = (s.ticks > 1 && span > 0) ? static_cast<double>(s.ticks - 1) / (static_cast<double>(span) * ns) : 0.0;
     s.period_p50 = period_.percentile(0.5) * ns;
@@ -157,6 +169,8 @@ class LoopStatistics {
     latches_.store(0, std::memory_order_relaxed);
     last_latch_.store(0, std::memory_order_relaxed);
     recoveries_.store(0, std::memory_order_relaxed);
+    last_latch_time_.store(-1.0, std::memory_order_relaxed);
+    last_recovery_time_.store(-1.0, std::memory_order_relaxed);
     peak_force_.store(0.0, std::memory_order_relaxed);
   }
 
@@ -171,6 +185,8 @@ class LoopStatistics {
   std::atomic<std::uint64_t> latches_{0};
   std::atomic<std::uint32_t> last_latch_{0};
   std::atomic<std::uint64_t> recoveries_{0};
+  std::atomic<double> last_latch_time_{-1.0};
+  std::atomic<double> last_recovery_time_{-1.0};
   std::atomic<std::int64_t> first_wake_{0};
   std::atomic<std::int64_t> last_wake_{0};
   std::atomic<double> peak_force_{0.0};
