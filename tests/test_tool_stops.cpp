@@ -172,7 +172,9 @@ TEST_CASE("Ctrl-C on servo_demo over our protocol on a pty: the last command is 
       return arm.core().armed() && (c.flags & protocol::command_flags::arm) &&
              (c.torque_mnm[0] != 0 || c.torque_mnm[1] != 0 || c.torque_mnm[2] != 0);
     };
-    REQUIRE(peer.wait_for(pushing));  // armed, and the spring pushes
+    const bool ready = peer.wait_for(pushing);
+    INFO(tool.out() << tool.err());
+    REQUIRE(ready);  // armed, and the spring pushes
     tool.signal(signal);
     check_stopped(tool, signal);
     peer.stop();
@@ -214,7 +216,9 @@ TEST_CASE("Ctrl-C on servo_demo with a WoodenHaptics P4 arm on a pty: the last c
     }
   });
   Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("woody:p4:" + pty.path), tmp, "p4");
-  REQUIRE(peer.wait_for([&] { return nonzero_frames > 50; }));  // the spring drives the motors
+  const bool ready = peer.wait_for([&] { return nonzero_frames > 50; });
+  INFO(tool.out() << tool.err());
+  REQUIRE(ready);  // the spring drives the motors
   tool.signal(SIGINT);
   check_stopped(tool, SIGINT);
   peer.stop();
@@ -229,7 +233,9 @@ TEST_CASE("Ctrl-C on servo_demo with an Inverse3 on a pty: the last force reques
     device.feed(bytes, [master](std::span<const std::uint8_t> r) { send(master, r); });
   });
   Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("inverse3:" + pty.path), tmp, "inverse3");
-  REQUIRE(peer.wait_for([&] { return device.counters().forces > 200 && glm::length(device.force()) > 0.1; }));
+  const bool ready = peer.wait_for([&] { return device.counters().forces > 200 && glm::length(device.force()) > 0.1; });
+  INFO(tool.out() << tool.err());
+  REQUIRE(ready);
   tool.signal(SIGINT);
   check_stopped(tool, SIGINT);
   peer.stop();
@@ -254,7 +260,9 @@ TEST_CASE("Ctrl-C before the operator's go-ahead: servo_demo exits without a for
         send(master, arm.core().report());
       });
   Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("serial:" + pty.path), tmp, "prompt", false);
-  REQUIRE(tool.wait_for_output("Press Enter"));
+  const bool ready = tool.wait_for_output("Press Enter");
+  INFO(tool.out() << tool.err());
+  REQUIRE(ready);
   tool.signal(SIGINT);
   CAPTURE(tool.out(), tool.err());
   REQUIRE(tool.wait());
@@ -301,7 +309,9 @@ TEST_CASE("Ctrl-C on the tools that run a simulated arm: stopped through the loo
   for (Tool& t : tools) {
     CAPTURE(t.name);
     Child tool(t.path, t.args, tmp, t.name);
-    REQUIRE(tool.wait_for_output(t.ready));
+    const bool ready = tool.wait_for_output(t.ready);
+    INFO(tool.out() << tool.err());
+    REQUIRE(ready);
     tool.signal(SIGINT);
     check_stopped(tool, SIGINT);
   }
@@ -326,7 +336,9 @@ TEST_CASE("servo_demo: a serial arm that hangs up mid-run is one line on stderr 
         ++reports;
       });
   Child tool(HAPTICFIELD_TOOL_SERVO_DEMO, demo_args("serial:" + pty.path), tmp, "hangup");
-  REQUIRE(peer.wait_for([&] { return arm.core().armed(); }));
+  const bool ready = peer.wait_for([&] { return arm.core().armed(); });
+  INFO(tool.out() << tool.err());
+  REQUIRE(ready);
   peer.stop();
   pty.close_master();  // the cable is pulled
   CAPTURE(tool.out(), tool.err());
