@@ -261,6 +261,9 @@ class SerialTransport final : public Transport {
     const auto deadline = Clock::now() + std::chrono::microseconds(config_.feature_timeout_us);
     std::array<std::uint8_t, protocol::max_report_size> frame{};
     for (;;) {
+      // Read once more after the deadline: a reply that arrived while this
+      // thread was not scheduled is not a timeout.
+      const bool last = Clock::now() >= deadline;
       std::size_t n = 0;
       const Status s = read(frame, n, 1000);
       if (s == Status::disconnected) return s;
@@ -275,7 +278,7 @@ class SerialTransport final : public Transport {
           return get && reply.status == Status::ok ? Status::bad_value : reply.status;
         ++dropped_waiting_;
       }
-      if (Clock::now() >= deadline) return Status::timeout;
+      if (last) return Status::timeout;
     }
   }
 
