@@ -63,13 +63,13 @@ AllocationCount counter_function(const char* name) {
   return reinterpret_cast<AllocationCount>(dlsym(RTLD_DEFAULT, name));
 }
 
-template <Device D>
-py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, double rate, RealTime realtime) {
+template <Device D, ServoClock C>
+py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, RealTime realtime) {
   LoopConfig config;
   config.rate = rate;
   config.realtime = realtime;
   config.recover_after = 0.5;  // [s] fresh states before re-arming after a latch
-  ServoLoop<D, SteadyClock> loop(device, clock, config);
+  ServoLoop<D, C> loop(device, clock, config);
   const auto ticks = static_cast<std::uint64_t>(std::llround(seconds * rate));
   std::vector<TraceRow> rows;
   rows.reserve(ticks + 8);  // the tick only fills reserved rows
@@ -131,9 +131,35 @@ py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, dou
   return result;
 }
 
+/// The simulated arm held by the scripted hand, on `clock`.
+template <ServoClock C>
+py::dict run_simulated(C& clock, Field& field, double seconds, double rate, RealTime rt, const std::string& hand,
+                       const V3& hand_centre, double hand_size, double hand_speed) {
+  SimulatedArmConfig c;
+  c.hand.path = hand_path(hand, hand_centre, hand_size, hand_speed);
+  c.validate();
+  SimulatedArm arm(c);
+  SimulatedTransport link(arm, [&clock] { return clock.now(); });
+  ForceArm arm_device(link);
+  return run_on(arm_device, clock, field, seconds, rate, rt);
+}
+
 py::dict run_servo(Field& field, double seconds, double rate, const std::string& device, const std::string& hand,
                    const V3& hand_centre, double hand_size, double hand_speed, const std::string& realtime,
-                   bool confirm_hardware) {
+                   bool confirm_hardware, const std::optional<std::string>& clock_name) {
+  const bool real_arm = device.rfind("hid", 0) == 0;
+  // The simulated arm runs on the virtual clock unless told otherwise: what a run renders is then the same on
+  // any machine, however loaded. A real arm lives in real time.
+  const std::string clock_kind = clock_name.value_or(real_arm ? "wall" : "virtual");
+  if (clock_kind != "wall" && clock_kind != "virtual")
+    throw py::value_error("clock: unknown '" + clock_kind + "' (choose wall or virtual)");
+  const bool virtual_time = clock_kind == "virtual";
+  if (virtual_time && real_arm)
+    throw py::value_error("clock: the virtual clock cannot drive a real arm, which moves in real time; use "
+                          "clock='wall' (the default for hid)");
+  if (virtual_time && realtime != "off")
+    throw py::value_error("realtime: '" + realtime + "' is for the wall clock; a virtual run never sleeps and would "
+                          "hold a CPU at real-time priority (use realtime='off' or clock='wall')");
   if (!(std::isfinite(seconds) && seconds > 0.0 && seconds <= 3600.0))
     throw py::value_error("seconds: must be within (0, 3600] [s]");
   if (!(std::isfinite(rate) && rate >= 1.0 && rate <= 10000.0))
@@ -146,18 +172,15 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
     rt = RealTime::enforce;
   else if (realtime != "off")
     throw py::value_error("realtime: unknown '" + realtime + "' (choose off, best_effort or enforce)");
-  SteadyClock clock;
-  const auto now = [&clock] { return clock.now(); };
   if (device == "sim") {
-    SimulatedArmConfig c;
-    c.hand.path = hand_path(hand, hand_centre, hand_size, hand_speed);
-    c.validate();
-    SimulatedArm arm(c);
-    SimulatedTransport link(arm, now);
-    ForceArm arm_device(link);
-    return run_on(arm_device, clock, field, seconds, rate, rt);
+    if (virtual_time) {
+      VirtualClock clock;
+      return run_simulated(clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed);
+    }
+    SteadyClock clock;
+    return run_simulated(clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed);
   }
-  if (device.rfind("hid", 0) == 0) {
+  if (real_arm) {
 #if HAPTICFIELD_PYTHON_HID
     if (!confirm_hardware)
       throw py::value_error(
@@ -170,6 +193,7 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
         throw py::value_error("device: hid:VID:PID takes hexadecimal ids, e.g. hid:1209:0001");
       vid = static_cast<std::uint16_t>(v), pid = static_cast<std::uint16_t>(p);
     }
+    SteadyClock clock;
     HidTransport link(vid, pid);
     ForceArm arm_device(link);
     return run_on(arm_device, clock, field, seconds, rate, rt);
@@ -187,7 +211,7 @@ void bind_servo(py::module_& m) {
   m.def("run_servo", &run_servo, py::arg("field"), py::arg("seconds") = 1.0, py::arg("rate") = 1000.0,
         py::arg("device") = "sim", py::arg("hand") = "raster", py::arg("hand_centre") = V3{0.0, 0.0, -0.008},
         py::arg("hand_size") = 0.06, py::arg("hand_speed") = 0.06, py::arg("realtime") = "off",
-        py::arg("confirm_hardware") = false,
+        py::arg("confirm_hardware") = false, py::arg("clock") = py::none(),
         "Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] "
         "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace "
         "(t [s], position N x 3 [m], force N x 3 [N] as commanded after the safety chain), period_histogram "
@@ -195,7 +219,12 @@ void bind_servo(py::module_& m) {
         "thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None "
         "otherwise). device sim: the simulated arm, held by a scripted hand "
         "(raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm "
-        "(needs confirm_hardware=True). The field is evaluated in C++; the GIL is released while the loop runs.");
+        "(needs confirm_hardware=True). clock virtual (the default for sim): the loop runs on simulated time as "
+        "fast as the CPU allows, with the same ticks, safety chain and trace as in real time, so a run renders "
+        "the same forces on any machine (its timing statistics are nominal: every period exact, compute time 0); "
+        "wall (the default for hid, the only choice there): real time, for timing studies and live interaction. "
+        "realtime off|best_effort|enforce (SCHED_FIFO; wall clock only). The field is evaluated in C++; the GIL "
+        "is released while the loop runs.");
 }
 
 }  // namespace hapticfield::python

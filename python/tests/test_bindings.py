@@ -253,9 +253,11 @@ def test_normal_field_gradient_mode_pushes_downhill():
 
 # --- the servo loop -------------------------------------------------------------
 
-def test_run_servo_on_the_simulated_arm(coffee):
+@pytest.mark.parametrize("clock", ["virtual", "wall"])
+def test_run_servo_on_the_simulated_arm(coffee, clock):
+    # Only what holds however loaded the machine is: the tick count, the shapes, the force limit.
     field = hf.plane_contact([hf.tangible_field(coffee, workspace_mm=80.0)])
-    result = hf.run_servo(field, seconds=0.3, rate=1000.0)
+    result = hf.run_servo(field, seconds=0.3, rate=1000.0, clock=clock)
     stats, trace = result["statistics"], result["trace"]
     assert stats["ticks"] == 300 and result["stop_reason"] == "tick_limit"
     assert trace["t"].shape == (300,) and trace["position"].shape == (300, 3) and trace["force"].shape == (300, 3)
@@ -264,9 +266,31 @@ def test_run_servo_on_the_simulated_arm(coffee):
     assert int(result["period_histogram"].sum()) == 299  # one period between each pair of ticks
 
 
+def test_a_virtual_run_renders_the_same_forces_every_time(coffee):
+    def run(**options):
+        scene = hf.plane_contact([hf.tangible_field(coffee, workspace_mm=80.0),
+                                  hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)])
+        return hf.run_servo(scene, seconds=0.8, rate=1000.0, hand="circle", hand_size=0.03, **options)
+
+    first, second, default = run(clock="virtual"), run(clock="virtual"), run()
+    for other in (second, default):  # the simulated arm runs on the virtual clock unless told otherwise
+        for key in ("t", "position", "force"):
+            np.testing.assert_array_equal(first["trace"][key], other["trace"][key])
+    stats = first["statistics"]
+    assert stats["ticks"] == 800 and first["stop_reason"] == "tick_limit"
+    assert stats["missed_deadlines"] == 0 and stats["latches"] == 0
+    assert stats["peak_force_n"] > 0.5  # the plane pushed back [N]
+    np.testing.assert_allclose(np.diff(first["trace"]["t"]), 1e-3, rtol=0, atol=1e-12)  # every tick on time
+    # Time only moves when the loop sleeps: every period is the nominal one, in one histogram bin.
+    assert stats["period_max_s"] == pytest.approx(1e-3, abs=1e-12)
+    assert int(first["period_histogram"].max()) == 799
+
+
 def test_the_gil_is_released_while_the_loop_runs():
+    # The wall clock: a virtual run of 0.4 s may be over before this thread runs at all. A loaded
+    # 2-core machine still gives this thread far more than 1000 turns of the loop in 0.4 s.
     done = []
-    worker = threading.Thread(target=lambda: done.append(hf.run_servo(hf.zero(), seconds=0.4)))
+    worker = threading.Thread(target=lambda: done.append(hf.run_servo(hf.zero(), seconds=0.4, clock="wall")))
     worker.start()
     spins = 0
     while worker.is_alive():
@@ -299,6 +323,10 @@ def test_the_gil_is_released_while_the_loop_runs():
     (lambda: hf.run_servo(hf.zero(), seconds=0.0), ValueError, "seconds"),
     (lambda: hf.run_servo(hf.zero(), device="usb"), ValueError, "device"),
     (lambda: hf.run_servo(hf.zero(), device="hid"), ValueError, "hid"),
+    (lambda: hf.run_servo(hf.zero(), device="hid", clock="virtual", confirm_hardware=True), ValueError,
+     "virtual clock.*real arm"),
+    (lambda: hf.run_servo(hf.zero(), clock="sundial"), ValueError, "clock: unknown 'sundial'"),
+    (lambda: hf.run_servo(hf.zero(), clock="virtual", realtime="best_effort"), ValueError, "realtime"),
 ])
 def test_bad_input_raises_with_the_library_message(call, error, message):
     with pytest.raises(error, match=message):
