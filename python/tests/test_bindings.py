@@ -1,4 +1,5 @@
 """The hapticfield module against the C++ tools, closed forms and itself."""
+import json
 import math
 import os
 import subprocess
@@ -297,6 +298,77 @@ def test_the_gil_is_released_while_the_loop_runs():
         spins += 1
     worker.join()
     assert done and spins > 1000  # Python ran here while the loop ran
+
+
+# Ctrl-C in a child running a run of an hour on the wall clock. It says "running" once the loop runs
+# (the ServoStop token it passes only tells it so), then the parent sends SIGINT.
+INTERRUPTED_CHILD = """
+import json, sys, threading, time
+import numpy as np
+import hapticfield as hf
+token = hf.ServoStop()
+def tell():
+    while not token.running:
+        time.sleep(0.01)
+    time.sleep(0.3)  # most often the arm has armed and pushes by now; nothing below counts on it
+    print("running", flush=True)
+threading.Thread(target=tell, daemon=True).start()
+try:
+    hf.run_servo(hf.plane_contact([]), seconds=3600.0, clock="wall", stop=token)
+    print(json.dumps({"raised": None}))
+except KeyboardInterrupt as e:
+    r = e.result
+    f = r["trace"]["force"]
+    print(json.dumps({"raised": type(e).__name__, "stop_reason": r["stop_reason"], "ticks": r["statistics"]["ticks"],
+                      "rows": len(r["trace"]["t"]),
+                      "last_force": float(np.linalg.norm(f[-1])), "pushed": float(np.max(np.linalg.norm(f, axis=1)))}))
+"""
+
+
+def test_ctrl_c_stops_a_run_within_ticks_and_keeps_the_trace():
+    import signal
+    import sys
+    import time
+    child = subprocess.Popen([sys.executable, "-c", INTERRUPTED_CHILD], stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "running"
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        out, _ = child.communicate(timeout=60)
+        took = time.monotonic() - sent
+    finally:
+        child.kill()
+    # Generous bounds, whatever the load: the loop stops within a few ticks of the signal.
+    assert took < 10.0, took
+    r = json.loads(out.strip().splitlines()[-1])
+    assert r["raised"] == "KeyboardInterrupt" and r["stop_reason"] == "interrupted", r
+    assert r["rows"] == r["ticks"] > 0  # the trace up to the signal
+    assert r["last_force"] == 0.0 and r["pushed"] <= 3.3  # stopped with zero force; never beyond the arm's limit [N]
+
+
+def test_another_thread_stops_a_run_with_a_servo_stop_token():
+    token = hf.ServoStop()
+    assert not token.requested and not token.running
+    done = []
+    worker = threading.Thread(target=lambda: done.append(
+        hf.run_servo(hf.plane_contact([]), seconds=3600.0, clock="wall", stop=token)))
+    worker.start()
+    waited = 0.0
+    while not token.running and worker.is_alive() and waited < 60.0:  # [s] generous, whatever the load
+        threading.Event().wait(0.01)
+        waited += 0.01
+    assert token.running
+    token.request()
+    worker.join(timeout=10.0)
+    assert not worker.is_alive() and not token.running
+    r = done[0]
+    assert r["stop_reason"] == "requested" and r["statistics"]["ticks"] == len(r["trace"]["t"]) > 0
+    assert np.linalg.norm(r["trace"]["force"][-1]) == 0.0
+    assert token.requested  # a token stays requested: it ends any run it is given until cleared
+    again = hf.run_servo(hf.zero(), seconds=1.0, stop=token)
+    assert again["stop_reason"] == "requested" and again["statistics"]["ticks"] == 0
+    token.clear()
+    assert hf.run_servo(hf.zero(), seconds=0.01, stop=token)["stop_reason"] == "tick_limit"
 
 
 # --- bad input ------------------------------------------------------------------
