@@ -280,6 +280,7 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
     rt = RealTime::enforce;
   else if (realtime != "off")
     throw py::value_error("realtime: unknown '" + realtime + "' (choose off, best_effort or enforce)");
+  const FieldUse use(field);  // for the whole run: no other thread evaluates the field or its parts meanwhile
   if (device == "sim") {
     if (virtual_time) {
       VirtualClock clock;

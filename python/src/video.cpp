@@ -134,6 +134,7 @@ VideoHandle video_field(const py::object& path, const std::string& mask, std::op
   VideoHandle h;
   h.video = std::make_shared<VideoField>(std::move(source), mapping, std::move(config));
   h.impl = std::make_shared<AnyField>(SharedVideo{h.video});
+  h.guards = guards_of();
   h.description =
       "video " + name + " " + std::to_string(h.video->width()) + " x " + std::to_string(h.video->height()) + " px";
   return h;
