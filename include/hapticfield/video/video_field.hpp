@@ -137,7 +137,8 @@ class VideoField {
     s.tick_epoch.store(epoch, std::memory_order_release);
     const WindowField* w = s.windows.acquire();
     if (s.lockstep.load(std::memory_order_relaxed) && !s.live_source) {
-      while (!(w && w->covers(t, epoch)) && !s.idle(epoch)) {
+      // (a window of this epoch already past t: none will come, do not wait)
+      while (!(w && (w->covers(t, epoch) || (w->epoch == epoch && t < w->window.t0))) && !s.idle(epoch)) {
         std::this_thread::yield();
         w = s.windows.acquire();
       }
@@ -157,6 +158,11 @@ class VideoField {
   /// camera (a live source) is real time by nature: lockstep does nothing.
   void set_lockstep(bool on) noexcept { state_->lockstep.store(on); }
   [[nodiscard]] bool lockstep() const noexcept { return state_->lockstep.load(); }
+
+  /// A new run from the configured start at the next tick (a new epoch: the
+  /// worker seeks there); any thread. A tick whose loop time goes back (the
+  /// loop's clock restarted) does the same by itself.
+  void reset() noexcept { state_->clock.restart(); }
 
   /// Playback controls, from any thread.
   [[nodiscard]] PlaybackClock& playback() noexcept { return state_->clock; }
@@ -392,5 +398,6 @@ class VideoField {
 };
 
 static_assert(HapticField<VideoField>);
+static_assert(ResettableField<VideoField>);
 
 }  // namespace hapticfield
