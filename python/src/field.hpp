@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -68,6 +69,9 @@ void evaluate_as(AnyField& any, const ProbeArrays& a) noexcept {
 /// field composed of others also holds theirs, so evaluating a composition takes its parts too.
 struct FieldGuard {
   std::atomic<bool> busy{false};
+  /// A video field's lockstep switch (VideoField::set_lockstep), empty for other fields: run_servo turns it
+  /// on for a run on the virtual clock, so that each tick waits for its frame, and off after.
+  std::function<void(bool)> lockstep;
 };
 using Guards = std::vector<std::shared_ptr<FieldGuard>>;
 

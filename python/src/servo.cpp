@@ -283,6 +283,19 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
   const FieldUse use(field);  // for the whole run: no other thread evaluates the field or its parts meanwhile
   if (device == "sim") {
     if (virtual_time) {
+      // Every video the field is made of waits for its frames at each tick for the run: the worker has no
+      // real time to keep up with.
+      struct Lockstep {
+        const Guards& guards;
+        explicit Lockstep(const Guards& g) : guards(g) {
+          for (const auto& guard : guards)
+            if (guard->lockstep) guard->lockstep(true);
+        }
+        ~Lockstep() {
+          for (const auto& guard : guards)
+            if (guard->lockstep) guard->lockstep(false);
+        }
+      } lockstep(field.guards);
       VirtualClock clock;
       return run_simulated(clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
     }

@@ -118,15 +118,31 @@ def test_playback_controls_move_the_video_time(clip):
 def test_run_servo_on_a_video_field_gives_forces_and_statistics(clip):
     video = hf.video_field(clip, workspace_mm=60.0, gain=1.0, loop=True, **PLAIN)
     scene = hf.plane_contact([video], stiffness=1500.0)
-    # The wall clock until the video field can wait for its frames on the virtual clock (lockstep).
-    result = hf.run_servo(scene, seconds=0.6, rate=1000.0, hand="raster", hand_size=0.02, clock="wall")
+    # The virtual clock (the simulated arm's default), the video in lockstep: every tick waits for its frame.
+    result = hf.run_servo(scene, seconds=0.6, rate=1000.0, hand="raster", hand_size=0.02)
     assert result["statistics"]["ticks"] == 600
     tangential = np.linalg.norm(result["trace"]["force"][:, :2], axis=1)
     assert np.max(tangential) > 0.05  # the video's edges were felt [N]
     s = video.statistics()
-    assert s["prepared"] > 0 and s["published"] > 0 and s["video_time_s"] > 0.3
-    assert video.error() == ""
+    assert s["prepared"] >= 15 and s["published"] >= 14 and s["dropped"] == 0  # every frame of 0.6 s came
+    assert 0.59 < s["video_time_s"] < 0.6  # the last tick's
+    assert video.error() == "" and not video.lockstep  # lockstep for the run only
     video.stop()
+
+
+def test_a_virtual_run_on_a_video_field_renders_the_same_forces_every_time(clip):
+    def scene(video):
+        return hf.plane_contact([video, hf.friction(coulomb=0.2)], stiffness=1500.0)
+
+    first_video = hf.video_field(clip, workspace_mm=60.0, gain=1.0, **PLAIN)
+    runs = [hf.run_servo(scene(first_video), seconds=0.7, hand="circle", hand_size=0.03),  # past the cut
+            hf.run_servo(scene(hf.video_field(clip, workspace_mm=60.0, gain=1.0, **PLAIN)), seconds=0.7,
+                         hand="circle", hand_size=0.03),
+            hf.run_servo(scene(first_video), seconds=0.7, hand="circle", hand_size=0.03)]  # the same field again
+    for other in runs[1:]:
+        np.testing.assert_array_equal(runs[0]["trace"]["force"], other["trace"]["force"])
+    assert np.max(np.linalg.norm(runs[0]["trace"]["force"][:, :2], axis=1)) > 0.05
+    assert first_video.statistics()["dropped"] == 0
 
 
 def test_a_frame_smaller_than_the_mask_is_the_workers_error(tmp_path):
