@@ -3,15 +3,17 @@
 //   tangible_video VIDEO [--mask prewitt|sobel|scharr|roberts|gauss|emboss] [--size M]
 //                  [--border suspend|clamp|reflect|fade] [--denoise none|temporal|spatial|both]
 //                  [--fade-ms MS] [--cuts OUT.csv] [--probes IN.csv --forces OUT.csv]
-//                  [--seconds S] [--device sim|hid[:VID:PID]] [--trace OUT.csv] [--plots DIR]
-//                  [--verbose]
+//                  [--seconds S] [--device sim|hid[:VID:PID]] [--clock wall|virtual]
+//                  [--trace OUT.csv] [--plots DIR] [--verbose]
 //
 // With --probes it renders offline, as fast as it can: t,x,y per line (t in
 // seconds of video time, frame k at k / fps; x, y in pixels as
 // tangible_image) to t,x,y,fx,fy (normalised, 1 = a black/white edge, fy
 // down), blends and fades included. Without --probes it plays the video to
 // the simulated arm (a scripted hand raster-scans it) or a HID arm in the
-// 1 kHz servo loop, with a live status line. Bad input: one line on stderr,
+// 1 kHz servo loop, with a live status line; --clock virtual runs the
+// simulated arm on simulated time, in lockstep with the video's worker, so
+// a run's trace is the same on any machine. Bad input: one line on stderr,
 // exit status 1 (2 for usage errors).
 #include <hapticfield/video.hpp>
 
@@ -29,6 +31,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <opencv2/core/utils/logger.hpp>
@@ -68,6 +71,9 @@ constexpr const char* usage =
     "  --forces OUT.csv      t,x,y,fx,fy per probe: the normalised force (1 = black/white edge), fy down\n"
     "  --seconds S           play time [s], in (0, 3600] (default: the video's length, at most 60)\n"
     "  --device D            sim (default: the simulated arm, a scripted hand) or hid, hid:VID:PID\n"
+    "  --clock C             wall (default: real time) or virtual (the simulated arm only: simulated\n"
+    "                        time, each tick waits for its frame, none dropped: the same trace on any\n"
+    "                        machine)\n"
     "  --trace OUT.csv       write t, position [m], force [N] per tick (play mode)\n"
     "  --plots DIR           write force.png (play mode) or forces.png (probe mode) into DIR\n"
     "  --verbose             let OpenCV's and FFmpeg's own log lines through\n"
@@ -83,6 +89,7 @@ struct Arguments {
   std::optional<std::string> cuts, probes, forces, trace, plots;
   std::optional<double> seconds;
   std::string device{"sim"};
+  std::optional<std::string> clock;  ///< "wall" or "virtual"; given or not
   bool verbose = false;
 };
 
@@ -120,6 +127,8 @@ Arguments parse(hf::cli::Parser& p) {
       if (!valid_device(a.device))
         throw hf::cli::UsageError("--device must be sim, hid or hid:VID:PID with hexadecimal ids, got '" + a.device +
                                   "'");
+    } else if (p.is("--clock")) {
+      a.clock = p.choice<std::string>("clock", {{"wall", "wall"}, {"virtual", "virtual"}});
     } else if (p.is("--trace")) {
       a.trace = p.output_file();
     } else if (p.is("--plots")) {
@@ -136,8 +145,11 @@ Arguments parse(hf::cli::Parser& p) {
   }
   if (a.video.empty()) throw hf::cli::UsageError("no VIDEO given");
   if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
-  if (a.probes && (a.trace || a.seconds))
-    throw hf::cli::UsageError("--trace and --seconds are for play mode, not --probes");
+  if (a.probes && (a.trace || a.seconds || a.clock))
+    throw hf::cli::UsageError("--trace, --seconds and --clock are for play mode, not --probes");
+  if (a.clock == "virtual" && a.device != "sim")
+    throw hf::cli::UsageError(
+        "--clock virtual is for the simulated arm (--device sim): a real arm runs on the wall clock");
   if (!a.size_given) a.options.size = hf::default_mask_size(a.options.mask);
   try {
     hf::validate_mask_size(a.options.mask, a.options.size);
@@ -253,6 +265,9 @@ struct Row {
   glm::dvec3 force{0.0};
 };
 
+/// Play mode on the loop clock `Clock`: SteadyClock (real time) or
+/// VirtualClock (simulated time, the video in lockstep).
+template <class Clock>
 int run_play(const Arguments& a) {
   auto source = open_source(a);
   const double duration = source->duration();
@@ -272,8 +287,10 @@ int run_play(const Arguments& a) {
   auto field = hf::contact(wall, std::move(video));
   video_ptr = &field.part<0>();
 
-  hf::SteadyClock clock;
+  Clock clock;
   const auto now = [&clock] { return clock.now(); };
+  constexpr bool simulated_time = std::is_same_v<Clock, hf::VirtualClock>;
+  if (simulated_time) video_ptr->set_lockstep(true);  // each tick waits for its frame
   const double w_m = width / mapping.px_per_mm() * 1e-3, h_m = height / mapping.px_per_mm() * 1e-3;
   std::unique_ptr<hf::SimulatedArm> arm;
   std::unique_ptr<hf::Transport> transport;
@@ -295,11 +312,11 @@ int run_play(const Arguments& a) {
   hf::ForceArm device(*transport);
   hf::LoopConfig loop_config;
   loop_config.recover_after = 0.5;
-  hf::ServoLoop<hf::ForceArm, hf::SteadyClock> loop(device, clock, loop_config);
+  hf::ServoLoop<hf::ForceArm, Clock> loop(device, clock, loop_config);
   if (hardware) hf::cli::wait_for_operator();
-  std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s\n", name.c_str(), width,
-              height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise), a.fade_s * 1e3,
-              seconds);
+  std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s%s\n", name.c_str(),
+              width, height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise),
+              a.fade_s * 1e3, seconds, simulated_time ? " of simulated time (lockstep)" : "");
 
   const auto ticks = static_cast<std::uint64_t>(std::max(1L, std::lround(seconds * loop_config.rate)));
   std::vector<Row> rows;
@@ -364,11 +381,15 @@ int run_play(const Arguments& a) {
   return 0;
 }
 
+int play(const Arguments& a) {
+  return a.clock == "virtual" ? run_play<hf::VirtualClock>(a) : run_play<hf::SteadyClock>(a);
+}
+
 int run(const Arguments& a) {
   hf::quiet_video_logs(a.verbose);
-  if (a.verbose) return a.probes ? run_probes(a) : run_play(a);
+  if (a.verbose) return a.probes ? run_probes(a) : play(a);
   // FFmpeg writes its own complaints about damaged streams to stderr: muted.
-  return hf::cli::quiet_stderr([&] { return a.probes ? run_probes(a) : run_play(a); });
+  return hf::cli::quiet_stderr([&] { return a.probes ? run_probes(a) : play(a); });
 }
 
 }  // namespace

@@ -601,6 +601,12 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
       {"tangible_video", {"camera:100"}, usage, "camera:N"},
       {"tangible_video", {clip, "--fade-ms", "10001"}, usage, "[0, 10000]"},
       {"tangible_video", {clip, "--seconds", "3601"}, usage, "(0, 3600]"},
+      {"tangible_video", {clip, "--clock", "moon"}, usage, "unknown clock 'moon'"},
+      {"tangible_video",
+       {clip, "--clock", "virtual", "--device", "hid"},
+       usage,
+       "--clock virtual is for the simulated"},
+      {"tangible_video", {clip, "--clock", "wall", "--probes", probes, "--forces", forces}, usage, "play mode"},
   };
   add_numeric(cases, "tangible_video", {clip}, "--size");
   add_numeric(cases, "tangible_video", {clip}, "--fade-ms", {"0"});
@@ -671,6 +677,19 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
     CHECK(r.err.empty());
     const std::string t = slurp(trace);
     CHECK(std::count(t.begin(), t.end(), '\n') == 301);
+  }
+  SECTION("play mode on simulated time: the same trace every run, no frame dropped") {
+    const std::string trace1 = in_tmp("vtrace_v1.csv"), trace2 = in_tmp("vtrace_v2.csv");
+    for (const std::string& trace : {trace1, trace2}) {
+      const Result r = run("tangible_video", {clip, "--seconds", "0.8", "--clock", "virtual", "--trace", trace});
+      CAPTURE(r.err, r.out);
+      REQUIRE(r.status == ok);
+      CHECK(r.err.empty());
+      CHECK(r.out.find("0 dropped") != std::string::npos);
+    }
+    const std::string t = slurp(trace1);
+    CHECK(std::count(t.begin(), t.end(), '\n') == 801);
+    CHECK(t == slurp(trace2));
   }
 }
 #endif

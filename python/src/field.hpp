@@ -9,10 +9,14 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <array>
+#include <atomic>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -61,12 +65,62 @@ void evaluate_as(AnyField& any, const ProbeArrays& a) noexcept {
     evaluate(any, a);
 }
 
+/// The one-thread-at-a-time rule for a field, enforced: every field built in Python has a guard, and a
+/// field composed of others also holds theirs, so evaluating a composition takes its parts too.
+struct FieldGuard {
+  std::atomic<bool> busy{false};
+  /// A video field's lockstep switch (VideoField::set_lockstep), empty for other fields: run_servo turns it
+  /// on for a run on the virtual clock, so that each tick waits for its frame, and off after.
+  std::function<void(bool)> lockstep;
+};
+using Guards = std::vector<std::shared_ptr<FieldGuard>>;
+
 /// A field built in Python. Fields made of fields share their parts.
 struct Field {
   std::shared_ptr<AnyField> impl;
   std::string description;
   /// Evaluates impl over arrays knowing its type (set by make_field; null: through AnyField).
   void (*batch)(AnyField&, const ProbeArrays&) noexcept = nullptr;
+  /// Its own guard first, then those of every field it is made of, each once.
+  Guards guards;
+};
+
+/// A fresh guard for a new field, followed by the guards of `parts` (each once).
+inline Guards guards_of(const std::vector<const Field*>& parts = {}) {
+  Guards g{std::make_shared<FieldGuard>()};
+  for (const Field* part : parts)
+    for (const auto& guard : part->guards)
+      if (std::find(g.begin(), g.end(), guard) == g.end()) g.push_back(guard);
+  return g;
+}
+
+/// Holds every guard of a field for the length of a call that evaluates it (forces, force, reset,
+/// run_servo); throws RuntimeError, holding none, when another thread holds one of them.
+class FieldUse {
+ public:
+  explicit FieldUse(const Field& field) : guards_(&field.guards) {
+    for (std::size_t i = 0; i < guards_->size(); ++i) {
+      bool free = false;
+      if (!(*guards_)[i]->busy.compare_exchange_strong(free, true, std::memory_order_acquire)) {
+        release(i);
+        throw std::runtime_error(
+            "field '" + field.description +
+            "' is in use by another thread (a run_servo loop or a forces(), force() or reset() call): a field keeps "
+            "state and is evaluated by one thread at a time; build a second field for the other thread (e.g. a "
+            "second video_field on the same clip for a preview beside the loop), or wait for the first call to end");
+      }
+    }
+  }
+  ~FieldUse() { release(guards_->size()); }
+  FieldUse(const FieldUse&) = delete;
+  FieldUse& operator=(const FieldUse&) = delete;
+
+ private:
+  void release(std::size_t n) noexcept {
+    for (std::size_t i = 0; i < n; ++i)
+      (*guards_)[i]->busy.store(false, std::memory_order_release);
+  }
+  const Guards* guards_;
 };
 
 /// A part held by a composed field: forwards to the shared field.
@@ -91,10 +145,12 @@ struct FieldSum {
   }
 };
 
+/// A field of its own (parts empty) or one made of `parts`, whose guards it takes when evaluated.
 template <HapticField F>
-Field make_field(F&& f, std::string description) {
+Field make_field(F&& f, std::string description, const std::vector<const Field*>& parts = {}) {
   using T = std::remove_cvref_t<F>;
-  return Field{std::make_shared<AnyField>(std::forward<F>(f)), std::move(description), &evaluate_as<T>};
+  return Field{std::make_shared<AnyField>(std::forward<F>(f)), std::move(description), &evaluate_as<T>,
+               guards_of(parts)};
 }
 
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;

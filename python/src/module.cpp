@@ -48,6 +48,7 @@ py::array_t<double> forces(Field& self, const Array& positions, const std::optio
   a.period = period;
   a.start_time = start_time;
   std::shared_ptr<AnyField> field = self.impl;
+  const FieldUse use(self);
   {
     py::gil_scoped_release release;
     if (self.batch)
@@ -62,11 +63,13 @@ Field sum_of(const std::vector<Field>& fields) {
   if (fields.empty()) throw py::value_error("sum: needs at least one field");
   FieldSum s;
   std::string d;
+  std::vector<const Field*> parts;
   for (const Field& f : fields) {
     s.parts.push_back({f.impl});
     d += (d.empty() ? "" : " + ") + f.description;
+    parts.push_back(&f);
   }
-  return make_field(std::move(s), d);
+  return make_field(std::move(s), d, parts);
 }
 
 /// F = Fc + parts: the constraint first, the parts see |Fc| and the normal.
@@ -76,17 +79,20 @@ Field contact_with(C constraint, const std::vector<Field>& parts, const std::str
     const std::string d = "contact(" + name + " + " + parts[0].description + ")";
     // A stateless part (its force() is const) is copied in: a copy behaves as the shared part would, and
     // the contact calls it directly instead of through a second type-erased field.
+    // The copy is the contact's own: it does not take the part's guard.
     if (const auto* friction = parts[0].impl->target<texture::Friction>())
       return make_field(contact(std::move(constraint), texture::Friction(*friction)), d);
-    return make_field(contact(std::move(constraint), SharedField{parts[0].impl}), d);
+    return make_field(contact(std::move(constraint), SharedField{parts[0].impl}), d, {&parts[0]});
   }
   FieldSum s;
   std::string d = name;
+  std::vector<const Field*> shared;
   for (const Field& f : parts) {
     s.parts.push_back({f.impl});
     d += " + " + f.description;
+    shared.push_back(&f);
   }
-  return make_field(contact(std::move(constraint), std::move(s)), "contact(" + d + ")");
+  return make_field(contact(std::move(constraint), std::move(s)), "contact(" + d + ")", shared);
 }
 
 /// For the allocation proof's own test: allocates and frees on every
@@ -116,6 +122,7 @@ void bind_core(py::module_& m) {
       .def(
           "force",
           [](Field& self, const V3& position, const V3& velocity, double normal_force, const V3& surface_normal) {
+            const FieldUse use(self);
             Probe p;
             p.position = glm3(position);
             p.velocity = glm3(velocity);
@@ -130,7 +137,11 @@ void bind_core(py::module_& m) {
           py::arg("surface_normal") = V3{0.0, 0.0, 0.0},
           "Force [N] (3 numbers) at one probe: position [m], velocity [m/s], normal force [N].")
       .def(
-          "reset", [](Field& self) { self.impl->reset(); }, "Resets the state of stateful parts (filters, samplers).")
+          "reset",
+          [](Field& self) {
+            const FieldUse use(self);
+            self.impl->reset();
+          }, "Resets the state of stateful parts (filters, samplers).")
       .def("__add__",
            [](const Field& a, const Field& b) {
              return sum_of({a, b});
@@ -143,13 +154,13 @@ void bind_core(py::module_& m) {
       "scale",
       [](const Field& f, double k) {
         if (!std::isfinite(k)) throw py::value_error("scale: factor must be finite");
-        return make_field(scale(SharedField{f.impl}, k), "scale(" + f.description + ")");
+        return make_field(scale(SharedField{f.impl}, k), "scale(" + f.description + ")", {&f});
       },
       py::arg("field"), py::arg("factor"), "F = factor x field [N].");
   m.def(
       "clamp",
       [](const Field& f, double limit) {
-        return make_field(clamp(SharedField{f.impl}, limit), "clamp(" + f.description + ")");
+        return make_field(clamp(SharedField{f.impl}, limit), "clamp(" + f.description + ")", {&f});
       },
       py::arg("field"), py::arg("limit"),
       "|F| limited to limit [N] keeping the direction; a non-finite force becomes zero.");

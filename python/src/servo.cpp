@@ -11,9 +11,14 @@
 #include <pybind11/stl.h>
 
 #include <dlfcn.h>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <exception>
 #include <memory>
+#include <mutex>
+#include <thread>
 
 namespace hapticfield::python {
 
@@ -62,14 +67,121 @@ using AllocationCount = unsigned long (*)();
 AllocationCount counter_function(const char* name) {
   return reinterpret_cast<AllocationCount>(dlsym(RTLD_DEFAULT, name));
 }
+/// The counter's switch: starts (1) or stops (0) counting the calling thread, clearing its counts.
+using CountHere = void (*)(int);
 
-template <Device D>
-py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, double rate, RealTime realtime) {
+}  // namespace
+
+/// A token that stops run_servo from any thread (ServoStop in Python).
+struct StopToken {
+  std::atomic<bool> requested{false};
+  std::atomic<int> running{0};  ///< runs in progress that were given this token
+};
+
+namespace {
+
+/// The interrupt a signal handler raised while a loop ran (a KeyboardInterrupt for Ctrl-C), held until
+/// the loop has stopped and the result is built. Touched only with the GIL held.
+struct PendingInterrupt {
+  PyObject* type = nullptr;
+  PyObject* value = nullptr;
+  PyObject* traceback = nullptr;
+  explicit operator bool() const noexcept { return type != nullptr; }
+  /// Raises it again with `result` attached as its `result` attribute.
+  [[noreturn]] void raise_with(const py::dict& result) {
+    PyErr_NormalizeException(&type, &value, &traceback);
+    if (value && PyObject_SetAttrString(value, "result", result.ptr()) != 0) PyErr_Clear();
+    PyErr_Restore(type, value, traceback);
+    type = value = traceback = nullptr;
+    throw py::error_already_set();
+  }
+  ~PendingInterrupt() {
+    Py_XDECREF(type);
+    Py_XDECREF(value);
+    Py_XDECREF(traceback);
+  }
+};
+
+/// Runs `loop` on a thread of its own while the calling thread, the GIL released, watches every few ms for a
+/// signal (Ctrl-C: Python's handler runs here, on the calling thread, the GIL taken for that moment only) and
+/// for the token: either asks the loop to stop (zero force, disarm) at its next tick. The loop thread never
+/// takes the GIL. Returns the loop's reason; the loop's own exception is rethrown here.
+template <class Loop, class Callback>
+StopReason run_watched(Loop& loop, Callback& callback, std::uint64_t ticks, StopToken* token,
+                       PendingInterrupt& interrupt, long& loop_mallocs, long& loop_frees) {
+  static const AllocationCount mallocs = counter_function("hapticfield_malloc_calls");
+  static const AllocationCount frees = counter_function("hapticfield_free_calls");
+  static const auto count_here = reinterpret_cast<CountHere>(dlsym(RTLD_DEFAULT, "hapticfield_count_here"));
+  const bool counted = mallocs && frees && count_here;
+  StopReason reason = StopReason::requested;
+  std::exception_ptr error;
+  std::mutex m;
+  std::condition_variable ended;
+  bool done = false;
+  struct Running {  // StopToken::running for the length of the call
+    StopToken* token;
+    explicit Running(StopToken* t) noexcept : token(t) {
+      if (token) token->running.fetch_add(1);
+    }
+    ~Running() {
+      if (token) token->running.fetch_sub(1);
+    }
+  } running(token);
+  {
+    py::gil_scoped_release release;  // Python never runs inside a tick
+    std::thread worker([&]() noexcept {
+      // The loop thread is counted from here: the loop alone, not its setup.
+      if (counted) count_here(1);
+      try {
+        reason = loop.run(callback, {.max_ticks = ticks});
+      } catch (...) {
+        error = std::current_exception();
+      }
+      if (counted) {
+        loop_mallocs = static_cast<long>(mallocs()), loop_frees = static_cast<long>(frees());
+        count_here(0);
+      }
+      {
+        std::lock_guard<std::mutex> lock(m);
+        done = true;
+      }
+      ended.notify_all();
+    });
+    bool stop_sent = false;
+    std::unique_lock<std::mutex> lock(m);
+    while (!ended.wait_for(lock, std::chrono::milliseconds(4), [&] { return done; })) {
+      if (stop_sent) continue;
+      if (token && token->requested.load()) {
+        loop.request_stop();
+        stop_sent = true;
+        continue;
+      }
+      lock.unlock();
+      {
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() != 0) {  // a handler raised: stop, and raise it once the loop has
+          PyErr_Fetch(&interrupt.type, &interrupt.value, &interrupt.traceback);
+          loop.request_stop();
+          stop_sent = true;
+        }
+      }
+      lock.lock();
+    }
+    lock.unlock();
+    worker.join();
+  }
+  if (error) std::rethrow_exception(error);
+  return reason;
+}
+
+template <Device D, ServoClock C>
+py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, RealTime realtime,
+                StopToken* token) {
   LoopConfig config;
   config.rate = rate;
   config.realtime = realtime;
   config.recover_after = 0.5;  // [s] fresh states before re-arming after a latch
-  ServoLoop<D, SteadyClock> loop(device, clock, config);
+  ServoLoop<D, C> loop(device, clock, config);
   const auto ticks = static_cast<std::uint64_t>(std::llround(seconds * rate));
   std::vector<TraceRow> rows;
   rows.reserve(ticks + 8);  // the tick only fills reserved rows
@@ -81,17 +193,10 @@ py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, dou
     }
     return f->force(in.probe);
   };
-  StopReason reason = StopReason::requested;
-  static const AllocationCount mallocs = counter_function("hapticfield_malloc_calls");
-  static const AllocationCount frees = counter_function("hapticfield_free_calls");
-  const bool counted = mallocs && frees;
-  unsigned long loop_mallocs = 0, loop_frees = 0;
-  {
-    py::gil_scoped_release release;  // Python never runs inside a tick
-    const unsigned long mallocs_before = counted ? mallocs() : 0, frees_before = counted ? frees() : 0;
-    reason = loop.run(callback, {.max_ticks = ticks});
-    if (counted) loop_mallocs = mallocs() - mallocs_before, loop_frees = frees() - frees_before;
-  }
+  if (token && token->requested.load()) loop.request_stop();  // a request made before the run ends it at once
+  PendingInterrupt interrupt;
+  long loop_mallocs = -1, loop_frees = -1;
+  const StopReason reason = run_watched(loop, callback, ticks, token, interrupt, loop_mallocs, loop_frees);
   if (!rows.empty()) rows.back().force = loop.last_command();
   const py::ssize_t n = static_cast<py::ssize_t>(rows.size());
   py::array_t<double> t(n);
@@ -118,22 +223,51 @@ py::dict run_on(D& device, SteadyClock& clock, Field& field, double seconds, dou
   result["histogram_bin_s"] = DurationHistogram::bin_ns * 1e-9;
   result["nominal_period_s"] = loop.period();
   result["max_force_n"] = device.info().max_force;
-  if (counted) {
+  if (loop_mallocs >= 0) {
     result["loop_allocations"] = loop_mallocs;
     result["loop_frees"] = loop_frees;
   } else {
     result["loop_allocations"] = py::none();
     result["loop_frees"] = py::none();
   }
-  result["stop_reason"] = reason == StopReason::tick_limit     ? "tick_limit"
+  result["stop_reason"] = interrupt                              ? "interrupted"
+                          : reason == StopReason::tick_limit     ? "tick_limit"
                           : reason == StopReason::disconnected ? "disconnected"
                                                                : "requested";
+  if (interrupt) interrupt.raise_with(result);
   return result;
+}
+
+/// The simulated arm held by the scripted hand, on `clock`.
+template <ServoClock C>
+py::dict run_simulated(C& clock, Field& field, double seconds, double rate, RealTime rt, const std::string& hand,
+                       const V3& hand_centre, double hand_size, double hand_speed, StopToken* token) {
+  SimulatedArmConfig c;
+  c.hand.path = hand_path(hand, hand_centre, hand_size, hand_speed);
+  c.validate();
+  SimulatedArm arm(c);
+  SimulatedTransport link(arm, [&clock] { return clock.now(); });
+  ForceArm arm_device(link);
+  return run_on(arm_device, clock, field, seconds, rate, rt, token);
 }
 
 py::dict run_servo(Field& field, double seconds, double rate, const std::string& device, const std::string& hand,
                    const V3& hand_centre, double hand_size, double hand_speed, const std::string& realtime,
-                   bool confirm_hardware) {
+                   bool confirm_hardware, const std::optional<std::string>& clock_name,
+                   const std::shared_ptr<StopToken>& stop) {
+  const bool real_arm = device.rfind("hid", 0) == 0;
+  // The simulated arm runs on the virtual clock unless told otherwise: what a run renders is then the same on
+  // any machine, however loaded. A real arm lives in real time.
+  const std::string clock_kind = clock_name.value_or(real_arm ? "wall" : "virtual");
+  if (clock_kind != "wall" && clock_kind != "virtual")
+    throw py::value_error("clock: unknown '" + clock_kind + "' (choose wall or virtual)");
+  const bool virtual_time = clock_kind == "virtual";
+  if (virtual_time && real_arm)
+    throw py::value_error("clock: the virtual clock cannot drive a real arm, which moves in real time; use "
+                          "clock='wall' (the default for hid)");
+  if (virtual_time && realtime != "off")
+    throw py::value_error("realtime: '" + realtime + "' is for the wall clock; a virtual run never sleeps and would "
+                          "hold a CPU at real-time priority (use realtime='off' or clock='wall')");
   if (!(std::isfinite(seconds) && seconds > 0.0 && seconds <= 3600.0))
     throw py::value_error("seconds: must be within (0, 3600] [s]");
   if (!(std::isfinite(rate) && rate >= 1.0 && rate <= 10000.0))
@@ -146,18 +280,29 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
     rt = RealTime::enforce;
   else if (realtime != "off")
     throw py::value_error("realtime: unknown '" + realtime + "' (choose off, best_effort or enforce)");
-  SteadyClock clock;
-  const auto now = [&clock] { return clock.now(); };
+  const FieldUse use(field);  // for the whole run: no other thread evaluates the field or its parts meanwhile
   if (device == "sim") {
-    SimulatedArmConfig c;
-    c.hand.path = hand_path(hand, hand_centre, hand_size, hand_speed);
-    c.validate();
-    SimulatedArm arm(c);
-    SimulatedTransport link(arm, now);
-    ForceArm arm_device(link);
-    return run_on(arm_device, clock, field, seconds, rate, rt);
+    if (virtual_time) {
+      // Every video the field is made of waits for its frames at each tick for the run: the worker has no
+      // real time to keep up with.
+      struct Lockstep {
+        const Guards& guards;
+        explicit Lockstep(const Guards& g) : guards(g) {
+          for (const auto& guard : guards)
+            if (guard->lockstep) guard->lockstep(true);
+        }
+        ~Lockstep() {
+          for (const auto& guard : guards)
+            if (guard->lockstep) guard->lockstep(false);
+        }
+      } lockstep(field.guards);
+      VirtualClock clock;
+      return run_simulated(clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
+    }
+    SteadyClock clock;
+    return run_simulated(clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
   }
-  if (device.rfind("hid", 0) == 0) {
+  if (real_arm) {
 #if HAPTICFIELD_PYTHON_HID
     if (!confirm_hardware)
       throw py::value_error(
@@ -170,9 +315,10 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
         throw py::value_error("device: hid:VID:PID takes hexadecimal ids, e.g. hid:1209:0001");
       vid = static_cast<std::uint16_t>(v), pid = static_cast<std::uint16_t>(p);
     }
+    SteadyClock clock;
     HidTransport link(vid, pid);
     ForceArm arm_device(link);
-    return run_on(arm_device, clock, field, seconds, rate, rt);
+    return run_on(arm_device, clock, field, seconds, rate, rt, stop.get());
 #else
     (void)confirm_hardware;
     throw py::value_error("device hid: this build of the module has no hidapi");
@@ -184,10 +330,28 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
 }  // namespace
 
 void bind_servo(py::module_& m) {
+  py::class_<StopToken, std::shared_ptr<StopToken>>(
+      m, "ServoStop",
+      "A token that stops run_servo from another thread: pass it as run_servo(..., stop=token) and call "
+      "token.request() from any thread; the loop stops within a few ms (zero force, slew, disarm) and run_servo "
+      "returns what it recorded with stop_reason 'requested'. A requested token stays requested, so it also ends "
+      "any later run it is given before its first tick, until clear().")
+      .def(py::init<>())
+      .def(
+          "request", [](StopToken& t) { t.requested.store(true); },
+          "Asks every run given this token to stop (any thread; returns at once).")
+      .def(
+          "clear", [](StopToken& t) { t.requested.store(false); },
+          "Withdraws the request, so that the token can be given to a new run.")
+      .def_property_readonly(
+          "requested", [](const StopToken& t) { return t.requested.load(); }, "True once request() was called.")
+      .def_property_readonly(
+          "running", [](const StopToken& t) { return t.running.load() > 0; },
+          "True while a run given this token is in progress.");
   m.def("run_servo", &run_servo, py::arg("field"), py::arg("seconds") = 1.0, py::arg("rate") = 1000.0,
         py::arg("device") = "sim", py::arg("hand") = "raster", py::arg("hand_centre") = V3{0.0, 0.0, -0.008},
         py::arg("hand_size") = 0.06, py::arg("hand_speed") = 0.06, py::arg("realtime") = "off",
-        py::arg("confirm_hardware") = false,
+        py::arg("confirm_hardware") = false, py::arg("clock") = py::none(), py::arg("stop") = py::none(),
         "Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] "
         "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace "
         "(t [s], position N x 3 [m], force N x 3 [N] as commanded after the safety chain), period_histogram "
@@ -195,7 +359,16 @@ void bind_servo(py::module_& m) {
         "thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None "
         "otherwise). device sim: the simulated arm, held by a scripted hand "
         "(raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm "
-        "(needs confirm_hardware=True). The field is evaluated in C++; the GIL is released while the loop runs.");
+        "(needs confirm_hardware=True). clock virtual (the default for sim): the loop runs on simulated time as "
+        "fast as the CPU allows, with the same ticks, safety chain and trace as in real time, so a run renders "
+        "the same forces on any machine (its timing statistics are nominal: every period exact, compute time 0); "
+        "wall (the default for hid, the only choice there): real time, for timing studies and live interaction. "
+        "realtime off|best_effort|enforce (SCHED_FIFO; wall clock only). The loop runs on a thread of its own, "
+        "evaluating the field in C++, never taking the GIL; the calling thread waits with the GIL released. "
+        "stop: a ServoStop token another thread can request() to end the run (stop_reason 'requested'). Ctrl-C "
+        "(any exception a signal handler raises) stops the loop within a few ms with zero force and is then "
+        "raised, the result attached as its `result` attribute (stop_reason 'interrupted'): "
+        "`except KeyboardInterrupt as e: run = e.result`.");
 }
 
 }  // namespace hapticfield::python

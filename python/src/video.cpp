@@ -29,6 +29,7 @@ namespace {
 struct SharedVideo {
   std::shared_ptr<VideoField> video;
   glm::dvec3 force(const Probe& probe) noexcept { return video->force(probe); }
+  void reset() noexcept { video->reset(); }  // plays from the configured start again
 };
 
 /// A Field that is a video: the handle keeps the playback controls.
@@ -134,6 +135,10 @@ VideoHandle video_field(const py::object& path, const std::string& mask, std::op
   VideoHandle h;
   h.video = std::make_shared<VideoField>(std::move(source), mapping, std::move(config));
   h.impl = std::make_shared<AnyField>(SharedVideo{h.video});
+  h.guards = guards_of();
+  h.guards.front()->lockstep = [video = std::weak_ptr<VideoField>(h.video)](bool on) {
+    if (const auto v = video.lock()) v->set_lockstep(on);
+  };
   h.description =
       "video " + name + " " + std::to_string(h.video->width()) + " x " + std::to_string(h.video->height()) + " px";
   return h;
@@ -204,6 +209,10 @@ void bind_video(py::module_& m) {
             h.video->stop();
           },
           "Stops the worker thread (the field keeps its last window).")
+      .def_property_readonly(
+          "lockstep", [](const VideoHandle& h) { return h.video->lockstep(); },
+          "True while run_servo(clock='virtual') holds the video: each tick waits for the frame that covers its "
+          "video time, and the worker drops no frame.")
       .def_property_readonly(
           "fps", [](const VideoHandle& h) { return h.video->fps(); }, "Frames per second [1/s].")
       .def_property_readonly(

@@ -1,8 +1,12 @@
 """The hapticfield module against the C++ tools, closed forms and itself."""
+import json
 import math
 import os
+import signal
 import subprocess
+import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -253,9 +257,11 @@ def test_normal_field_gradient_mode_pushes_downhill():
 
 # --- the servo loop -------------------------------------------------------------
 
-def test_run_servo_on_the_simulated_arm(coffee):
+@pytest.mark.parametrize("clock", ["virtual", "wall"])
+def test_run_servo_on_the_simulated_arm(coffee, clock):
+    # Only what holds however loaded the machine is: the tick count, the shapes, the force limit.
     field = hf.plane_contact([hf.tangible_field(coffee, workspace_mm=80.0)])
-    result = hf.run_servo(field, seconds=0.3, rate=1000.0)
+    result = hf.run_servo(field, seconds=0.3, rate=1000.0, clock=clock)
     stats, trace = result["statistics"], result["trace"]
     assert stats["ticks"] == 300 and result["stop_reason"] == "tick_limit"
     assert trace["t"].shape == (300,) and trace["position"].shape == (300, 3) and trace["force"].shape == (300, 3)
@@ -264,15 +270,117 @@ def test_run_servo_on_the_simulated_arm(coffee):
     assert int(result["period_histogram"].sum()) == 299  # one period between each pair of ticks
 
 
+def test_a_virtual_run_renders_the_same_forces_every_time(coffee):
+    def run(**options):
+        scene = hf.plane_contact([hf.tangible_field(coffee, workspace_mm=80.0),
+                                  hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)])
+        return hf.run_servo(scene, seconds=0.8, rate=1000.0, hand="circle", hand_size=0.03, **options)
+
+    first, second, default = run(clock="virtual"), run(clock="virtual"), run()
+    for other in (second, default):  # the simulated arm runs on the virtual clock unless told otherwise
+        for key in ("t", "position", "force"):
+            np.testing.assert_array_equal(first["trace"][key], other["trace"][key])
+    stats = first["statistics"]
+    assert stats["ticks"] == 800 and first["stop_reason"] == "tick_limit"
+    assert stats["missed_deadlines"] == 0 and stats["latches"] == 0
+    assert stats["peak_force_n"] > 0.5  # the plane pushed back [N]
+    np.testing.assert_allclose(np.diff(first["trace"]["t"]), 1e-3, rtol=0, atol=1e-12)  # every tick on time
+    # Time only moves when the loop sleeps: every period is the nominal one, in one histogram bin.
+    assert stats["period_max_s"] == pytest.approx(1e-3, abs=1e-12)
+    assert int(first["period_histogram"].max()) == 799
+
+
 def test_the_gil_is_released_while_the_loop_runs():
+    # The wall clock: a virtual run of 0.4 s may be over before this thread runs at all. A loaded
+    # 2-core machine still gives this thread far more than 1000 turns of the loop in 0.4 s.
     done = []
-    worker = threading.Thread(target=lambda: done.append(hf.run_servo(hf.zero(), seconds=0.4)))
+    worker = threading.Thread(target=lambda: done.append(hf.run_servo(hf.zero(), seconds=0.4, clock="wall")))
     worker.start()
     spins = 0
     while worker.is_alive():
         spins += 1
     worker.join()
     assert done and spins > 1000  # Python ran here while the loop ran
+
+
+# Ctrl-C in a child running a run of an hour on the wall clock. It says "running" once the loop runs
+# (the ServoStop token it passes only tells it so), then the parent sends SIGINT.
+INTERRUPTED_CHILD = """
+import json, signal, sys, threading, time
+import numpy as np
+import hapticfield as hf
+# Python keeps SIGINT ignored when it starts ignored (a test run started in the background by a
+# non-interactive shell): Ctrl-C's own handler, whatever the parent did.
+signal.signal(signal.SIGINT, signal.default_int_handler)
+token = hf.ServoStop()
+def tell():
+    while not token.running:
+        time.sleep(0.01)
+    time.sleep(0.3)  # most often the arm has armed and pushes by now; nothing below counts on it
+    print("running", flush=True)
+threading.Thread(target=tell, daemon=True).start()
+try:
+    hf.run_servo(hf.plane_contact([]), seconds=3600.0, clock="wall", stop=token)
+    print(json.dumps({"raised": None}))
+except KeyboardInterrupt as e:
+    r = e.result
+    f = r["trace"]["force"]
+    print(json.dumps({"raised": type(e).__name__, "stop_reason": r["stop_reason"], "ticks": r["statistics"]["ticks"],
+                      "rows": len(r["trace"]["t"]),
+                      "last_force": float(np.linalg.norm(f[-1])), "pushed": float(np.max(np.linalg.norm(f, axis=1)))}))
+"""
+
+
+def test_ctrl_c_stops_a_run_within_ticks_and_keeps_the_trace():
+    child = subprocess.Popen([sys.executable, "-c", INTERRUPTED_CHILD], stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "running"
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        out, _ = child.communicate(timeout=60)
+        took = time.monotonic() - sent
+    finally:
+        child.kill()
+    # Generous bounds, whatever the load: the loop stops within a few ticks of the signal.
+    assert took < 10.0, took
+    r = json.loads(out.strip().splitlines()[-1])
+    assert r["raised"] == "KeyboardInterrupt" and r["stop_reason"] == "interrupted", r
+    assert r["rows"] == r["ticks"] > 0  # the trace up to the signal
+    assert r["last_force"] == 0.0 and r["pushed"] <= 3.3  # stopped with zero force; never beyond the arm's limit [N]
+
+
+def test_another_thread_stops_a_run_with_a_servo_stop_token():
+    token = hf.ServoStop()
+    assert not token.requested and not token.running
+    done = []
+    worker = threading.Thread(target=lambda: done.append(
+        hf.run_servo(hf.plane_contact([]), seconds=3600.0, clock="wall", stop=token)))
+    worker.start()
+    waited = 0.0
+    while not token.running and worker.is_alive() and waited < 60.0:  # [s] generous, whatever the load
+        threading.Event().wait(0.01)
+        waited += 0.01
+    assert token.running
+    token.request()
+    worker.join(timeout=10.0)
+    assert not worker.is_alive() and not token.running
+    r = done[0]
+    assert r["stop_reason"] == "requested" and r["statistics"]["ticks"] == len(r["trace"]["t"]) > 0
+    assert np.linalg.norm(r["trace"]["force"][-1]) == 0.0
+    assert token.requested  # a token stays requested: it ends any run it is given until cleared
+    again = hf.run_servo(hf.zero(), seconds=1.0, stop=token)
+    assert again["stop_reason"] == "requested" and again["statistics"]["ticks"] == 0
+    token.clear()
+    assert hf.run_servo(hf.zero(), seconds=0.01, stop=token)["stop_reason"] == "tick_limit"
+
+
+def test_the_servo_clocks_example_runs():
+    # Only what holds under any load: the virtual runs repeat, the token stops the hour-long run.
+    r = subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "..", "examples", "servo_clocks.py"),
+                        "--seconds", "0.3"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "virtual runs equal bit for bit: True" in r.stdout and "stop requested" in r.stdout
+    assert "last commanded force 0.000 N" in r.stdout
 
 
 # --- bad input ------------------------------------------------------------------
@@ -299,6 +407,10 @@ def test_the_gil_is_released_while_the_loop_runs():
     (lambda: hf.run_servo(hf.zero(), seconds=0.0), ValueError, "seconds"),
     (lambda: hf.run_servo(hf.zero(), device="usb"), ValueError, "device"),
     (lambda: hf.run_servo(hf.zero(), device="hid"), ValueError, "hid"),
+    (lambda: hf.run_servo(hf.zero(), device="hid", clock="virtual", confirm_hardware=True), ValueError,
+     "virtual clock.*real arm"),
+    (lambda: hf.run_servo(hf.zero(), clock="sundial"), ValueError, "clock: unknown 'sundial'"),
+    (lambda: hf.run_servo(hf.zero(), clock="virtual", realtime="best_effort"), ValueError, "realtime"),
 ])
 def test_bad_input_raises_with_the_library_message(call, error, message):
     with pytest.raises(error, match=message):

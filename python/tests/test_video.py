@@ -6,6 +6,7 @@ disc on black.
 """
 import os
 import subprocess
+import sys
 import time
 
 import numpy as np
@@ -117,14 +118,31 @@ def test_playback_controls_move_the_video_time(clip):
 def test_run_servo_on_a_video_field_gives_forces_and_statistics(clip):
     video = hf.video_field(clip, workspace_mm=60.0, gain=1.0, loop=True, **PLAIN)
     scene = hf.plane_contact([video], stiffness=1500.0)
+    # The virtual clock (the simulated arm's default), the video in lockstep: every tick waits for its frame.
     result = hf.run_servo(scene, seconds=0.6, rate=1000.0, hand="raster", hand_size=0.02)
     assert result["statistics"]["ticks"] == 600
     tangential = np.linalg.norm(result["trace"]["force"][:, :2], axis=1)
     assert np.max(tangential) > 0.05  # the video's edges were felt [N]
     s = video.statistics()
-    assert s["prepared"] > 0 and s["published"] > 0 and s["video_time_s"] > 0.3
-    assert video.error() == ""
+    assert s["prepared"] >= 15 and s["published"] >= 14 and s["dropped"] == 0  # every frame of 0.6 s came
+    assert 0.59 < s["video_time_s"] < 0.6  # the last tick's
+    assert video.error() == "" and not video.lockstep  # lockstep for the run only
     video.stop()
+
+
+def test_a_virtual_run_on_a_video_field_renders_the_same_forces_every_time(clip):
+    def scene(video):
+        return hf.plane_contact([video, hf.friction(coulomb=0.2)], stiffness=1500.0)
+
+    first_video = hf.video_field(clip, workspace_mm=60.0, gain=1.0, **PLAIN)
+    runs = [hf.run_servo(scene(first_video), seconds=0.7, hand="circle", hand_size=0.03),  # past the cut
+            hf.run_servo(scene(hf.video_field(clip, workspace_mm=60.0, gain=1.0, **PLAIN)), seconds=0.7,
+                         hand="circle", hand_size=0.03),
+            hf.run_servo(scene(first_video), seconds=0.7, hand="circle", hand_size=0.03)]  # the same field again
+    for other in runs[1:]:
+        np.testing.assert_array_equal(runs[0]["trace"]["force"], other["trace"]["force"])
+    assert np.max(np.linalg.norm(runs[0]["trace"]["force"][:, :2], axis=1)) > 0.05
+    assert first_video.statistics()["dropped"] == 0
 
 
 def test_a_frame_smaller_than_the_mask_is_the_workers_error(tmp_path):
@@ -178,3 +196,49 @@ def test_a_file_that_is_not_a_video(tmp_path):
         hf.video_field(str(bad))
     with pytest.raises(OSError):
         hf.video_forces(str(bad), [0.0], [[0.0, 0.0]])
+
+
+# --- FFmpeg's own log lines ------------------------------------------------------
+
+OPENCV_DOC = "/usr/share/doc/opencv-doc/examples/data"
+
+# Opens each clip with the three video calls; prints nothing itself on stderr.
+OPEN_CLIPS = """
+import sys, time
+import numpy as np
+import hapticfield as hf
+for path in sys.argv[1:]:
+    for call in (lambda: hf.video_cuts(path),
+                 lambda: hf.video_forces(path, np.linspace(0.0, 3.0, 40), np.full((40, 2), 30.0), size=5),
+                 lambda: hf.video_field(path, size=5).forces(np.zeros((2000, 3)))):
+        try:
+            call()
+        except (hf.Error, ValueError) as e:
+            print("raised:", e)
+"""
+
+
+def damaged_copy(source, target, seed):
+    """source with 5000 bytes past its headers overwritten at random: decoder errors on most frames."""
+    data = bytearray(open(source, "rb").read())
+    rng = np.random.default_rng(seed)
+    for k in rng.integers(10000, len(data), 5000):
+        data[k] = rng.integers(0, 256)
+    target.write_bytes(bytes(data))
+    return str(target)
+
+
+@pytest.mark.skipif(not os.path.exists(OPENCV_DOC + "/Megamind_bugy.avi"), reason="opencv-doc's clips not installed")
+def test_damaged_and_odd_clips_leave_stderr_free_of_ffmpeg_lines(tmp_path):
+    clips = [OPENCV_DOC + "/Megamind_bugy.avi",                                      # damaged as shipped
+             damaged_copy(OPENCV_DOC + "/Megamind_bugy.avi", tmp_path / "damaged.avi", 5),
+             damaged_copy(OPENCV_DOC + "/Megamind.avi", tmp_path / "damaged2.avi", 7)]
+    (tmp_path / "truncated.avi").write_bytes(open(OPENCV_DOC + "/Megamind.avi", "rb").read()[:3000])
+    (tmp_path / "text.avi").write_text("not a video\n")
+    clips += [str(tmp_path / "truncated.avi"), str(tmp_path / "text.avi")]
+    env = {k: v for k, v in os.environ.items() if not k.startswith("OPENCV_")}  # the defaults, as a user has them
+    r = subprocess.run([sys.executable, "-c", OPEN_CLIPS, *clips], capture_output=True, text=True, env=env,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.count("raised:") >= 6  # the truncated and the text file were refused, with our message
+    assert r.stderr == "", r.stderr[:2000]  # no "[mpeg4 @ 0x...] ac-tex damaged" and the like

@@ -3,6 +3,11 @@
 /// PlaybackClock: video time from the servo loop's clock, with pause, seek,
 /// a playback rate and looping. The controls may be called from any thread
 /// (atomics); at() runs on the servo thread: noexcept, no allocation, no lock.
+///
+/// A run starts at the configured start: at the first tick, at the first
+/// tick after restart(), and at a tick whose loop time goes back (the loop's
+/// clock restarted, a second run from 0): each starts a new epoch, so a
+/// worker that follows epoch() seeks there.
 
 #include <algorithm>
 #include <atomic>
@@ -48,6 +53,8 @@ class PlaybackClock {
     seek_to_.store(std::clamp(t, 0.0, config_.duration));
     seek_serial_.fetch_add(1);
   }
+  /// Starts again at the configured start at the next tick (a new epoch).
+  void restart() noexcept { restart_serial_.fetch_add(1, std::memory_order_release); }
   /// @throws std::invalid_argument for a rate outside (0, 16].
   void set_rate(double rate) {
     if (!std::isfinite(rate) || rate <= 0.0 || rate > max_playback_rate)
@@ -62,6 +69,13 @@ class PlaybackClock {
     const bool paused = paused_.load(std::memory_order_relaxed);
     const double rate = rate_.load(std::memory_order_relaxed);
     const std::uint32_t serial = seek_serial_.load(std::memory_order_acquire);
+    const std::uint32_t restart = restart_serial_.load(std::memory_order_acquire);
+    if (anchored_ && (restart != applied_restart_ || now < last_now_)) {  // a new run: from the start
+      anchored_ = false;
+      epoch_.fetch_add(1, std::memory_order_release);
+    }
+    applied_restart_ = restart;
+    last_now_ = now;
     if (!anchored_) {
       anchored_ = true;
       anchor_loop_ = now;
@@ -107,9 +121,12 @@ class PlaybackClock {
   std::atomic<double> rate_{1.0};
   std::atomic<double> seek_to_{0.0};
   std::atomic<std::uint32_t> seek_serial_{0};
+  std::atomic<std::uint32_t> restart_serial_{0};
   std::atomic<std::uint32_t> epoch_{0};
   // servo-thread state
   bool anchored_ = false;
+  std::uint32_t applied_restart_ = 0;
+  double last_now_ = 0.0;  ///< the last tick's loop time [s]
   bool applied_paused_ = false;
   double applied_rate_ = 1.0;
   std::uint32_t applied_serial_ = 0;

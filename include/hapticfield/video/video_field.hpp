@@ -13,6 +13,13 @@
 /// (except by an explicit seek or loop). A live camera blends the previous
 /// and the newest frame, one frame late.
 ///
+/// Lockstep (set_lockstep(true)) is for loops on a simulated clock
+/// (VirtualClock, offline evaluation): force() then waits, spinning with
+/// yield, until the worker has published the window that covers the tick's
+/// video time (or the stream ended, or the worker stopped), and the worker
+/// drops no frame for lateness. The forces of a simulated run are then the
+/// same on a slow and a fast machine. A real-time loop never sets it.
+///
 /// For a display (a viewer showing the frame under the probe), the worker
 /// can keep copies of the newest decoded frames (VideoFieldConfig::
 /// display_frames); display_frame(t) returns the newest kept frame at or
@@ -23,6 +30,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -65,7 +73,14 @@ inline constexpr int max_display_frames = 64;
 struct WindowField {
   FrameWindow window;
   PlaneMapping mapping;
-  double gain = 1.0;  ///< force at a black/white edge [N]
+  double gain = 1.0;        ///< force at a black/white edge [N]
+  std::uint32_t epoch = 0;  ///< the playback epoch (seeks, loops) it was made for
+
+  /// True when this is the window the worker publishes for video time t in
+  /// epoch e: the next one comes out once t reaches t1 (see VideoField).
+  [[nodiscard]] bool covers(double t, std::uint32_t e) const noexcept {
+    return epoch == e && t >= window.t0 - 1e-9 && t < window.t1 - 1e-9;
+  }
 
   [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept {
     if (!is_finite(probe.position)) return glm::dvec3{0.0};
@@ -113,14 +128,41 @@ class VideoField {
   }
 
   /// Force on the HIP [N] at the loop time probe.time [s]: servo thread only.
+  /// In lockstep it first waits for the worker (see set_lockstep()).
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
     State& s = *state_;
     const double t = s.clock.at(probe.time);
+    const std::uint32_t epoch = s.clock.epoch();  // only at() changes it, on this thread
     s.video_time.store(t, std::memory_order_release);
+    s.tick_epoch.store(epoch, std::memory_order_release);
+    const WindowField* w = s.windows.acquire();
+    if (s.lockstep.load(std::memory_order_relaxed) && !s.live_source) {
+      // (a window of this epoch already past t: none will come, do not wait)
+      while (!(w && (w->covers(t, epoch) || (w->epoch == epoch && t < w->window.t0))) && !s.idle(epoch)) {
+        std::this_thread::yield();
+        w = s.windows.acquire();
+      }
+      if (w && w->epoch != epoch) w = nullptr;  // nothing for this epoch: the stream ended before t
+    }
+    if (!w) return glm::dvec3{0.0};
     Probe on = probe;
     on.time = t;
-    return s.live.force(on);
+    return w->force(on);
   }
+
+  /// Lockstep with a simulated clock, from any thread: while on, force()
+  /// waits until the worker has published the window that covers the
+  /// tick's video time (or the stream ended, the worker stopped or failed),
+  /// and the worker never drops a frame for lateness. For loops on a
+  /// VirtualClock only: a real-time loop would stall on a slow worker. A
+  /// camera (a live source) is real time by nature: lockstep does nothing.
+  void set_lockstep(bool on) noexcept { state_->lockstep.store(on); }
+  [[nodiscard]] bool lockstep() const noexcept { return state_->lockstep.load(); }
+
+  /// A new run from the configured start at the next tick (a new epoch: the
+  /// worker seeks there); any thread. A tick whose loop time goes back (the
+  /// loop's clock restarted) does the same by itself.
+  void reset() noexcept { state_->clock.restart(); }
 
   /// Playback controls, from any thread.
   [[nodiscard]] PlaybackClock& playback() noexcept { return state_->clock; }
@@ -180,6 +222,7 @@ class VideoField {
           builder(config.fade),
           clock(playback_config(*source, config.playback)),
           fps(source->fps()),
+          live_source(source->live()),
           width(source->width()),
           height(source->height()) {
       if (!std::isfinite(config.gain) || config.gain < 0.0)
@@ -200,8 +243,15 @@ class VideoField {
       if (worker.joinable()) worker.join();
     }
 
-    void publish(const FrameWindow& w) {
-      live.publish(WindowField{w, mapping, config.gain});
+    /// Nothing more comes for epoch e: the worker is done (stopped, failed)
+    /// or reached the end of the stream in that epoch.
+    [[nodiscard]] bool idle(std::uint32_t e) const noexcept {
+      return done.load(std::memory_order_acquire) || stop.load(std::memory_order_relaxed) ||
+             ended_epoch.load(std::memory_order_acquire) == static_cast<std::int64_t>(e);
+    }
+
+    void publish(const FrameWindow& w, std::uint32_t epoch) {
+      (void)windows.publish(std::make_unique<WindowField>(WindowField{w, mapping, config.gain, epoch}));
       published.fetch_add(1);
     }
 
@@ -240,17 +290,20 @@ class VideoField {
         error = "unknown error";
       }
       ended.store(true);
+      done.store(true, std::memory_order_release);
     }
 
     void run_file() {
       std::optional<FrameWindow> pending;
-      std::uint32_t epoch = clock.epoch();
+      // The servo thread stores a tick's video time, then its epoch: once
+      // the worker sees an epoch, video_time is at least that tick's.
+      std::uint32_t epoch = tick_epoch.load(std::memory_order_acquire);
       bool end = false;
       bool have_frame = false;
       cv::Mat image;
-      if (config.playback.start > 0.0) source->seek(static_cast<long>(std::floor(config.playback.start * fps)));
+      if (config.playback.start > 0.0) source->seek(static_cast<long>(std::floor(config.playback.start * fps + 1e-9)));
       while (!stop.load()) {
-        if (const std::uint32_t e = clock.epoch(); e != epoch) {  // a seek or a loop
+        if (const std::uint32_t e = tick_epoch.load(std::memory_order_acquire); e != epoch) {  // a seek or a loop
           epoch = e;
           const double t = video_time.load(std::memory_order_acquire);
           source->seek(static_cast<long>(std::floor(t * fps + 1e-9)));
@@ -269,10 +322,11 @@ class VideoField {
             bad.store(source->bad_frames());
             pending = builder.last();
             ended.store(true);
+            if (!pending) ended_epoch.store(epoch, std::memory_order_release);
             continue;
           }
           bad.store(source->bad_frames());
-          if (have_frame && source->time_of(index + 1) <= t) {  // its successor is already due
+          if (have_frame && !lockstep.load() && source->time_of(index + 1) <= t) {  // its successor is already due
             dropped.fetch_add(1);
             continue;
           }
@@ -286,8 +340,9 @@ class VideoField {
           continue;
         }
         if (pending && t >= pending->t0 - 1e-9) {
-          publish(*pending);
+          publish(*pending, epoch);
           pending.reset();
+          if (end) ended_epoch.store(epoch, std::memory_order_release);  // the last window is out
           continue;
         }
         std::this_thread::sleep_for(std::chrono::microseconds(200));
@@ -307,7 +362,7 @@ class VideoField {
         std::shared_ptr<const VideoFrame> f = preparer.prepare(image, index, now);
         prepared.fetch_add(1);
         if (f->cut) record_cut(*f);
-        publish(builder.push_live(std::move(f), now, period));
+        publish(builder.push_live(std::move(f), now, period), tick_epoch.load(std::memory_order_acquire));
       }
     }
 
@@ -318,10 +373,16 @@ class VideoField {
     WindowBuilder builder;
     PlaybackClock clock;
     double fps;
+    bool live_source;
     int width;
     int height;
-    LiveField<WindowField> live;
+    /// The windows, worker to servo thread; old ones come back to the worker.
+    TripleBuffer<WindowField> windows;
     std::atomic<double> video_time{0.0};
+    std::atomic<std::uint32_t> tick_epoch{0};   ///< the playback epoch of the latest tick
+    std::atomic<std::int64_t> ended_epoch{-1};  ///< the epoch whose stream ended with nothing left to publish
+    std::atomic<bool> lockstep{false};
+    std::atomic<bool> done{false};  ///< the worker returned (stopped or failed)
     std::atomic<bool> stop{false};
     std::atomic<bool> ended{false};
     std::atomic<long> prepared{0}, dropped{0}, bad{0}, published{0}, cut_count{0};
@@ -337,5 +398,6 @@ class VideoField {
 };
 
 static_assert(HapticField<VideoField>);
+static_assert(ResettableField<VideoField>);
 
 }  // namespace hapticfield

@@ -1,6 +1,7 @@
 """Counts the allocation calls of run_servo on this thread (run under LD_PRELOAD=alloc_counter.so).
 
     servo_allocations.py SCENE [--clip PATTERN] [--hatt MODEL] [--coffee PNG] [--short S] [--long S] [--pairs N]
+                         [--clock virtual|wall]
 
 Builds SCENE (full: plane contact with a tangible image, a lattice texture,
 friction, a HaTT texture and a video; allocating: the test-only field that
@@ -8,6 +9,8 @@ allocates every tick), warms up, then runs the loop for S_short and S_long
 seconds, N times each, and prints one JSON line: for each run its ticks and
 the malloc/free calls made on this thread: by the whole run_servo call, and
 by the loop alone (run_servo reports those when this counter is preloaded).
+The loop runs on the virtual clock unless --clock wall: what it renders (and
+so which ticks evaluate the field) does not depend on how busy the machine is.
 """
 import argparse
 import ctypes
@@ -42,14 +45,15 @@ def main():
     p.add_argument("--short", type=float, default=0.5)
     p.add_argument("--long", type=float, default=2.5)
     p.add_argument("--pairs", type=int, default=1)
+    p.add_argument("--clock", choices=["virtual", "wall"], default="virtual")
     a = p.parse_args()
     field = scene(a)
-    hf.run_servo(field, seconds=0.3)  # warm-up: first-use allocations (lazy tables, caches)
+    hf.run_servo(field, seconds=0.3, clock=a.clock)  # warm-up: first-use allocations (lazy tables, caches)
     runs = []
     for _ in range(a.pairs):
         for seconds in (a.short, a.long):
             counter.hapticfield_count_here(1)
-            result = hf.run_servo(field, seconds=seconds)
+            result = hf.run_servo(field, seconds=seconds, clock=a.clock)
             runs.append({"seconds": seconds, "ticks": result["statistics"]["ticks"],
                          "malloc": counter.hapticfield_malloc_calls(), "free": counter.hapticfield_free_calls(),
                          "peak_force_n": result["statistics"]["peak_force_n"],
