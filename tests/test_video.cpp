@@ -650,6 +650,25 @@ TEST_CASE("bad video input is one clear error, and a damaged stream plays what d
 
   // Bad settings.
   CHECK_THROWS_AS(WindowBuilder(-1.0), std::invalid_argument);
+  // A start past the end of the video, in the clock and in the field (from the source's duration).
+  CHECK_THROWS_AS(PlaybackClock(PlaybackConfig{.start = 5.0, .duration = 2.0}), std::invalid_argument);
+  CHECK_NOTHROW(PlaybackClock(PlaybackConfig{.start = 2.0, .duration = 2.0}));
+  {
+    const std::string seq = write_sequence("short", {scene_frame(0, 0), scene_frame(0, 1), scene_frame(0, 2)});
+    VideoFieldConfig c;
+    c.prepare = plain_config();
+    for (const double start : {1e9, 0.2}) {  // 3 frames at 25 fps: 0.12 s
+      c.playback.start = start;
+      CAPTURE(start);
+      try {
+        VideoField f(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}),
+                     PlaneMapping(1.0, glm::dvec2{48.0, 32.0}), c);
+        FAIL("a start past the end was accepted");
+      } catch (const std::invalid_argument& e) {
+        CHECK(std::string(e.what()).find("past the end") != std::string::npos);
+      }
+    }
+  }
   CHECK_THROWS_AS(FrameDenoiser(DenoiseConfig{.weight = 0.0}), std::invalid_argument);
   CHECK_THROWS_AS(SceneCutDetector(SceneCutConfig{.ratio = 0.5}), std::invalid_argument);
   CHECK_THROWS_AS(PlaybackClock(PlaybackConfig{.rate = -1.0}), std::invalid_argument);

@@ -116,7 +116,9 @@ struct VideoStatistics {
 class VideoField {
  public:
   /// Starts the worker thread on `source`.
-  /// @throws std::invalid_argument for a bad gain, fade, mask or playback setting.
+  /// @throws std::invalid_argument for a bad gain, fade, mask or playback
+  ///         setting, or a start past the end of a file (its duration from
+  ///         the source when the config leaves it infinite).
   VideoField(std::unique_ptr<VideoSource> source, PlaneMapping mapping, VideoFieldConfig config)
       : state_(std::make_unique<State>(std::move(source), mapping, std::move(config))) {
     state_->worker = std::thread([s = state_.get()] { s->run(); });
