@@ -650,6 +650,23 @@ TEST_CASE("bad video input is one clear error, and a damaged stream plays what d
 
   // Bad settings.
   CHECK_THROWS_AS(WindowBuilder(-1.0), std::invalid_argument);
+  // Frames smaller than the mask: refused when the field or the timeline is made, not by the worker later.
+  {
+    const std::string small = write_sequence("small", {cv::Mat(12, 16, CV_8UC3, cv::Scalar::all(90))});
+    VideoSource source(small);
+    for (const int size : {13, 17}) {
+      CAPTURE(size);
+      try {
+        VideoField f(std::make_unique<VideoSource>(small), PlaneMapping(1.0, glm::dvec2{8.0, 6.0}),
+                     VideoFieldConfig{.prepare = plain_config(size)});
+        FAIL("a clip smaller than the mask was accepted");
+      } catch (const std::invalid_argument& e) {
+        CHECK(std::string(e.what()).find("(16 x 12 px) are smaller than the") != std::string::npos);
+      }
+      CHECK_THROWS_AS(VideoTimeline(source, plain_config(size)), std::invalid_argument);
+    }
+    CHECK_NOTHROW(VideoTimeline(source, plain_config(11)));
+  }
   // A start past the end of the video, in the clock and in the field (from the source's duration).
   CHECK_THROWS_AS(PlaybackClock(PlaybackConfig{.start = 5.0, .duration = 2.0}), std::invalid_argument);
   CHECK_NOTHROW(PlaybackClock(PlaybackConfig{.start = 2.0, .duration = 2.0}));
@@ -793,8 +810,11 @@ TEST_CASE("image sequences: 25 fps unless given, whichever decoder reads the pic
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::vector<cv::Mat> frames = six_frames();
-  for (std::size_t k = 0; k < frames.size(); ++k)
-    REQUIRE(cv::imwrite((dir / ("f" + std::to_string(k) + ".sr")).string(), frames[k]));
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    char file[32];
+    std::snprintf(file, sizeof file, "f%zu.sr", k);
+    REQUIRE(cv::imwrite((dir / file).string(), frames[k]));
+  }
   VideoSource source((dir / "f%d.sr").string());
   CHECK(source.fps() == 25.0);
   CHECK(source.frame_count() == 6);
