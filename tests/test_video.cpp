@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <random>
 #include <string>
@@ -854,6 +855,44 @@ TEST_CASE("image sequences: a bad pattern is refused at once, with what is wrong
   REQUIRE(cv::imwrite((wide / "50%_000000008.png").string(), scene_frame(0, 0)));
   CHECK(VideoSource((wide / "%09d.png").string()).frame_count() == 1);
   CHECK(VideoSource((wide / "50%%_%09d.png").string()).frame_count() == 1);
+}
+
+TEST_CASE("a file that claims more frames than it holds ends cleanly: no frame reported undecodable", "[video][vfr]") {
+  // A variable-rate file's frame count is an estimate (duration x mean
+  // rate): here an MJPG clip of 20 clean frames whose AVI headers claim 40.
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 20; ++k)
+    frames.push_back(scene_frame(0, k));
+  const std::string clip = write_mjpg("claims_more", frames, 25.0);
+  {
+    std::string bytes;
+    {
+      std::ifstream in(clip, std::ios::binary);
+      bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    const auto put32 = [&bytes](std::size_t at, std::uint32_t v) {
+      REQUIRE(at + 4 <= bytes.size());
+      for (int i = 0; i < 4; ++i)
+        bytes[at + static_cast<std::size_t>(i)] = static_cast<char>((v >> (8 * i)) & 0xff);
+    };
+    const std::size_t avih = bytes.find("avih"), strh = bytes.find("strh");
+    REQUIRE(avih != std::string::npos);
+    REQUIRE(strh != std::string::npos);
+    put32(avih + 8 + 16, 40);  // MainAVIHeader::dwTotalFrames
+    put32(strh + 8 + 32, 40);  // AVIStreamHeader::dwLength
+    std::ofstream(clip, std::ios::binary) << bytes;
+  }
+  VideoSource source(clip);
+  REQUIRE(source.frame_count() == 40);  // as claimed
+  cv::Mat image;
+  long index = 0, read = 0;
+  while (source.read(image, index)) {
+    CHECK(index == read);
+    ++read;
+  }
+  CHECK(read == 20);
+  CHECK(source.bad_frames() == 0);
+  CHECK_FALSE(source.variable_rate());  // its timestamps are k / fps
 }
 
 TEST_CASE("video frames above the pixel limit are refused before they are decoded", "[video][bad]") {
