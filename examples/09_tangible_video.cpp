@@ -4,7 +4,7 @@
 //                  [--border suspend|clamp|reflect|fade] [--denoise none|temporal|spatial|both]
 //                  [--fade-ms MS] [--cuts OUT.csv] [--probes IN.csv --forces OUT.csv]
 //                  [--seconds S] [--device sim|hid[:VID:PID]] [--clock wall|virtual]
-//                  [--trace OUT.csv] [--plots DIR] [--verbose]
+//                  [--trace OUT.csv] [--plots DIR] [--max-mpx N] [--verbose]
 //
 // With --probes it renders offline, as fast as it can: t,x,y per line (t in
 // seconds of video time, frame k at k / fps; x, y in pixels as
@@ -21,6 +21,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -76,6 +77,8 @@ constexpr const char* usage =
     "                        machine)\n"
     "  --trace OUT.csv       write t, position [m], force [N] per tick (play mode)\n"
     "  --plots DIR           write force.png (play mode) or forces.png (probe mode) into DIR\n"
+    "  --max-mpx N           largest frame accepted [megapixels], in (0, 1e6] (default 100),\n"
+    "                        checked before any frame is decoded\n"
     "  --verbose             let OpenCV's and FFmpeg's own log lines through\n"
     "  -h, --help            this text\n"
     "Exit status: 0 done, 1 bad input (files, videos, devices), 2 usage error.\n";
@@ -89,7 +92,8 @@ struct Arguments {
   std::optional<std::string> cuts, probes, forces, trace, plots;
   std::optional<double> seconds;
   std::string device{"sim"};
-  std::optional<std::string> clock;  ///< "wall" or "virtual"; given or not
+  std::optional<std::string> clock;                   ///< "wall" or "virtual"; given or not
+  std::uint64_t max_pixels = hf::default_max_pixels;  ///< largest frame decoded [px]
   bool verbose = false;
 };
 
@@ -133,6 +137,8 @@ Arguments parse(hf::cli::Parser& p) {
       a.trace = p.output_file();
     } else if (p.is("--plots")) {
       a.plots = p.output_dir();
+    } else if (p.is("--max-mpx")) {
+      a.max_pixels = static_cast<std::uint64_t>(p.real(hf::cli::open_closed(0.0, 1e6)) * 1e6);
     } else if (p.is("--verbose")) {
       a.verbose = true;
     } else if (p.positional() && a.video.empty()) {
@@ -162,9 +168,17 @@ Arguments parse(hf::cli::Parser& p) {
 }
 
 std::unique_ptr<hf::VideoSource> open_source(const Arguments& a) {
+  const hf::VideoSourceConfig config{.max_pixels = a.max_pixels};
   if (a.video.rfind("camera:", 0) == 0)
-    return std::make_unique<hf::VideoSource>(static_cast<int>(std::stol(a.video.substr(7))));
-  return std::make_unique<hf::VideoSource>(a.video);
+    return std::make_unique<hf::VideoSource>(static_cast<int>(std::stol(a.video.substr(7))), config);
+  return std::make_unique<hf::VideoSource>(a.video, config);
+}
+
+void warn_variable_rate(const std::string& name) {
+  std::printf(
+      "warning: '%s' has a variable frame rate: frame k is felt at k / fps, which strays from the file's own "
+      "timestamps\n",
+      name.c_str());
 }
 
 hf::PrepareConfig prepare_config(const Arguments& a) {
@@ -243,6 +257,7 @@ int run_probes(const Arguments& a) {
   std::printf("%s: %d x %d px at %.3f fps, %ld frames prepared in %.2f s, %zu cuts, %ld undecodable frames\n",
               a.video.c_str(), source->width(), source->height(), source->fps(), timeline.prepared(), seconds,
               timeline.cuts().size(), source->bad_frames());
+  if (source->variable_rate()) warn_variable_rate(a.video);
   std::printf("forces at %zu probes written to %s\n", rows.size(), a.forces->c_str());
   if (a.cuts) {
     write_cuts(*a.cuts, timeline.cuts());
@@ -355,7 +370,8 @@ int run_play(const Arguments& a) {
   for (const hf::SceneCut& c : cuts)
     std::printf(" %ld (%.3f s)", c.frame, c.time);
   std::printf("\n");
-  if (const std::string e = video_ptr->error(); !e.empty()) std::printf("the video stopped early: %s\n", e.c_str());
+  if (v.variable_rate) warn_variable_rate(name);
+  const std::string stopped = video_ptr->error();
   if (a.cuts) {
     write_cuts(*a.cuts, cuts);
     std::printf("cuts: %s\n", a.cuts->c_str());
@@ -378,6 +394,8 @@ int run_play(const Arguments& a) {
     plot_forces(*a.plots + "/force.png", plot, {});
     std::printf("plots: %s/force.png\n", a.plots->c_str());
   }
+  // The worker failed on a frame (bad input): one line on stderr, exit 1.
+  if (!stopped.empty()) throw hf::VideoError("the video stopped early: " + stopped);
   return 0;
 }
 

@@ -81,6 +81,8 @@ constexpr const char* usage_text =
     "  --from S             start at video time S [s], in [0, the video's length] (default 0)\n"
     "  --loop               start again at 0 after the end (default: hold the last frame)\n"
     "  --fade-ms MS         fade out and in across a scene cut [ms], in [0, 10000] (default 100)\n"
+    "  --max-mpx N          largest picture or video frame accepted [megapixels], in (0, 1e6]\n"
+    "                       (default 100), checked before decoding\n"
     "normals from a picture (Kim & Kwon):\n"
     "  --face CORNERS       \"x1,y1 x2,y2 x3,y3 x4,y4\" [px] around a planar face; repeat per face\n"
     "  --focal F            focal length [px] in [1, 1e6] (default: a 60 degree field of view)\n"
@@ -109,7 +111,8 @@ struct Arguments {
   bool kind_given{false};
   bool blur_given{false};  ///< --denoise with a sigma above 0 (pictures)
   VideoPlayerConfig video;
-  std::vector<std::string> video_only;  ///< the video-only options given
+  std::vector<std::string> video_only;           ///< the video-only options given
+  std::uint64_t max_pixels{default_max_pixels};  ///< largest picture or frame decoded [px]
   std::string device{"mouse"};
   std::optional<glm::dvec2> start;
   double rate{1000.0};
@@ -132,12 +135,12 @@ std::optional<DenoiseMode> denoise_mode(const std::string& v) {
 /// A still picture (else a video): by the name's ending, or by the file's
 /// first bytes when a picture decoder knows them.
 bool is_still_picture(const std::string& path) {
+  if (path.find('%') != std::string::npos) return false;  // an image sequence, whatever its files are
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   for (const char* e : {".png", ".jpg", ".jpeg", ".jpe", ".bmp", ".dib", ".tif", ".tiff", ".webp", ".pgm", ".ppm",
                         ".pbm", ".pnm", ".pxm",  ".pfm", ".sr",  ".ras", ".exr", ".hdr",  ".pic",  ".jp2"})
     if (ext == e) return true;
-  if (path.find('%') != std::string::npos) return false;  // an image sequence
   try {
     return std::filesystem::is_regular_file(path) && cv::haveImageReader(path);
   } catch (const std::exception&) {
@@ -208,6 +211,9 @@ Arguments parse(cli::Parser& p) {
     } else if (p.is("--fade-ms")) {
       o.video.fade = p.real(cli::closed(0.0, 10000.0)) * 1e-3;
       o.video_only.emplace_back("--fade-ms");
+    } else if (p.is("--max-mpx")) {
+      o.max_pixels = static_cast<std::uint64_t>(p.real(cli::open_closed(0.0, 1e6)) * 1e6);
+      o.video.max_pixels = o.max_pixels;
     } else if (p.is("--gain")) {
       o.scene.gain = p.real(cli::closed(0.0, 10.0));
     } else if (p.is("--face")) {
@@ -514,7 +520,7 @@ int run(const Arguments& o) {
   std::optional<VideoPlayer> video;
   cv::Mat picture;
   if (still) {
-    picture = cli::load_bgr8(o.source);
+    picture = cli::to_bgr8(cli::quiet_stderr([&] { return load_image(o.source, o.max_pixels); }));
   } else {
     quiet_video_logs(false);
     video.emplace(o.source, o.video);

@@ -201,6 +201,19 @@ void add_numeric(std::vector<Case>& cases, const std::string& tool, std::vector<
 
 const std::string face = "10,10 50,10 50,30 10,30";
 
+#ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
+/// A 4-frame MJPG clip of 16 x 12 px at 10 fps: smaller than the default 17 x 17 mask.
+std::string make_tiny_clip() {
+  const std::string path = in_tmp("tiny.avi");
+  cv::VideoWriter w(path, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(16, 12));
+  REQUIRE(w.isOpened());
+  for (int k = 0; k < 4; ++k)
+    w.write(cv::Mat(12, 16, CV_8UC3, cv::Scalar::all(40 * k)));
+  w.release();
+  return path;
+}
+#endif
+
 }  // namespace
 
 TEST_CASE("--help: usage on stdout, nothing on stderr, exit 0") {
@@ -550,6 +563,13 @@ TEST_CASE("hapticfield_view --field video: video options on a picture, bad video
   add_numeric(cases, "hapticfield_view", {clip}, "--from", {"0"}, "", "", offscreen);
   add_numeric(cases, "hapticfield_view", {clip}, "--fade-ms", {"0"}, "", "", offscreen);
   cases.push_back({"hapticfield_view", with(clip, {"--speed", "17"}), usage, "(0, 16]"});
+  add_numeric(cases, "hapticfield_view", {clip}, "--max-mpx", {}, "", "", offscreen);
+  cases.push_back({"hapticfield_view", with(clip, {"--max-mpx", "0.001"}), bad_input,
+                   "64 x 48 px (3072 px), larger than the limit of 1000 px"});
+  cases.push_back({"hapticfield_view", with(picture, {"--max-mpx", "0.001"}), bad_input, "larger than the limit"});
+  cases.push_back(
+      {"hapticfield_view", with(make_tiny_clip(), {}), bad_input, "(16 x 12 px) are smaller than the 17 x 17 mask"});
+  cases.push_back({"hapticfield_view", with(in_tmp("%999999999d.png"), {}), bad_input, "at most 9"});
   for (const Case& c : cases)
     check_error(c);
   CHECK_FALSE(fs::exists(shot));  // no case drew anything
@@ -557,6 +577,25 @@ TEST_CASE("hapticfield_view --field video: video options on a picture, bad video
   const Result r = run("hapticfield_view", with(clip, {"--from", "0.5", "--loop"}));
   CAPTURE(r.out, r.err);
   CHECK(r.status == ok);
+  CHECK(r.out.find("frame 5 shown") != std::string::npos);
+  CHECK(fs::exists(shot));
+}
+
+TEST_CASE("hapticfield_view opens an image sequence (a pattern ending in .png is not a still picture)") {
+  const fs::path dir = tmp / "view_sequence";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (int k = 0; k < 10; ++k)
+    REQUIRE(cv::imwrite((dir / (std::to_string(100 + k).substr(1) + ".png")).string(),
+                        cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(20 * k))));
+  const std::string shot = in_tmp("view_sequence.png");
+  fs::remove(shot);
+  // 10 frames at 25 fps; from 0.2 s: frame 5
+  const Result r = run("hapticfield_view",
+                       {(dir / "%02d.png").string(), "--from", "0.2", "--seconds", "0.01", "--screenshot", shot});
+  CAPTURE(r.out, r.err);
+  CHECK(r.status == ok);
+  CHECK(r.err.empty());
   CHECK(r.out.find("frame 5 shown") != std::string::npos);
   CHECK(fs::exists(shot));
 }
@@ -611,6 +650,21 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
   add_numeric(cases, "tangible_video", {clip}, "--size");
   add_numeric(cases, "tangible_video", {clip}, "--fade-ms", {"0"});
   add_numeric(cases, "tangible_video", {clip}, "--seconds");
+  add_numeric(cases, "tangible_video", {clip}, "--max-mpx");
+  // frames above --max-mpx, refused before decoding; a clip smaller than the mask, in both modes; a
+  // sequence pattern wider than %09d, refused at once
+  const std::string tiny = make_tiny_clip();
+  for (const std::vector<std::string>& mode : {std::vector<std::string>{}, {"--probes", probes, "--forces", forces}}) {
+    std::vector<std::string> args = {clip, "--max-mpx", "0.001"};
+    args.insert(args.end(), mode.begin(), mode.end());
+    cases.push_back({"tangible_video", args, bad_input, "64 x 48 px (3072 px), larger than the limit of 1000 px"});
+    args = {tiny};
+    args.insert(args.end(), mode.begin(), mode.end());
+    cases.push_back({"tangible_video", args, bad_input, "(16 x 12 px) are smaller than the 17 x 17 mask"});
+    args = {in_tmp("%999999999d.png")};
+    args.insert(args.end(), mode.begin(), mode.end());
+    cases.push_back({"tangible_video", args, bad_input, "at most 9"});
+  }
   // videos: missing, empty, a folder, text named .avi, a truncated clip
   const std::string text_avi = in_tmp("text.avi");
   write(text_avi, "this is text, not a video\n");

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <random>
 #include <string>
@@ -650,6 +651,42 @@ TEST_CASE("bad video input is one clear error, and a damaged stream plays what d
 
   // Bad settings.
   CHECK_THROWS_AS(WindowBuilder(-1.0), std::invalid_argument);
+  // Frames smaller than the mask: refused when the field or the timeline is made, not by the worker later.
+  {
+    const std::string small = write_sequence("small", {cv::Mat(12, 16, CV_8UC3, cv::Scalar::all(90))});
+    VideoSource source(small);
+    for (const int size : {13, 17}) {
+      CAPTURE(size);
+      try {
+        VideoField f(std::make_unique<VideoSource>(small), PlaneMapping(1.0, glm::dvec2{8.0, 6.0}),
+                     VideoFieldConfig{.prepare = plain_config(size)});
+        FAIL("a clip smaller than the mask was accepted");
+      } catch (const std::invalid_argument& e) {
+        CHECK(std::string(e.what()).find("(16 x 12 px) are smaller than the") != std::string::npos);
+      }
+      CHECK_THROWS_AS(VideoTimeline(source, plain_config(size)), std::invalid_argument);
+    }
+    CHECK_NOTHROW(VideoTimeline(source, plain_config(11)));
+  }
+  // A start past the end of the video, in the clock and in the field (from the source's duration).
+  CHECK_THROWS_AS(PlaybackClock(PlaybackConfig{.start = 5.0, .duration = 2.0}), std::invalid_argument);
+  CHECK_NOTHROW(PlaybackClock(PlaybackConfig{.start = 2.0, .duration = 2.0}));
+  {
+    const std::string seq = write_sequence("short", {scene_frame(0, 0), scene_frame(0, 1), scene_frame(0, 2)});
+    VideoFieldConfig c;
+    c.prepare = plain_config();
+    for (const double start : {1e9, 0.2}) {  // 3 frames at 25 fps: 0.12 s
+      c.playback.start = start;
+      CAPTURE(start);
+      try {
+        VideoField f(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}),
+                     PlaneMapping(1.0, glm::dvec2{48.0, 32.0}), c);
+        FAIL("a start past the end was accepted");
+      } catch (const std::invalid_argument& e) {
+        CHECK(std::string(e.what()).find("past the end") != std::string::npos);
+      }
+    }
+  }
   CHECK_THROWS_AS(FrameDenoiser(DenoiseConfig{.weight = 0.0}), std::invalid_argument);
   CHECK_THROWS_AS(SceneCutDetector(SceneCutConfig{.ratio = 0.5}), std::invalid_argument);
   CHECK_THROWS_AS(PlaybackClock(PlaybackConfig{.rate = -1.0}), std::invalid_argument);
@@ -661,6 +698,229 @@ TEST_CASE("bad video input is one clear error, and a damaged stream plays what d
   // Non-finite probes and times give zero force.
   FrameWindow w;
   CHECK(glm::length(w.at(0.0, 1.0, 1.0)) == 0.0);
+}
+
+namespace {
+
+/// Reads a whole source: the indices read, each frame checked against `frames` (lossless).
+std::vector<long> read_all(VideoSource& source, const std::vector<cv::Mat>& frames) {
+  std::vector<long> read;
+  cv::Mat image;
+  long index = 0;
+  while (source.read(image, index)) {
+    read.push_back(index);
+    REQUIRE(index >= 0);
+    REQUIRE(static_cast<std::size_t>(index) < frames.size());
+    CHECK(image.size() == frames[0].size());
+    CHECK(cv::norm(image, frames[static_cast<std::size_t>(index)], cv::NORM_INF) == 0.0);
+  }
+  return read;
+}
+
+/// Six 96 x 64 frames, each different.
+std::vector<cv::Mat> six_frames() {
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 6; ++k)
+    frames.push_back(scene_frame(0, k));
+  return frames;
+}
+
+/// A PNG file of 100 bytes whose header declares w x h px.
+void write_png_header(const std::string& path, std::uint32_t w, std::uint32_t h) {
+  std::string bytes = "\x89PNG\r\n\x1a\n";
+  const auto be32 = [&bytes](std::uint32_t v) {
+    for (int s = 24; s >= 0; s -= 8)
+      bytes.push_back(static_cast<char>((v >> s) & 0xff));
+  };
+  be32(13);
+  bytes += "IHDR";
+  be32(w);
+  be32(h);
+  bytes += std::string("\x08\x02\x00\x00\x00", 5);
+  bytes.resize(100, '\0');
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+}  // namespace
+
+TEST_CASE("image sequences: a frame of another size is refused as bad, not cropped or padded", "[video][sequence]") {
+  std::vector<cv::Mat> frames = six_frames();
+  const std::string seq = write_sequence("seq_size", frames);
+  cv::imwrite((fs::path(seq).parent_path() / "0003.png").string(), scene_frame(0, 3, 80, 64));  // narrower
+  VideoSource source(seq);
+  CHECK(source.frame_count() == 6);
+  CHECK(read_all(source, frames) == std::vector<long>{0, 1, 2, 4, 5});
+  CHECK(source.bad_frames() == 1);
+  // one whose header claims a huge size is not decoded either
+  write_png_header((fs::path(seq).parent_path() / "0004.png").string(), 30000, 30000);
+  VideoSource again(seq);
+  CHECK(read_all(again, frames) == std::vector<long>{0, 1, 2, 5});
+  CHECK(again.bad_frames() == 2);
+}
+
+TEST_CASE("image sequences: a missing or truncated frame is skipped and counted, its time slot kept",
+          "[video][sequence]") {
+  const std::vector<cv::Mat> frames = six_frames();
+  for (const bool truncate : {false, true}) {
+    CAPTURE(truncate);
+    const std::string seq = write_sequence(truncate ? "seq_truncated" : "seq_missing", frames);
+    const fs::path two = fs::path(seq).parent_path() / "0002.png";
+    if (truncate)
+      fs::resize_file(two, 60);
+    else
+      fs::remove(two);
+    VideoSource source(seq, {.fallback_fps = 25.0});
+    CHECK(source.frame_count() == 6);
+    CHECK(source.duration() == Approx(6 / 25.0));
+    CHECK(read_all(source, frames) == std::vector<long>{0, 1, 3, 4, 5});
+    CHECK(source.time_of(3) == Approx(3 / 25.0));
+    CHECK(source.bad_frames() == 1);
+    // through the timeline: frame 3's force at frame 3's time
+    VideoSource again(seq, {.fallback_fps = 25.0});
+    const PrepareConfig config = plain_config();
+    VideoTimeline timeline(again, config, 0.0);
+    const double x = 27.0, y = 30.0;  // on frame 3's bar edge
+    CHECK(timeline.at(3.0 / 25.0, x, y).x == Approx(still(frames[3], config.tangible).at(x, y).x).margin(1e-9));
+  }
+}
+
+TEST_CASE("image sequences: a first frame that fails keeps its slot and is counted", "[video][sequence]") {
+  const std::vector<cv::Mat> frames = six_frames();
+  const std::string seq = write_sequence("seq_first", frames);
+  fs::resize_file(fs::path(seq).parent_path() / "0000.png", 60);
+  VideoSource source(seq);
+  CHECK(source.width() == 96);
+  CHECK(source.bad_frames() == 1);
+  CHECK(read_all(source, frames) == std::vector<long>{1, 2, 3, 4, 5});
+  CHECK(source.bad_frames() == 1);
+  // the numbering starts at the smallest file number, whatever it is
+  const fs::path dir = fs::path(seq).parent_path();
+  fs::remove(dir / "0000.png");
+  for (int k = 5; k >= 1; --k)
+    fs::rename(dir / fs::path(std::to_string(10000 + k).substr(1) + ".png"),
+               dir / fs::path(std::to_string(10000 + 20 + k).substr(1) + ".png"));  // files 0021..0025
+  VideoSource shifted(seq);
+  CHECK(shifted.frame_count() == 5);
+  std::vector<cv::Mat> later(frames.begin() + 1, frames.end());
+  CHECK(read_all(shifted, later) == std::vector<long>{0, 1, 2, 3, 4});
+}
+
+TEST_CASE("image sequences: 25 fps unless given, whichever decoder reads the pictures", "[video][sequence]") {
+  // Sun raster files: a format FFmpeg's image reader does not open.
+  const fs::path dir = tmp / "seq_sr";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::vector<cv::Mat> frames = six_frames();
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    char file[32];
+    std::snprintf(file, sizeof file, "f%zu.sr", k);
+    REQUIRE(cv::imwrite((dir / file).string(), frames[k]));
+  }
+  VideoSource source((dir / "f%d.sr").string());
+  CHECK(source.fps() == 25.0);
+  CHECK(source.frame_count() == 6);
+  CHECK(read_all(source, frames) == std::vector<long>{0, 1, 2, 3, 4, 5});
+  VideoSource ten((dir / "f%d.sr").string(), {.fallback_fps = 10.0});
+  CHECK(ten.fps() == 10.0);
+  CHECK(ten.duration() == Approx(0.6));
+}
+
+TEST_CASE("image sequences: a bad pattern is refused at once, with what is wrong", "[video][sequence][bad]") {
+  const std::string seq = write_sequence("seq_pattern", six_frames());
+  const std::string dir = fs::path(seq).parent_path().string();
+  const auto refused = [](const std::string& pattern, const std::string& says) {
+    CAPTURE(pattern);
+    try {
+      VideoSource s(pattern);
+      FAIL("accepted");
+    } catch (const FileError& e) {
+      CAPTURE(e.what());
+      CHECK(std::string(e.what()).find(says) != std::string::npos);
+    }
+  };
+  refused(dir + "/%999999999d.png", "at most 9");
+  refused(dir + "/%10d.png", "at most 9");
+  refused(dir + "/%s.png", "%d, %Nd or %0Nd");
+  refused(dir + "/%n.png", "%d, %Nd or %0Nd");
+  refused(dir + "/%04d_%04d.png", "more than one");
+  refused(dir + "/%04x.png", "%d, %Nd or %0Nd");
+  refused(dir + "%d/0000.png", "in the file name");
+  refused(dir + "/%05d.png", "no file matches");
+  refused(dir + "/none/%04d.png", "no folder");
+  // %09d is the widest
+  const fs::path wide = tmp / "seq_wide";
+  fs::remove_all(wide);
+  fs::create_directories(wide);
+  REQUIRE(cv::imwrite((wide / "000000007.png").string(), scene_frame(0, 0)));
+  REQUIRE(cv::imwrite((wide / "50%_000000008.png").string(), scene_frame(0, 0)));
+  CHECK(VideoSource((wide / "%09d.png").string()).frame_count() == 1);
+  CHECK(VideoSource((wide / "50%%_%09d.png").string()).frame_count() == 1);
+}
+
+TEST_CASE("a file that claims more frames than it holds ends cleanly: no frame reported undecodable", "[video][vfr]") {
+  // A variable-rate file's frame count is an estimate (duration x mean
+  // rate): here an MJPG clip of 20 clean frames whose AVI headers claim 40.
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 20; ++k)
+    frames.push_back(scene_frame(0, k));
+  const std::string clip = write_mjpg("claims_more", frames, 25.0);
+  {
+    std::string bytes;
+    {
+      std::ifstream in(clip, std::ios::binary);
+      bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    const auto put32 = [&bytes](std::size_t at, std::uint32_t v) {
+      REQUIRE(at + 4 <= bytes.size());
+      for (int i = 0; i < 4; ++i)
+        bytes[at + static_cast<std::size_t>(i)] = static_cast<char>((v >> (8 * i)) & 0xff);
+    };
+    const std::size_t avih = bytes.find("avih"), strh = bytes.find("strh");
+    REQUIRE(avih != std::string::npos);
+    REQUIRE(strh != std::string::npos);
+    put32(avih + 8 + 16, 40);  // MainAVIHeader::dwTotalFrames
+    put32(strh + 8 + 32, 40);  // AVIStreamHeader::dwLength
+    std::ofstream(clip, std::ios::binary) << bytes;
+  }
+  VideoSource source(clip);
+  REQUIRE(source.frame_count() == 40);  // as claimed
+  cv::Mat image;
+  long index = 0, read = 0;
+  while (source.read(image, index)) {
+    CHECK(index == read);
+    ++read;
+  }
+  CHECK(read == 20);
+  CHECK(source.bad_frames() == 0);
+  CHECK_FALSE(source.variable_rate());  // its timestamps are k / fps
+}
+
+TEST_CASE("video frames above the pixel limit are refused before they are decoded", "[video][bad]") {
+  const std::vector<cv::Mat> frames = six_frames();  // 96 x 64 = 6144 px
+  const std::string clip = write_mjpg("limit", frames, 25.0);
+  const std::string seq = write_sequence("seq_limit", frames);
+  for (const std::string& path : {clip, seq}) {
+    CAPTURE(path);
+    CHECK_NOTHROW(VideoSource(path, {.max_pixels = 6144}));
+    try {
+      VideoSource s(path, {.max_pixels = 6143});
+      FAIL("a frame above the limit was accepted");
+    } catch (const VideoError& e) {
+      CAPTURE(e.what());
+      CHECK(std::string(e.what()).find("96 x 64 px (6144 px), larger than the limit of 6143 px") != std::string::npos);
+    }
+  }
+  // a sequence whose first file's header claims 30000 x 30000 px: refused from the header
+  // (decoding it would take 2.7 GB)
+  write_png_header((fs::path(seq).parent_path() / "0000.png").string(), 30000, 30000);
+  try {
+    VideoSource s(seq);
+    FAIL("a 900 Mpx header was accepted");
+  } catch (const VideoError& e) {
+    CAPTURE(e.what());
+    CHECK(std::string(e.what()).find("30000 x 30000 px") != std::string::npos);
+    CHECK(std::string(e.what()).find("larger than the limit of 100000000 px") != std::string::npos);
+  }
 }
 
 TEST_CASE("opencv-doc's real clips: cuts in Megamind, the damaged copy plays, vtest flicker", "[video][real]") {

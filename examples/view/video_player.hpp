@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -37,12 +38,13 @@
 namespace hapticfield::view {
 
 struct VideoPlayerConfig {
-  double speed{1.0};              ///< video seconds per loop second, in (0, 16]
-  double from{0.0};               ///< video time at the start [s], at most the video's length
-  bool loop{false};               ///< start again at 0 after the end
-  double fade{default_cut_fade};  ///< fade out and in across a scene cut [s]
-  double seek_step{5.0};          ///< what one seek key moves [s]
-  int display_frames{8};          ///< decoded frames the worker keeps for display
+  double speed{1.0};                             ///< video seconds per loop second, in (0, 16]
+  double from{0.0};                              ///< video time at the start [s], at most the video's length
+  bool loop{false};                              ///< start again at 0 after the end
+  double fade{default_cut_fade};                 ///< fade out and in across a scene cut [s]
+  double seek_step{5.0};                         ///< what one seek key moves [s]
+  int display_frames{8};                         ///< decoded frames the worker keeps for display
+  std::uint64_t max_pixels{default_max_pixels};  ///< largest frame decoded [px] (VideoSourceConfig)
 };
 
 /// What the status panel shows about the video.
@@ -66,7 +68,7 @@ class VideoPlayer {
     PlaybackConfig{.rate = config.speed, .start = config.from}.validate();
     if (!std::isfinite(config.fade) || config.fade < 0.0 || config.fade > 10.0)
       throw std::invalid_argument("VideoPlayer: fade must be in [0, 10] s");
-    VideoSource source(path_);
+    VideoSource source(path_, source_config());
     fps_ = source.fps();
     duration_ = source.duration();
     frame_count_ = source.frame_count();
@@ -103,7 +105,7 @@ class VideoPlayer {
     c.fade = config_.fade;
     c.gain = scene.gain;
     c.display_frames = config_.display_frames;
-    VideoField field(std::make_unique<VideoSource>(path_), mapping, std::move(c));
+    VideoField field(std::make_unique<VideoSource>(path_, source_config()), mapping, std::move(c));
     if (paused_) field.playback().pause();
     AnyField any(std::move(field));
     VideoField* fresh = any.target<VideoField>();
@@ -199,6 +201,8 @@ class VideoPlayer {
     last_.paused = paused_;
     return last_;
   }
+
+  [[nodiscard]] VideoSourceConfig source_config() const { return VideoSourceConfig{.max_pixels = config_.max_pixels}; }
 
   [[nodiscard]] double fps() const noexcept { return fps_; }
   [[nodiscard]] double duration() const noexcept { return duration_; }

@@ -8,6 +8,7 @@
 #include "hapticfield/video/frame_window.hpp"
 #include "hapticfield/video/playback_clock.hpp"
 #include "hapticfield/video/scene_cut.hpp"
+#include "hapticfield/video/sequence_pattern.hpp"
 #include "hapticfield/video/video_field.hpp"
 #include "hapticfield/video/video_source.hpp"
 #include "hapticfield/video/video_timeline.hpp"

@@ -67,6 +67,16 @@ class FramePreparer {
     return frame;
   }
 
+  /// Checks that frames of w x h px can carry the mask, before any is prepared.
+  /// @throws std::invalid_argument naming both sizes when a side is smaller than the mask.
+  void check_frame_size(int w, int h) const {
+    const int m = config_.tangible.size;
+    if (w < m || h < m)
+      throw std::invalid_argument("the video's frames (" + std::to_string(w) + " x " + std::to_string(h) +
+                                  " px) are smaller than the " + std::to_string(m) + " x " + std::to_string(m) +
+                                  " mask");
+  }
+
   /// The next frame starts a new scene without being a cut (a seek): the
   /// temporal average and the cut detector restart.
   void restart() noexcept {

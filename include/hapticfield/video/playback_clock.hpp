@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace hapticfield {
 
@@ -24,7 +25,7 @@ static_assert(std::atomic<double>::is_always_lock_free, "the servo thread reads 
 
 struct PlaybackConfig {
   double rate = 1.0;                                          ///< video seconds per loop second, in (0, 16]
-  double start = 0.0;                                         ///< video time at the first tick [s]
+  double start = 0.0;                                         ///< video time at the first tick [s], at most duration
   bool loop = false;                                          ///< start again at 0 after the end
   double duration = std::numeric_limits<double>::infinity();  ///< length of the video [s]
 
@@ -34,6 +35,9 @@ struct PlaybackConfig {
       throw std::invalid_argument("PlaybackConfig: rate must be in (0, 16]");
     if (!std::isfinite(start) || start < 0.0) throw std::invalid_argument("PlaybackConfig: start must be >= 0 [s]");
     if (!(duration > 0.0)) throw std::invalid_argument("PlaybackConfig: duration must be positive [s]");
+    if (start > duration)
+      throw std::invalid_argument("PlaybackConfig: start " + std::to_string(start) +
+                                  " s is past the end of the video (" + std::to_string(duration) + " s)");
   }
 };
 

@@ -104,19 +104,23 @@ struct VideoFieldConfig {
 
 /// Counters, readable from any thread.
 struct VideoStatistics {
-  long prepared = 0;        ///< frames prepared
-  long dropped = 0;         ///< frames skipped because preparation lagged
-  long bad = 0;             ///< frames that failed to decode
-  long published = 0;       ///< windows handed to the servo thread
-  long cuts = 0;            ///< scene cuts detected
-  bool ended = false;       ///< the stream ended (the last frame is held)
-  double video_time = 0.0;  ///< the servo thread's latest video time [s]
+  long prepared = 0;           ///< frames prepared
+  long dropped = 0;            ///< frames skipped because preparation lagged
+  long bad = 0;                ///< frames that failed to decode
+  long published = 0;          ///< windows handed to the servo thread
+  long cuts = 0;               ///< scene cuts detected
+  bool ended = false;          ///< the stream ended (the last frame is held)
+  bool variable_rate = false;  ///< the file's timestamps stray from k / fps (VideoSource::variable_rate())
+  double video_time = 0.0;     ///< the servo thread's latest video time [s]
 };
 
 class VideoField {
  public:
   /// Starts the worker thread on `source`.
-  /// @throws std::invalid_argument for a bad gain, fade, mask or playback setting.
+  /// @throws std::invalid_argument for a bad gain, fade, mask or playback
+  ///         setting, frames smaller than the mask, or a start past the end
+  ///         of a file (its duration from the source when the config leaves
+  ///         it infinite).
   VideoField(std::unique_ptr<VideoSource> source, PlaneMapping mapping, VideoFieldConfig config)
       : state_(std::make_unique<State>(std::move(source), mapping, std::move(config))) {
     state_->worker = std::thread([s = state_.get()] { s->run(); });
@@ -176,6 +180,7 @@ class VideoField {
     v.published = s.published.load();
     v.cuts = s.cut_count.load();
     v.ended = s.ended.load();
+    v.variable_rate = s.variable_rate.load();
     v.video_time = s.video_time.load();
     return v;
   }
@@ -229,6 +234,7 @@ class VideoField {
         throw std::invalid_argument("VideoField: gain must be finite and non-negative [N]");
       if (config.display_frames < 0 || config.display_frames > max_display_frames)
         throw std::invalid_argument("VideoField: display_frames must be in [0, 64]");
+      preparer.check_frame_size(width, height);
       video_time.store(config.playback.start);
     }
 
@@ -326,6 +332,7 @@ class VideoField {
             continue;
           }
           bad.store(source->bad_frames());
+          variable_rate.store(source->variable_rate());
           if (have_frame && !lockstep.load() && source->time_of(index + 1) <= t) {  // its successor is already due
             dropped.fetch_add(1);
             continue;
@@ -382,6 +389,7 @@ class VideoField {
     std::atomic<std::uint32_t> tick_epoch{0};   ///< the playback epoch of the latest tick
     std::atomic<std::int64_t> ended_epoch{-1};  ///< the epoch whose stream ended with nothing left to publish
     std::atomic<bool> lockstep{false};
+    std::atomic<bool> variable_rate{false};
     std::atomic<bool> done{false};  ///< the worker returned (stopped or failed)
     std::atomic<bool> stop{false};
     std::atomic<bool> ended{false};

@@ -21,9 +21,12 @@ namespace hapticfield {
 
 class VideoTimeline {
  public:
-  /// @throws std::invalid_argument for a bad mask, denoise or fade setting.
+  /// @throws std::invalid_argument for a bad mask, denoise or fade setting,
+  ///         or frames smaller than the mask.
   VideoTimeline(VideoSource& source, const PrepareConfig& prepare, double fade = default_cut_fade)
-      : source_(source), preparer_(prepare), builder_(fade) {}
+      : source_(source), preparer_(prepare), builder_(fade) {
+    preparer_.check_frame_size(source.width(), source.height());
+  }
 
   /// Normalised force at image position (x, y) [px] at video time t [s]
   /// (a black/white edge = 1, y down). Times must not decrease.
