@@ -43,6 +43,7 @@
 #include "common/csv.hpp"
 #include "common/hid_device.hpp"
 #include "common/loop_thread.hpp"
+#include "common/stop_signal.hpp"
 
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
@@ -81,7 +82,9 @@ constexpr const char* usage =
     "                        checked before any frame is decoded\n"
     "  --verbose             let OpenCV's and FFmpeg's own log lines through\n"
     "  -h, --help            this text\n"
-    "Exit status: 0 done, 1 bad input (files, videos, devices), 2 usage error.\n";
+    "Ctrl-C or SIGTERM stops the loop through its stop (zero force, then disarm).\n"
+    "Exit status: 0 done, 1 bad input (files, videos, devices), 2 usage error, 128 + N stopped\n"
+    "by signal N.\n";
 
 struct Arguments {
   std::string video;
@@ -328,9 +331,14 @@ int run_play(const Arguments& a) {
   hf::LoopConfig loop_config;
   loop_config.recover_after = 0.5;
   hf::ServoLoop<hf::ForceArm, Clock> loop(device, clock, loop_config);
+  hf::cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm through the loop's stop
   if (hardware) hf::cli::wait_for_operator();
-  std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s%s\n", name.c_str(),
-              width, height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise),
+  if (stop.caught()) {
+    std::printf("stopped by signal %d before the loop started; no force was commanded\n", stop.caught());
+    return stop.exit_status();
+  }
+  std::printf("%s: %d x %d px at %.3f fps, mask %s %d, denoise %s, fade %.0f ms; playing %.2f s%s (Ctrl-C stops)\n",
+              name.c_str(), width, height, fps, hf::to_string(a.options.mask), a.options.size, hf::to_string(a.denoise),
               a.fade_s * 1e3, seconds, simulated_time ? " of simulated time (lockstep)" : "");
 
   const auto ticks = static_cast<std::uint64_t>(std::max(1L, std::lround(seconds * loop_config.rate)));
@@ -361,7 +369,9 @@ int run_play(const Arguments& a) {
   servo.join();
   status();
   std::printf("\n");
-  (void)servo.outcome();  // rethrows what the loop threw
+  const bool disconnected = servo.outcome() == hf::StopReason::disconnected;  // rethrows what the loop threw
+  if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
   const hf::VideoStatistics v = video_ptr->statistics();
   const std::vector<hf::SceneCut> cuts = video_ptr->cuts();
   video_ptr->stop();
@@ -396,7 +406,8 @@ int run_play(const Arguments& a) {
   }
   // The worker failed on a frame (bad input): one line on stderr, exit 1.
   if (!stopped.empty()) throw hf::VideoError("the video stopped early: " + stopped);
-  return 0;
+  if (disconnected) throw hf::DeviceError("the device disconnected during the run; zero force was commanded");
+  return stop.caught() ? stop.exit_status() : 0;
 }
 
 int play(const Arguments& a) {
