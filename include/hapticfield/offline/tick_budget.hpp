@@ -122,8 +122,9 @@ struct TickBudgetReport {
     const auto verdict = [&](bool fits, double budget, std::uint64_t over) {
       char v[200];
       if (fits)
-        std::snprintf(v, sizeof v, "fits (p99 is %.1f%% of the %.0f us tick; %llu ticks above the %.0f%% share)",
-                      100.0 * p99_ns / budget, budget * 1e-3, static_cast<unsigned long long>(over), 100.0 * share);
+        std::snprintf(v, sizeof v, "fits (p99 is %.1f%% of the %.0f us tick; %llu ticks above the %.0f%% share%s)",
+                      100.0 * p99_ns / budget, budget * 1e-3, static_cast<unsigned long long>(over), 100.0 * share,
+                      allocations < 0 ? "; allocations not counted" : "");
       else
         std::snprintf(v, sizeof v, "does NOT fit (%s)", reason(budget).c_str());
       return std::string(v);
