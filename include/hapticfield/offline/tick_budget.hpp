@@ -186,6 +186,13 @@ glm::dvec3 call_field(F& field, const Probe& p, std::uint64_t& exceptions) noexc
 }
 }  // namespace detail
 
+namespace detail {
+template <class F>
+void reset_if_possible(F& field) noexcept {
+  if constexpr (requires { field.reset(); }) field.reset();
+}
+}  // namespace detail
+
 /// Something the harness can time: a field (force(probe), noexcept or not)
 /// or a callable Probe -> force.
 template <class F>
@@ -203,9 +210,6 @@ template <TimedField F>
   TickBudgetReport r;
   r.share = config.share;
   r.ticks = config.ticks < 1 ? 1 : config.ticks;
-  const auto reset = [&field] {
-    if constexpr (requires { field.reset(); }) field.reset();
-  };
   std::uint64_t exceptions = 0;
   volatile double sink = 0.0;
   std::vector<Probe> probes(r.ticks);
@@ -218,7 +222,7 @@ template <TimedField F>
     empty[i] = detail::monotonic_ns() - a;
   }
   // untimed pass: the mean, allocations and exceptions
-  reset();
+  detail::reset_if_possible(field);
   for (std::uint64_t i = 0; i < config.warmup; ++i)
     sink = sink + detail::call_field(field, scripted_probe(config.path, i), exceptions).x;
   exceptions = 0;
@@ -231,7 +235,7 @@ template <TimedField F>
   r.exceptions = exceptions;
   r.mean_ns = static_cast<double>(t1 - t0) / static_cast<double>(r.ticks);
   // timed pass: one clock read around each tick
-  reset();
+  detail::reset_if_possible(field);
   for (std::uint64_t i = 0; i < config.warmup; ++i)
     sink = sink + detail::call_field(field, scripted_probe(config.path, i), exceptions).x;
   for (std::uint64_t i = 0; i < r.ticks; ++i) {
