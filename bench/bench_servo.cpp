@@ -2,6 +2,7 @@
 // of the device layer and the safety chain. Prints Markdown tables.
 //
 //   bench_servo [--seconds S] [--load N]   (default 10 s per loop, no load)
+//   bench_servo --pacing [--seconds S] [--spin-margin US]
 //
 // With --load N, N busy processes spin on the CPUs during a third table:
 // each loop with and without SCHED_FIFO (RealTime::best_effort), with the
@@ -13,6 +14,12 @@
 //    simulated arm and a wall field, side by side with a relative-sleep loop
 //    doing the same work (work; sleep_for(period)), as CHAI3D- and H3D-style
 //    loops pace themselves. Same statistics code for both.
+// With --pacing: ServoLoop paced by sleeping (today's default) against the
+// hybrid mode (sleep to a spin margin before the deadline, then spin), at
+// 1 kHz idle and beside two busy processes and at 10 kHz, SCHED_FIFO where
+// granted; periods longer than 4 periods are counted apart as stalls, and
+// the loop thread's CPU time is the cost of the pacing.
+//
 // 2. Per-tick cost [ns], mean and worst, of ForceArm read+write (decode,
 //    FK, velocity, J^T F, encode) over a loopback transport, of the safety
 //    chain, and of a whole virtual-clock tick with the simulated arm; as a
@@ -239,18 +246,98 @@ void loaded_table(double seconds, int load) {
       "during the run, all CPUs; latches: times the watchdog zeroed the force and disarmed)\n");
 }
 
+/// CPU time of the calling thread [s].
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+/// Sleep against hybrid pacing, same loop, same run (see the file comment).
+void pacing_table(double seconds, std::int64_t margin_ns) {
+  std::printf(
+      "\n## Pacing: sleep (default) against hybrid (spin margin %.0f us, at most a fifth of the period), %.0f s "
+      "per loop, SCHED_FIFO where granted\n\n",
+      static_cast<double>(margin_ns) * 1e-3, seconds);
+  std::printf(
+      "| rate, load | pacing | mean rate [Hz] | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | max without stalls [ms] |"
+      " stalls | missed | CPU [%% of a core] | steal [ms] |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  struct Case {
+    double rate;
+    int load;
+  };
+  for (const Case k : {Case{1000.0, 0}, Case{1000.0, 2}, Case{10000.0, 0}}) {
+    for (const bool hybrid : {false, true}) {
+      BusyLoad busy(k.load);
+      const double steal0 = steal_seconds();
+      SteadyClock clock;
+      SimulatedArm arm(arm_config());
+      SimulatedTransport link(arm, [&clock] { return clock.now(); });
+      ForceArm device(link);
+      LoopConfig c;
+      c.rate = k.rate;
+      c.realtime = RealTime::best_effort;
+      // at most a fifth of the period: the thread must sleep in every period
+      const std::int64_t margin = std::min<std::int64_t>(margin_ns, static_cast<std::int64_t>(2e8 / k.rate));
+      if (hybrid) c.pacing = {.mode = PacingMode::hybrid, .spin_margin_ns = margin};
+      ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+      Wall wall;
+      const double cpu0 = thread_cpu_seconds();
+      const std::int64_t t0 = clock.now();
+      loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * k.rate)});
+      const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
+      const double cpu = (thread_cpu_seconds() - cpu0) / elapsed;
+      const LoopSnapshot s = loop.statistics();
+      const DurationHistogram& periods = loop.detailed_statistics().periods();
+      const auto stall_bin = static_cast<std::size_t>(4.0e6 / k.rate);  // [us]: 4 periods
+      std::uint64_t stall_count = 0;
+      std::size_t max_calm = 0;
+      for (std::size_t i = 0; i < DurationHistogram::bins; ++i) {
+        if (periods.bin(i) == 0) continue;
+        if (i >= stall_bin)
+          stall_count += periods.bin(i);
+        else
+          max_calm = i;
+      }
+      char name[48];
+      std::snprintf(name, sizeof name, "%.0f kHz, %s", k.rate * 1e-3, k.load ? "2 busy processes" : "idle");
+      char mode[32];
+      std::snprintf(mode, sizeof mode, "hybrid, %.0f us", static_cast<double>(margin) * 1e-3);
+      std::printf("| %s | %s | %.3f | %.4f | %.4f | %.4f | %.3f | %.3f | %llu | %llu | %.1f | %.1f |\n", name,
+                  hybrid ? mode : "sleep", s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_p999 * 1e3,
+                  s.period_max * 1e3, static_cast<double>(max_calm + 1) * 1e-3,
+                  static_cast<unsigned long long>(stall_count), static_cast<unsigned long long>(s.missed_deadlines),
+                  cpu * 100.0, (steal_seconds() - steal0) * 1e3);
+    }
+  }
+  std::printf(
+      "\n(stalls: periods longer than 4 periods, the host stalling this virtual machine; max without stalls:\n"
+      "upper edge of the longest shorter period's 1 us bin; CPU: the loop thread's CPU time over the run's\n"
+      "wall time, tick work included; steal: CPU time the hypervisor took during the run, all CPUs)\n");
+}
+
 int main(int argc, char** argv) {
   double seconds = 10.0;
   int load = 0;
+  bool pacing = false;
+  double margin_us = 100.0;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc)
       seconds = std::atof(argv[++i]);
     else if (std::strcmp(argv[i], "--load") == 0 && i + 1 < argc)
       load = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "--pacing") == 0)
+      pacing = true;
+    else if (std::strcmp(argv[i], "--spin-margin") == 0 && i + 1 < argc)
+      margin_us = std::atof(argv[++i]);
     else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
       std::printf(
-          "usage: bench_servo [--seconds S] [--load N]\n  --seconds S  time per loop [s] (default 10)\n"
-          "  --load N     also time the loops under N busy processes (default 0: skip)\n");
+          "usage: bench_servo [--seconds S] [--load N] [--pacing [--spin-margin US]]\n"
+          "  --seconds S  time per loop [s] (default 10)\n"
+          "  --load N     also time the loops under N busy processes (default 0: skip)\n"
+          "  --pacing     sleep against hybrid pacing only, idle and loaded, 1 and 10 kHz\n"
+          "  --spin-margin US  hybrid pacing's spin margin [us] (default 100)\n");
       return 0;
     } else {
       std::fprintf(stderr, "bench_servo: unknown or incomplete option '%s' (--help shows the usage)\n", argv[i]);
@@ -260,6 +347,14 @@ int main(int argc, char** argv) {
   if (!(seconds > 0.0 && seconds <= 600.0) || load < 0 || load > 64) {
     std::fprintf(stderr, "bench_servo: --seconds must be in (0, 600] and --load in 0..64\n");
     return 2;
+  }
+  if (!(margin_us >= 0.0 && margin_us <= 1000.0)) {
+    std::fprintf(stderr, "bench_servo: --spin-margin must be within [0, 1000] [us]\n");
+    return 2;
+  }
+  if (pacing) {
+    pacing_table(seconds, static_cast<std::int64_t>(margin_us * 1e3));
+    return 0;
   }
   if (load > 0) {
     loaded_table(seconds, load);

@@ -194,6 +194,10 @@ void bind_core(py::module_& m) {
 
 }  // namespace hapticfield::python
 
+namespace hapticfield::python {
+void bind_budget(py::module_& m);  // budget.cpp: the tick-budget harness
+}  // namespace hapticfield::python
+
 PYBIND11_MODULE(hapticfield, m) {
   namespace hp = hapticfield::python;
   namespace py = pybind11;
@@ -221,4 +225,5 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_texture(m);
   hp::bind_servo(m);
   hp::bind_video(m);
+  hp::bind_budget(m);
 }

@@ -1,7 +1,8 @@
 #pragma once
 /// @file clock.hpp
 /// Clocks the servo loop runs on: SteadyClock (CLOCK_MONOTONIC, absolute
-/// sleeps) and VirtualClock (tests: time moves only when told, never sleeps).
+/// sleeps, and a busy-wait for the last stretch before a deadline) and
+/// VirtualClock (tests: time moves only when told, never sleeps).
 
 #include <atomic>
 #include <cerrno>
@@ -21,6 +22,27 @@ concept ServoClock = requires(C& clock, std::int64_t t) {
   noexcept;
 };
 
+/// A ServoClock that can also busy-wait until an absolute time: what the
+/// hybrid pacing (servo/pacer.hpp) spins on for the last stretch. A clock
+/// without spin_until() is paced by sleeping only.
+template <class C>
+concept SpinningClock = ServoClock<C> && requires(C& clock, std::int64_t t) {
+  { clock.spin_until(t) }
+  noexcept;
+};
+
+namespace detail {
+/// Tells the CPU this is a spin-wait (saves power, frees the sibling
+/// hyperthread); a no-op where there is no such instruction.
+inline void cpu_relax() noexcept {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  asm volatile("yield");
+#endif
+}
+}  // namespace detail
+
 /// CLOCK_MONOTONIC with clock_nanosleep(TIMER_ABSTIME): sleeps to absolute
 /// deadlines, so per-tick latencies do not accumulate into drift.
 struct SteadyClock {
@@ -35,6 +57,11 @@ struct SteadyClock {
     ts.tv_nsec = static_cast<long>(t % 1'000'000'000);
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
+  }
+  /// Busy-waits until t [ns]: keeps the CPU for the whole wait.
+  void spin_until(std::int64_t t) const noexcept {
+    while (now() < t)
+      detail::cpu_relax();
   }
 };
 
@@ -52,6 +79,14 @@ class VirtualClock {
     while (cur < target && !now_ns_.compare_exchange_weak(cur, target, std::memory_order_acq_rel)) {
     }
   }
+  /// A busy-wait is exact: time moves to t (never backwards). Neither the
+  /// wake delay nor a shifted wake applies (they model the scheduler, which
+  /// a spinning thread does not wait for).
+  void spin_until(std::int64_t t) noexcept {
+    std::int64_t cur = now_ns_.load(std::memory_order_relaxed);
+    while (cur < t && !now_ns_.compare_exchange_weak(cur, t, std::memory_order_acq_rel)) {
+    }
+  }
   /// Moves time forward by dt [ns] (e.g. to model compute time in a field).
   void advance(std::int64_t dt) noexcept { now_ns_.fetch_add(dt, std::memory_order_acq_rel); }
   /// Every sleep wakes this late [ns] (scheduling latency model).
@@ -66,7 +101,7 @@ class VirtualClock {
   std::atomic<std::int64_t> once_{0};
 };
 
-static_assert(ServoClock<SteadyClock>);
-static_assert(ServoClock<VirtualClock>);
+static_assert(SpinningClock<SteadyClock>);
+static_assert(SpinningClock<VirtualClock>);
 
 }  // namespace hapticfield

@@ -55,7 +55,8 @@ inline constexpr std::uint64_t no_tick_limit = UINT64_MAX;
 struct LoopConfig {
   double rate{1000.0};  ///< servo rate [Hz], 1..10000
   RealTime realtime{RealTime::best_effort};
-  int priority{80};  ///< SCHED_FIFO priority (1..99)
+  int priority{80};       ///< SCHED_FIFO priority (1..99)
+  PacingConfig pacing{};  ///< sleep (default) or hybrid sleep-then-spin to each deadline (servo/pacer.hpp)
   SafetyConfig safety{};
   bool auto_home{true};       ///< request homing when the device is not homed
   bool auto_arm{true};        ///< request arming at start (the device arms once homed)
@@ -479,7 +480,7 @@ class ServoLoop {
       ServoLoop* self;
       ~Restore() { self->restore_realtime(); }
     } restore{this};
-    Pacer pacer(period_ns_);
+    Pacer pacer(period_ns_, config_.pacing);
     pacer.start(clock_->now());
     const std::uint64_t first_tick = tick_;
     TickInput in;

@@ -1,0 +1,299 @@
+#pragma once
+/// @file tick_budget.hpp
+/// Does a field fit in a servo tick? measure_tick_budget(field) runs any
+/// field (or any callable Probe -> force) over a scripted probe path, times
+/// every call, counts allocations (when a counter is installed, see below)
+/// and exceptions, and judges the result against the 1 kHz and 10 kHz
+/// budgets. Offline code: it allocates, and servo/ never includes it.
+///
+/// The verdict: a field fits a rate when its p99 tick cost is at most
+/// `share` of the period (default 0.25: the rest of the tick belongs to the
+/// device, the safety chain and the scheduler), it allocated nothing and
+/// threw nothing. The worst case is reported beside it, not judged: on a
+/// shared machine it includes the process being preempted.
+///
+/// Allocations: give TickBudgetConfig::allocation_count a function that
+/// returns the allocation calls made so far. One translation unit of a
+/// program may define HAPTICFIELD_TICK_BUDGET_COUNT_NEW before including
+/// this header: it then replaces the global operator new with a counting
+/// one and the harness uses it by default (examples/12_tick_budget.cpp).
+///
+///   auto report = hapticfield::offline::measure_tick_budget(field);
+///   std::puts(report.summary().c_str());
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <cstdio>
+#include <ctime>
+#include <exception>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "hapticfield/core/field.hpp"
+#include "hapticfield/core/probe.hpp"
+
+namespace hapticfield::offline {
+
+/// Tick budgets [ns].
+inline constexpr double budget_1khz_ns = 1e6;
+inline constexpr double budget_10khz_ns = 1e5;
+
+/// The scripted path: the probe strokes a circle of `radius` on the plane
+/// z = 0 at `speed`, pressed `depth` below it, the depth breathing by half
+/// over `breath_period` (so contact forces and textures vary), with the
+/// velocity that motion has. normal_force and surface_normal stay zero: a
+/// ContactField sets its own.
+struct ProbePathConfig {
+  glm::dvec3 centre{0.0};       ///< [m]
+  double radius{0.02};          ///< [m]
+  double speed{0.1};            ///< [m/s]
+  double depth{0.002};          ///< mean depth below z = 0 [m]
+  double breath_period{0.5};    ///< [s]
+  double period{servo_period};  ///< tick period given to the field [s]
+};
+
+/// The probe of tick i on the path.
+[[nodiscard]] inline Probe scripted_probe(const ProbePathConfig& c, std::uint64_t i) noexcept {
+  Probe p;
+  const double t = static_cast<double>(i) * c.period;
+  const double w = c.radius > 0.0 ? c.speed / c.radius : 0.0;  // [rad/s]
+  const double b = 2.0 * 3.14159265358979323846 / c.breath_period;
+  const double z = -c.depth * (1.0 + 0.5 * std::sin(b * t));
+  p.position = c.centre + glm::dvec3{c.radius * std::cos(w * t), c.radius * std::sin(w * t), z};
+  p.velocity = {-c.speed * std::sin(w * t), c.speed * std::cos(w * t), -0.5 * c.depth * b * std::cos(b * t)};
+  p.time = t;
+  p.period = c.period;
+  return p;
+}
+
+/// Returns the allocation calls made so far (any monotonic count).
+using AllocationCount = std::int64_t (*)() noexcept;
+
+namespace detail {
+inline std::atomic<std::int64_t> tick_budget_news{0};
+inline std::int64_t count_news() noexcept {
+  return tick_budget_news.load(std::memory_order_relaxed);
+}
+#ifdef HAPTICFIELD_TICK_BUDGET_COUNT_NEW
+inline constexpr AllocationCount default_allocation_count = &count_news;
+#else
+inline constexpr AllocationCount default_allocation_count = nullptr;
+#endif
+inline std::int64_t monotonic_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+}  // namespace detail
+
+struct TickBudgetConfig {
+  std::uint64_t ticks{20000};  ///< timed ticks
+  std::uint64_t warmup{1000};  ///< ticks run first, untimed (caches, lazy tables)
+  ProbePathConfig path{};      ///< the scripted probe path
+  double share{0.25};          ///< share of a period the field may take at p99 [-]
+  AllocationCount allocation_count{detail::default_allocation_count};  ///< null: allocations not counted
+};
+
+struct TickBudgetReport {
+  std::uint64_t ticks{0};
+  double mean_ns{0.0};                                           ///< total time of an untimed pass / ticks
+  double p50_ns{0.0}, p99_ns{0.0}, p999_ns{0.0}, worst_ns{0.0};  ///< per tick, clock overhead subtracted
+  double clock_overhead_ns{0.0};  ///< median cost of reading the clock twice (subtracted)
+  std::int64_t allocations{-1};   ///< during the timed ticks; -1: not counted
+  std::uint64_t exceptions{0};    ///< ticks whose call threw (the tick then gives no force)
+  std::uint64_t over_1khz{0};     ///< ticks above share x 1 ms
+  std::uint64_t over_10khz{0};    ///< ticks above share x 0.1 ms
+  double share{0.25};
+  bool fits_1khz{false};
+  bool fits_10khz{false};
+
+  [[nodiscard]] double allocations_per_tick() const noexcept {
+    return allocations < 0 || ticks == 0 ? -1.0 : static_cast<double>(allocations) / static_cast<double>(ticks);
+  }
+  /// A few plain lines: the figures and the verdict at each rate.
+  [[nodiscard]] std::string summary() const {
+    char buf[768];
+    const auto verdict = [&](bool fits, double budget, std::uint64_t over) {
+      char v[200];
+      if (fits)
+        std::snprintf(v, sizeof v, "fits (p99 is %.1f%% of the %.0f us tick; %llu ticks above the %.0f%% share%s)",
+                      100.0 * p99_ns / budget, budget * 1e-3, static_cast<unsigned long long>(over), 100.0 * share,
+                      allocations < 0 ? "; allocations not counted" : "");
+      else
+        std::snprintf(v, sizeof v, "does NOT fit (%s)", reason(budget).c_str());
+      return std::string(v);
+    };
+    std::snprintf(buf, sizeof buf,
+                  "tick cost over %llu ticks: mean %.0f ns, p50 %.0f ns, p99 %.0f ns, p99.9 %.0f ns, worst %.0f ns\n"
+                  "allocations per tick: %s; exceptions: %llu\n1 kHz: %s\n10 kHz: %s\n",
+                  static_cast<unsigned long long>(ticks), mean_ns, p50_ns, p99_ns, p999_ns, worst_ns,
+                  allocations_text().c_str(), static_cast<unsigned long long>(exceptions),
+                  verdict(fits_1khz, budget_1khz_ns, over_1khz).c_str(),
+                  verdict(fits_10khz, budget_10khz_ns, over_10khz).c_str());
+    return buf;
+  }
+
+ private:
+  [[nodiscard]] std::string allocations_text() const {
+    if (allocations < 0) return "not counted";
+    char t[32];
+    std::snprintf(t, sizeof t, "%.3g", allocations_per_tick());
+    return t;
+  }
+  [[nodiscard]] std::string reason(double budget) const {
+    std::string r;
+    if (p99_ns > share * budget)
+      r += "p99 " + std::to_string(static_cast<long long>(p99_ns)) + " ns is above " +
+           std::to_string(static_cast<int>(100.0 * share)) + "% of the tick";
+    if (allocations > 0) r += (r.empty() ? "" : "; ") + std::string("it allocates");
+    if (exceptions > 0) r += (r.empty() ? "" : "; ") + std::string("it throws");
+    return r;
+  }
+};
+
+namespace detail {
+template <class F>
+glm::dvec3 call_field(F& field, const Probe& p, std::uint64_t& exceptions) noexcept {
+  if constexpr (requires { field.force(p); }) {
+    if constexpr (noexcept(field.force(p))) {
+      return glm::dvec3(field.force(p));
+    } else {
+      try {
+        return glm::dvec3(field.force(p));
+      } catch (...) {
+        ++exceptions;
+        return glm::dvec3{0.0};
+      }
+    }
+  } else {
+    if constexpr (std::is_nothrow_invocable_v<F&, const Probe&>) {
+      return glm::dvec3(field(p));
+    } else {
+      try {
+        return glm::dvec3(field(p));
+      } catch (...) {
+        ++exceptions;
+        return glm::dvec3{0.0};
+      }
+    }
+  }
+}
+}  // namespace detail
+
+namespace detail {
+template <class F>
+void reset_if_possible(F& field) noexcept {
+  if constexpr (requires { field.reset(); }) field.reset();
+}
+}  // namespace detail
+
+/// Something the harness can time: a field (force(probe), noexcept or not)
+/// or a callable Probe -> force.
+template <class F>
+concept TimedField = requires(F& f, const Probe& p) {
+  glm::dvec3(f.force(p));
+}
+|| requires(F& f, const Probe& p) {
+  glm::dvec3(f(p));
+};
+
+/// Measures the field's tick cost over the scripted path (see the file comment).
+/// Stateful fields are reset (when they can be) before each pass.
+template <TimedField F>
+[[nodiscard]] TickBudgetReport measure_tick_budget(F& field, const TickBudgetConfig& config = {}) {
+  TickBudgetReport r;
+  r.share = config.share;
+  r.ticks = config.ticks < 1 ? 1 : config.ticks;
+  std::uint64_t exceptions = 0;
+  volatile double sink = 0.0;
+  std::vector<Probe> probes(r.ticks);
+  for (std::uint64_t i = 0; i < r.ticks; ++i)
+    probes[i] = scripted_probe(config.path, config.warmup + i);
+  std::vector<std::int64_t> d(r.ticks);
+  std::vector<std::int64_t> empty(r.ticks);
+  for (std::uint64_t i = 0; i < r.ticks; ++i) {  // the clock's own cost
+    const std::int64_t a = detail::monotonic_ns();
+    empty[i] = detail::monotonic_ns() - a;
+  }
+  // untimed pass: the mean, allocations and exceptions
+  detail::reset_if_possible(field);
+  for (std::uint64_t i = 0; i < config.warmup; ++i)
+    sink = sink + detail::call_field(field, scripted_probe(config.path, i), exceptions).x;
+  exceptions = 0;
+  const std::int64_t before = config.allocation_count ? config.allocation_count() : 0;
+  const std::int64_t t0 = detail::monotonic_ns();
+  for (std::uint64_t i = 0; i < r.ticks; ++i)
+    sink = sink + detail::call_field(field, probes[i], exceptions).x;
+  const std::int64_t t1 = detail::monotonic_ns();
+  if (config.allocation_count) r.allocations = config.allocation_count() - before;
+  r.exceptions = exceptions;
+  r.mean_ns = static_cast<double>(t1 - t0) / static_cast<double>(r.ticks);
+  // timed pass: one clock read around each tick
+  detail::reset_if_possible(field);
+  for (std::uint64_t i = 0; i < config.warmup; ++i)
+    sink = sink + detail::call_field(field, scripted_probe(config.path, i), exceptions).x;
+  for (std::uint64_t i = 0; i < r.ticks; ++i) {
+    const std::int64_t a = detail::monotonic_ns();
+    sink = sink + detail::call_field(field, probes[i], exceptions).x;
+    d[i] = detail::monotonic_ns() - a;
+  }
+  (void)sink;
+  std::sort(empty.begin(), empty.end());
+  r.clock_overhead_ns = static_cast<double>(empty[empty.size() / 2]);
+  for (auto& x : d)
+    x = std::max<std::int64_t>(0, x - static_cast<std::int64_t>(r.clock_overhead_ns));
+  for (const auto x : d) {
+    r.over_1khz += static_cast<double>(x) > config.share * budget_1khz_ns;
+    r.over_10khz += static_cast<double>(x) > config.share * budget_10khz_ns;
+  }
+  std::sort(d.begin(), d.end());
+  const auto at = [&](double q) { return static_cast<double>(d[static_cast<std::size_t>(q * double(d.size() - 1))]); };
+  r.p50_ns = at(0.5);
+  r.p99_ns = at(0.99);
+  r.p999_ns = at(0.999);
+  r.worst_ns = static_cast<double>(d.back());
+  const bool clean = r.allocations <= 0 && r.exceptions == 0;
+  r.fits_1khz = clean && r.p99_ns <= config.share * budget_1khz_ns;
+  r.fits_10khz = clean && r.p99_ns <= config.share * budget_10khz_ns;
+  return r;
+}
+
+}  // namespace hapticfield::offline
+
+#ifdef HAPTICFIELD_TICK_BUDGET_COUNT_NEW
+// Counting replacements of the global allocation functions (one translation
+// unit per program: it defines HAPTICFIELD_TICK_BUDGET_COUNT_NEW).
+#include <cstdlib>
+#include <new>
+// g++ 12 warns that the replacement delete frees what the replacement new
+// malloc'd, once both are inlined: that pairing is exactly what is intended.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+void* operator new(std::size_t size) {
+  hapticfield::offline::detail::tick_budget_news.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+#endif
