@@ -4,7 +4,8 @@
 set -euo pipefail
 
 packages=(g++ clang libclang-rt-14-dev cmake make pkg-config libglm-dev libopencv-dev libhidapi-dev libpugixml-dev catch2
-          pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib)
+          pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
+          libtinygltf-dev libtinyobjloader-dev)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -112,7 +112,10 @@ inline void check_config(const MeshReadConfig& config) {
 }
 
 [[nodiscard]] inline std::string to_text(const glm::dvec3& v) {
-  return "(" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";
+  std::string s(1, '(');  // appended piece by piece: g++ 12 warns falsely on "(" + std::string
+  s.append(std::to_string(v.x)).append(", ").append(std::to_string(v.y)).append(", ");
+  s.append(std::to_string(v.z)).append(1, ')');
+  return s;
 }
 
 /// Twice the area of triangle t [m^2] and whether it is degenerate: a
