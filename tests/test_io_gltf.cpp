@@ -249,6 +249,18 @@ TEST_CASE("glTF: hostile files fail with one clear FileError", "[io][gltf][hosti
     fails(replace(json, R"("count": 8, "type": "VEC3")", R"("count": 8, "type": "VEC3", "byteOffset": 4)"),
           "do not fit");
   }
+  SECTION("many primitives over one accessor count against the triangle limit before they are built") {
+    std::string prims;
+    for (int i = 0; i < 1000; ++i)
+      prims += std::string(i ? ", " : "") + R"({"attributes": {"POSITION": 0}, "indices": 1})";
+    const std::string many =
+        replace(json, R"([{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}])", "[" + prims + "]");
+    MeshReadConfig config;
+    config.max_triangles = 100;
+    expect_file_error([&] { (void)parse_gltf(embed(many, bin), "many.gltf", config); }, "many.gltf",
+                      "mesh 0 primitive 8: more than 100 triangles");
+    CHECK(parse_gltf(embed(many, bin), "many.gltf").mesh.triangle_count() == 12000);
+  }
   SECTION("a stride smaller than an element") {
     fails(replace(json, R"("byteLength": 96})", R"("byteLength": 96, "byteStride": 4})"),
           "byteStride 4 is smaller than an element");

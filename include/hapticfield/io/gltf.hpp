@@ -429,11 +429,24 @@ class GltfReader {
       const int position_accessor = attribute("POSITION");
       if (position_accessor < 0) throw mesh_error(name_, where + " has no POSITION");
       const View pos = view(position_accessor, "POSITION", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+      // Every converted mesh is placed at least once: the triangles of all of
+      // them count against the limit before any is built, so many primitives
+      // over one large accessor cannot multiply the work or the memory.
+      View idx;
+      if (prim.indices >= 0)
+        idx = view(prim.indices, "index", TINYGLTF_TYPE_SCALAR,
+                   {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
+      const std::size_t corner_count = prim.indices >= 0 ? idx.count : pos.count;
+      const std::size_t will_make = mode == TINYGLTF_MODE_TRIANGLES ? corner_count / 3
+                                    : corner_count >= 3             ? corner_count - 2
+                                                                    : 0;
+      if (will_make > limit_ - converted_triangles_)
+        throw mesh_error(name_, where + ": more than " + std::to_string(limit_) +
+                                    " triangles (raise MeshReadConfig::max_triangles)");
+      converted_triangles_ += will_make;
       std::vector<std::uint32_t> corners;  // indices into the primitive's vertices
       if (prim.indices >= 0) {
-        const View idx = view(prim.indices, "index", TINYGLTF_TYPE_SCALAR,
-                              {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                               TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
         corners.reserve(idx.count);
         for (std::size_t i = 0; i < idx.count; ++i) {
           const double k = component(idx, i, 0);
@@ -466,11 +479,10 @@ class GltfReader {
           triangles.push_back({corners[i], corners[i + 1], corners[0]});
       }
       if (triangles.empty()) continue;
-      if (triangles.size() > limit_)
-        throw mesh_error(name_, where + ": more than " + std::to_string(limit_) +
-                                    " triangles (raise MeshReadConfig::max_triangles)");
-      // Keep only the vertices the triangles use, so a primitive's size is its triangles'.
-      std::vector<std::uint32_t> remap(pos.count, std::numeric_limits<std::uint32_t>::max());
+      // Keep only the vertices the triangles use, so a primitive's size is its
+      // triangles'. One table for every primitive, reset where it was written.
+      if (remap_.size() < pos.count) remap_.resize(pos.count, std::numeric_limits<std::uint32_t>::max());
+      std::vector<std::uint32_t>& remap = remap_;
       std::vector<std::uint32_t> used;
       GltfPart part;
       part.triangles.reserve(triangles.size());
@@ -486,6 +498,8 @@ class GltfReader {
         }
         part.triangles.push_back(out);
       }
+      for (const std::uint32_t k : used)
+        remap[k] = std::numeric_limits<std::uint32_t>::max();
       part.positions.reserve(used.size());
       for (const std::uint32_t k : used) {
         const glm::dvec3 p{component(pos, k, 0), component(pos, k, 1), component(pos, k, 2)};
@@ -538,6 +552,8 @@ class GltfReader {
   LoadedMesh& out_;
   std::vector<std::vector<GltfPart>> parts_;
   std::vector<bool> converted_;
+  std::vector<std::uint32_t> remap_;     ///< file vertex -> part vertex, all unset between primitives
+  std::size_t converted_triangles_ = 0;  ///< triangles of every converted primitive
   std::vector<bool> normal_missing_;
   std::uint32_t default_material_ = 0;
   bool use_default_material_ = false;
