@@ -28,6 +28,10 @@ run("${WORK_DIR}/build/consumer_hatt" "${SOURCE_DIR}/tests/data/hatt/Models_Tool
 run("${WORK_DIR}/build/consumer_image" "${SOURCE_DIR}/examples/data/coffee.png")
 file(MAKE_DIRECTORY "${WORK_DIR}/frames")
 run("${WORK_DIR}/build/consumer_video" "${WORK_DIR}/frames")
+if(EXISTS "${WORK_DIR}/build/consumer_io")
+  file(MAKE_DIRECTORY "${WORK_DIR}/meshes")
+  run("${WORK_DIR}/build/consumer_io" "${WORK_DIR}/meshes")
+endif()
 if(MODE STREQUAL "find_package")
   # The pkg-config file must name the installed headers.
   file(GLOB pc "${WORK_DIR}/prefix/*/pkgconfig/hapticfield.pc" "${WORK_DIR}/prefix/*/*/pkgconfig/hapticfield.pc")
