@@ -203,5 +203,6 @@ void bind_image(py::module_& m);
 void bind_texture(py::module_& m);
 void bind_servo(py::module_& m);
 void bind_video(py::module_& m);
+void bind_budget(py::module_& m);
 
 }  // namespace hapticfield::python

@@ -194,10 +194,6 @@ void bind_core(py::module_& m) {
 
 }  // namespace hapticfield::python
 
-namespace hapticfield::python {
-void bind_budget(py::module_& m);  // budget.cpp: the tick-budget harness
-}  // namespace hapticfield::python
-
 PYBIND11_MODULE(hapticfield, m) {
   namespace hp = hapticfield::python;
   namespace py = pybind11;

@@ -88,3 +88,19 @@ def test_a_field_that_allocates_every_tick_is_caught():
 def test_without_a_counter_run_servo_reports_none():
     result = hf.run_servo(hf.zero(), seconds=0.01)
     assert result["loop_allocations"] is None and result["loop_frees"] is None
+
+
+def test_tick_budget_counts_a_tick_that_allocates_and_says_it_does_not_fit():
+    # Timing is the machine's business; allocations are not: the verdict for
+    # a field that allocates every tick is "does not fit" on any machine.
+    script = ("import json, hapticfield as hf; "
+              "a = hf.tick_budget(hf._allocating_field(), ticks=500); "
+              "p = hf.tick_budget(hf.plane_contact([], stiffness=1500.0), ticks=500); "
+              "print(json.dumps([a['allocations'], a['fits_1khz'], a['fits_10khz'], p['allocations'], a['ticks']]))")
+    out = subprocess.run([sys.executable, "-c", script], env=dict(os.environ, LD_PRELOAD=COUNTER), check=True,
+                         capture_output=True, text=True, timeout=300).stdout
+    allocations, fits_1khz, fits_10khz, plane_allocations, ticks = json.loads(out.strip().splitlines()[-1])
+    assert ticks == 500
+    assert allocations >= 500  # one (or more) a tick
+    assert not fits_1khz and not fits_10khz
+    assert plane_allocations == 0

@@ -475,3 +475,15 @@ def test_non_finite_probes_give_zero_force(coffee):
     velocities = np.array([[0.05, 0.0, 0.0], [np.inf, 0.0, 0.0], [0.05, 0.0, 0.0]])
     np.testing.assert_array_equal(scene.forces(positions, velocities), 0.0)
     assert np.all(np.isfinite(hf.tangible_field(coffee).forces(positions)))
+
+
+def test_tick_budget_reports_the_tick_cost_without_an_allocation_counter():
+    r = hf.tick_budget(hf.plane_contact([], stiffness=1500.0), ticks=2000)
+    assert r["ticks"] == 2000
+    assert 0 < r["p50_ns"] <= r["p99_ns"] <= r["p999_ns"] <= r["worst_ns"]
+    assert r["allocations"] is None and r["allocations_per_tick"] is None  # no counter preloaded here
+    assert r["exceptions"] == 0
+    assert "not counted" in r["summary"]
+    for bad in ({"ticks": 0}, {"speed": -1.0}, {"radius": 0.0}, {"period": 0.0}, {"share": 2.0}):
+        with pytest.raises(ValueError):
+            hf.tick_budget(hf.plane_contact([], stiffness=1500.0), **bad)

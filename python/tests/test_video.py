@@ -145,19 +145,15 @@ def test_a_virtual_run_on_a_video_field_renders_the_same_forces_every_time(clip)
     assert first_video.statistics()["dropped"] == 0
 
 
-def test_a_frame_smaller_than_the_mask_is_the_workers_error(tmp_path):
+def test_a_clip_smaller_than_the_mask_is_refused_when_the_field_is_made(tmp_path):
+    # The first frame's size is checked before the worker starts (it used to
+    # start, stop on its error and leave a field that gave zero force).
     d = tmp_path / "tiny"
     d.mkdir()
     for k in range(3):
         write_png(d / f"{k:04d}.png", np.full((6, 6), 100.0))
-    video = hf.video_field(str(d / "%04d.png"), size=17)
-    for _ in range(500):  # the worker stops on its error [10 ms steps]
-        if video.statistics()["ended"]:
-            break
-        time.sleep(0.01)
-    assert video.statistics()["ended"] and video.statistics()["prepared"] == 0
-    np.testing.assert_array_equal(video.forces(np.zeros((5, 3))), 0.0)  # no frame: zero force
-    assert "smaller" in video.error() or "mask" in video.error()
+    with pytest.raises(ValueError, match="smaller than the 17 x 17 mask"):
+        hf.video_field(str(d / "%04d.png"), size=17)
 
 
 # --- bad input ------------------------------------------------------------------------
