@@ -1,0 +1,357 @@
+#pragma once
+/// @file proxy.hpp
+/// ProxyConstraint: the god-object (Zilles & Salisbury, "A constraint-based
+/// god-object method for haptic display", IROS 1995) or virtual proxy
+/// (Ruspini, Kolarov & Khatib, "The haptic display of complex graphical
+/// environments", SIGGRAPH 1997) on any Shape.
+///
+/// The HIP may sink into the surface; the proxy may not. Each tick the proxy
+/// moves toward the HIP as far as the surface lets it:
+///
+///   1. It sweeps from where it is toward the goal (the HIP at first).
+///      Every move is a swept first_hit() query that stops just before the
+///      first surface met, so the proxy never crosses a surface, however
+///      thin, whatever the speed (no pop-through).
+///   2. Each surface met adds its plane (face normal n, through the hit point
+///      lifted by the offset) to the constraints of the tick, at most three
+///      (an edge: two, a corner: three). The goal becomes the point nearest
+///      the HIP on all of them (a least-squares projection with the normal
+///      equations of the planes; a plane whose multiplier comes out negative,
+///      one the HIP has left, is released). Back to 1, at most six moves.
+///   3. Friction (the friction cone of Salisbury et al. 1995 and of Ruspini
+///      1997): with d the distance from the HIP to the frictionless proxy
+///      and s the distance the proxy would slide from where it was, it stays
+///      where it was (sticks) while s <= mu_s d, and when it slides it lags
+///      mu_k d behind, so the tangential force is mu_k times the normal one.
+///   4. Fc = k (proxy - HIP) with the normal part max(0, k d - b v.n) n: the
+///      damping b acts on the normal velocity and never pulls into the
+///      surface. With one plane and a shaded normal (mesh vertex normals), n
+///      is the shaded normal (force shading, Morgenbesser & Srinivasan 1996).
+///
+/// The offset that keeps the proxy off the surface is relative to the size
+/// of the primitive it touches (plus a few rounding units of the
+/// coordinates), never absolute, so 20 um and 10 cm triangles both hold.
+/// The contact reports the touched point's uv, tangent frame, primitive and
+/// material (a closest() query at the proxy), for the parts of a
+/// ContactField.
+///
+/// Convex edges: a proxy that slid past the end of a face this tick floats
+/// just above the next face and lands on it on the next tick. A query that
+/// runs out of its budget leaves the proxy where it is for that tick.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "hapticfield/core/contact.hpp"
+#include "hapticfield/core/field.hpp"
+#include "hapticfield/core/probe.hpp"
+#include "hapticfield/core/vector_math.hpp"
+#include "hapticfield/surface/shape.hpp"
+
+namespace hapticfield {
+
+/// Most proxy moves (swept queries) in one tick, friction not counted.
+inline constexpr int proxy_max_moves = 6;
+
+struct ProxyConfig {
+  double stiffness{1500.0};      ///< k [N/m]
+  double damping{0.0};           ///< b on the normal velocity while touching [N s/m]
+  double static_friction{0.0};   ///< mu_s [-]: the proxy sticks while the HIP is inside this cone
+  double dynamic_friction{0.0};  ///< mu_k [-] <= mu_s: the cone while sliding
+  double offset{1e-6};           ///< the proxy's height above the surface, relative to the primitive's size [-]
+};
+
+/// What the last tick did (for tests and benches).
+struct ProxyTick {
+  int moves{0};         ///< swept queries made (friction's one included)
+  int planes{0};        ///< constraint planes at the end of the tick (0..3)
+  bool blocked{false};  ///< a query ran out of its budget: the proxy stayed
+  bool sliding{false};  ///< friction: the proxy slides (else sticks)
+};
+
+template <Shape S>
+class ProxyConstraint {
+ public:
+  /// @throws std::invalid_argument for a stiffness that is not finite and
+  ///         > 0, a negative or non-finite damping, friction coefficients
+  ///         that are not 0 <= mu_k <= mu_s (finite), or an offset outside
+  ///         (0, 0.01].
+  ProxyConstraint(S shape, const ProxyConfig& config) : shape_(std::move(shape)), config_(config) {
+    if (!std::isfinite(config.stiffness) || config.stiffness <= 0.0)
+      throw std::invalid_argument("ProxyConstraint: stiffness must be finite and > 0 [N/m]");
+    if (!std::isfinite(config.damping) || config.damping < 0.0)
+      throw std::invalid_argument("ProxyConstraint: damping must be finite and >= 0 [N s/m]");
+    if (!std::isfinite(config.static_friction) || !std::isfinite(config.dynamic_friction) ||
+        config.dynamic_friction < 0.0 || config.dynamic_friction > config.static_friction)
+      throw std::invalid_argument("ProxyConstraint: need 0 <= dynamic_friction <= static_friction [-]");
+    if (!std::isfinite(config.offset) || config.offset <= 0.0 || config.offset > 0.01)
+      throw std::invalid_argument("ProxyConstraint: offset must be in (0, 0.01] (relative to a primitive's size)");
+  }
+
+  /// The contact of this tick; moves the proxy. A non-finite probe gives no
+  /// contact and leaves the proxy where it is.
+  [[nodiscard]] Contact contact(const Probe& probe) noexcept {
+    tick_ = ProxyTick{};
+    if (!is_finite(probe.position) || !is_finite(probe.velocity)) return Contact{};
+    const glm::dvec3 goal = probe.position;
+    if (!started_ || !is_finite(proxy_)) {
+      started_ = true;
+      proxy_ = goal;
+      touching_ = false;
+      return Contact{};
+    }
+    const glm::dvec3 start = proxy_;
+
+    // 1-2: frictionless constrained motion toward the HIP
+    Planes planes;
+    Hit last_hit;
+    glm::dvec3 x = start;
+    bool blocked = false;
+    for (int move = 0; move < proxy_max_moves; ++move) {
+      const glm::dvec3 target = planes.project(goal);
+      const glm::dvec3 d = target - x;
+      const double length = glm::length(d);
+      if (!(length > planes.tolerance)) break;
+      const Hit h = shape_.first_hit(x, target);
+      ++tick_.moves;
+      if (!h.complete) {
+        blocked = true;
+        break;
+      }
+      if (!h.found()) {
+        x = target;
+        break;
+      }
+      const double eps = offset_for(h);
+      const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
+      const double back = facing > 1e-6 ? eps / facing : length;
+      x += (std::fmax(0.0, h.t * length - back) / length) * d;
+      last_hit = h;
+      if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + eps, eps)) break;
+    }
+    const glm::dvec3 frictionless = x;
+    planes.project(goal);  // the final active set (releases planes the HIP has left)
+    tick_.planes = planes.count;
+
+    // 3: friction cone
+    const double depth = glm::length(frictionless - goal);  // [m]
+    if (planes.count > 0 && touching_ && !blocked && config_.static_friction > 0.0 && depth > 0.0) {
+      const glm::dvec3 held = planes.project_equal(start);  // where the proxy was, on this tick's constraints
+      const glm::dvec3 slide = held - frictionless;
+      const double s = glm::length(slide);
+      const double mu = sliding_ ? config_.dynamic_friction : config_.static_friction;
+      glm::dvec3 candidate = held;
+      if (s > mu * depth) {
+        sliding_ = true;
+        candidate = frictionless + (config_.dynamic_friction * depth / s) * slide;
+      } else {
+        sliding_ = false;
+      }
+      if (glm::length(candidate - frictionless) > planes.tolerance) {
+        const Hit h = shape_.first_hit(frictionless, candidate);
+        ++tick_.moves;
+        if (h.complete && !h.found()) x = candidate;
+      }
+    } else if (planes.count == 0) {
+      sliding_ = false;  // a new contact starts stuck
+    }
+    tick_.sliding = sliding_;
+    tick_.blocked = blocked;
+
+    proxy_ = x;
+    const bool touching = planes.count > 0 || (blocked && touching_);
+    touching_ = touching;
+    if (!touching) return Contact{};
+
+    // 4: the force and what the parts see
+    Hit touched = shape_.closest(x, 4.0 * planes.max_offset + planes.tolerance);
+    if (!touched.found()) touched = last_hit;
+    glm::dvec3 n =
+        planes.count == 1 ? planes.normal[0] : (depth > 0.0 ? (frictionless - goal) / depth : glm::dvec3{0.0});
+    if (glm::length(n) == 0.0 && touched.found()) n = touched.face_normal;
+    if (planes.count == 1 && touched.found() && glm::dot(touched.face_normal, n) > 0.999999 &&
+        glm::dot(touched.normal, n) > 0.0)
+      n = touched.normal;  // force shading
+    if (!is_finite(n) || glm::length(n) == 0.0) n = glm::dvec3{0.0, 0.0, 1.0};
+    // the HIP's depth below the surface itself, not below the lifted planes
+    double lift = planes.count > 0 ? planes.lift[0] : 0.0;
+    for (int i = 1; i < planes.count; ++i)
+      lift = std::fmin(lift, planes.lift[static_cast<std::size_t>(i)]);
+    const double surface_depth = std::fmax(0.0, depth - lift);                                              // [m]
+    const double push = config_.stiffness * surface_depth - config_.damping * glm::dot(probe.velocity, n);  // [N]
+    const glm::dvec3 force = (push > 0.0 ? push : 0.0) * n + config_.stiffness * (x - frictionless);
+    if (!is_finite(force)) {
+      proxy_ = goal;
+      touching_ = false;
+      return Contact{};
+    }
+    Contact c;
+    c.touching = true;
+    c.depth = surface_depth;
+    c.normal = n;
+    c.force = force;
+    if (touched.found()) {
+      c.surface_uv = touched.uv;
+      c.surface_tangent = touched.tangent;
+      c.surface_bitangent = touched.bitangent;
+      c.primitive = touched.primitive;
+      c.material = touched.material;
+    }
+    return c;
+  }
+
+  /// Fc alone [N].
+  [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept { return contact(probe).force; }
+
+  /// Forgets the proxy: the next tick starts it at the HIP.
+  void reset() noexcept {
+    started_ = false;
+    touching_ = false;
+    sliding_ = false;
+    proxy_ = glm::dvec3{0.0};
+  }
+
+  /// The proxy's position [m] (on the surface while touching, else the HIP).
+  [[nodiscard]] const glm::dvec3& proxy() const noexcept { return proxy_; }
+  [[nodiscard]] bool touching() const noexcept { return touching_; }
+  [[nodiscard]] const ProxyTick& last_tick() const noexcept { return tick_; }
+  [[nodiscard]] const S& shape() const noexcept { return shape_; }
+  [[nodiscard]] const ProxyConfig& config() const noexcept { return config_; }
+
+ private:
+  /// The constraint planes of one tick: n . x >= c.
+  struct Planes {
+    std::array<glm::dvec3, 3> normal{};
+    std::array<double, 3> c{};
+    std::array<double, 3> lift{};  ///< each plane's offset above its surface [m]
+    int count{0};
+    int active{0};           ///< the first `active` planes bind (after release)
+    double tolerance{0.0};   ///< smallest offset seen: motions below it are none [m]
+    double max_offset{0.0};  ///< largest offset seen [m]
+
+    /// Adds a plane; false when three are held already.
+    bool add(const glm::dvec3& n, double offset_c, double eps) noexcept {
+      tolerance = count == 0 ? 0.01 * eps : std::fmin(tolerance, 0.01 * eps);
+      max_offset = std::fmax(max_offset, eps);
+      for (int i = 0; i < count; ++i)
+        if (glm::dot(normal[static_cast<std::size_t>(i)], n) > 1.0 - 1e-12) {  // the same plane again
+          if (offset_c > c[static_cast<std::size_t>(i)]) {
+            c[static_cast<std::size_t>(i)] = offset_c;
+            lift[static_cast<std::size_t>(i)] = eps;
+          }
+          return true;
+        }
+      if (count == 3) return false;
+      normal[static_cast<std::size_t>(count)] = n;
+      c[static_cast<std::size_t>(count)] = offset_c;
+      lift[static_cast<std::size_t>(count)] = eps;
+      ++count;
+      return true;
+    }
+
+    /// The point nearest to g on the planes, as equalities, with multipliers
+    /// lambda (x = g + sum lambda_i n_i); false when the planes are
+    /// dependent (parallel, or three through one line).
+    bool solve(const glm::dvec3& g, int m, glm::dvec3& x, std::array<double, 3>& lambda) const noexcept {
+      std::array<double, 3> r{};
+      for (int i = 0; i < m; ++i)
+        r[static_cast<std::size_t>(i)] =
+            c[static_cast<std::size_t>(i)] - glm::dot(normal[static_cast<std::size_t>(i)], g);
+      lambda = {0.0, 0.0, 0.0};
+      if (m == 1) {
+        lambda[0] = r[0];
+      } else if (m == 2) {
+        const double g12 = glm::dot(normal[0], normal[1]);
+        const double det = 1.0 - g12 * g12;
+        if (!(det > 1e-10)) return false;
+        lambda[0] = (r[0] - g12 * r[1]) / det;
+        lambda[1] = (r[1] - g12 * r[0]) / det;
+      } else if (m == 3) {
+        // x - g = N^T lambda with N n_i . x = c_i: the Gram system G lambda = r by Cramer
+        const glm::dvec3 &a = normal[0], &b = normal[1], &e = normal[2];
+        const double det = glm::dot(a, glm::cross(b, e));  // of the normals: G = N N^T, det G = det^2
+        if (!(det * det > 1e-10)) return false;
+        // x = g + d with n_i . d = r_i: d = (r0 (b x e) + r1 (e x a) + r2 (a x b)) / det
+        const glm::dvec3 d = (r[0] * glm::cross(b, e) + r[1] * glm::cross(e, a) + r[2] * glm::cross(a, b)) / det;
+        x = g + d;
+        // lambda from N^T lambda = d: lambda_i = d . (dual basis)
+        const double g01 = glm::dot(a, b), g02 = glm::dot(a, e), g12 = glm::dot(b, e);
+        const double m00 = 1.0 - g12 * g12, m01 = g02 * g12 - g01, m02 = g01 * g12 - g02;
+        const double m11 = 1.0 - g02 * g02, m12 = g01 * g02 - g12, m22 = 1.0 - g01 * g01;
+        const double gd = det * det;
+        lambda[0] = (m00 * r[0] + m01 * r[1] + m02 * r[2]) / gd;
+        lambda[1] = (m01 * r[0] + m11 * r[1] + m12 * r[2]) / gd;
+        lambda[2] = (m02 * r[0] + m12 * r[1] + m22 * r[2]) / gd;
+        return true;
+      }
+      x = g;
+      for (int i = 0; i < m; ++i)
+        x += lambda[static_cast<std::size_t>(i)] * normal[static_cast<std::size_t>(i)];
+      return true;
+    }
+
+    void remove(int i) noexcept {
+      for (int k = i; k + 1 < count; ++k) {
+        normal[static_cast<std::size_t>(k)] = normal[static_cast<std::size_t>(k + 1)];
+        c[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k + 1)];
+        lift[static_cast<std::size_t>(k)] = lift[static_cast<std::size_t>(k + 1)];
+      }
+      --count;
+    }
+
+    /// The point nearest to g with every held plane binding whose
+    /// multiplier stays >= 0; planes that would pull (the HIP left them)
+    /// or are dependent on the others are dropped.
+    glm::dvec3 project(const glm::dvec3& g) noexcept {
+      for (;;) {
+        glm::dvec3 x{0.0};
+        std::array<double, 3> lambda{};
+        if (!solve(g, count, x, lambda)) {
+          remove(count - 1);  // dependent: drop the newest
+          continue;
+        }
+        int worst = -1;
+        double most_negative = 0.0;
+        for (int i = 0; i < count; ++i)
+          if (lambda[static_cast<std::size_t>(i)] < most_negative) {
+            most_negative = lambda[static_cast<std::size_t>(i)];
+            worst = i;
+          }
+        if (worst < 0) return x;
+        remove(worst);
+      }
+    }
+
+    /// The point nearest to g on all held planes as equalities (g itself
+    /// when they are dependent).
+    [[nodiscard]] glm::dvec3 project_equal(const glm::dvec3& g) const noexcept {
+      glm::dvec3 x{0.0};
+      std::array<double, 3> lambda{};
+      return solve(g, count, x, lambda) ? x : g;
+    }
+  };
+
+  /// The proxy's height above the primitive of a hit [m].
+  [[nodiscard]] double offset_for(const Hit& h) const noexcept {
+    const double coordinate = std::fmax(std::fabs(h.point.x), std::fmax(std::fabs(h.point.y), std::fabs(h.point.z)));
+    return config_.offset * h.size + 64.0 * std::numeric_limits<double>::epsilon() * coordinate;
+  }
+
+  S shape_;
+  ProxyConfig config_;
+  glm::dvec3 proxy_{0.0};
+  bool started_{false};
+  bool touching_{false};
+  bool sliding_{false};
+  ProxyTick tick_{};
+};
+
+}  // namespace hapticfield
