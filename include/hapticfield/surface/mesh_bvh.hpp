@@ -236,14 +236,21 @@ class MeshBvh {
   };
 
   /// Segment [0, t_max] of from + t d against a node's box (slabs); entry
-  /// receives the entry parameter. A zero component of d gives infinite
-  /// slabs; a NaN slab (origin on a face of a flat box) does not limit.
+  /// receives the entry parameter. An axis along which the segment does not
+  /// move (inv infinite) limits nothing when `from` lies within the box's
+  /// extent on it and rejects the box otherwise (no 0 * inf = NaN slab).
   static bool segment_box(const BvhNode& n, const glm::dvec3& from, const glm::dvec3& inv, double t_max,
                           double& entry) noexcept {
     double t0 = 0.0, t1 = t_max;
     for (int k = 0; k < 3; ++k) {
-      const double a = (static_cast<double>(n.lo[k]) - from[k]) * inv[k];
-      const double b = (static_cast<double>(n.hi[k]) - from[k]) * inv[k];
+      const auto lo = static_cast<double>(n.lo[static_cast<std::size_t>(k)]);
+      const auto hi = static_cast<double>(n.hi[static_cast<std::size_t>(k)]);
+      if (!std::isfinite(inv[k])) {
+        if (from[k] < lo || from[k] > hi) return false;
+        continue;
+      }
+      const double a = (lo - from[k]) * inv[k];
+      const double b = (hi - from[k]) * inv[k];
       t0 = std::fmax(t0, std::fmin(a, b));
       t1 = std::fmin(t1, std::fmax(a, b));
     }

@@ -58,7 +58,8 @@
 
 namespace hapticfield {
 
-/// Most proxy moves (swept queries) in one tick, friction not counted.
+/// Most proxy moves (swept queries) in one pass of a tick (a tick makes at
+/// most two passes and one friction move).
 inline constexpr int proxy_max_moves = 6;
 
 struct ProxyConfig {
@@ -110,39 +111,52 @@ class ProxyConstraint {
     }
     const glm::dvec3 start = proxy_;
 
-    // 1-2: frictionless constrained motion toward the HIP
+    // 1-2: frictionless constrained motion toward the HIP; a second pass
+    // when the first left the proxy off every face (past a convex edge)
     Planes planes;
     Hit last_hit;
+    Hit touched;
     glm::dvec3 x = start;
     bool blocked = false;
-    for (int move = 0; move < proxy_max_moves; ++move) {
-      const glm::dvec3 target = planes.project(goal);
-      const glm::dvec3 d = target - x;
-      const double length = glm::length(d);
-      if (!(length > planes.tolerance)) break;
-      const Hit h = shape_.first_hit(x, target);
-      ++tick_.moves;
-      if (!h.complete) {
-        blocked = true;
-        break;
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int move = 0; move < proxy_max_moves; ++move) {
+        const glm::dvec3 target = planes.project(goal);
+        const glm::dvec3 d = target - x;
+        const double length = glm::length(d);
+        if (!(length > planes.tolerance)) break;
+        const Hit h = shape_.first_hit(x, target);
+        ++tick_.moves;
+        if (!h.complete) {
+          blocked = true;
+          break;
+        }
+        if (!h.found()) {
+          x = target;
+          break;
+        }
+        const double eps = offset_for(h);
+        const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
+        const double back = facing > 1e-6 ? eps / facing : length;
+        x += (std::fmax(0.0, h.t * length - back) / length) * d;
+        last_hit = h;
+        if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + eps, eps)) break;
       }
-      if (!h.found()) {
-        x = target;
-        break;
-      }
-      const double eps = offset_for(h);
-      const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
-      const double back = facing > 1e-6 ? eps / facing : length;
-      x += (std::fmax(0.0, h.t * length - back) / length) * d;
-      last_hit = h;
-      if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + eps, eps)) break;
+      planes.project(goal);  // the final active set (releases planes the HIP has left)
+      if (blocked || planes.count == 0) break;
+      touched = shape_.closest(x, 4.0 * planes.max_offset + planes.tolerance);
+      if (touched.found() || !touched.complete || pass == 1) break;
+      planes = Planes{};  // slid past the end of its faces: sweep on from here toward the HIP
     }
     const glm::dvec3 frictionless = x;
-    planes.project(goal);  // the final active set (releases planes the HIP has left)
     tick_.planes = planes.count;
 
+    // the surface point the HIP is pushed toward: the nearest point to the
+    // HIP on this tick's planes without the proxy's lift (the face, the
+    // crease line or the corner itself); the depth is measured from it
+    const glm::dvec3 on_surface = planes.project_equal(goal, false);
+    const double depth = glm::length(on_surface - goal);  // [m]
+
     // 3: friction cone
-    const double depth = glm::length(frictionless - goal);  // [m]
     if (planes.count > 0 && touching_ && !blocked && config_.static_friction > 0.0 && depth > 0.0) {
       const glm::dvec3 held = planes.project_equal(start);  // where the proxy was, on this tick's constraints
       const glm::dvec3 slide = held - frictionless;
@@ -158,7 +172,10 @@ class ProxyConstraint {
       if (glm::length(candidate - frictionless) > planes.tolerance) {
         const Hit h = shape_.first_hit(frictionless, candidate);
         ++tick_.moves;
-        if (h.complete && !h.found()) x = candidate;
+        if (h.complete && !h.found()) {
+          x = candidate;
+          touched = shape_.closest(x, 4.0 * planes.max_offset + planes.tolerance);
+        }
       }
     } else if (planes.count == 0) {
       sliding_ = false;  // a new contact starts stuck
@@ -172,21 +189,14 @@ class ProxyConstraint {
     if (!touching) return Contact{};
 
     // 4: the force and what the parts see
-    Hit touched = shape_.closest(x, 4.0 * planes.max_offset + planes.tolerance);
     if (!touched.found()) touched = last_hit;
-    glm::dvec3 n =
-        planes.count == 1 ? planes.normal[0] : (depth > 0.0 ? (frictionless - goal) / depth : glm::dvec3{0.0});
+    glm::dvec3 n = planes.count == 1 ? planes.normal[0] : (depth > 0.0 ? (on_surface - goal) / depth : glm::dvec3{0.0});
     if (glm::length(n) == 0.0 && touched.found()) n = touched.face_normal;
-    if (planes.count == 1 && touched.found() && glm::dot(touched.face_normal, n) > 0.999999 &&
-        glm::dot(touched.normal, n) > 0.0)
-      n = touched.normal;  // force shading
+    // force shading: the touched point's interpolated normal (the touched
+    // face may be the next one past a convex edge, within a few offsets)
+    if (planes.count == 1 && touched.found() && glm::dot(touched.normal, n) > 0.5) n = touched.normal;
     if (!is_finite(n) || glm::length(n) == 0.0) n = glm::dvec3{0.0, 0.0, 1.0};
-    // the HIP's depth below the surface itself, not below the lifted planes
-    double lift = planes.count > 0 ? planes.lift[0] : 0.0;
-    for (int i = 1; i < planes.count; ++i)
-      lift = std::fmin(lift, planes.lift[static_cast<std::size_t>(i)]);
-    const double surface_depth = std::fmax(0.0, depth - lift);                                              // [m]
-    const double push = config_.stiffness * surface_depth - config_.damping * glm::dot(probe.velocity, n);  // [N]
+    const double push = config_.stiffness * depth - config_.damping * glm::dot(probe.velocity, n);  // [N]
     const glm::dvec3 force = (push > 0.0 ? push : 0.0) * n + config_.stiffness * (x - frictionless);
     if (!is_finite(force)) {
       proxy_ = goal;
@@ -195,7 +205,7 @@ class ProxyConstraint {
     }
     Contact c;
     c.touching = true;
-    c.depth = surface_depth;
+    c.depth = depth;
     c.normal = n;
     c.force = force;
     if (touched.found()) {
@@ -260,11 +270,13 @@ class ProxyConstraint {
     /// The point nearest to g on the planes, as equalities, with multipliers
     /// lambda (x = g + sum lambda_i n_i); false when the planes are
     /// dependent (parallel, or three through one line).
-    bool solve(const glm::dvec3& g, int m, glm::dvec3& x, std::array<double, 3>& lambda) const noexcept {
+    bool solve(const glm::dvec3& g, int m, glm::dvec3& x, std::array<double, 3>& lambda,
+               bool lifted = true) const noexcept {
       std::array<double, 3> r{};
       for (int i = 0; i < m; ++i)
-        r[static_cast<std::size_t>(i)] =
-            c[static_cast<std::size_t>(i)] - glm::dot(normal[static_cast<std::size_t>(i)], g);
+        r[static_cast<std::size_t>(i)] = c[static_cast<std::size_t>(i)] -
+                                         (lifted ? 0.0 : lift[static_cast<std::size_t>(i)]) -
+                                         glm::dot(normal[static_cast<std::size_t>(i)], g);
       lambda = {0.0, 0.0, 0.0};
       if (m == 1) {
         lambda[0] = r[0];
@@ -331,11 +343,12 @@ class ProxyConstraint {
     }
 
     /// The point nearest to g on all held planes as equalities (g itself
-    /// when they are dependent).
-    [[nodiscard]] glm::dvec3 project_equal(const glm::dvec3& g) const noexcept {
+    /// when they are dependent); lifted false: on the surfaces themselves,
+    /// without the proxy's lift.
+    [[nodiscard]] glm::dvec3 project_equal(const glm::dvec3& g, bool lifted = true) const noexcept {
       glm::dvec3 x{0.0};
       std::array<double, 3> lambda{};
-      return solve(g, count, x, lambda) ? x : g;
+      return solve(g, count, x, lambda, lifted) ? x : g;
     }
   };
 
