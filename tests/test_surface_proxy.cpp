@@ -231,11 +231,11 @@ TEST_CASE("open, non-manifold and degenerate meshes give finite forces and never
   m.positions.push_back({0.0, 0.0, 0.01});
   m.positions.push_back({0.0, 0.0, 0.01});  // a duplicate vertex
   m.positions.push_back({0.01, 0.0, -0.01});
-  m.triangles.push_back({v, v + 1, v + 2});          // zero area (two corners at one point)
-  m.triangles.push_back({v, v, v});                  // a point
-  m.triangles.push_back({0, 1, v});                  // a fin on an edge: non-manifold
-  m.triangles.push_back({0, v, 1});                  // the same fin facing the other way
-  m.triangles.push_back(m.triangles.front());        // a duplicate face
+  m.triangles.push_back({v, v + 1, v + 2});    // zero area (two corners at one point)
+  m.triangles.push_back({v, v, v});            // a point
+  m.triangles.push_back({0, 1, v});            // a fin on an edge: non-manifold
+  m.triangles.push_back({0, v, 1});            // the same fin facing the other way
+  m.triangles.push_back(m.triangles.front());  // a duplicate face
   m.positions.push_back({0.02, 0.02, 0.0});
   m.positions.push_back({0.03, 0.03, 0.0});
   m.positions.push_back({0.04, 0.04, 0.0});
@@ -290,13 +290,11 @@ TEST_CASE("friction: the proxy sticks inside the cone and slides with |Ft| = mu_
 TEST_CASE("on_surface: a field laid on a sphere pushes in its tangent plane at the touched point") {
   // a field that pushes +x in the flat texture frame with 0.5 |Fc|
   struct AlongU {
-    [[nodiscard]] glm::dvec3 force(const Probe& p) const noexcept {
-      return glm::dvec3{0.5 * p.normal_force, 0.0, 0.0};
-    }
+    [[nodiscard]] glm::dvec3 force(const Probe& p) const noexcept { return glm::dvec3{0.5 * p.normal_force, 0.0, 0.0}; }
   };
   const double radius = 0.03, k = 1000.0;
-  auto field = contact(ProxyConstraint(SphereShape(SphereShapeConfig{{0, 0, 0}, radius}), ProxyConfig{k}),
-                       on_surface(AlongU{}));
+  auto field =
+      contact(ProxyConstraint(SphereShape(SphereShapeConfig{{0, 0, 0}, radius}), ProxyConfig{k}), on_surface(AlongU{}));
   std::mt19937 rng(4);
   std::normal_distribution<double> g;
   for (int i = 0; i < 200; ++i) {
@@ -318,8 +316,9 @@ TEST_CASE("a tick of the proxy on a mesh with a texture and friction laid on it 
   m.uvs.clear();
   for (const auto& p : m.positions)
     m.uvs.emplace_back(p.x / 0.1 + 0.5, p.y / 0.1 + 0.5);
-  auto field = contact(ProxyConstraint(MeshShape(with_vertex_normals(m)), ProxyConfig{1500.0, 1.0, 0.5, 0.4}),
-                       on_surface(texture::Friction(texture::FrictionConfig{0.3, 0.0, 0.0, 2e-3, true}), UvMapping{{0.1, 0.1}}));
+  auto field =
+      contact(ProxyConstraint(MeshShape(with_vertex_normals(m)), ProxyConfig{1500.0, 1.0, 0.5, 0.4}),
+              on_surface(texture::Friction(texture::FrictionConfig{0.3, 0.0, 0.0, 2e-3, true}), UvMapping{{0.1, 0.1}}));
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-0.03, 0.03);
   std::vector<Probe> path;

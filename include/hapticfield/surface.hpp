@@ -3,6 +3,7 @@
 /// Surfaces: meshes and height fields felt through a proxy, and fields laid
 /// on them by uv. GLM only (hapticfield::core).
 
+#include "hapticfield/surface/height_field.hpp"
 #include "hapticfield/surface/mesh_bvh.hpp"
 #include "hapticfield/surface/mesh_shape.hpp"
 #include "hapticfield/surface/on_surface.hpp"
