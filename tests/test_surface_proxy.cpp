@@ -18,6 +18,7 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/surface.hpp"
 #include "hapticfield/texture.hpp"
+#include "surface_energy.hpp"
 #include "surface_meshes.hpp"
 
 using namespace hapticfield;
@@ -331,4 +332,77 @@ TEST_CASE("a tick of the proxy on a mesh with a texture and friction laid on it 
   });
   if (test::allocations_counted) CHECK(n == 0);
   CHECK(is_finite(sum));
+}
+
+// --- passivity ---------------------------------------------------------------------
+
+TEST_CASE("a stiff mesh surface at 1 kHz stays passive over 10 s of tapping and sliding with the arm's damping") {
+  // arm: 0.1 kg, 1 N s/m; Colgate & Schenkel's bound at 1 kHz: k < 2 b / T = 2000 N/m
+  const TriangleMesh m = with_vertex_normals(test::wavy_sheet(0.1, 60, 0.001, 0.03));
+  for (const double mu : {0.0, 0.5}) {
+    ProxyConstraint stiff(MeshShape(m), ProxyConfig{1500.0, 0.0, mu, mu * 0.8});
+    const test::EnergyRun run = test::tap_and_slide(stiff, 1000.0, 10.0);
+    CHECK(run.max_force > 1.5);                          // it did press
+    CHECK(run.excess <= 1e-9 * run.dissipated + 1e-12);  // never gave back more than the damping took
+  }
+  // far past the bound the same check sees the sampled spring make energy
+  ProxyConstraint too_stiff(MeshShape(m), ProxyConfig{8000.0});
+  CHECK(test::tap_and_slide(too_stiff, 1000.0, 10.0).excess > 0.0);
+}
+
+// --- node ceiling per tick ---------------------------------------------------------
+
+TEST_CASE("a proxy tick visits a bounded number of tree nodes on hostile meshes") {
+  constexpr std::uint32_t ceiling = 600;  // nodes in a whole tick (all its queries), a few microseconds
+  const auto walk = [](auto& proxy, double half, std::uint32_t& worst) {
+    std::mt19937 rng(6);
+    std::uniform_real_distribution<double> u(-half, half), s(-1e-3, 1e-3);
+    glm::dvec3 hip{0.0, 0.0, 0.003};
+    for (int i = 0; i < 3000; ++i) {  // up to 2 mm a tick (2 m/s), above and into the surface
+      hip = glm::clamp(hip + glm::dvec3{s(rng), s(rng), s(rng)}, glm::dvec3{-half, -half, -0.004},
+                       glm::dvec3{half, half, 0.004});
+      (void)proxy.contact(probe_at(hip));
+      worst = std::max(worst, proxy.last_tick().nodes);
+      REQUIRE_FALSE(proxy.last_tick().blocked);
+    }
+  };
+  SECTION("a million coplanar faces") {
+    ProxyConstraint proxy(MeshShape(test::flat_sheet(0.1, 708)), ProxyConfig{});  // 1 002 528 triangles
+    std::uint32_t worst = 0;
+    walk(proxy, 0.045, worst);
+    CHECK(worst <= ceiling);
+  }
+  SECTION("long thin triangles: 20 000 slivers 10 cm x 10 um") {
+    TriangleMesh m;
+    test::add_grid(m, {-0.05, -0.05, 0.0}, {0.1, 0.0, 0.0}, {0.0, 0.1, 0.0}, 1, 10000);
+    ProxyConstraint proxy(MeshShape(m), ProxyConfig{});
+    std::uint32_t worst = 0;
+    walk(proxy, 0.045, worst);
+    CHECK(worst <= ceiling);
+  }
+  SECTION("slivers whose boxes all overlap: the node budget holds and the proxy stays put") {
+    TriangleMesh m;  // a fan of 20 000 thin triangles crossing the whole square diagonally
+    for (int i = 0; i < 20000; ++i) {
+      const double z = -0.002 + 1e-7 * i;
+      const auto v = static_cast<std::uint32_t>(m.positions.size());
+      m.positions.push_back({-0.05, -0.05, z});
+      m.positions.push_back({0.05, 0.05, z});
+      m.positions.push_back({0.05 - 1e-5 * (i % 7 + 1), 0.05, z});
+      m.triangles.push_back({v, v + 1, v + 2});
+    }
+    const MeshShape shape(m, MeshShapeConfig{true, 1024});
+    QueryStats stats;
+    const Hit h = shape.first_hit({0.0, 0.0, 0.01}, {0.0, 0.0, -0.01}, &stats);
+    CHECK(stats.nodes <= 1024);
+    if (!h.complete) CHECK(h.t == 0.0);  // out of budget: reports the segment blocked, never free
+    ProxyConstraint proxy(shape, ProxyConfig{});
+    glm::dvec3 hip{0.0, 0.0, 0.01};
+    for (int i = 0; i < 200; ++i) {
+      hip.z -= 1e-4;
+      const Contact c = proxy.contact(probe_at(hip));
+      CHECK(proxy.last_tick().nodes <= 2 * proxy_max_moves * 1024 + 3 * 1024);
+      CHECK(is_finite(c.force));
+      CHECK(proxy.proxy().z >= hip.z);
+    }
+  }
 }

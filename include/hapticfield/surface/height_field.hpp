@@ -68,7 +68,7 @@ concept HeightGridLike = requires(const G& g) {
   { g.height } -> std::convertible_to<long long>;
   { g.spacing_x } -> std::convertible_to<double>;
   { g.spacing_y } -> std::convertible_to<double>;
-  { std::span<const double>(g.heights) };
+  {std::span<const double>(g.heights)};
 };
 
 class HeightFieldShape {
@@ -84,8 +84,7 @@ class HeightFieldShape {
     if (width < 2 || height < 2)
       throw std::invalid_argument("HeightFieldShape: need at least 2 x 2 samples, got " + std::to_string(width) +
                                   " x " + std::to_string(height));
-    if (static_cast<unsigned long long>(width) >
-        height_field_max_samples / static_cast<unsigned long long>(height))
+    if (static_cast<unsigned long long>(width) > height_field_max_samples / static_cast<unsigned long long>(height))
       throw std::invalid_argument("HeightFieldShape: " + std::to_string(width) + " x " + std::to_string(height) +
                                   " samples is more than the limit of 100 Mpx");
     if (!std::isfinite(spacing_x) || !std::isfinite(spacing_y) || spacing_x <= 0.0 || spacing_y <= 0.0)
@@ -278,7 +277,8 @@ class HeightFieldShape {
   static void push_nearest_last(Kids& kids, int count, std::array<NodeRef, stack_size>& stack,
                                 std::size_t& top) noexcept {
     for (int a = 1; a < count; ++a)
-      for (int b = a; b > 0 && kids[static_cast<std::size_t>(b - 1)].first < kids[static_cast<std::size_t>(b)].first; --b)
+      for (int b = a; b > 0 && kids[static_cast<std::size_t>(b - 1)].first < kids[static_cast<std::size_t>(b)].first;
+           --b)
         std::swap(kids[static_cast<std::size_t>(b - 1)], kids[static_cast<std::size_t>(b)]);
     for (int k = 0; k < count; ++k)
       stack[top++] = kids[static_cast<std::size_t>(k)].second;
@@ -292,7 +292,8 @@ class HeightFieldShape {
       Level out;
       out.nx = mx;
       out.ny = my;
-      out.range.assign(static_cast<std::size_t>(mx) * my, {std::numeric_limits<float>::max(), -std::numeric_limits<float>::max()});
+      out.range.assign(static_cast<std::size_t>(mx) * my,
+                       {std::numeric_limits<float>::max(), -std::numeric_limits<float>::max()});
       for (std::uint32_t j = 0; j < ny; ++j)
         for (std::uint32_t i = 0; i < nx; ++i) {
           std::array<float, 2> r{};
@@ -502,9 +503,8 @@ class HeightFieldShape {
     h.face_normal = glm::normalize(glm::dvec3{-hx, -hy, 1.0});
     h.normal = h.face_normal;
     if (config_.shade_normals) {
-      const glm::dvec3 blend =
-          (1 - s) * (1 - t) * sample_normal(g, i, j) + s * (1 - t) * sample_normal(g, i + 1, j) +
-          (1 - s) * t * sample_normal(g, i, j + 1) + s * t * sample_normal(g, i + 1, j + 1);
+      const glm::dvec3 blend = (1 - s) * (1 - t) * sample_normal(g, i, j) + s * (1 - t) * sample_normal(g, i + 1, j) +
+                               (1 - s) * t * sample_normal(g, i, j + 1) + s * t * sample_normal(g, i + 1, j + 1);
       const double length = glm::length(blend);
       if (length > 0.0 && glm::dot(blend, h.face_normal) > 0.0) h.normal = blend / length;
     }

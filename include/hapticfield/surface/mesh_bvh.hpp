@@ -100,6 +100,7 @@ class MeshBvh {
                                  QueryStats* stats = nullptr) const noexcept {
     BvhHit best;
     QueryStats work;
+    if (stats) *stats = work;
     const glm::dvec3 d = to - from;
     if (nodes_.empty() || !is_finite(from) || !is_finite(d)) return best;
     const glm::dvec3 inv{1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
@@ -161,6 +162,7 @@ class MeshBvh {
   [[nodiscard]] BvhHit closest(const glm::dvec3& p, double max_distance, QueryStats* stats = nullptr) const noexcept {
     BvhHit best;
     QueryStats work;
+    if (stats) *stats = work;
     if (nodes_.empty() || !is_finite(p) || !(max_distance >= 0.0)) return best;
     double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
     std::array<std::uint32_t, bvh_max_depth> stack{};

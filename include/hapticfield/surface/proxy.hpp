@@ -72,8 +72,10 @@ struct ProxyConfig {
 
 /// What the last tick did (for tests and benches).
 struct ProxyTick {
-  int moves{0};         ///< swept queries made (friction's one included)
-  int planes{0};        ///< constraint planes at the end of the tick (0..3)
+  int moves{0};   ///< swept queries made (friction's one included)
+  int planes{0};  ///< constraint planes at the end of the tick (0..3)
+  std::uint32_t nodes{
+      0};               ///< tree nodes (or grid cells) visited by all the tick's queries, where the shape counts them
   bool blocked{false};  ///< a query ran out of its budget: the proxy stayed
   bool sliding{false};  ///< friction: the proxy slides (else sticks)
 };
@@ -124,7 +126,7 @@ class ProxyConstraint {
         const glm::dvec3 d = target - x;
         const double length = glm::length(d);
         if (!(length > planes.tolerance)) break;
-        const Hit h = shape_.first_hit(x, target);
+        const Hit h = sweep(x, target);
         ++tick_.moves;
         if (!h.complete) {
           blocked = true;
@@ -143,7 +145,7 @@ class ProxyConstraint {
       }
       planes.project(goal);  // the final active set (releases planes the HIP has left)
       if (blocked || planes.count == 0) break;
-      touched = shape_.closest(x, 4.0 * planes.max_offset + planes.tolerance);
+      touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance);
       if (touched.found() || !touched.complete || pass == 1) break;
       planes = Planes{};  // slid past the end of its faces: sweep on from here toward the HIP
     }
@@ -170,11 +172,11 @@ class ProxyConstraint {
         sliding_ = false;
       }
       if (glm::length(candidate - frictionless) > planes.tolerance) {
-        const Hit h = shape_.first_hit(frictionless, candidate);
+        const Hit h = sweep(frictionless, candidate);
         ++tick_.moves;
         if (h.complete && !h.found()) {
           x = candidate;
-          touched = shape_.closest(x, 4.0 * planes.max_offset + planes.tolerance);
+          touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance);
         }
       }
     } else if (planes.count == 0) {
@@ -351,6 +353,30 @@ class ProxyConstraint {
       return solve(g, count, x, lambda, lifted) ? x : g;
     }
   };
+
+  /// shape_.first_hit, counting the nodes it visits when the shape can.
+  [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to) noexcept {
+    if constexpr (requires(QueryStats * q) { shape_.first_hit(from, to, q); }) {
+      QueryStats q;
+      const Hit h = shape_.first_hit(from, to, &q);
+      tick_.nodes += q.nodes;
+      return h;
+    } else {
+      return shape_.first_hit(from, to);
+    }
+  }
+
+  /// shape_.closest, counting as sweep() does.
+  [[nodiscard]] Hit nearest(const glm::dvec3& p, double max_distance) noexcept {
+    if constexpr (requires(QueryStats * q) { shape_.closest(p, max_distance, q); }) {
+      QueryStats q;
+      const Hit h = shape_.closest(p, max_distance, &q);
+      tick_.nodes += q.nodes;
+      return h;
+    } else {
+      return shape_.closest(p, max_distance);
+    }
+  }
 
   /// The proxy's height above the primitive of a hit [m].
   [[nodiscard]] double offset_for(const Hit& h) const noexcept {
