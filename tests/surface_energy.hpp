@@ -49,7 +49,8 @@ EnergyRun tap_and_slide(Field& field, double rate, double seconds, double mass =
       const double ts = t + k * dt;
       glm::dvec3 target{0.0};
       if (ts < seconds / 2)
-        target = glm::dvec3{0.004 * std::sin(2 * pi * 0.3 * ts), 0.0, 0.002 - 0.005 * (0.5 - 0.5 * std::cos(4 * pi * ts))};
+        target =
+            glm::dvec3{0.004 * std::sin(2 * pi * 0.3 * ts), 0.0, 0.002 - 0.005 * (0.5 - 0.5 * std::cos(4 * pi * ts))};
       else
         target = glm::dvec3{0.02 * std::sin(pi * ts), 0.01 * std::cos(pi * ts) - 0.01, -0.003};
       const glm::dvec3 hand = hand_k * (target - x) - hand_b * v;

@@ -10,8 +10,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <random>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -404,5 +408,121 @@ TEST_CASE("a proxy tick visits a bounded number of tree nodes on hostile meshes"
       CHECK(is_finite(c.force));
       CHECK(proxy.proxy().z >= hip.z);
     }
+  }
+}
+
+// --- force shading -----------------------------------------------------------------
+
+TEST_CASE("force shading: a coarse icosphere with vertex normals pushes along the radius") {
+  const double radius = 0.03, k = 1000.0;
+  const TriangleMesh coarse = test::icosphere(1, radius);  // 80 faces, about 21 degrees apart
+  ProxyConstraint flat(MeshShape(coarse, MeshShapeConfig{false}), ProxyConfig{k});
+  ProxyConstraint round(MeshShape(coarse, MeshShapeConfig{true}), ProxyConfig{k});
+  std::mt19937 rng(12);
+  std::normal_distribution<double> g;
+  double worst_flat = 0.0, worst_round = 0.0;
+  for (int i = 0; i < 300; ++i) {
+    const glm::dvec3 dir = glm::normalize(glm::dvec3{g(rng), g(rng), g(rng)});
+    flat.reset();
+    round.reset();
+    for (auto* proxy : {&flat, &round}) {
+      (void)proxy->contact(probe_at((radius + 0.001) * dir));
+      const Contact c = proxy->contact(probe_at((radius - 0.01) * dir));  // deep: inside every face
+      REQUIRE(c.touching);
+      const double angle = std::acos(std::clamp(glm::dot(glm::normalize(c.force), dir), -1.0, 1.0));
+      (proxy == &flat ? worst_flat : worst_round) = std::fmax(proxy == &flat ? worst_flat : worst_round, angle);
+    }
+  }
+  // flat: off by up to a face's angular radius (about 0.3 rad); shaded: the radial normal at the proxy,
+  // which lies off the HIP's radius only by the projection's shift onto the face
+  INFO("worst angle flat " << worst_flat << " rad, shaded " << worst_round << " rad");
+  CHECK(worst_flat > 0.15);
+  CHECK(worst_round < 0.5 * worst_flat);
+}
+
+// --- real meshes ---------------------------------------------------------------------
+
+namespace {
+
+/// A minimal OBJ reader for the test meshes: `v x y z` and `f a b c` (the
+/// first number of each corner, 1-based; polygons fanned), nothing else.
+bool read_obj(const std::filesystem::path& path, TriangleMesh& mesh) {
+  std::ifstream in(path);
+  if (!in) return false;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string tag;
+    s >> tag;
+    if (tag == "v") {
+      glm::dvec3 p{0.0};
+      s >> p.x >> p.y >> p.z;
+      mesh.positions.push_back(p);
+    } else if (tag == "f") {
+      std::vector<std::uint32_t> corner;
+      std::string word;
+      while (s >> word)
+        corner.push_back(static_cast<std::uint32_t>(std::stoul(word.substr(0, word.find('/'))) - 1));
+      for (std::size_t k = 2; k < corner.size(); ++k)
+        mesh.triangles.push_back({corner[0], corner[k - 1], corner[k]});
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("real scanned and CAD meshes: finite forces, the proxy on the surface, bounded nodes, no allocation") {
+  const std::filesystem::path folder = "/work/shared/data/meshes";
+  if (!std::filesystem::is_directory(folder)) {
+    WARN("skipped: " << folder << " is absent");
+    return;
+  }
+  for (const char* name : {"stanford-bunny.obj", "fandisk.obj", "spot.obj", "teapot.obj", "rocker-arm.obj"}) {
+    TriangleMesh m;
+    if (!read_obj(folder / name, m)) continue;
+    INFO(name);
+    // scaled to a 0.1 m diagonal about its box's centre
+    glm::dvec3 lo{1e300}, hi{-1e300};
+    for (const auto& p : m.positions) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+    const double scale = 0.1 / glm::length(hi - lo);
+    for (auto& p : m.positions)
+      p = (p - 0.5 * (lo + hi)) * scale;
+    ProxyConstraint proxy(MeshShape(with_vertex_normals(m)), ProxyConfig{1500.0, 1.0, 0.4, 0.3});
+    std::mt19937 rng(21);
+    std::normal_distribution<double> g;
+    std::uniform_real_distribution<double> wobble(-5e-4, 5e-4);
+    int touched = 0;
+    std::uint32_t worst_nodes = 0;
+    long allocations = 0;
+    for (int line = 0; line < 40; ++line) {
+      proxy.reset();
+      const glm::dvec3 dir = glm::normalize(glm::dvec3{g(rng), g(rng), g(rng)});
+      int inside = 0;
+      for (int i = 0; i <= 100 && inside < 40; ++i) {  // from 8 cm out at 0.8 mm a tick, wobbling sideways,
+        // then on along the surface for 40 ticks no deeper than 4 mm (6 N)
+        glm::dvec3 hip = (0.08 - 0.0008 * i) * dir + glm::dvec3{wobble(rng), wobble(rng), wobble(rng)};
+        if (inside > 5)
+          hip = proxy.proxy() - 0.004 * glm::normalize(proxy.shape().closest(proxy.proxy(), 1.0).normal) +
+                glm::dvec3{wobble(rng), wobble(rng), wobble(rng)};
+        Contact c;
+        allocations += test::count_allocations([&] { c = proxy.contact(probe_at(hip, 0.8 * dir)); });
+        REQUIRE(is_finite(c.force));
+        worst_nodes = std::max(worst_nodes, proxy.last_tick().nodes);
+        if (c.touching) {
+          ++touched;
+          ++inside;
+          const Hit on = proxy.shape().closest(proxy.proxy(), 1.0);
+          INFO("moves " << proxy.last_tick().moves << " planes " << proxy.last_tick().planes << " i " << i);
+          CHECK(on.distance <= 1e-6);  // on the surface (a few offsets of a face's size)
+        }
+      }
+    }
+    CHECK(touched > 200);
+    CHECK(worst_nodes <= 600);
+    if (test::allocations_counted) CHECK(allocations == 0);
   }
 }

@@ -18,26 +18,37 @@
 ///      the HIP on all of them (a least-squares projection with the normal
 ///      equations of the planes; a plane whose multiplier comes out negative,
 ///      one the HIP has left, is released). Back to 1, at most six moves.
+///      A pass that leaves the proxy off every face (it slid along a plane
+///      past a convex edge) starts another from there with no planes, at
+///      most four; if the last one still floats the proxy goes back to where
+///      it last met a face.
 ///   3. Friction (the friction cone of Salisbury et al. 1995 and of Ruspini
-///      1997): with d the distance from the HIP to the frictionless proxy
-///      and s the distance the proxy would slide from where it was, it stays
-///      where it was (sticks) while s <= mu_s d, and when it slides it lags
-///      mu_k d behind, so the tangential force is mu_k times the normal one.
-///   4. Fc = k (proxy - HIP) with the normal part max(0, k d - b v.n) n: the
-///      damping b acts on the normal velocity and never pulls into the
-///      surface. With one plane and a shaded normal (mesh vertex normals), n
-///      is the shaded normal (force shading, Morgenbesser & Srinivasan 1996).
+///      1997): with d the depth and s the distance the proxy would slide from
+///      where it was, it stays where it was (sticks) while s <= mu_s d, and
+///      when it slides it lags mu_k d behind, so the tangential force is mu_k
+///      times the normal one. A held point that is off the surface (a
+///      plane's extension past its face) is not taken: no friction that tick.
+///   4. The depth d is measured from the surface point nearest the HIP on
+///      this tick's planes without the lift (the face, the crease line or the
+///      corner); Fc = max(0, k d - b v.n) n + k (proxy - frictionless proxy):
+///      the damping b acts on the normal velocity and never pulls into the
+///      surface, the second term is friction's. n is the direction from the
+///      HIP to that surface point; with one plane and a shaded normal (mesh
+///      vertex normals) the touched point's normal (force shading,
+///      Morgenbesser & Srinivasan 1996).
 ///
 /// The offset that keeps the proxy off the surface is relative to the size
 /// of the primitive it touches (plus a few rounding units of the
 /// coordinates), never absolute, so 20 um and 10 cm triangles both hold.
 /// The contact reports the touched point's uv, tangent frame, primitive and
 /// material (a closest() query at the proxy), for the parts of a
-/// ContactField.
+/// ContactField; last_tick() tells what the tick did, with the nodes its
+/// queries visited.
 ///
-/// Convex edges: a proxy that slid past the end of a face this tick floats
-/// just above the next face and lands on it on the next tick. A query that
-/// runs out of its budget leaves the proxy where it is for that tick.
+/// The first tick (and the first after reset()) puts the proxy at the HIP:
+/// a HIP that starts inside a solid is not touching until it has left it
+/// (surfaces are one-sided). A query that runs out of its node budget
+/// leaves the proxy where it is for that tick (ProxyTick::blocked).
 
 #include <algorithm>
 #include <array>
@@ -58,9 +69,13 @@
 
 namespace hapticfield {
 
-/// Most proxy moves (swept queries) in one pass of a tick (a tick makes at
-/// most two passes and one friction move).
+/// Most proxy moves (swept queries) in one pass of a tick.
 inline constexpr int proxy_max_moves = 6;
+/// Most passes in one tick: a pass that leaves the proxy off every face (it
+/// slid past a convex edge) is followed by another from there; a tick makes
+/// at most proxy_max_passes x proxy_max_moves swept queries, a closest()
+/// after each pass and one friction move.
+inline constexpr int proxy_max_passes = 4;
 
 struct ProxyConfig {
   double stiffness{1500.0};      ///< k [N/m]
@@ -119,8 +134,9 @@ class ProxyConstraint {
     Hit last_hit;
     Hit touched;
     glm::dvec3 x = start;
+    glm::dvec3 anchor = start;  // where the proxy last stopped against a face: on the surface
     bool blocked = false;
-    for (int pass = 0; pass < 2; ++pass) {
+    for (int pass = 0; pass < proxy_max_passes; ++pass) {
       for (int move = 0; move < proxy_max_moves; ++move) {
         const glm::dvec3 target = planes.project(goal);
         const glm::dvec3 d = target - x;
@@ -140,13 +156,19 @@ class ProxyConstraint {
         const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
         const double back = facing > 1e-6 ? eps / facing : length;
         x += (std::fmax(0.0, h.t * length - back) / length) * d;
+        anchor = x;
         last_hit = h;
         if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + eps, eps)) break;
       }
       planes.project(goal);  // the final active set (releases planes the HIP has left)
       if (blocked || planes.count == 0) break;
       touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance);
-      if (touched.found() || !touched.complete || pass == 1) break;
+      if (touched.found() || !touched.complete) break;
+      if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
+        x = anchor;
+        touched = last_hit;
+        break;
+      }
       planes = Planes{};  // slid past the end of its faces: sweep on from here toward the HIP
     }
     const glm::dvec3 frictionless = x;
@@ -175,8 +197,13 @@ class ProxyConstraint {
         const Hit h = sweep(frictionless, candidate);
         ++tick_.moves;
         if (h.complete && !h.found()) {
-          x = candidate;
-          touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance);
+          // held only where it is still on the surface (a plane's extension
+          // past the end of its face is not): else frictionless this tick
+          const Hit there = nearest(candidate, 4.0 * planes.max_offset + planes.tolerance);
+          if (there.found()) {
+            x = candidate;
+            touched = there;
+          }
         }
       }
     } else if (planes.count == 0) {
