@@ -341,16 +341,16 @@ class HeightFieldShape {
   }
 
   static Box box_of(const Data& g, const NodeRef& n) noexcept {
-    const double cells = std::ldexp(1.0, static_cast<int>(n.level));
+    const auto cells = static_cast<double>(std::uint64_t{1} << n.level);
     Box b;
     b.lo.x = n.i * cells * g.spacing.x;
     b.lo.y = n.j * cells * g.spacing.y;
-    b.hi.x = std::fmin((n.i + 1) * cells, g.width - 1.0) * g.spacing.x;
-    b.hi.y = std::fmin((n.j + 1) * cells, g.height - 1.0) * g.spacing.y;
+    b.hi.x = detail::smaller((n.i + 1) * cells, g.width - 1.0) * g.spacing.x;
+    b.hi.y = detail::smaller((n.j + 1) * cells, g.height - 1.0) * g.spacing.y;
     if (n.level == 0) {
       const double a = at(g, n.i, n.j), b1 = at(g, n.i + 1, n.j), c = at(g, n.i, n.j + 1), e = at(g, n.i + 1, n.j + 1);
-      b.lo.z = std::fmin(std::fmin(a, b1), std::fmin(c, e));
-      b.hi.z = std::fmax(std::fmax(a, b1), std::fmax(c, e));
+      b.lo.z = detail::smaller(detail::smaller(a, b1), detail::smaller(c, e));
+      b.hi.z = detail::larger(detail::larger(a, b1), detail::larger(c, e));
     } else {
       const Level& l = g.levels[n.level - 1];
       const auto& r = l.range[static_cast<std::size_t>(n.j) * l.nx + n.i];
@@ -374,8 +374,8 @@ class HeightFieldShape {
       }
       const double a = (lo - from[k]) * inv[k];
       const double b = (hi - from[k]) * inv[k];
-      t0 = std::fmax(t0, std::fmin(a, b));
-      t1 = std::fmin(t1, std::fmax(a, b));
+      t0 = detail::larger(t0, detail::smaller(a, b));
+      t1 = detail::smaller(t1, detail::larger(a, b));
     }
     entry = t0;
     exit = t1;
@@ -385,7 +385,7 @@ class HeightFieldShape {
   static double box_distance2(const Box& b, const glm::dvec3& p) noexcept {
     double d2 = 0.0;
     for (int k = 0; k < 3; ++k) {
-      const double out = std::fmax(0.0, std::fmax(b.lo[k] - p[k], p[k] - b.hi[k]));
+      const double out = detail::larger(0.0, detail::larger(b.lo[k] - p[k], p[k] - b.hi[k]));
       d2 += out * out;
     }
     return d2;

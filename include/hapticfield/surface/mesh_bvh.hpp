@@ -253,8 +253,9 @@ class MeshBvh {
       }
       const double a = (lo - from[k]) * inv[k];
       const double b = (hi - from[k]) * inv[k];
-      t0 = std::fmax(t0, std::fmin(a, b));
-      t1 = std::fmin(t1, std::fmax(a, b));
+      // plain comparisons (std::fmin / fmax are library calls here): no NaN can occur
+      t0 = detail::larger(t0, detail::smaller(a, b));
+      t1 = detail::smaller(t1, detail::larger(a, b));
     }
     entry = t0;
     return t0 <= t1 * (1.0 + 1e-12) + 1e-300;
@@ -265,7 +266,7 @@ class MeshBvh {
     for (int k = 0; k < 3; ++k) {
       const double below = static_cast<double>(n.lo[k]) - p[k];
       const double above = p[k] - static_cast<double>(n.hi[k]);
-      const double out = std::fmax(0.0, std::fmax(below, above));
+      const double out = detail::larger(0.0, detail::larger(below, above));
       d2 += out * out;
     }
     return d2;

@@ -78,6 +78,16 @@ struct QueryStats {
 
 namespace detail {
 
+/// a < b ? a : b, inlined (std::fmin is a library call that also handles
+/// NaN; the traversals that use these never see one).
+[[nodiscard]] constexpr double smaller(double a, double b) noexcept {
+  return b < a ? b : a;
+}
+/// a > b ? a : b, inlined (see smaller()).
+[[nodiscard]] constexpr double larger(double a, double b) noexcept {
+  return b > a ? b : a;
+}
+
 /// The tangent frame of a surface point from dP/du and dP/dv [m per uv
 /// unit], made orthonormal against the unit normal n: t along dP/du in the
 /// tangent plane, b = +-(n x t) with the sign of dP/dv (mirrored uvs keep
