@@ -130,7 +130,7 @@ class HeightFieldShape {
     glm::dvec2 best_st{0.0};
     std::array<NodeRef, stack_size> stack{};
     std::size_t top = 0;
-    stack[top++] = NodeRef{static_cast<std::uint32_t>(g.levels.size()), 0, 0};
+    stack[top++] = smallest_node(g, glm::min(from, to), glm::max(from, to));
     bool complete = true;
     while (top > 0) {
       const NodeRef node = stack[--top];
@@ -186,7 +186,8 @@ class HeightFieldShape {
     glm::dvec2 best_st{0.0};
     std::array<NodeRef, stack_size> stack{};
     std::size_t top = 0;
-    stack[top++] = NodeRef{static_cast<std::uint32_t>(g.levels.size()), 0, 0};
+    const double reach = std::isfinite(max_distance) ? max_distance : 1e300;
+    stack[top++] = smallest_node(g, p - glm::dvec3{reach}, p + glm::dvec3{reach});
     bool complete = true;
     while (top > 0) {
       const NodeRef node = stack[--top];
@@ -271,6 +272,25 @@ class HeightFieldShape {
   static constexpr std::size_t stack_size = 4 * 32 + 1;
 
   using Kids = std::array<std::pair<double, NodeRef>, 4>;
+
+  /// The smallest quadtree node holding every cell under the box [lo, hi]
+  /// (x and y only; cells outside the grid do not exist): a short query
+  /// starts there instead of at the root.
+  static NodeRef smallest_node(const Data& g, const glm::dvec3& lo, const glm::dvec3& hi) noexcept {
+    const auto top_level = static_cast<std::uint32_t>(g.levels.size());
+    const auto cell = [](double v, double spacing, std::uint32_t cells) {
+      const double c = std::floor(v / spacing);
+      if (!(c >= 0.0)) return std::uint32_t{0};  // also NaN
+      if (!(c < static_cast<double>(cells))) return cells - 1;
+      return static_cast<std::uint32_t>(c);
+    };
+    const std::uint32_t i0 = cell(lo.x, g.spacing.x, g.width - 1), i1 = cell(hi.x, g.spacing.x, g.width - 1);
+    const std::uint32_t j0 = cell(lo.y, g.spacing.y, g.height - 1), j1 = cell(hi.y, g.spacing.y, g.height - 1);
+    std::uint32_t level = 0;
+    while (level < top_level && ((i0 >> level) != (i1 >> level) || (j0 >> level) != (j1 >> level)))
+      ++level;
+    return NodeRef{level, i0 >> level, j0 >> level};
+  }
 
   /// Pushes the children farthest first (largest key), so the nearest is
   /// popped next (an insertion sort of at most four).
