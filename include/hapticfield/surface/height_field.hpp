@@ -229,6 +229,19 @@ class HeightFieldShape {
     return best;
   }
 
+  /// The point of one cell nearest to p, if within max_distance [m] (no
+  /// tree traversal: the proxy's check that it is still on a cell).
+  [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p, double max_distance) const noexcept {
+    const Data& g = *data_;
+    if (primitive >= (g.width - 1) * (g.height - 1) || !is_finite(p)) return Hit{};
+    glm::dvec2 st{0.0};
+    const double d2 = closest_in_cell(g, primitive % (g.width - 1), primitive / (g.width - 1), p, st);
+    if (!(d2 <= max_distance * max_distance)) return Hit{};
+    Hit h = describe(primitive, st);
+    h.distance = std::sqrt(d2);
+    return h;
+  }
+
   /// The bilinear height at (x, y) [m]; NaN outside the footprint.
   [[nodiscard]] double height_at(double x, double y) const noexcept {
     const Data& g = *data_;

@@ -42,6 +42,60 @@
 
 namespace hapticfield {
 
+namespace detail {
+
+/// The point of the triangle (a, a + e1, a + e2) nearest to p, by the
+/// Voronoi region of p (a vertex, an edge or the face; Ericson 2005,
+/// 5.1.5); b1, b2 receive its barycentric weights of vertices 1 and 2.
+[[nodiscard]] inline glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& e1,
+                                                    const glm::dvec3& e2, double& b1, double& b2) noexcept {
+  const glm::dvec3 ap = p - a;
+  const double d1 = glm::dot(e1, ap), d2 = glm::dot(e2, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) {  // vertex a
+    b1 = b2 = 0.0;
+    return a;
+  }
+  const glm::dvec3 bp = ap - e1;
+  const double d3 = glm::dot(e1, bp), d4 = glm::dot(e2, bp);
+  if (d3 >= 0.0 && d4 <= d3) {  // vertex b
+    b1 = 1.0;
+    b2 = 0.0;
+    return a + e1;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {  // edge ab
+    b1 = d1 / (d1 - d3);
+    b2 = 0.0;
+    return a + b1 * e1;
+  }
+  const glm::dvec3 cp = ap - e2;
+  const double d5 = glm::dot(e1, cp), d6 = glm::dot(e2, cp);
+  if (d6 >= 0.0 && d5 <= d6) {  // vertex c
+    b1 = 0.0;
+    b2 = 1.0;
+    return a + e2;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {  // edge ac
+    b1 = 0.0;
+    b2 = d2 / (d2 - d6);
+    return a + b2 * e2;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {  // edge bc
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    b1 = 1.0 - w;
+    b2 = w;
+    return a + e1 + w * (e2 - e1);
+  }
+  const double denominator = 1.0 / (va + vb + vc);  // inside the face
+  b1 = vb * denominator;
+  b2 = vc * denominator;
+  return a + b1 * e1 + b2 * e2;
+}
+
+}  // namespace detail
+
 /// Deepest a MeshBvh gets (root at depth 1): the size of the fixed
 /// traversal stack.
 inline constexpr std::size_t bvh_max_depth = 64;
@@ -180,7 +234,7 @@ class MeshBvh {
           ++work.primitives;
           const Triangle& tri = triangles_[i];
           double b1 = 0.0, b2 = 0.0;
-          const glm::dvec3 q = closest_on_triangle(p, tri, b1, b2);
+          const glm::dvec3 q = detail::closest_on_triangle(p, tri.a, tri.e1, tri.e2, b1, b2);
           const glm::dvec3 r = q - p;
           const double d2 = glm::dot(r, r);
           if (d2 <= best_d2) {
@@ -293,55 +347,6 @@ class MeshBvh {
     best.t = t;
     best.b1 = u / det;
     best.b2 = v / det;
-  }
-
-  /// The point of the triangle nearest to p, by the Voronoi region of p
-  /// (a vertex, an edge or the face); b1, b2 receive its barycentric
-  /// weights of vertices 1 and 2.
-  static glm::dvec3 closest_on_triangle(const glm::dvec3& p, const Triangle& tri, double& b1, double& b2) noexcept {
-    const glm::dvec3 ap = p - tri.a;
-    const double d1 = glm::dot(tri.e1, ap), d2 = glm::dot(tri.e2, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) {  // vertex a
-      b1 = b2 = 0.0;
-      return tri.a;
-    }
-    const glm::dvec3 bp = ap - tri.e1;
-    const double d3 = glm::dot(tri.e1, bp), d4 = glm::dot(tri.e2, bp);
-    if (d3 >= 0.0 && d4 <= d3) {  // vertex b
-      b1 = 1.0;
-      b2 = 0.0;
-      return tri.a + tri.e1;
-    }
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {  // edge ab
-      b1 = d1 / (d1 - d3);
-      b2 = 0.0;
-      return tri.a + b1 * tri.e1;
-    }
-    const glm::dvec3 cp = ap - tri.e2;
-    const double d5 = glm::dot(tri.e1, cp), d6 = glm::dot(tri.e2, cp);
-    if (d6 >= 0.0 && d5 <= d6) {  // vertex c
-      b1 = 0.0;
-      b2 = 1.0;
-      return tri.a + tri.e2;
-    }
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {  // edge ac
-      b1 = 0.0;
-      b2 = d2 / (d2 - d6);
-      return tri.a + b2 * tri.e2;
-    }
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {  // edge bc
-      const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-      b1 = 1.0 - w;
-      b2 = w;
-      return tri.a + tri.e1 + w * (tri.e2 - tri.e1);
-    }
-    const double denominator = 1.0 / (va + vb + vc);  // inside the face
-    b1 = vb * denominator;
-    b2 = vc * denominator;
-    return tri.a + b1 * tri.e1 + b2 * tri.e2;
   }
 
   /// Build-time state: per-triangle boxes and centroids, the order being

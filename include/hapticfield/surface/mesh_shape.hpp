@@ -39,6 +39,10 @@ struct MeshShapeConfig {
 
 class MeshShape {
  public:
+  /// Each primitive is a flat, convex triangle (the proxy moves over one
+  /// without a sweep).
+  static constexpr bool flat_primitives = true;
+
   /// Takes the mesh and builds its tree (allocates; may take about a second
   /// per million triangles).
   /// @throws std::invalid_argument for an invalid mesh (TriangleMesh::validate)
@@ -68,6 +72,23 @@ class MeshShape {
     Hit out = describe(h);
     out.t = h.t;
     if (h.found()) out.distance = h.t * glm::length(to - from);
+    return out;
+  }
+
+  /// The point of one triangle nearest to p, if within max_distance [m]
+  /// (no tree traversal: the proxy's check that it is still on a face).
+  [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p, double max_distance) const noexcept {
+    const TriangleMesh& m = data_->mesh;
+    if (primitive >= m.triangles.size() || !is_finite(p)) return Hit{};
+    const TriangleIndices& tri = m.triangles[primitive];
+    const glm::dvec3 a = m.positions[tri[0]];
+    BvhHit h;
+    h.point = detail::closest_on_triangle(p, a, m.positions[tri[1]] - a, m.positions[tri[2]] - a, h.b1, h.b2);
+    h.distance = glm::length(h.point - p);
+    if (!(h.distance <= max_distance)) return Hit{};
+    h.triangle = primitive;
+    Hit out = describe(h);
+    out.distance = h.distance;
     return out;
   }
 

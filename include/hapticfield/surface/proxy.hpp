@@ -162,7 +162,7 @@ class ProxyConstraint {
       }
       planes.project(goal);  // the final active set (releases planes the HIP has left)
       if (blocked || planes.count == 0) break;
-      touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance);
+      touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance, last_hit);
       if (touched.found() || !touched.complete) break;
       if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
         x = anchor;
@@ -194,15 +194,21 @@ class ProxyConstraint {
         sliding_ = false;
       }
       if (glm::length(candidate - frictionless) > planes.tolerance) {
-        const Hit h = sweep(frictionless, candidate);
-        ++tick_.moves;
-        if (h.complete && !h.found()) {
-          // held only where it is still on the surface (a plane's extension
-          // past the end of its face is not): else frictionless this tick
-          const Hit there = nearest(candidate, 4.0 * planes.max_offset + planes.tolerance);
-          if (there.found()) {
-            x = candidate;
-            touched = there;
+        const double reach = 4.0 * planes.max_offset + planes.tolerance;
+        if (Hit same = on_same_face(candidate, reach, touched); same.found()) {
+          x = candidate;  // both ends over one flat face: nothing can lie between them
+          touched = same;
+        } else {
+          const Hit h = sweep(frictionless, candidate);
+          ++tick_.moves;
+          if (h.complete && !h.found()) {
+            // held only where it is still on the surface (a plane's extension
+            // past the end of its face is not): else frictionless this tick
+            const Hit there = nearest(candidate, reach, touched);
+            if (there.found()) {
+              x = candidate;
+              touched = there;
+            }
           }
         }
       }
@@ -393,8 +399,30 @@ class ProxyConstraint {
     }
   }
 
-  /// shape_.closest, counting as sweep() does.
-  [[nodiscard]] Hit nearest(const glm::dvec3& p, double max_distance) noexcept {
+  /// The point over `face` (the primitive the proxy is on) nearest to p,
+  /// when the shape's primitives are flat (S::flat_primitives) and p is
+  /// within max_distance of it; else nothing. A move between two points over
+  /// one flat, convex face needs no sweep.
+  [[nodiscard]] Hit on_same_face(const glm::dvec3& p, double max_distance, const Hit& face) const noexcept {
+    if constexpr (requires {
+                    requires S::flat_primitives;
+                    shape_.on_primitive(face.primitive, p, max_distance);
+                  }) {
+      if (face.found()) return shape_.on_primitive(face.primitive, p, max_distance);
+    }
+    return Hit{};
+  }
+
+  /// shape_.closest, counting as sweep() does; first the primitive of
+  /// `hint` alone when the shape can answer for one (on_primitive()), which
+  /// costs no traversal while the proxy stays on the face it last met.
+  [[nodiscard]] Hit nearest(const glm::dvec3& p, double max_distance, const Hit& hint) noexcept {
+    if constexpr (requires { shape_.on_primitive(hint.primitive, p, max_distance); }) {
+      if (hint.found()) {
+        const Hit h = shape_.on_primitive(hint.primitive, p, max_distance);
+        if (h.found()) return h;
+      }
+    }
     if constexpr (requires(QueryStats * q) { shape_.closest(p, max_distance, q); }) {
       QueryStats q;
       const Hit h = shape_.closest(p, max_distance, &q);
