@@ -9,5 +9,7 @@
 #include "hapticfield/normals.hpp"
 #include "hapticfield/offline.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/surface.hpp"
 #include "hapticfield/texture.hpp"
 #include "hapticfield/texture/hatt.hpp"
+#include "hapticfield/vibration.hpp"

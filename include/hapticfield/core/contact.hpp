@@ -12,16 +12,21 @@
 ///      parts are not called (no contact, no texture, no friction).
 ///
 /// So a force-scaled texture or friction, or a HaTT model chosen by normal
-/// force, sees the constraint force alone, never its own output.
+/// force, sees the constraint force alone, never its own output. Where the
+/// constraint knows it (a proxy on a mesh or height field, surface/), the
+/// parts also see where the contact is: uv, tangent frame, primitive and
+/// material of the touched point (Probe's surface fields).
 
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <cstdint>
 #include <tuple>
 #include <type_traits>
 #include <utility>
 
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "hapticfield/core/field.hpp"
@@ -32,17 +37,24 @@ namespace hapticfield {
 
 /// What a constraint reports about the HIP this tick.
 struct Contact {
-  bool touching{false};    ///< the HIP is inside the surface (depth > 0)
-  double depth{0.0};       ///< penetration depth [m], >= 0
-  glm::dvec3 normal{0.0};  ///< unit surface normal toward the user; zero when not touching
-  glm::dvec3 force{0.0};   ///< constraint force Fc [N]; zero when not touching
+  bool touching{false};                   ///< the HIP is inside the surface (depth > 0)
+  double depth{0.0};                      ///< penetration depth [m], >= 0
+  glm::dvec3 normal{0.0};                 ///< unit surface normal toward the user; zero when not touching
+  glm::dvec3 force{0.0};                  ///< constraint force Fc [N]; zero when not touching
+  glm::dvec2 surface_uv{0.0};             ///< texture coordinates of the touched point [-]
+  glm::dvec3 surface_tangent{0.0};        ///< unit direction of increasing u in the tangent plane; zero: no uv
+  glm::dvec3 surface_bitangent{0.0};      ///< unit direction of increasing v in the tangent plane; zero: no uv
+  std::uint32_t primitive{no_primitive};  ///< touched triangle / grid cell id; no_primitive: none
+  std::uint32_t material{0};              ///< material index of the touched primitive
 };
 
 /// A constraint: a surface that reports the contact of the HIP with it.
 /// `contact()` is on the servo path: noexcept, no allocation; a non-finite
-/// probe gives a Contact that is not touching.
+/// probe gives a Contact that is not touching. It may change the
+/// constraint's own state (a proxy remembers where it is) and then has a
+/// `reset()` that ContactField::reset() calls.
 template <class C>
-concept Constraint = requires(const C& constraint, const Probe& probe) {
+concept Constraint = requires(C& constraint, const Probe& probe) {
   { constraint.contact(probe) }
   noexcept->std::same_as<Contact>;
 };
@@ -67,12 +79,18 @@ class ContactField {
     Probe on = probe;
     on.normal_force = glm::length(last_.force);
     on.surface_normal = last_.normal;
+    on.surface_uv = last_.surface_uv;
+    on.surface_tangent = last_.surface_tangent;
+    on.surface_bitangent = last_.surface_bitangent;
+    on.primitive = last_.primitive;
+    on.material = last_.material;
     const glm::dvec3 f =
         std::apply([&on, this](auto&... part) { return (last_.force + ... + glm::dvec3(part.force(on))); }, parts_);
     return is_finite(f) ? f : glm::dvec3{0.0};
   }
 
   void reset() noexcept {
+    if constexpr (requires { constraint_.reset(); }) constraint_.reset();
     std::apply([](auto&... part) { (reset_if_stateful(part), ...); }, parts_);
     last_ = Contact{};
   }
@@ -80,6 +98,7 @@ class ContactField {
   /// The contact found by the last force() call.
   [[nodiscard]] const Contact& last_contact() const noexcept { return last_; }
   [[nodiscard]] const C& constraint() const noexcept { return constraint_; }
+  [[nodiscard]] C& constraint() noexcept { return constraint_; }
   /// The i-th part.
   template <std::size_t I>
   [[nodiscard]] auto& part() noexcept {

@@ -1,0 +1,320 @@
+// Cost of a proxy tick on meshes from 1k to 4M triangles, as ratios against
+// baselines measured in the same run: the proxy on an analytic plane, and a
+// brute-force scan of every triangle (where it finishes); MeshBvh build time
+// per million triangles; the height-field tick against a tangible-image
+// tick; and the highest stiffness that stays passive at each servo rate.
+//
+//   bench_surface [--ticks N] [--max-triangles N] [--no-passivity]
+#include <hapticfield/kernels.hpp>
+#include <hapticfield/surface.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "../tests/surface_energy.hpp"
+#include "../tests/surface_meshes.hpp"
+#include "tick_cost.hpp"
+
+namespace hf = hapticfield;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+/// Every triangle tested for every query: the baseline a tree must beat.
+class BruteShape {
+ public:
+  explicit BruteShape(const hf::TriangleMesh& mesh) : mesh_(mesh) {}
+
+  [[nodiscard]] hf::Hit first_hit(const glm::dvec3& from, const glm::dvec3& to) const noexcept {
+    const glm::dvec3 d = to - from;
+    hf::Hit best;
+    double best_t = 1.0;
+    for (std::uint32_t k = 0; k < mesh_.triangles.size(); ++k) {
+      const auto& t = mesh_.triangles[k];
+      const glm::dvec3 a = mesh_.positions[t[0]], e1 = mesh_.positions[t[1]] - a, e2 = mesh_.positions[t[2]] - a;
+      const glm::dvec3 n = glm::cross(e1, e2);
+      const double dn = glm::dot(d, n);
+      if (!(dn < 0.0)) continue;  // back face or parallel
+      const double s = glm::dot(a - from, n) / dn;
+      if (!(s >= 0.0 && s < best_t)) continue;
+      const glm::dvec3 p = from + s * d - a;
+      const double b1 = glm::dot(glm::cross(p, e2), n) / glm::dot(n, n);
+      const double b2 = glm::dot(glm::cross(e1, p), n) / glm::dot(n, n);
+      if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
+      best_t = s;
+      best = describe(k, from + s * d);
+      best.t = s;
+    }
+    return best;
+  }
+
+  [[nodiscard]] hf::Hit closest(const glm::dvec3& p, double max_distance) const noexcept {
+    hf::Hit best;
+    double best_d = max_distance;
+    for (std::uint32_t k = 0; k < mesh_.triangles.size(); ++k) {
+      const auto& t = mesh_.triangles[k];
+      const glm::dvec3 a = mesh_.positions[t[0]], b = mesh_.positions[t[1]], c = mesh_.positions[t[2]];
+      // the face when the projection is inside, else the nearest edge point
+      const glm::dvec3 n = glm::normalize(glm::cross(b - a, c - a));
+      const glm::dvec3 q = p - glm::dot(p - a, n) * n;
+      const auto side = [&](const glm::dvec3& x, const glm::dvec3& y) {
+        return glm::dot(glm::cross(y - x, q - x), n) >= 0.0;
+      };
+      glm::dvec3 best_point = q;
+      if (!(side(a, b) && side(b, c) && side(c, a))) {
+        double nearest = std::numeric_limits<double>::max();
+        for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) {
+          const double s = std::clamp(glm::dot(p - x, y - x) / glm::dot(y - x, y - x), 0.0, 1.0);
+          const glm::dvec3 e = x + s * (y - x);
+          if (glm::length(e - p) < nearest) {
+            nearest = glm::length(e - p);
+            best_point = e;
+          }
+        }
+      }
+      const double dist = glm::length(best_point - p);
+      if (dist <= best_d) {
+        best_d = dist;
+        best = describe(k, best_point);
+        best.distance = dist;
+      }
+    }
+    return best;
+  }
+
+ private:
+  [[nodiscard]] hf::Hit describe(std::uint32_t k, const glm::dvec3& point) const noexcept {
+    const auto& t = mesh_.triangles[k];
+    const glm::dvec3 a = mesh_.positions[t[0]], b = mesh_.positions[t[1]], c = mesh_.positions[t[2]];
+    hf::Hit h;
+    h.point = point;
+    h.face_normal = h.normal = glm::normalize(glm::cross(b - a, c - a));
+    h.size = std::sqrt(std::fmax(glm::dot(b - a, b - a), std::fmax(glm::dot(c - a, c - a), glm::dot(c - b, c - b))));
+    h.primitive = k;
+    return h;
+  }
+
+  const hf::TriangleMesh& mesh_;
+};
+
+/// A HIP sliding over the surface 2 mm deep at up to 0.2 m/s, with taps.
+std::vector<hf::Probe> script(long ticks, double half_extent) {
+  std::vector<hf::Probe> path;
+  std::mt19937 rng(17);
+  std::normal_distribution<double> g(0.0, 2e-5);
+  glm::dvec3 wobble{0.0};
+  for (long i = 0; i < ticks; ++i) {
+    const double t = static_cast<double>(i) * 1e-3;
+    wobble += glm::dvec3{g(rng), g(rng), g(rng)};
+    wobble = glm::clamp(wobble, glm::dvec3{-1e-3}, glm::dvec3{1e-3});
+    hf::Probe p;
+    p.position = glm::dvec3{0.6 * half_extent * std::sin(0.5 * t), 0.6 * half_extent * std::sin(0.31 * t),
+                            0.002 - 0.004 * (0.5 + 0.5 * std::sin(3.0 * t))} +
+                 wobble;
+    p.velocity = glm::dvec3{0.1, 0.05, 0.0};
+    p.time = t;
+    path.push_back(p);
+  }
+  return path;
+}
+
+/// The cost of one call [ns] in this thread's CPU time (CLOCK_THREAD_CPUTIME_ID):
+/// time the scheduler gives to other processes is not counted, so a shared,
+/// loaded machine still measures the work of the tick. Includes the clock's
+/// own cost (printed as "clock").
+template <class Tick>
+hf::bench::Cost measure_cpu(long n, Tick&& tick) {
+  const auto now = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  };
+  std::vector<std::int64_t> d(static_cast<std::size_t>(n));
+  const std::int64_t t0 = now();
+  for (long i = 0; i < n; ++i)
+    tick();
+  hf::bench::Cost c;
+  c.mean_ns = static_cast<double>(now() - t0) / static_cast<double>(n);
+  for (long i = 0; i < n; ++i) {
+    const std::int64_t a = now();
+    tick();
+    d[static_cast<std::size_t>(i)] = now() - a;
+  }
+  std::sort(d.begin(), d.end());
+  const auto at = [&](double q) {
+    return static_cast<double>(d[static_cast<std::size_t>(q * static_cast<double>(n - 1))]);
+  };
+  c.p50_ns = at(0.5);
+  c.p99_ns = at(0.99);
+  c.p999_ns = at(0.999);
+  c.worst_ns = static_cast<double>(d.back());
+  return c;
+}
+
+template <class Proxy>
+hf::bench::Cost tick_cost(Proxy& proxy, const std::vector<hf::Probe>& path, double& mean_nodes,
+                          std::uint32_t& worst_nodes) {
+  std::size_t i = 0;
+  glm::dvec3 sink{0.0};
+  double node_sum = 0.0;
+  worst_nodes = 0;
+  const auto tick = [&] {
+    sink += proxy.contact(path[i]).force;
+    node_sum += proxy.last_tick().nodes;
+    worst_nodes = std::max(worst_nodes, proxy.last_tick().nodes);
+    i = (i + 1) % path.size();
+  };
+  const hf::bench::Cost c = measure_cpu(static_cast<long>(path.size()), tick);
+  mean_nodes = node_sum / (2.0 * static_cast<double>(path.size()));
+  if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
+  return c;
+}
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+/// The highest stiffness [N/m] that stays passive at `rate` [Hz] (bisection
+/// on the energy check of tests/surface_energy.hpp), on a mesh surface.
+double highest_passive(const hf::TriangleMesh& mesh, double rate) {
+  double lo = 100.0, hi = 100000.0;
+  for (int step = 0; step < 14; ++step) {
+    const double k = std::sqrt(lo * hi);
+    hf::ProxyConstraint proxy(hf::MeshShape(mesh), hf::ProxyConfig{k});
+    const auto run = hf::test::tap_and_slide(proxy, rate, 10.0);
+    (run.excess <= 1e-9 * run.dissipated + 1e-12 ? lo : hi) = k;
+  }
+  return lo;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long ticks = 20000;
+  std::size_t max_triangles = 4'000'000;
+  bool passivity = true;
+  for (int a = 1; a < argc; ++a) {
+    if (!std::strcmp(argv[a], "--ticks") && a + 1 < argc)
+      ticks = std::atol(argv[++a]);
+    else if (!std::strcmp(argv[a], "--max-triangles") && a + 1 < argc)
+      max_triangles = static_cast<std::size_t>(std::atoll(argv[++a]));
+    else if (!std::strcmp(argv[a], "--no-passivity"))
+      passivity = false;
+    else {
+      std::fprintf(stderr, "usage: bench_surface [--ticks N] [--max-triangles N] [--no-passivity]\n");
+      return 2;
+    }
+  }
+  const double side = 0.1;  // [m]
+  const std::vector<hf::Probe> path = script(ticks, side / 2);
+
+  // --- baseline: the proxy on an analytic plane ---
+  hf::ProxyConstraint plane(hf::PlaneShape(hf::PlaneShapeConfig{}), hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
+  double plane_nodes = 0.0;
+  std::uint32_t plane_worst_nodes = 0;
+  const hf::bench::Cost base = tick_cost(plane, path, plane_nodes, plane_worst_nodes);
+  const hf::bench::Cost clock = measure_cpu(ticks, [] {});
+  std::printf("Times are this thread's CPU time per call (the clock read itself: p99 %.0f ns).\n\n", clock.p99_ns);
+  std::printf("## Proxy tick on a wavy mesh (sliding 2 mm deep with friction, %ld ticks)\n\n", ticks);
+  std::printf("Baseline: the proxy on an analytic plane, mean %.0f ns, p99 %.0f ns, worst %.0f ns.\n\n", base.mean_ns,
+              base.p99_ns, base.worst_ns);
+  std::printf(
+      "| triangles | build [ms] | build [s per M] | depth | mean [ns] | p99 [ns] | worst [ns] | "
+      "mean / plane | p99 / plane | nodes mean | nodes worst | brute mean / tree mean |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const std::size_t target : {1'000ul, 16'000ul, 250'000ul, 1'000'000ul, 4'000'000ul}) {
+    if (target > max_triangles) break;
+    const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0)));
+    hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+    const auto t0 = Clock::now();
+    hf::MeshShape shape(mesh);
+    const double build_s = seconds_since(t0);
+    hf::ProxyConstraint proxy(shape, hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
+    double nodes = 0.0;
+    std::uint32_t worst_nodes = 0;
+    const hf::bench::Cost c = tick_cost(proxy, path, nodes, worst_nodes);
+    std::string brute = "-";
+    if (mesh.triangles.size() <= 20'000) {  // a brute-force tick at 250k triangles takes milliseconds
+      hf::ProxyConstraint slow(BruteShape(mesh), hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
+      const std::vector<hf::Probe> few(path.begin(), path.begin() + std::min<long>(ticks, 2000));
+      double unused = 0.0;
+      std::uint32_t unused_worst = 0;
+      const hf::bench::Cost b = tick_cost(slow, few, unused, unused_worst);
+      brute = std::to_string(static_cast<int>(std::lround(b.mean_ns / c.mean_ns))) + " x";
+    }
+    const double mtri = static_cast<double>(mesh.triangles.size()) / 1e6;
+    std::printf("| %zu | %.1f | %.2f | %zu | %.0f | %.0f | %.0f | %.1f | %.1f | %.1f | %u | %s |\n",
+                mesh.triangles.size(), build_s * 1e3, build_s / mtri, shape.bvh().depth(), c.mean_ns, c.p99_ns,
+                c.worst_ns, c.mean_ns / base.mean_ns, c.p99_ns / base.p99_ns, nodes, worst_nodes, brute.c_str());
+  }
+
+  // --- height field vs tangible image, on a picture-sized grid ---
+  {
+    const int w = 1504, h = 1000;
+    const double spacing = 1.0 / 6400.0 * 1.0;  // 6.4 px/mm [m]
+    struct Grid {
+      int width, height;
+      double spacing_x, spacing_y;
+      std::vector<double> heights;
+    } grid{w, h, spacing, spacing, {}};
+    hf::GrayImage gray(w, h);
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < w; ++i) {
+        const double level = 127.5 + 127.5 * std::sin(i * 0.05) * std::cos(j * 0.04);
+        gray.at(i, j) = level;
+        grid.heights.push_back(level * 1e-5);  // 0 .. 2.55 mm
+      }
+    const auto t0 = Clock::now();
+    hf::HeightFieldShape field(grid);
+    const double build_s = seconds_since(t0);
+    hf::ProxyConstraint proxy(field, hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
+    std::vector<hf::Probe> over = script(ticks, w * spacing / 2);
+    for (auto& p : over) {
+      p.position.x += w * spacing / 2;
+      p.position.y += h * spacing / 2;
+      p.position.z += 0.0013;
+    }
+    double nodes = 0.0;
+    std::uint32_t worst_nodes = 0;
+    const hf::bench::Cost c = tick_cost(proxy, over, nodes, worst_nodes);
+    const hf::TangibleImageField image(hf::TangibleImage(gray, hf::TangibleConfig{}),
+                                       hf::PlaneMapping(6.4, glm::dvec2{w / 2.0, h / 2.0}), 1.0);
+    std::size_t i = 0;
+    glm::dvec3 sink{0.0};
+    const hf::bench::Cost t = measure_cpu(static_cast<long>(over.size()), [&] {
+      sink += image.force(over[i]);
+      i = (i + 1) % over.size();
+    });
+    std::printf("\n## Height field (%d x %d, build %.0f ms) against the tangible image of the same picture\n\n", w, h,
+                build_s * 1e3);
+    std::printf(
+        "| field | mean [ns] | p99 [ns] | worst [ns] | nodes mean | nodes worst |\n|---|---:|---:|---:|---:|---:|\n");
+    std::printf("| tangible image (17 px Prewitt) | %.0f | %.0f | %.0f | - | - |\n", t.mean_ns, t.p99_ns, t.worst_ns);
+    std::printf("| proxy on the height field | %.0f | %.0f | %.0f | %.1f | %u |\n", c.mean_ns, c.p99_ns, c.worst_ns,
+                nodes, worst_nodes);
+    std::printf("\nHeight field / tangible image: mean %.1f x, p99 %.1f x, worst %.1f x.\n", c.mean_ns / t.mean_ns,
+                c.p99_ns / t.p99_ns, c.worst_ns / t.worst_ns);
+    if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
+  }
+
+  // --- passivity: the highest stable stiffness against the servo rate ---
+  if (passivity) {
+    const hf::TriangleMesh mesh = hf::with_vertex_normals(hf::test::wavy_sheet(0.1, 60, 0.001, 0.03));
+    std::printf("\n## Highest passive stiffness (0.1 kg arm with 1 N s/m damping, 10 s of tapping and sliding)\n\n");
+    std::printf("| rate [Hz] | highest passive k [N/m] | 2 b / T [N/m] | k T / (2 b) |\n|---:|---:|---:|---:|\n");
+    for (const double rate : {500.0, 1000.0, 2000.0, 4000.0}) {
+      const double k = highest_passive(mesh, rate);
+      std::printf("| %.0f | %.0f | %.0f | %.2f |\n", rate, k, 2.0 * rate, k / (2.0 * rate));
+    }
+  }
+  return 0;
+}

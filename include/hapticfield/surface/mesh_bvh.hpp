@@ -1,0 +1,562 @@
+#pragma once
+/// @file mesh_bvh.hpp
+/// MeshBvh: a bounding volume hierarchy over a TriangleMesh, built once and
+/// queried every tick.
+///
+/// Build (allocates, may throw): binned surface-area heuristic over the
+/// triangles' centroids, 16 bins on each axis (Wald, "On fast construction
+/// of SAH-based bounding volume hierarchies", IEEE RT 2007), leaves of at
+/// most 4 triangles. The depth is capped at bvh_max_depth: once the SAH
+/// could run past it, nodes are split at the median triangle, which halves
+/// them, so a fixed traversal stack of bvh_max_depth entries always
+/// suffices. Triangles with no area (the height of the triangle below 1e-12
+/// of its longest edge) or non-finite corners are left out: they have no
+/// normal and are never hit.
+///
+/// Queries (const, noexcept, no allocation): first_hit(from, to), the
+/// first front-facing triangle a segment crosses (Moller & Trumbore, "Fast,
+/// minimum storage ray/triangle intersection", JGT 1997, with a barycentric
+/// tolerance of 1e-9, relative to the triangle, so a segment through a
+/// shared edge or vertex meets one of its triangles), and closest(p, r), the
+/// nearest point within r (the Voronoi-region closest point on a triangle,
+/// Ericson, "Real-Time Collision Detection", 2005, section 5.1.5). Each
+/// query visits at most `max_nodes` nodes (its budget); past that it stops
+/// and says so (BvhHit::complete = false).
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "hapticfield/surface/shape.hpp"
+#include "hapticfield/surface/triangle_mesh.hpp"
+
+namespace hapticfield {
+
+namespace detail {
+
+/// The point of the triangle (a, a + e1, a + e2) nearest to p, by the
+/// Voronoi region of p (a vertex, an edge or the face; Ericson 2005,
+/// 5.1.5); b1, b2 receive its barycentric weights of vertices 1 and 2.
+[[nodiscard]] inline glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& e1,
+                                                    const glm::dvec3& e2, double& b1, double& b2) noexcept {
+  const glm::dvec3 ap = p - a;
+  const double d1 = glm::dot(e1, ap), d2 = glm::dot(e2, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) {  // vertex a
+    b1 = b2 = 0.0;
+    return a;
+  }
+  const glm::dvec3 bp = ap - e1;
+  const double d3 = glm::dot(e1, bp), d4 = glm::dot(e2, bp);
+  if (d3 >= 0.0 && d4 <= d3) {  // vertex b
+    b1 = 1.0;
+    b2 = 0.0;
+    return a + e1;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {  // edge ab
+    b1 = d1 / (d1 - d3);
+    b2 = 0.0;
+    return a + b1 * e1;
+  }
+  const glm::dvec3 cp = ap - e2;
+  const double d5 = glm::dot(e1, cp), d6 = glm::dot(e2, cp);
+  if (d6 >= 0.0 && d5 <= d6) {  // vertex c
+    b1 = 0.0;
+    b2 = 1.0;
+    return a + e2;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {  // edge ac
+    b1 = 0.0;
+    b2 = d2 / (d2 - d6);
+    return a + b2 * e2;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {  // edge bc
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    b1 = 1.0 - w;
+    b2 = w;
+    return a + e1 + w * (e2 - e1);
+  }
+  const double denominator = 1.0 / (va + vb + vc);  // inside the face
+  b1 = vb * denominator;
+  b2 = vc * denominator;
+  return a + b1 * e1 + b2 * e2;
+}
+
+}  // namespace detail
+
+/// Deepest a MeshBvh gets (root at depth 1): the size of the fixed
+/// traversal stack.
+inline constexpr std::size_t bvh_max_depth = 64;
+/// Most triangles in a leaf.
+inline constexpr std::uint32_t bvh_max_leaf = 4;
+/// Default node budget of one query: a few microseconds at worst.
+inline constexpr std::uint32_t bvh_default_max_nodes = 4096;
+
+/// One node: its box (float, rounded outward) and either its right child
+/// (an inner node; the left child follows it) or its triangles (a leaf).
+struct BvhNode {
+  std::array<float, 3> lo{};  ///< box minimum [m]
+  std::uint32_t index{0};     ///< inner: right child; leaf: first triangle in MeshBvh order
+  std::array<float, 3> hi{};  ///< box maximum [m]
+  std::uint32_t count{0};     ///< 0: inner node; else the leaf's triangle count
+};
+
+/// A low-level query answer: the triangle (mesh index), the point and its
+/// barycentric coordinates (weights of vertices 1 and 2; vertex 0 gets
+/// 1 - b1 - b2).
+struct BvhHit {
+  std::uint32_t triangle{no_primitive};                      ///< index into TriangleMesh::triangles; no_primitive: none
+  glm::dvec3 point{0.0};                                     ///< [m]
+  double b1{0.0};                                            ///< barycentric weight of vertex 1
+  double b2{0.0};                                            ///< barycentric weight of vertex 2
+  double t{1.0};                                             ///< first_hit: fraction of the segment [0, 1]
+  double distance{std::numeric_limits<double>::infinity()};  ///< closest: distance to the query point [m]
+  bool complete{true};                                       ///< false: the node budget ran out
+  [[nodiscard]] bool found() const noexcept { return triangle != no_primitive; }
+};
+
+struct MeshBvhConfig {
+  std::uint32_t max_nodes{bvh_default_max_nodes};  ///< node budget of one query
+};
+
+class MeshBvh {
+ public:
+  MeshBvh() = default;
+
+  /// Builds the hierarchy over `mesh` (validated first).
+  /// @throws std::invalid_argument for an invalid mesh or a zero budget.
+  [[nodiscard]] static MeshBvh build(const TriangleMesh& mesh, const MeshBvhConfig& config = {}) {
+    mesh.validate();
+    if (config.max_nodes == 0) throw std::invalid_argument("MeshBvh: max_nodes must be > 0");
+    MeshBvh bvh;
+    bvh.config_ = config;
+    Builder builder(mesh, bvh);
+    builder.run();
+    return bvh;
+  }
+
+  /// The first front-facing triangle met going from `from` to `to`
+  /// (not found: the segment is free). stats, when given, receives the
+  /// work done.
+  [[nodiscard]] BvhHit first_hit(const glm::dvec3& from, const glm::dvec3& to,
+                                 QueryStats* stats = nullptr) const noexcept {
+    BvhHit best;
+    QueryStats work;
+    if (stats) *stats = work;
+    const glm::dvec3 d = to - from;
+    if (nodes_.empty() || !is_finite(from) || !is_finite(d)) return best;
+    const glm::dvec3 inv{1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
+    std::array<std::uint32_t, bvh_max_depth> stack{};
+    std::size_t top = 0;
+    std::uint32_t node = 0;
+    double best_t = 1.0;
+    double entry = 0.0;
+    if (!segment_box(nodes_[0], from, inv, best_t, entry)) return best;
+    for (;;) {
+      if (++work.nodes > config_.max_nodes) {
+        best = BvhHit{};
+        best.t = 0.0;
+        best.complete = false;
+        break;
+      }
+      const BvhNode& n = nodes_[node];
+      if (n.count > 0) {
+        for (std::uint32_t i = n.index; i < n.index + n.count; ++i) {
+          ++work.primitives;
+          intersect(triangles_[i], from, d, best_t, best);
+        }
+      } else {
+        std::uint32_t near = node + 1, far = n.index;
+        double t_near = 0.0, t_far = 0.0;
+        bool hit_near = segment_box(nodes_[near], from, inv, best_t, t_near);
+        bool hit_far = segment_box(nodes_[far], from, inv, best_t, t_far);
+        if (hit_near && hit_far) {
+          if (t_far < t_near) std::swap(near, far);
+          stack[top++] = far;
+          node = near;
+          continue;
+        }
+        if (hit_near || hit_far) {
+          node = hit_near ? near : far;
+          continue;
+        }
+      }
+      // pop, skipping boxes the best hit so far has made too far
+      bool next = false;
+      while (top > 0) {
+        const std::uint32_t candidate = stack[--top];
+        double t_box = 0.0;
+        if (segment_box(nodes_[candidate], from, inv, best_t, t_box)) {
+          node = candidate;
+          next = true;
+          break;
+        }
+      }
+      if (!next) break;
+    }
+    if (best.found()) best.point = from + best.t * d;
+    if (stats) *stats = work;
+    return best;
+  }
+
+  /// The point of the mesh nearest to p if one is within max_distance [m]
+  /// (not found: none). stats, when given, receives the work done.
+  [[nodiscard]] BvhHit closest(const glm::dvec3& p, double max_distance, QueryStats* stats = nullptr) const noexcept {
+    BvhHit best;
+    QueryStats work;
+    if (stats) *stats = work;
+    if (nodes_.empty() || !is_finite(p) || !(max_distance >= 0.0)) return best;
+    double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
+    std::array<std::uint32_t, bvh_max_depth> stack{};
+    std::size_t top = 0;
+    std::uint32_t node = 0;
+    if (!(box_distance2(nodes_[0], p) <= best_d2)) return best;
+    for (;;) {
+      if (++work.nodes > config_.max_nodes) {
+        best.complete = false;
+        break;
+      }
+      const BvhNode& n = nodes_[node];
+      if (n.count > 0) {
+        for (std::uint32_t i = n.index; i < n.index + n.count; ++i) {
+          ++work.primitives;
+          const Triangle& tri = triangles_[i];
+          double b1 = 0.0, b2 = 0.0;
+          const glm::dvec3 q = detail::closest_on_triangle(p, tri.a, tri.e1, tri.e2, b1, b2);
+          const glm::dvec3 r = q - p;
+          const double d2 = glm::dot(r, r);
+          if (d2 <= best_d2) {
+            best_d2 = d2;
+            best.triangle = tri.id;
+            best.point = q;
+            best.b1 = b1;
+            best.b2 = b2;
+          }
+        }
+      } else {
+        std::uint32_t near = node + 1, far = n.index;
+        double d_near = box_distance2(nodes_[near], p);
+        double d_far = box_distance2(nodes_[far], p);
+        if (d_far < d_near) {
+          std::swap(near, far);
+          std::swap(d_near, d_far);
+        }
+        if (d_near <= best_d2) {
+          if (d_far <= best_d2) stack[top++] = far;
+          node = near;
+          continue;
+        }
+      }
+      bool next = false;
+      while (top > 0) {
+        const std::uint32_t candidate = stack[--top];
+        if (box_distance2(nodes_[candidate], p) <= best_d2) {
+          node = candidate;
+          next = true;
+          break;
+        }
+      }
+      if (!next) break;
+    }
+    if (best.found()) best.distance = std::sqrt(best_d2);
+    if (stats) *stats = work;
+    return best;
+  }
+
+  [[nodiscard]] std::size_t node_count() const noexcept { return nodes_.size(); }
+  /// Triangles in the tree (the mesh's, less those with no area).
+  [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles_.size(); }
+  /// Deepest leaf (root: 1), <= bvh_max_depth.
+  [[nodiscard]] std::size_t depth() const noexcept { return depth_; }
+  [[nodiscard]] const MeshBvhConfig& config() const noexcept { return config_; }
+  [[nodiscard]] const std::vector<BvhNode>& nodes() const noexcept { return nodes_; }
+
+ private:
+  /// A triangle as the queries want it: corner a, edges e1 = b - a,
+  /// e2 = c - a, and its index in the mesh.
+  struct Triangle {
+    glm::dvec3 a{0.0}, e1{0.0}, e2{0.0};
+    std::uint32_t id{0};
+  };
+
+  /// Segment [0, t_max] of from + t d against a node's box (slabs); entry
+  /// receives the entry parameter. An axis along which the segment does not
+  /// move (inv infinite) limits nothing when `from` lies within the box's
+  /// extent on it and rejects the box otherwise (no 0 * inf = NaN slab).
+  static bool segment_box(const BvhNode& n, const glm::dvec3& from, const glm::dvec3& inv, double t_max,
+                          double& entry) noexcept {
+    double t0 = 0.0, t1 = t_max;
+    for (int k = 0; k < 3; ++k) {
+      const auto lo = static_cast<double>(n.lo[static_cast<std::size_t>(k)]);
+      const auto hi = static_cast<double>(n.hi[static_cast<std::size_t>(k)]);
+      if (!std::isfinite(inv[k])) {
+        if (from[k] < lo || from[k] > hi) return false;
+        continue;
+      }
+      const double a = (lo - from[k]) * inv[k];
+      const double b = (hi - from[k]) * inv[k];
+      // plain comparisons (std::fmin / fmax are library calls here): no NaN can occur
+      t0 = detail::larger(t0, detail::smaller(a, b));
+      t1 = detail::smaller(t1, detail::larger(a, b));
+    }
+    entry = t0;
+    return t0 <= t1 * (1.0 + 1e-12) + 1e-300;
+  }
+
+  static double box_distance2(const BvhNode& n, const glm::dvec3& p) noexcept {
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double below = static_cast<double>(n.lo[k]) - p[k];
+      const double above = p[k] - static_cast<double>(n.hi[k]);
+      const double out = detail::larger(0.0, detail::larger(below, above));
+      d2 += out * out;
+    }
+    return d2;
+  }
+
+  /// Moller-Trumbore against a front-facing triangle (d opposes e1 x e2),
+  /// keeping the nearest hit with t in [0, best_t).
+  static void intersect(const Triangle& tri, const glm::dvec3& from, const glm::dvec3& d, double& best_t,
+                        BvhHit& best) noexcept {
+    constexpr double tolerance = 1e-9;  // barycentric, relative to the triangle
+    const glm::dvec3 pvec = glm::cross(d, tri.e2);
+    const double det = glm::dot(tri.e1, pvec);  // = -d . (e1 x e2): > 0 for a front face
+    if (!(det > 0.0)) return;
+    const glm::dvec3 tvec = from - tri.a;
+    const double u = glm::dot(tvec, pvec);
+    if (u < -tolerance * det || u > (1.0 + tolerance) * det) return;
+    const glm::dvec3 qvec = glm::cross(tvec, tri.e1);
+    const double v = glm::dot(d, qvec);
+    if (v < -tolerance * det || u + v > (1.0 + tolerance) * det) return;
+    const double t = glm::dot(tri.e2, qvec) / det;
+    if (!(t >= 0.0) || !(t < best_t)) return;
+    best_t = t;
+    best.triangle = tri.id;
+    best.t = t;
+    best.b1 = u / det;
+    best.b2 = v / det;
+  }
+
+  /// Build-time state: per-triangle boxes and centroids, the order being
+  /// built, the recursion.
+  class Builder {
+   public:
+    Builder(const TriangleMesh& mesh, MeshBvh& out) : mesh_(mesh), out_(out) {}
+
+    void run() {
+      const std::size_t n = mesh_.triangles.size();
+      order_.reserve(n);
+      lo_.reserve(n);
+      hi_.reserve(n);
+      centre_.reserve(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto& t = mesh_.triangles[i];
+        const glm::dvec3 a = mesh_.positions[t[0]], b = mesh_.positions[t[1]], c = mesh_.positions[t[2]];
+        const double longest = std::fmax(glm::length(b - a), std::fmax(glm::length(c - b), glm::length(a - c)));
+        const double area2 = glm::length(glm::cross(b - a, c - a));                   // twice the area [m^2]
+        if (!(area2 > 1e-12 * longest * longest) || !std::isfinite(area2)) continue;  // no area: never hit
+        order_.push_back(static_cast<std::uint32_t>(i));
+        lo_.push_back(glm::min(a, glm::min(b, c)));
+        hi_.push_back(glm::max(a, glm::max(b, c)));
+        centre_.push_back((a + b + c) / 3.0);
+      }
+      if (order_.empty()) return;
+      out_.nodes_.reserve(2 * order_.size());
+      out_.nodes_.emplace_back();
+      split(0, 0, static_cast<std::uint32_t>(order_.size()), 1);
+      out_.triangles_.reserve(order_.size());
+      for (const std::uint32_t i : order_) {
+        const auto& t = mesh_.triangles[i];
+        const glm::dvec3 a = mesh_.positions[t[0]];
+        out_.triangles_.push_back(Triangle{a, mesh_.positions[t[1]] - a, mesh_.positions[t[2]] - a, i});
+      }
+    }
+
+   private:
+    struct Bounds {
+      glm::dvec3 lo{std::numeric_limits<double>::max()};
+      glm::dvec3 hi{-std::numeric_limits<double>::max()};
+      void grow(const glm::dvec3& a, const glm::dvec3& b) noexcept {
+        lo = glm::min(lo, a);
+        hi = glm::max(hi, b);
+      }
+      void grow(const Bounds& o) noexcept { grow(o.lo, o.hi); }
+      [[nodiscard]] double half_area() const noexcept {
+        if (lo.x > hi.x) return 0.0;
+        const glm::dvec3 e = hi - lo;
+        return e.x * e.y + e.y * e.z + e.z * e.x;
+      }
+    };
+
+    static constexpr int bins = 16;
+
+    static std::size_t ceil_log2(std::size_t n) noexcept {
+      std::size_t k = 0;
+      while ((std::size_t{1} << k) < n)
+        ++k;
+      return k;
+    }
+
+    void set_box(std::uint32_t node, const Bounds& b) {
+      BvhNode& n = out_.nodes_[node];
+      for (int k = 0; k < 3; ++k) {
+        float lo = static_cast<float>(b.lo[k]);
+        float hi = static_cast<float>(b.hi[k]);
+        if (static_cast<double>(lo) > b.lo[k]) lo = std::nextafter(lo, -std::numeric_limits<float>::infinity());
+        if (static_cast<double>(hi) < b.hi[k]) hi = std::nextafter(hi, std::numeric_limits<float>::infinity());
+        n.lo[static_cast<std::size_t>(k)] = lo;
+        n.hi[static_cast<std::size_t>(k)] = hi;
+      }
+    }
+
+    void split(std::uint32_t node, std::uint32_t begin, std::uint32_t end, std::size_t depth) {
+      out_.depth_ = std::max(out_.depth_, depth);
+      Bounds box, centres;
+      for (std::uint32_t i = begin; i < end; ++i) {
+        box.grow(lo_[i], hi_[i]);
+        centres.grow(centre_[i], centre_[i]);
+      }
+      set_box(node, box);
+      const std::uint32_t count = end - begin;
+      if (count <= bvh_max_leaf) {
+        out_.nodes_[node].index = begin;
+        out_.nodes_[node].count = count;
+        return;
+      }
+      std::uint32_t middle = begin;
+      if (depth + ceil_log2(count) + 1 < bvh_max_depth) middle = sah_split(begin, end, centres);
+      if (middle == begin || middle == end) middle = median_split(begin, end, centres);
+      const auto left = static_cast<std::uint32_t>(out_.nodes_.size());
+      out_.nodes_.emplace_back();
+      split(left, begin, middle, depth + 1);
+      const auto right = static_cast<std::uint32_t>(out_.nodes_.size());
+      out_.nodes_.emplace_back();
+      out_.nodes_[node].index = right;
+      out_.nodes_[node].count = 0;
+      split(right, middle, end, depth + 1);
+    }
+
+    /// Binned SAH on all three axes; returns the partition point, or begin
+    /// when no split beats the others (all centroids at one point).
+    std::uint32_t sah_split(std::uint32_t begin, std::uint32_t end, const Bounds& centres) {
+      double best_cost = std::numeric_limits<double>::max();
+      int best_axis = -1, best_bin = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double lo = centres.lo[axis], extent = centres.hi[axis] - centres.lo[axis];
+        if (!(extent > 0.0)) continue;
+        const double scale = bins / extent;
+        std::array<Bounds, bins> bin_box{};
+        std::array<std::uint32_t, bins> bin_count{};
+        for (std::uint32_t i = begin; i < end; ++i) {
+          const int b = std::min(bins - 1, static_cast<int>((centre_[i][axis] - lo) * scale));
+          bin_box[static_cast<std::size_t>(b)].grow(lo_[i], hi_[i]);
+          ++bin_count[static_cast<std::size_t>(b)];
+        }
+        std::array<double, bins> right_cost{};
+        Bounds acc;
+        std::uint32_t acc_count = 0;
+        for (int b = bins - 1; b > 0; --b) {
+          acc.grow(bin_box[static_cast<std::size_t>(b)]);
+          acc_count += bin_count[static_cast<std::size_t>(b)];
+          right_cost[static_cast<std::size_t>(b)] = acc.half_area() * acc_count;
+        }
+        acc = Bounds{};
+        acc_count = 0;
+        for (int b = 0; b < bins - 1; ++b) {
+          acc.grow(bin_box[static_cast<std::size_t>(b)]);
+          acc_count += bin_count[static_cast<std::size_t>(b)];
+          const double cost = acc.half_area() * acc_count + right_cost[static_cast<std::size_t>(b + 1)];
+          if (acc_count > 0 && acc_count < end - begin && cost < best_cost) {
+            best_cost = cost;
+            best_axis = axis;
+            best_bin = b;
+          }
+        }
+      }
+      if (best_axis < 0) return begin;
+      const double lo = centres.lo[best_axis];
+      const double scale = bins / (centres.hi[best_axis] - lo);
+      return partition(begin, end, [&](std::uint32_t i) {
+        return std::min(bins - 1, static_cast<int>((centre_[i][best_axis] - lo) * scale)) <= best_bin;
+      });
+    }
+
+    /// Splits at the median triangle along the longest centroid axis
+    /// (halves the node whatever the geometry: bounds the depth).
+    std::uint32_t median_split(std::uint32_t begin, std::uint32_t end, const Bounds& centres) {
+      const glm::dvec3 e = centres.hi - centres.lo;
+      const int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
+      const std::uint32_t middle = begin + (end - begin) / 2;
+      std::vector<std::uint32_t> idx(end - begin);
+      for (std::uint32_t i = 0; i < end - begin; ++i)
+        idx[i] = begin + i;
+      std::nth_element(idx.begin(), idx.begin() + (middle - begin), idx.end(),
+                       [&](std::uint32_t a, std::uint32_t b) { return centre_[a][axis] < centre_[b][axis]; });
+      permute(begin, idx);
+      return middle;
+    }
+
+    template <class Left>
+    std::uint32_t partition(std::uint32_t begin, std::uint32_t end, Left&& left) {
+      std::uint32_t i = begin, j = end;
+      while (i < j) {
+        if (left(i)) {
+          ++i;
+        } else {
+          --j;
+          swap_items(i, j);
+        }
+      }
+      return i;
+    }
+
+    void swap_items(std::uint32_t a, std::uint32_t b) noexcept {
+      std::swap(order_[a], order_[b]);
+      std::swap(lo_[a], lo_[b]);
+      std::swap(hi_[a], hi_[b]);
+      std::swap(centre_[a], centre_[b]);
+    }
+
+    /// Reorders items [begin, begin + idx.size()) so that slot k holds the
+    /// item that was at idx[k].
+    void permute(std::uint32_t begin, const std::vector<std::uint32_t>& idx) {
+      const std::size_t n = idx.size();
+      std::vector<std::uint32_t> order(n);
+      std::vector<glm::dvec3> lo(n), hi(n), centre(n);
+      for (std::size_t k = 0; k < n; ++k) {
+        order[k] = order_[idx[k]];
+        lo[k] = lo_[idx[k]];
+        hi[k] = hi_[idx[k]];
+        centre[k] = centre_[idx[k]];
+      }
+      std::copy(order.begin(), order.end(), order_.begin() + begin);
+      std::copy(lo.begin(), lo.end(), lo_.begin() + begin);
+      std::copy(hi.begin(), hi.end(), hi_.begin() + begin);
+      std::copy(centre.begin(), centre.end(), centre_.begin() + begin);
+    }
+
+    const TriangleMesh& mesh_;
+    MeshBvh& out_;
+    std::vector<std::uint32_t> order_;
+    std::vector<glm::dvec3> lo_, hi_, centre_;
+  };
+
+  std::vector<BvhNode> nodes_;
+  std::vector<Triangle> triangles_;
+  std::size_t depth_{0};
+  MeshBvhConfig config_{};
+};
+
+}  // namespace hapticfield

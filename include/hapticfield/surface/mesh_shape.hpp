@@ -1,0 +1,169 @@
+#pragma once
+/// @file mesh_shape.hpp
+/// MeshShape: a TriangleMesh and its MeshBvh as a Shape for the proxy.
+///
+/// What a hit reports: the face normal of the triangle; the shaded normal,
+/// the barycentric blend of the vertex normals, renormalised (force
+/// shading, Morgenbesser & Srinivasan, "Force shading for haptic shape
+/// perception", ASME DSC 1996), when the mesh has vertex normals, else the
+/// face normal (also where the blend is zero or turns away from the face);
+/// uv blended the same way with the tangent frame of the triangle's uv
+/// map; the triangle's index and material; its longest edge as its size.
+///
+/// Meshes as they come: open meshes and non-manifold edges need nothing
+/// special (each triangle is a one-sided surface, felt from the side its
+/// normal points to: the back of an open sheet lets the proxy through);
+/// triangles with no area are left out. A built MeshShape never changes;
+/// copies share the built data (publish a new one through LiveField).
+
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "hapticfield/surface/mesh_bvh.hpp"
+#include "hapticfield/surface/shape.hpp"
+#include "hapticfield/surface/triangle_mesh.hpp"
+
+namespace hapticfield {
+
+struct MeshShapeConfig {
+  bool shade_normals{true};                        ///< use the mesh's vertex normals (force shading) when it has them
+  std::uint32_t max_nodes{bvh_default_max_nodes};  ///< node budget of one query
+};
+
+class MeshShape {
+ public:
+  /// Each primitive is a flat, convex triangle (the proxy moves over one
+  /// without a sweep).
+  static constexpr bool flat_primitives = true;
+
+  /// Takes the mesh and builds its tree (allocates; may take about a second
+  /// per million triangles).
+  /// @throws std::invalid_argument for an invalid mesh (TriangleMesh::validate)
+  ///         or a zero budget.
+  explicit MeshShape(TriangleMesh mesh, const MeshShapeConfig& config = {}) : config_(config) {
+    auto data = std::make_shared<Data>();
+    data->bvh = MeshBvh::build(mesh, MeshBvhConfig{config.max_nodes});
+    data->mesh = std::move(mesh);
+    data_ = std::move(data);
+  }
+
+  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance) const noexcept {
+    return closest(p, max_distance, nullptr);
+  }
+  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats) const noexcept {
+    const BvhHit h = data_->bvh.closest(p, max_distance, stats);
+    Hit out = describe(h);
+    out.distance = h.distance;
+    return out;
+  }
+
+  [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to) const noexcept {
+    return first_hit(from, to, nullptr);
+  }
+  [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to, QueryStats* stats) const noexcept {
+    const BvhHit h = data_->bvh.first_hit(from, to, stats);
+    Hit out = describe(h);
+    out.t = h.t;
+    if (h.found()) out.distance = h.t * glm::length(to - from);
+    return out;
+  }
+
+  /// The point of one triangle nearest to p, if within max_distance [m]
+  /// (no tree traversal: the proxy's check that it is still on a face).
+  [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p, double max_distance) const noexcept {
+    const TriangleMesh& m = data_->mesh;
+    if (primitive >= m.triangles.size() || !is_finite(p)) return Hit{};
+    const TriangleIndices& tri = m.triangles[primitive];
+    const glm::dvec3 a = m.positions[tri[0]];
+    BvhHit h;
+    h.point = detail::closest_on_triangle(p, a, m.positions[tri[1]] - a, m.positions[tri[2]] - a, h.b1, h.b2);
+    h.distance = glm::length(h.point - p);
+    if (!(h.distance <= max_distance)) return Hit{};
+    h.triangle = primitive;
+    Hit out = describe(h);
+    out.distance = h.distance;
+    return out;
+  }
+
+  [[nodiscard]] const TriangleMesh& mesh() const noexcept { return data_->mesh; }
+  [[nodiscard]] const MeshBvh& bvh() const noexcept { return data_->bvh; }
+  [[nodiscard]] const MeshShapeConfig& config() const noexcept { return config_; }
+
+ private:
+  struct Data {
+    TriangleMesh mesh;
+    MeshBvh bvh;
+  };
+
+  [[nodiscard]] Hit describe(const BvhHit& h) const noexcept {
+    Hit out;
+    out.complete = h.complete;
+    if (!h.found()) {
+      if (!h.complete) out.t = 0.0;
+      return out;
+    }
+    const TriangleMesh& m = data_->mesh;
+    const TriangleIndices& tri = m.triangles[h.triangle];
+    const glm::dvec3 a = m.positions[tri[0]], b = m.positions[tri[1]], c = m.positions[tri[2]];
+    const glm::dvec3 e1 = b - a, e2 = c - a;
+    const double w0 = 1.0 - h.b1 - h.b2;
+    out.point = h.point;
+    out.face_normal = glm::normalize(glm::cross(e1, e2));
+    out.normal = out.face_normal;
+    if (config_.shade_normals && m.has_normals()) {
+      const glm::dvec3 blend = w0 * m.normals[tri[0]] + h.b1 * m.normals[tri[1]] + h.b2 * m.normals[tri[2]];
+      const double length = glm::length(blend);
+      if (length > 0.0 && std::isfinite(length) && glm::dot(blend, out.face_normal) > 0.0) out.normal = blend / length;
+    }
+    if (m.has_uvs()) {
+      const glm::dvec2 ua = m.uvs[tri[0]], ub = m.uvs[tri[1]], uc = m.uvs[tri[2]];
+      out.uv = w0 * ua + h.b1 * ub + h.b2 * uc;
+      // [e1 e2] = [dP/du dP/dv] [duv1 duv2]  ->  dP/du, dP/dv
+      const glm::dvec2 d1 = ub - ua, d2 = uc - ua;
+      const double det = d1.x * d2.y - d2.x * d1.y;
+      if (det != 0.0 && std::isfinite(det)) {
+        const glm::dvec3 dpdu = (d2.y * e1 - d1.y * e2) / det;
+        const glm::dvec3 dpdv = (d1.x * e2 - d2.x * e1) / det;
+        detail::tangent_frame(out.normal, dpdu, dpdv, out.tangent, out.bitangent);
+      }
+    }
+    out.size = std::sqrt(std::fmax(glm::dot(e1, e1), std::fmax(glm::dot(e2, e2), glm::dot(c - b, c - b))));
+    out.primitive = h.triangle;
+    out.material = m.materials.empty() ? 0u : m.materials[h.triangle];
+    return out;
+  }
+
+  std::shared_ptr<const Data> data_;
+  MeshShapeConfig config_;
+};
+
+static_assert(Shape<MeshShape>);
+
+/// Vertex normals for force shading of a mesh that has none: each vertex
+/// gets the area-weighted mean of the face normals around it (a vertex with
+/// no triangle gets +z). Seams with duplicated vertices keep a crease.
+/// @throws std::invalid_argument for an invalid mesh.
+[[nodiscard]] inline TriangleMesh with_vertex_normals(TriangleMesh mesh) {
+  mesh.validate();
+  mesh.normals.assign(mesh.positions.size(), glm::dvec3{0.0});
+  for (const TriangleIndices& t : mesh.triangles) {
+    const glm::dvec3 a = mesh.positions[t[0]];
+    const glm::dvec3 n = glm::cross(mesh.positions[t[1]] - a, mesh.positions[t[2]] - a);  // twice the area
+    for (const std::uint32_t k : t)
+      mesh.normals[k] += n;
+  }
+  for (glm::dvec3& n : mesh.normals) {
+    const double length = glm::length(n);
+    n = length > 0.0 && std::isfinite(length) ? n / length : glm::dvec3{0.0, 0.0, 1.0};
+  }
+  return mesh;
+}
+
+}  // namespace hapticfield

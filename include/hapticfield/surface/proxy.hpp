@@ -1,0 +1,451 @@
+#pragma once
+/// @file proxy.hpp
+/// ProxyConstraint: the god-object (Zilles & Salisbury, "A constraint-based
+/// god-object method for haptic display", IROS 1995) or virtual proxy
+/// (Ruspini, Kolarov & Khatib, "The haptic display of complex graphical
+/// environments", SIGGRAPH 1997) on any Shape.
+///
+/// The HIP may sink into the surface; the proxy may not. Each tick the proxy
+/// moves toward the HIP as far as the surface lets it:
+///
+///   1. It sweeps from where it is toward the goal (the HIP at first).
+///      Every move is a swept first_hit() query that stops just before the
+///      first surface met, so the proxy never crosses a surface, however
+///      thin, whatever the speed (no pop-through).
+///   2. Each surface met adds its plane (face normal n, through the hit point
+///      lifted by the offset) to the constraints of the tick, at most three
+///      (an edge: two, a corner: three). The goal becomes the point nearest
+///      the HIP on all of them (a least-squares projection with the normal
+///      equations of the planes; a plane whose multiplier comes out negative,
+///      one the HIP has left, is released). Back to 1, at most six moves.
+///      A pass that leaves the proxy off every face (it slid along a plane
+///      past a convex edge) starts another from there with no planes, at
+///      most four; if the last one still floats the proxy goes back to where
+///      it last met a face.
+///   3. Friction (the friction cone of Salisbury et al. 1995 and of Ruspini
+///      1997): with d the depth and s the distance the proxy would slide from
+///      where it was, it stays where it was (sticks) while s <= mu_s d, and
+///      when it slides it lags mu_k d behind, so the tangential force is mu_k
+///      times the normal one. A held point that is off the surface (a
+///      plane's extension past its face) is not taken: no friction that tick.
+///   4. The depth d is measured from the surface point nearest the HIP on
+///      this tick's planes without the lift (the face, the crease line or the
+///      corner); Fc = max(0, k d - b v.n) n + k (proxy - frictionless proxy):
+///      the damping b acts on the normal velocity and never pulls into the
+///      surface, the second term is friction's. n is the direction from the
+///      HIP to that surface point; with one plane and a shaded normal (mesh
+///      vertex normals) the touched point's normal (force shading,
+///      Morgenbesser & Srinivasan 1996).
+///
+/// The offset that keeps the proxy off the surface is relative to the size
+/// of the primitive it touches (plus a few rounding units of the
+/// coordinates), never absolute, so 20 um and 10 cm triangles both hold.
+/// The contact reports the touched point's uv, tangent frame, primitive and
+/// material (a closest() query at the proxy), for the parts of a
+/// ContactField; last_tick() tells what the tick did, with the nodes its
+/// queries visited.
+///
+/// The first tick (and the first after reset()) puts the proxy at the HIP:
+/// a HIP that starts inside a solid is not touching until it has left it
+/// (surfaces are one-sided). A query that runs out of its node budget
+/// leaves the proxy where it is for that tick (ProxyTick::blocked).
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "hapticfield/core/contact.hpp"
+#include "hapticfield/core/field.hpp"
+#include "hapticfield/core/probe.hpp"
+#include "hapticfield/core/vector_math.hpp"
+#include "hapticfield/surface/shape.hpp"
+
+namespace hapticfield {
+
+/// Most proxy moves (swept queries) in one pass of a tick.
+inline constexpr int proxy_max_moves = 6;
+/// Most passes in one tick: a pass that leaves the proxy off every face (it
+/// slid past a convex edge) is followed by another from there; a tick makes
+/// at most proxy_max_passes x proxy_max_moves swept queries, a closest()
+/// after each pass and one friction move.
+inline constexpr int proxy_max_passes = 4;
+
+struct ProxyConfig {
+  double stiffness{1500.0};      ///< k [N/m]
+  double damping{0.0};           ///< b on the normal velocity while touching [N s/m]
+  double static_friction{0.0};   ///< mu_s [-]: the proxy sticks while the HIP is inside this cone
+  double dynamic_friction{0.0};  ///< mu_k [-] <= mu_s: the cone while sliding
+  double offset{1e-6};           ///< the proxy's height above the surface, relative to the primitive's size [-]
+};
+
+/// What the last tick did (for tests and benches).
+struct ProxyTick {
+  int moves{0};   ///< swept queries made (friction's one included)
+  int planes{0};  ///< constraint planes at the end of the tick (0..3)
+  std::uint32_t nodes{
+      0};               ///< tree nodes (or grid cells) visited by all the tick's queries, where the shape counts them
+  bool blocked{false};  ///< a query ran out of its budget: the proxy stayed
+  bool sliding{false};  ///< friction: the proxy slides (else sticks)
+};
+
+template <Shape S>
+class ProxyConstraint {
+ public:
+  /// @throws std::invalid_argument for a stiffness that is not finite and
+  ///         > 0, a negative or non-finite damping, friction coefficients
+  ///         that are not 0 <= mu_k <= mu_s (finite), or an offset outside
+  ///         (0, 0.01].
+  ProxyConstraint(S shape, const ProxyConfig& config) : shape_(std::move(shape)), config_(config) {
+    if (!std::isfinite(config.stiffness) || config.stiffness <= 0.0)
+      throw std::invalid_argument("ProxyConstraint: stiffness must be finite and > 0 [N/m]");
+    if (!std::isfinite(config.damping) || config.damping < 0.0)
+      throw std::invalid_argument("ProxyConstraint: damping must be finite and >= 0 [N s/m]");
+    if (!std::isfinite(config.static_friction) || !std::isfinite(config.dynamic_friction) ||
+        config.dynamic_friction < 0.0 || config.dynamic_friction > config.static_friction)
+      throw std::invalid_argument("ProxyConstraint: need 0 <= dynamic_friction <= static_friction [-]");
+    if (!std::isfinite(config.offset) || config.offset <= 0.0 || config.offset > 0.01)
+      throw std::invalid_argument("ProxyConstraint: offset must be in (0, 0.01] (relative to a primitive's size)");
+  }
+
+  /// The contact of this tick; moves the proxy. A non-finite probe gives no
+  /// contact and leaves the proxy where it is.
+  [[nodiscard]] Contact contact(const Probe& probe) noexcept {
+    tick_ = ProxyTick{};
+    if (!is_finite(probe.position) || !is_finite(probe.velocity)) return Contact{};
+    const glm::dvec3 goal = probe.position;
+    if (!started_ || !is_finite(proxy_)) {
+      started_ = true;
+      proxy_ = goal;
+      touching_ = false;
+      return Contact{};
+    }
+    const glm::dvec3 start = proxy_;
+
+    // 1-2: frictionless constrained motion toward the HIP; a second pass
+    // when the first left the proxy off every face (past a convex edge)
+    Planes planes;
+    Hit last_hit;
+    Hit touched;
+    glm::dvec3 x = start;
+    glm::dvec3 anchor = start;  // where the proxy last stopped against a face: on the surface
+    bool blocked = false;
+    for (int pass = 0; pass < proxy_max_passes; ++pass) {
+      for (int move = 0; move < proxy_max_moves; ++move) {
+        const glm::dvec3 target = planes.project(goal);
+        const glm::dvec3 d = target - x;
+        const double length = glm::length(d);
+        if (!(length > planes.tolerance)) break;
+        const Hit h = sweep(x, target);
+        ++tick_.moves;
+        if (!h.complete) {
+          blocked = true;
+          break;
+        }
+        if (!h.found()) {
+          x = target;
+          break;
+        }
+        const double eps = offset_for(h);
+        const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
+        const double back = facing > 1e-6 ? eps / facing : length;
+        x += (std::fmax(0.0, h.t * length - back) / length) * d;
+        anchor = x;
+        last_hit = h;
+        if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + eps, eps)) break;
+      }
+      planes.project(goal);  // the final active set (releases planes the HIP has left)
+      if (blocked || planes.count == 0) break;
+      touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance, last_hit);
+      if (touched.found() || !touched.complete) break;
+      if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
+        x = anchor;
+        touched = last_hit;
+        break;
+      }
+      planes = Planes{};  // slid past the end of its faces: sweep on from here toward the HIP
+    }
+    const glm::dvec3 frictionless = x;
+    tick_.planes = planes.count;
+
+    // the surface point the HIP is pushed toward: the nearest point to the
+    // HIP on this tick's planes without the proxy's lift (the face, the
+    // crease line or the corner itself); the depth is measured from it
+    const glm::dvec3 on_surface = planes.project_equal(goal, false);
+    const double depth = glm::length(on_surface - goal);  // [m]
+
+    // 3: friction cone
+    if (planes.count > 0 && touching_ && !blocked && config_.static_friction > 0.0 && depth > 0.0) {
+      const glm::dvec3 held = planes.project_equal(start);  // where the proxy was, on this tick's constraints
+      const glm::dvec3 slide = held - frictionless;
+      const double s = glm::length(slide);
+      const double mu = sliding_ ? config_.dynamic_friction : config_.static_friction;
+      glm::dvec3 candidate = held;
+      if (s > mu * depth) {
+        sliding_ = true;
+        candidate = frictionless + (config_.dynamic_friction * depth / s) * slide;
+      } else {
+        sliding_ = false;
+      }
+      if (glm::length(candidate - frictionless) > planes.tolerance) {
+        const double reach = 4.0 * planes.max_offset + planes.tolerance;
+        if (Hit same = on_same_face(candidate, reach, touched); same.found()) {
+          x = candidate;  // both ends over one flat face: nothing can lie between them
+          touched = same;
+        } else {
+          const Hit h = sweep(frictionless, candidate);
+          ++tick_.moves;
+          if (h.complete && !h.found()) {
+            // held only where it is still on the surface (a plane's extension
+            // past the end of its face is not): else frictionless this tick
+            const Hit there = nearest(candidate, reach, touched);
+            if (there.found()) {
+              x = candidate;
+              touched = there;
+            }
+          }
+        }
+      }
+    } else if (planes.count == 0) {
+      sliding_ = false;  // a new contact starts stuck
+    }
+    tick_.sliding = sliding_;
+    tick_.blocked = blocked;
+
+    proxy_ = x;
+    const bool touching = planes.count > 0 || (blocked && touching_);
+    touching_ = touching;
+    if (!touching) return Contact{};
+
+    // 4: the force and what the parts see
+    if (!touched.found()) touched = last_hit;
+    glm::dvec3 n = planes.count == 1 ? planes.normal[0] : (depth > 0.0 ? (on_surface - goal) / depth : glm::dvec3{0.0});
+    if (glm::length(n) == 0.0 && touched.found()) n = touched.face_normal;
+    // force shading: the touched point's interpolated normal (the touched
+    // face may be the next one past a convex edge, within a few offsets)
+    if (planes.count == 1 && touched.found() && glm::dot(touched.normal, n) > 0.5) n = touched.normal;
+    if (!is_finite(n) || glm::length(n) == 0.0) n = glm::dvec3{0.0, 0.0, 1.0};
+    const double push = config_.stiffness * depth - config_.damping * glm::dot(probe.velocity, n);  // [N]
+    const glm::dvec3 force = (push > 0.0 ? push : 0.0) * n + config_.stiffness * (x - frictionless);
+    if (!is_finite(force)) {
+      proxy_ = goal;
+      touching_ = false;
+      return Contact{};
+    }
+    Contact c;
+    c.touching = true;
+    c.depth = depth;
+    c.normal = n;
+    c.force = force;
+    if (touched.found()) {
+      c.surface_uv = touched.uv;
+      c.surface_tangent = touched.tangent;
+      c.surface_bitangent = touched.bitangent;
+      c.primitive = touched.primitive;
+      c.material = touched.material;
+    }
+    return c;
+  }
+
+  /// Fc alone [N].
+  [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept { return contact(probe).force; }
+
+  /// Forgets the proxy: the next tick starts it at the HIP.
+  void reset() noexcept {
+    started_ = false;
+    touching_ = false;
+    sliding_ = false;
+    proxy_ = glm::dvec3{0.0};
+  }
+
+  /// The proxy's position [m] (on the surface while touching, else the HIP).
+  [[nodiscard]] const glm::dvec3& proxy() const noexcept { return proxy_; }
+  [[nodiscard]] bool touching() const noexcept { return touching_; }
+  [[nodiscard]] const ProxyTick& last_tick() const noexcept { return tick_; }
+  [[nodiscard]] const S& shape() const noexcept { return shape_; }
+  [[nodiscard]] const ProxyConfig& config() const noexcept { return config_; }
+
+ private:
+  /// The constraint planes of one tick: n . x >= c.
+  struct Planes {
+    std::array<glm::dvec3, 3> normal{};
+    std::array<double, 3> c{};
+    std::array<double, 3> lift{};  ///< each plane's offset above its surface [m]
+    int count{0};
+    int active{0};           ///< the first `active` planes bind (after release)
+    double tolerance{0.0};   ///< smallest offset seen: motions below it are none [m]
+    double max_offset{0.0};  ///< largest offset seen [m]
+
+    /// Adds a plane; false when three are held already.
+    bool add(const glm::dvec3& n, double offset_c, double eps) noexcept {
+      tolerance = count == 0 ? 0.01 * eps : std::fmin(tolerance, 0.01 * eps);
+      max_offset = std::fmax(max_offset, eps);
+      for (int i = 0; i < count; ++i)
+        if (glm::dot(normal[static_cast<std::size_t>(i)], n) > 1.0 - 1e-12) {  // the same plane again
+          if (offset_c > c[static_cast<std::size_t>(i)]) {
+            c[static_cast<std::size_t>(i)] = offset_c;
+            lift[static_cast<std::size_t>(i)] = eps;
+          }
+          return true;
+        }
+      if (count == 3) return false;
+      normal[static_cast<std::size_t>(count)] = n;
+      c[static_cast<std::size_t>(count)] = offset_c;
+      lift[static_cast<std::size_t>(count)] = eps;
+      ++count;
+      return true;
+    }
+
+    /// The point nearest to g on the planes, as equalities, with multipliers
+    /// lambda (x = g + sum lambda_i n_i); false when the planes are
+    /// dependent (parallel, or three through one line).
+    bool solve(const glm::dvec3& g, int m, glm::dvec3& x, std::array<double, 3>& lambda,
+               bool lifted = true) const noexcept {
+      std::array<double, 3> r{};
+      for (int i = 0; i < m; ++i)
+        r[static_cast<std::size_t>(i)] = c[static_cast<std::size_t>(i)] -
+                                         (lifted ? 0.0 : lift[static_cast<std::size_t>(i)]) -
+                                         glm::dot(normal[static_cast<std::size_t>(i)], g);
+      lambda = {0.0, 0.0, 0.0};
+      if (m == 1) {
+        lambda[0] = r[0];
+      } else if (m == 2) {
+        const double g12 = glm::dot(normal[0], normal[1]);
+        const double det = 1.0 - g12 * g12;
+        if (!(det > 1e-10)) return false;
+        lambda[0] = (r[0] - g12 * r[1]) / det;
+        lambda[1] = (r[1] - g12 * r[0]) / det;
+      } else if (m == 3) {
+        // x - g = N^T lambda with N n_i . x = c_i: the Gram system G lambda = r by Cramer
+        const glm::dvec3 &a = normal[0], &b = normal[1], &e = normal[2];
+        const double det = glm::dot(a, glm::cross(b, e));  // of the normals: G = N N^T, det G = det^2
+        if (!(det * det > 1e-10)) return false;
+        // x = g + d with n_i . d = r_i: d = (r0 (b x e) + r1 (e x a) + r2 (a x b)) / det
+        const glm::dvec3 d = (r[0] * glm::cross(b, e) + r[1] * glm::cross(e, a) + r[2] * glm::cross(a, b)) / det;
+        x = g + d;
+        // lambda from N^T lambda = d: lambda_i = d . (dual basis)
+        const double g01 = glm::dot(a, b), g02 = glm::dot(a, e), g12 = glm::dot(b, e);
+        const double m00 = 1.0 - g12 * g12, m01 = g02 * g12 - g01, m02 = g01 * g12 - g02;
+        const double m11 = 1.0 - g02 * g02, m12 = g01 * g02 - g12, m22 = 1.0 - g01 * g01;
+        const double gd = det * det;
+        lambda[0] = (m00 * r[0] + m01 * r[1] + m02 * r[2]) / gd;
+        lambda[1] = (m01 * r[0] + m11 * r[1] + m12 * r[2]) / gd;
+        lambda[2] = (m02 * r[0] + m12 * r[1] + m22 * r[2]) / gd;
+        return true;
+      }
+      x = g;
+      for (int i = 0; i < m; ++i)
+        x += lambda[static_cast<std::size_t>(i)] * normal[static_cast<std::size_t>(i)];
+      return true;
+    }
+
+    void remove(int i) noexcept {
+      for (int k = i; k + 1 < count; ++k) {
+        normal[static_cast<std::size_t>(k)] = normal[static_cast<std::size_t>(k + 1)];
+        c[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k + 1)];
+        lift[static_cast<std::size_t>(k)] = lift[static_cast<std::size_t>(k + 1)];
+      }
+      --count;
+    }
+
+    /// The point nearest to g with every held plane binding whose
+    /// multiplier stays >= 0; planes that would pull (the HIP left them)
+    /// or are dependent on the others are dropped.
+    glm::dvec3 project(const glm::dvec3& g) noexcept {
+      for (;;) {
+        glm::dvec3 x{0.0};
+        std::array<double, 3> lambda{};
+        if (!solve(g, count, x, lambda)) {
+          remove(count - 1);  // dependent: drop the newest
+          continue;
+        }
+        int worst = -1;
+        double most_negative = 0.0;
+        for (int i = 0; i < count; ++i)
+          if (lambda[static_cast<std::size_t>(i)] < most_negative) {
+            most_negative = lambda[static_cast<std::size_t>(i)];
+            worst = i;
+          }
+        if (worst < 0) return x;
+        remove(worst);
+      }
+    }
+
+    /// The point nearest to g on all held planes as equalities (g itself
+    /// when they are dependent); lifted false: on the surfaces themselves,
+    /// without the proxy's lift.
+    [[nodiscard]] glm::dvec3 project_equal(const glm::dvec3& g, bool lifted = true) const noexcept {
+      glm::dvec3 x{0.0};
+      std::array<double, 3> lambda{};
+      return solve(g, count, x, lambda, lifted) ? x : g;
+    }
+  };
+
+  /// shape_.first_hit, counting the nodes it visits when the shape can.
+  [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to) noexcept {
+    if constexpr (requires(QueryStats * q) { shape_.first_hit(from, to, q); }) {
+      QueryStats q;
+      const Hit h = shape_.first_hit(from, to, &q);
+      tick_.nodes += q.nodes;
+      return h;
+    } else {
+      return shape_.first_hit(from, to);
+    }
+  }
+
+  /// The point over `face` (the primitive the proxy is on) nearest to p,
+  /// when the shape's primitives are flat (S::flat_primitives) and p is
+  /// within max_distance of it; else nothing. A move between two points over
+  /// one flat, convex face needs no sweep.
+  [[nodiscard]] Hit on_same_face(const glm::dvec3& p, double max_distance, const Hit& face) const noexcept {
+    if constexpr (requires {
+                    requires S::flat_primitives;
+                    shape_.on_primitive(face.primitive, p, max_distance);
+                  }) {
+      if (face.found()) return shape_.on_primitive(face.primitive, p, max_distance);
+    }
+    return Hit{};
+  }
+
+  /// shape_.closest, counting as sweep() does; first the primitive of
+  /// `hint` alone when the shape can answer for one (on_primitive()), which
+  /// costs no traversal while the proxy stays on the face it last met.
+  [[nodiscard]] Hit nearest(const glm::dvec3& p, double max_distance, const Hit& hint) noexcept {
+    if constexpr (requires { shape_.on_primitive(hint.primitive, p, max_distance); }) {
+      if (hint.found()) {
+        const Hit h = shape_.on_primitive(hint.primitive, p, max_distance);
+        if (h.found()) return h;
+      }
+    }
+    if constexpr (requires(QueryStats * q) { shape_.closest(p, max_distance, q); }) {
+      QueryStats q;
+      const Hit h = shape_.closest(p, max_distance, &q);
+      tick_.nodes += q.nodes;
+      return h;
+    } else {
+      return shape_.closest(p, max_distance);
+    }
+  }
+
+  /// The proxy's height above the primitive of a hit [m].
+  [[nodiscard]] double offset_for(const Hit& h) const noexcept {
+    const double coordinate = std::fmax(std::fabs(h.point.x), std::fmax(std::fabs(h.point.y), std::fabs(h.point.z)));
+    return config_.offset * h.size + 64.0 * std::numeric_limits<double>::epsilon() * coordinate;
+  }
+
+  S shape_;
+  ProxyConfig config_;
+  glm::dvec3 proxy_{0.0};
+  bool started_{false};
+  bool touching_{false};
+  bool sliding_{false};
+  ProxyTick tick_{};
+};
+
+}  // namespace hapticfield
