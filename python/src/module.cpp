@@ -141,7 +141,8 @@ void bind_core(py::module_& m) {
           [](Field& self) {
             const FieldUse use(self);
             self.impl->reset();
-          }, "Resets the state of stateful parts (filters, samplers).")
+          },
+          "Resets the state of stateful parts (filters, samplers).")
       .def("__add__",
            [](const Field& a, const Field& b) {
              return sum_of({a, b});

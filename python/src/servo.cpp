@@ -175,8 +175,7 @@ StopReason run_watched(Loop& loop, Callback& callback, std::uint64_t ticks, Stop
 }
 
 template <Device D, ServoClock C>
-py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, RealTime realtime,
-                StopToken* token) {
+py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, RealTime realtime, StopToken* token) {
   LoopConfig config;
   config.rate = rate;
   config.realtime = realtime;
@@ -230,8 +229,8 @@ py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, 
     result["loop_allocations"] = py::none();
     result["loop_frees"] = py::none();
   }
-  result["stop_reason"] = interrupt                              ? "interrupted"
-                          : reason == StopReason::tick_limit     ? "tick_limit"
+  result["stop_reason"] = interrupt                            ? "interrupted"
+                          : reason == StopReason::tick_limit   ? "tick_limit"
                           : reason == StopReason::disconnected ? "disconnected"
                                                                : "requested";
   if (interrupt) interrupt.raise_with(result);
@@ -263,10 +262,12 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
     throw py::value_error("clock: unknown '" + clock_kind + "' (choose wall or virtual)");
   const bool virtual_time = clock_kind == "virtual";
   if (virtual_time && real_arm)
-    throw py::value_error("clock: the virtual clock cannot drive a real arm, which moves in real time; use "
-                          "clock='wall' (the default for hid)");
+    throw py::value_error(
+        "clock: the virtual clock cannot drive a real arm, which moves in real time; use "
+        "clock='wall' (the default for hid)");
   if (virtual_time && realtime != "off")
-    throw py::value_error("realtime: '" + realtime + "' is for the wall clock; a virtual run never sleeps and would "
+    throw py::value_error("realtime: '" + realtime +
+                          "' is for the wall clock; a virtual run never sleeps and would "
                           "hold a CPU at real-time priority (use realtime='off' or clock='wall')");
   if (!(std::isfinite(seconds) && seconds > 0.0 && seconds <= 3600.0))
     throw py::value_error("seconds: must be within (0, 3600] [s]");
