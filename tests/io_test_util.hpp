@@ -3,6 +3,8 @@
 // measures (area, bounds, signed volume, welded boundary edges).
 #pragma once
 
+#include <catch2/catch.hpp>
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -21,6 +23,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/core/error.hpp"
 #include "hapticfield/surface/triangle_mesh.hpp"
 
 namespace io_test {
@@ -33,6 +36,19 @@ inline fs::path temp_dir(const std::string& name) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
+}
+
+/// Expects a FileError whose message names the file and says `what`.
+template <class F>
+void expect_file_error(F&& f, const std::string& name, const std::string& what) {
+  try {
+    f();
+    FAIL("no FileError for " << what);
+  } catch (const hapticfield::FileError& e) {
+    INFO(e.what());
+    CHECK_THAT(e.what(), Catch::Matchers::Contains(name));
+    CHECK_THAT(e.what(), Catch::Matchers::Contains(what));
+  }
 }
 
 inline std::string write(const fs::path& path, std::string_view bytes) {

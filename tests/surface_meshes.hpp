@@ -14,9 +14,18 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/core/probe.hpp"
 #include "hapticfield/surface/triangle_mesh.hpp"
 
 namespace hapticfield::test {
+
+/// A probe at position [m] moving at velocity [m/s].
+inline Probe probe_at(glm::dvec3 position, glm::dvec3 velocity = glm::dvec3{0.0}) {
+  Probe p;
+  p.position = position;
+  p.velocity = velocity;
+  return p;
+}
 
 /// Appends an nu x nv grid of quads (two triangles each) spanning
 /// origin + [0, 1] u_axis + [0, 1] v_axis, facing u_axis x v_axis, with uvs

@@ -18,6 +18,7 @@ using namespace hapticfield::io;
 using Catch::Matchers::Contains;
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;
+using io_test::expect_file_error;
 
 namespace {
 
@@ -72,19 +73,6 @@ void check_cube(const LoadedMesh& loaded, double a, std::size_t vertices = 8) {
   CHECK(io_test::welded_edges(m).same_direction == 0);
   CHECK_FALSE(loaded.has_warning(MeshWarningKind::degenerate_triangles));
   CHECK_NOTHROW(m.validate());
-}
-
-/// Expects a FileError whose message names the file and says `what`.
-template <class F>
-void expect_file_error(F&& f, const std::string& name, const std::string& what) {
-  try {
-    f();
-    FAIL("no FileError for " << what);
-  } catch (const FileError& e) {
-    INFO(e.what());
-    CHECK_THAT(e.what(), Contains(name));
-    CHECK_THAT(e.what(), Contains(what));
-  }
 }
 
 }  // namespace

@@ -22,6 +22,7 @@ using namespace hapticfield::io;
 using Catch::Matchers::Contains;
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;
+using io_test::expect_file_error;
 
 namespace {
 
@@ -89,18 +90,6 @@ std::string glb(std::string json, std::string bin) {
   io_test::put32(s, static_cast<std::uint32_t>(bin.size()));
   s += std::string("BIN\0", 4);
   return s + bin;
-}
-
-template <class F>
-void expect_file_error(F&& f, const std::string& name, const std::string& what) {
-  try {
-    f();
-    FAIL("no FileError for " << what);
-  } catch (const FileError& e) {
-    INFO(e.what());
-    CHECK_THAT(e.what(), Contains(name));
-    CHECK_THAT(e.what(), Contains(what));
-  }
 }
 
 void check_cube(const LoadedMesh& m, const glm::dvec3& lo, double a) {

@@ -20,20 +20,9 @@ using namespace hapticfield::io;
 using Catch::Matchers::Contains;
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;
+using io_test::expect_file_error;
 
 namespace {
-
-template <class F>
-void expect_file_error(F&& f, const std::string& name, const std::string& what) {
-  try {
-    f();
-    FAIL("no FileError for " << what);
-  } catch (const FileError& e) {
-    INFO(e.what());
-    CHECK_THAT(e.what(), Contains(name));
-    CHECK_THAT(e.what(), Contains(what));
-  }
-}
 
 /// A PNG signature and an IHDR chunk declaring w x h (CRC left zero): the
 /// header check must refuse it before any decoder sees it.

@@ -22,6 +22,7 @@ using namespace hapticfield::io;
 using Catch::Matchers::Contains;
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;
+using io_test::expect_file_error;
 
 namespace {
 
@@ -61,18 +62,6 @@ std::string obj_cube_full(double a) {
     }
   }
   return s;
-}
-
-template <class F>
-void expect_file_error(F&& f, const std::string& name, const std::string& what) {
-  try {
-    f();
-    FAIL("no FileError for " << what);
-  } catch (const FileError& e) {
-    INFO(e.what());
-    CHECK_THAT(e.what(), Contains(name));
-    CHECK_THAT(e.what(), Contains(what));
-  }
 }
 
 void check_cube_shape(const TriangleMesh& m, double a) {

@@ -16,15 +16,9 @@
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
+using hapticfield::test::probe_at;
 
 namespace {
-
-Probe probe_at(glm::dvec3 position, glm::dvec3 velocity = glm::dvec3{0.0}) {
-  Probe p;
-  p.position = position;
-  p.velocity = velocity;
-  return p;
-}
 
 /// The nearest point of a triangle by minimising over its face and edges
 /// (an independent closed form: the face by projection, each edge by the

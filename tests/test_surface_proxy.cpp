@@ -27,15 +27,9 @@
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
+using hapticfield::test::probe_at;
 
 namespace {
-
-Probe probe_at(glm::dvec3 position, glm::dvec3 velocity = glm::dvec3{0.0}) {
-  Probe p;
-  p.position = position;
-  p.velocity = velocity;
-  return p;
-}
 
 /// Triangles turned inside out (each one's winding reversed).
 TriangleMesh flipped(TriangleMesh m) {
