@@ -16,6 +16,11 @@ namespace {
 /// Largest picture accepted as an array [px] (int sizes, 8 bytes a pixel: 2 GiB).
 constexpr py::ssize_t max_array_pixels = py::ssize_t{1} << 28;
 
+/// A number as Python prints it (255.0, 0.5, nan).
+std::string number(double v) {
+  return py::str(py::float_(v));
+}
+
 GrayWeights gray_weights(const std::string& name) {
   return choose<GrayWeights>("gray", name, {{"paper", GrayWeights::paper}, {"bt601", GrayWeights::bt601}});
 }
@@ -69,8 +74,8 @@ GrayImage gray_from(const py::object& image, GrayWeights weights, const std::str
     for (int x = 0; x < gray.width(); ++x, src += c) {
       for (py::ssize_t k = 0; k < std::min<py::ssize_t>(c, 3); ++k)
         if (!(std::isfinite(src[k]) && src[k] >= 0.0 && src[k] <= white))
-          throw py::value_error("image: levels must be finite and within [0, " + std::to_string(white) + "], got " +
-                                std::to_string(src[k]) + " at (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
+          throw py::value_error("image: values must be finite and within [0, " + number(white) + "], got " +
+                                number(src[k]) + " at (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
                                 (levels ? "" : " (give levels= for another scale)"));
       gray.at(x, y) = c == 1 ? scale * src[0] : scale * (w.b * src[b_at] + w.g * src[1] + w.r * src[r_at]);
     }
