@@ -77,9 +77,12 @@ def clean_parameter(p, first):
     name = name.strip()
     if first and name == "self":
         return "self"
-    out = name + (f": {clean_type(annotation.strip())}" if colon else "")
+    annotation = clean_type(annotation.strip()) if colon else ""
+    default = default.strip()
+    if eq and default == "None" and annotation and not annotation.startswith(("Optional[", "None", "Any")):
+        annotation = f"Optional[{annotation}]"  # pybind11 allows None where the C++ side takes a holder or pointer
+    out = name + (f": {annotation}" if annotation else "")
     if eq:
-        default = default.strip()
         out += " = " + (default if LITERAL.match(default) and default not in ("inf", "-inf", "nan") else "...")
     return out
 
