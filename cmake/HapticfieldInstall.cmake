@@ -82,5 +82,15 @@ endif()
 if(HAPTICFIELD_HAS_OBJ)
   string(APPEND HAPTICFIELD_PC_REQUIRES " tinyobjloader_double")
 endif()
+# Relocatable: the prefix is found from the .pc file's own place (${pcfiledir}), so the installed
+# tree works wherever it is installed (cmake --install --prefix P) or moved to afterwards.
+set(HAPTICFIELD_PC_DIR "${CMAKE_INSTALL_DATAROOTDIR}/pkgconfig")
+if(IS_ABSOLUTE "${HAPTICFIELD_PC_DIR}" OR IS_ABSOLUTE "${CMAKE_INSTALL_INCLUDEDIR}")
+  set(HAPTICFIELD_PC_PREFIX "${CMAKE_INSTALL_PREFIX}")  # an absolute layout cannot move
+else()
+  file(RELATIVE_PATH HAPTICFIELD_PC_UP "/hapticfield_prefix/${HAPTICFIELD_PC_DIR}" "/hapticfield_prefix")
+  string(REGEX REPLACE "/$" "" HAPTICFIELD_PC_UP "${HAPTICFIELD_PC_UP}")
+  set(HAPTICFIELD_PC_PREFIX "\${pcfiledir}/${HAPTICFIELD_PC_UP}")
+endif()
 configure_file("${PROJECT_SOURCE_DIR}/cmake/hapticfield.pc.in" "${PROJECT_BINARY_DIR}/hapticfield.pc" @ONLY)
-install(FILES "${PROJECT_BINARY_DIR}/hapticfield.pc" DESTINATION "${CMAKE_INSTALL_DATAROOTDIR}/pkgconfig")
+install(FILES "${PROJECT_BINARY_DIR}/hapticfield.pc" DESTINATION "${HAPTICFIELD_PC_DIR}")

@@ -70,7 +70,8 @@ constexpr const char* usage_text =
     "  --clock C             wall (default) or virtual: simulated time for a simulated arm (sim or\n"
     "                        woody:GEN[:PRESET]:sim), as fast as the CPU allows, the same ticks, safety\n"
     "                        chain and trace whatever the machine's load\n"
-    "  --trace OUT.csv       write t, position [m], force [N] and period [s] per tick\n"
+    "  --trace OUT.csv       write t, position [m], force [N], period [s] and the device's\n"
+    "                        homed,armed (0/1) per tick\n"
     "  --plots DIR           write force.png and periods.png into DIR (created if needed), drawn with\n"
     "                        matplotlib when python3 has it, else simpler plots\n"
     "  --device D            sim (default), hid, hid:VID:PID (hexadecimal ids) or serial:PATH (a\n"
@@ -221,15 +222,47 @@ struct Row {
   glm::dvec3 position{0.0};
   glm::dvec3 force{0.0};  // commanded after the safety chain [N]
   double period{0.0};
+  bool homed{false};  // the tick's device state: homed, armed (motors on)
+  bool armed{false};
+};
+
+// The device as the loop sees it while tracing: each tick's callback opens a
+// row (open()) and the loop's write that follows, the tick's command after the
+// safety chain, fills its force. The zero force of the stop after the last tick
+// opens no row, so every row holds what its own tick commanded.
+template <Device D>
+class TracedDevice {
+ public:
+  TracedDevice(D& device, std::vector<Row>& rows) noexcept : device_(&device), rows_(&rows) {}
+  Status read(DeviceState& state) noexcept { return device_->read(state); }
+  Status write(const glm::dvec3& force) noexcept {
+    if (open_) rows_->back().force = force, open_ = false;
+    return device_->write(force);
+  }
+  Status set_armed(bool on) noexcept { return device_->set_armed(on); }
+  Status request_home() noexcept { return device_->request_home(); }
+  decltype(auto) info() const noexcept { return device_->info(); }
+  Status clear_fault() noexcept requires requires(D& d) { d.clear_fault(); }
+  { return device_->clear_fault(); }
+  void open(const TickInput& in, double period) noexcept {  // rows go only into reserved capacity
+    open_ = rows_->size() < rows_->capacity();
+    if (open_)
+      rows_->push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}, period, in.state.homed(), in.state.armed()});
+  }
+
+ private:
+  D* device_;
+  std::vector<Row>* rows_;
+  bool open_{false};
 };
 
 void write_trace(const std::string& path, const std::vector<Row>& rows) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write " + path);
-  f << "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,period_s\n";
+  f << "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,period_s,homed,armed\n";
   for (const Row& r : rows)
     f << r.t << ',' << r.position.x << ',' << r.position.y << ',' << r.position.z << ',' << r.force.x << ','
-      << r.force.y << ',' << r.force.z << ',' << r.period << '\n';
+      << r.force.y << ',' << r.force.z << ',' << r.period << ',' << int{r.homed} << ',' << int{r.armed} << '\n';
 }
 
 void plot_force(const std::string& path, const std::vector<Row>& rows, double limit) {
@@ -444,7 +477,11 @@ int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hard
   // A stall of the machine (a late wake, a stale state) latches zero force;
   // the demo re-arms through the soft start once states are fresh for 0.5 s.
   config.recover_after = 0.5;
-  ServoLoop<D, C> loop(device, clock, config);
+  const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * o.rate));
+  std::vector<Row> rows;
+  rows.reserve(ticks + 8);  // the tick path only fills reserved rows
+  TracedDevice<D> traced(device, rows);
+  ServoLoop<TracedDevice<D>, C> loop(traced, clock, config);
   cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm through the loop's stop
 
   if (hardware) cli::wait_for_operator();
@@ -453,15 +490,9 @@ int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hard
     return stop.exit_status();
   }
 
-  const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * o.rate));
-  std::vector<Row> rows;
-  rows.reserve(ticks + 8);  // the tick path only fills reserved rows
   double previous_time = 0.0;
   auto callback = [&](const TickInput& in) noexcept {
-    if (rows.size() < rows.capacity()) {
-      if (!rows.empty()) rows.back().force = loop.last_command();  // what the last tick commanded
-      rows.push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}, in.probe.time - previous_time});
-    }
+    traced.open(in, in.probe.time - previous_time);
     previous_time = in.probe.time;
     return field.force(in.probe);
   };

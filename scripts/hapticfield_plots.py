@@ -6,7 +6,7 @@
     hapticfield_plots.py --check      exit 0 when matplotlib is present
 
 servo: T.csv is servo_demo's trace (t_s, x_m, y_m, z_m, fx_N, fy_N, fz_N,
-period_s); P.csv the loop's tick-period histogram (period_ms, count). Writes
+period_s, homed, armed); P.csv the loop's tick-period histogram (period_ms, count). Writes
 DIR/force.png and DIR/periods.png.
 
 texture: DIR holds texture_gallery's gallery.csv (stem, name, axis,

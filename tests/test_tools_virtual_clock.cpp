@@ -63,8 +63,8 @@ TEST_CASE("servo_demo --clock virtual: 60 s of the simulated arm, the same trace
     std::vector<double> v;
     for (std::string cell; std::getline(row, cell, ',');)
       v.push_back(std::stod(cell));
-    REQUIRE(v.size() == 8);
-    pushed = v[6] > 1.0;  // fz [N]: the wall holds the hand
+    REQUIRE(v.size() == 10);  // t, x, y, z, fx, fy, fz, period, homed, armed
+    pushed = v[6] > 1.0;      // fz [N]: the wall holds the hand
   }
   CHECK(pushed);
 }

@@ -184,6 +184,17 @@ MaskKind mask_kind(const std::string& name);
 Border border_kind(const std::string& name);
 TangibleConfig tangible_options(const std::string& mask, std::optional<int> size, const std::string& border,
                                 double sigma);
+/// A picture as the bindings take it: a path, or a numpy array read with `channels` ("rgb" or "bgr") and white
+/// level `levels` (required for float arrays); see picture_argument_doc (image.cpp).
+GrayImage gray_from(const py::object& image, GrayWeights weights, const std::string& channels,
+                    std::optional<double> levels);
+/// What every docstring that takes a picture says about it.
+inline constexpr const char* picture_argument_doc =
+    "image: a path (any format OpenCV reads; 16-bit files are scaled by 255/65535) or a numpy array, H x W gray or "
+    "H x W x 3 / x 4 colour (alpha ignored). channels='rgb' (default: numpy, PIL, imageio order) or 'bgr' (cv2.imread "
+    "order) names a colour array's channel order. White level: 255 for uint8 and other integer arrays, 65535 for "
+    "uint16 (as 16-bit files); a float or bool array needs levels= (its white level: 1.0 for a picture in [0, 1], 255 "
+    "for [0, 255]) and is refused without it; levels= overrides the white level of any array.";
 /// The picture centred on the origin at px_per_mm [px/mm] (default Kim & Kwon's 6.4) or fitted so that its
 /// longer side spans workspace_mm [mm].
 PlaneMapping mapping_for(int width, int height, std::optional<double> px_per_mm, std::optional<double> workspace_mm);

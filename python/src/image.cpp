@@ -16,44 +16,81 @@ namespace {
 /// Largest picture accepted as an array [px] (int sizes, 8 bytes a pixel: 2 GiB).
 constexpr py::ssize_t max_array_pixels = py::ssize_t{1} << 28;
 
+/// A number as Python prints it (255.0, 0.5, nan).
+std::string number(double v) {
+  return py::str(py::float_(v));
+}
+
 GrayWeights gray_weights(const std::string& name) {
   return choose<GrayWeights>("gray", name, {{"paper", GrayWeights::paper}, {"bt601", GrayWeights::bt601}});
 }
 
-/// A picture from a path (any format OpenCV reads) or a numpy array: H x W
-/// gray levels [0, 255], or H x W x 3 / 4 in R, G, B (, A) order.
-GrayImage gray_from(const py::object& image, GrayWeights weights) {
+}  // namespace
+
+/// A picture from a path (any format OpenCV reads; 16-bit files are scaled by 255 / 65535) or a numpy array:
+/// H x W gray levels, or H x W x 3 / 4 colour in the order `channels` names ("rgb": R, G, B (, A), as numpy
+/// and PIL hold pictures; "bgr": B, G, R (, A), as cv2.imread returns them). An array's white level: 255 for
+/// uint8 and other integer arrays, 65535 for uint16 (as 16-bit files), and `levels` for float or bool
+/// arrays, which have no scale of their own and are refused without it (1.0 for pictures in [0, 1]).
+GrayImage gray_from(const py::object& image, GrayWeights weights, const std::string& channels,
+                    std::optional<double> levels) {
+  const bool bgr = choose<bool>("channels", channels, {{"rgb", false}, {"bgr", true}});
+  if (levels && !(std::isfinite(*levels) && *levels > 0.0))
+    throw py::value_error("levels: the array's white level must be finite and > 0, e.g. 1.0 or 255");
   if (py::isinstance<py::str>(image) || py::hasattr(image, "__fspath__")) {
     const std::string path = py::str(py::module_::import("os").attr("fspath")(image));
     return load_gray(path, weights);
   }
-  const Array a = Array::ensure(image);
+  const py::array raw = py::array::ensure(image);
+  if (!raw) throw py::type_error("image: expected a path or a numpy array");
+  const char kind = raw.dtype().kind();
+  if (kind != 'u' && kind != 'i' && kind != 'f' && kind != 'b')
+    throw py::type_error("image: expected a numeric array, got dtype " + std::string(py::str(raw.dtype())));
+  double white = gray_full_scale;
+  if (levels)
+    white = *levels;
+  else if (kind == 'f' || kind == 'b')
+    throw py::value_error(
+        "image: a " + std::string(py::str(raw.dtype())) +
+        " array has no gray scale of its own: give levels= (its white level: 1.0 for a picture in [0, 1], 255 for "
+        "[0, 255]), or pass uint8 / uint16");
+  else if (kind == 'u' && raw.itemsize() == 2)
+    white = 65535.0;
+  const Array a = Array::ensure(raw);
   if (!a) throw py::type_error("image: expected a path or a numpy array");
   if (a.ndim() != 2 && !(a.ndim() == 3 && (a.shape(2) == 3 || a.shape(2) == 4)))
-    throw py::value_error("image: expected an H x W gray array or an H x W x 3 (RGB) / x 4 (RGBA) array");
+    throw py::value_error("image: expected an H x W gray array or an H x W x 3 / x 4 colour array (see channels=)");
   if (a.shape(0) < 1 || a.shape(1) < 1) throw py::value_error("image: the array is empty (0 x 0 px)");
   if (a.shape(0) * a.shape(1) > max_array_pixels)
     throw py::value_error("image: more than " + std::to_string(max_array_pixels) + " pixels");
   GrayImage gray(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)));
   const LumaWeights w = luma_weights(weights);
   const py::ssize_t c = a.ndim() == 3 ? a.shape(2) : 1;
+  const int r_at = bgr ? 2 : 0, b_at = bgr ? 0 : 2;
+  // The same arithmetic as a file's pixels (to_gray): scale * (wb B + wg G + wr R).
+  const double scale = gray_full_scale / white;
   const double* src = a.data();
   for (int y = 0; y < gray.height(); ++y)
     for (int x = 0; x < gray.width(); ++x, src += c) {
-      const double v = c == 1 ? src[0] : w.r * src[0] + w.g * src[1] + w.b * src[2];
-      if (!(std::isfinite(v) && v >= 0.0 && v <= gray_full_scale))
-        throw py::value_error("image: gray levels must be finite and within [0, 255], got " + std::to_string(v) +
-                              " at (" + std::to_string(x) + ", " + std::to_string(y) + ")");
-      gray.at(x, y) = v;
+      for (py::ssize_t k = 0; k < std::min<py::ssize_t>(c, 3); ++k)
+        if (!(std::isfinite(src[k]) && src[k] >= 0.0 && src[k] <= white))
+          throw py::value_error("image: values must be finite and within [0, " + number(white) + "], got " +
+                                number(src[k]) + " at (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
+                                (levels ? "" : " (give levels= for another scale)"));
+      gray.at(x, y) = c == 1 ? scale * src[0] : scale * (w.b * src[b_at] + w.g * src[1] + w.r * src[r_at]);
     }
   return gray;
 }
 
+namespace {
+
 py::array_t<double> tangible_forces(const py::object& image, const Array& xy, const std::string& mask,
                                     std::optional<int> size, const std::string& border, double sigma,
-                                    const std::string& gray) {
+                                    const std::string& gray, const std::string& channels,
+                                    std::optional<double> levels) {
   const py::ssize_t n = rows_of(xy, 2, "xy");
-  const TangibleImage tangible(gray_from(image, gray_weights(gray)), tangible_options(mask, size, border, sigma));
+  const TangibleImage tangible(gray_from(image, gray_weights(gray), channels, levels),
+                               tangible_options(mask, size, border, sigma));
   auto out = matrix(n, 2);
   const double* p = xy.data();
   double* f = out.mutable_data();
@@ -146,18 +183,21 @@ PlaneMapping mapping_for(int width, int height, std::optional<double> px_per_mm,
 void bind_image(py::module_& m) {
   m.def("tangible_forces", &tangible_forces, py::arg("image"), py::arg("xy"), py::arg("mask") = "prewitt",
         py::arg("size") = py::none(), py::arg("border") = "suspend", py::arg("sigma") = 0.0, py::arg("gray") = "paper",
-        "Tangible-image forces (Vasudevan & Manivannan 2008) at N pixel positions: image a path or a numpy array "
-        "(H x W gray levels [0, 255], or H x W x 3 RGB); xy N x 2 [px] (x right, y down, integer = pixel centre). "
-        "Returns N x 2: the normalised force (1 = a black/white edge) before any gain, fy positive downward; the "
-        "same numbers as `tangible_image --probes`. mask prewitt|sobel|scharr|roberts|gauss|emboss, size [px] "
-        "(default 17; sobel/scharr 3, roberts 2), border suspend|clamp|reflect|fade, sigma [px] (gauss; 0: size/6), "
-        "gray paper|bt601.");
+        py::arg("channels") = "rgb", py::arg("levels") = py::none(),
+        (std::string("Tangible-image forces (Vasudevan & Manivannan 2008) at N pixel positions. ") +
+         picture_argument_doc +
+         " xy N x 2 [px] (x right, y down, integer = pixel centre). "
+         "Returns N x 2: the normalised force (1 = a black/white edge) before any gain, fy positive downward; the "
+         "same numbers as `tangible_image --probes`. mask prewitt|sobel|scharr|roberts|gauss|emboss, size [px] "
+         "(default 17; sobel/scharr 3, roberts 2), border suspend|clamp|reflect|fade, sigma [px] (gauss; 0: size/6), "
+         "gray paper|bt601 (luma weights).")
+            .c_str());
   m.def(
       "force_map",
       [](const py::object& image, const std::string& mask, std::optional<int> size, const std::string& border,
-         double sigma, const std::string& gray) {
+         double sigma, const std::string& gray, const std::string& channels, std::optional<double> levels) {
         const TangibleConfig o = tangible_options(mask, size, border, sigma);
-        const GrayImage g = gray_from(image, gray_weights(gray));
+        const GrayImage g = gray_from(image, gray_weights(gray), channels, levels);
         ForceMap map;
         {
           py::gil_scoped_release release;
@@ -172,15 +212,17 @@ void bind_image(py::module_& m) {
         return py::make_tuple(fx, fy);
       },
       py::arg("image"), py::arg("mask") = "prewitt", py::arg("size") = py::none(), py::arg("border") = "suspend",
-      py::arg("sigma") = 0.0, py::arg("gray") = "paper",
-      "The tangible-image force at every pixel centre: (fx, fy), two H x W float32 arrays, normalised "
-      "(1 = a black/white edge), fy positive downward. Same options as tangible_forces().");
+      py::arg("sigma") = 0.0, py::arg("gray") = "paper", py::arg("channels") = "rgb", py::arg("levels") = py::none(),
+      (std::string("The tangible-image force at every pixel centre: (fx, fy), two H x W float32 arrays, normalised "
+                   "(1 = a black/white edge), fy positive downward. ") +
+       picture_argument_doc + " Other options as tangible_forces().")
+          .c_str());
   m.def(
       "tangible_field",
       [](const py::object& image, const std::string& mask, std::optional<int> size, const std::string& border,
          double sigma, double gain, std::optional<double> px_per_mm, std::optional<double> workspace_mm,
-         const std::string& gray) {
-        const GrayImage g = gray_from(image, gray_weights(gray));
+         const std::string& gray, const std::string& channels, std::optional<double> levels) {
+        const GrayImage g = gray_from(image, gray_weights(gray), channels, levels);
         const PlaneMapping mapping = mapping_for(g.width(), g.height(), px_per_mm, workspace_mm);
         return make_field(
             TangibleImageField(TangibleImage(g, tangible_options(mask, size, border, sigma)), mapping, gain),
@@ -188,10 +230,13 @@ void bind_image(py::module_& m) {
       },
       py::arg("image"), py::arg("mask") = "prewitt", py::arg("size") = py::none(), py::arg("border") = "suspend",
       py::arg("sigma") = 0.0, py::arg("gain") = 1.0, py::arg("px_per_mm") = py::none(),
-      py::arg("workspace_mm") = py::none(), py::arg("gray") = "paper",
-      "A tangible-image field in the device's x-y plane: the picture centred on the origin at px_per_mm [px/mm] "
-      "(default 6.4, Kim & Kwon's) or fitted so its longer side spans workspace_mm [mm]; gain [N] at a black/white "
-      "edge. Device frame x right, y up.");
+      py::arg("workspace_mm") = py::none(), py::arg("gray") = "paper", py::arg("channels") = "rgb",
+      py::arg("levels") = py::none(),
+      (std::string("A tangible-image field in the device's x-y plane: the picture centred on the origin at px_per_mm "
+                   "[px/mm] (default 6.4, Kim & Kwon's) or fitted so its longer side spans workspace_mm [mm]; gain [N] "
+                   "at a black/white edge. Device frame x right, y up. ") +
+       picture_argument_doc + " Other options as tangible_forces().")
+          .c_str());
 
   m.def(
       "estimate_normal",

@@ -28,6 +28,39 @@ struct TraceRow {
   double t{0.0};
   glm::dvec3 position{0.0};
   glm::dvec3 force{0.0};  ///< commanded after the safety chain [N]
+  bool homed{false};      ///< the tick's state said homed
+  bool armed{false};      ///< the tick's state said armed (motors on)
+};
+
+/// A device that traces a run: each tick's callback opens a row (open()), and the loop's write that follows it,
+/// the tick's command after the safety chain, fills that row's force. The zero force a stopping run writes after
+/// its last tick opens no row, so every row holds what its own tick commanded. Rows go only into reserved
+/// capacity: no allocation in the tick.
+template <Device D>
+class TracedDevice {
+ public:
+  TracedDevice(D& device, std::vector<TraceRow>& rows) noexcept : device_(&device), rows_(&rows) {}
+  Status read(DeviceState& state) noexcept { return device_->read(state); }
+  Status write(const glm::dvec3& force) noexcept {
+    if (open_) rows_->back().force = force, open_ = false;
+    return device_->write(force);
+  }
+  Status set_armed(bool on) noexcept { return device_->set_armed(on); }
+  Status request_home() noexcept { return device_->request_home(); }
+  decltype(auto) info() const noexcept { return device_->info(); }
+  Status clear_fault() noexcept requires requires(D& d) { d.clear_fault(); }
+  { return device_->clear_fault(); }
+  /// A row for this tick (from the loop's callback), while the reserved rows last.
+  void open(const TickInput& in) noexcept {
+    open_ = rows_->size() < rows_->capacity();
+    if (open_)
+      rows_->push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}, in.state.homed(), in.state.armed()});
+  }
+
+ private:
+  D* device_;
+  std::vector<TraceRow>* rows_;
+  bool open_{false};
 };
 
 HandPath hand_path(const std::string& kind, const V3& centre, double size, double speed) {
@@ -180,29 +213,28 @@ py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, 
   config.rate = rate;
   config.realtime = realtime;
   config.recover_after = 0.5;  // [s] fresh states before re-arming after a latch
-  ServoLoop<D, C> loop(device, clock, config);
   const auto ticks = static_cast<std::uint64_t>(std::llround(seconds * rate));
   std::vector<TraceRow> rows;
   rows.reserve(ticks + 8);  // the tick only fills reserved rows
+  TracedDevice<D> traced(device, rows);
+  ServoLoop<TracedDevice<D>, C> loop(traced, clock, config);
   std::shared_ptr<AnyField> f = field.impl;
   auto callback = [&](const TickInput& in) noexcept {
-    if (rows.size() < rows.capacity()) {
-      if (!rows.empty()) rows.back().force = loop.last_command();
-      rows.push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}});
-    }
+    traced.open(in);
     return f->force(in.probe);
   };
   if (token && token->requested.load()) loop.request_stop();  // a request made before the run ends it at once
   PendingInterrupt interrupt;
   long loop_mallocs = -1, loop_frees = -1;
   const StopReason reason = run_watched(loop, callback, ticks, token, interrupt, loop_mallocs, loop_frees);
-  if (!rows.empty()) rows.back().force = loop.last_command();
   const py::ssize_t n = static_cast<py::ssize_t>(rows.size());
   py::array_t<double> t(n);
+  py::array_t<bool> homed(n), armed(n);
   auto position = matrix(n, 3), force = matrix(n, 3);
   for (py::ssize_t i = 0; i < n; ++i) {
     const TraceRow& r = rows[static_cast<std::size_t>(i)];
     t.mutable_at(i) = r.t;
+    homed.mutable_at(i) = r.homed, armed.mutable_at(i) = r.armed;
     for (int k = 0; k < 3; ++k)
       position.mutable_at(i, k) = r.position[k], force.mutable_at(i, k) = r.force[k];
   }
@@ -215,6 +247,8 @@ py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, 
   trace["t"] = t;
   trace["position"] = position;
   trace["force"] = force;
+  trace["homed"] = homed;
+  trace["armed"] = armed;
   py::dict result;
   result["statistics"] = snapshot_dict(loop.statistics());
   result["trace"] = trace;
@@ -355,7 +389,8 @@ void bind_servo(py::module_& m) {
         py::arg("confirm_hardware") = false, py::arg("clock") = py::none(), py::arg("stop") = py::none(),
         "Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] "
         "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace "
-        "(t [s], position N x 3 [m], force N x 3 [N] as commanded after the safety chain), period_histogram "
+        "(one row a tick: t [s], position N x 3 [m], force N x 3 [N] as that tick commanded after the safety chain, "
+        "homed and armed N booleans: the tick's device state, False before homing / arming), period_histogram "
         "(counts per histogram_bin_s), stop_reason, and loop_allocations / loop_frees (malloc / free calls on this "
         "thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None "
         "otherwise). device sim: the simulated arm, held by a scripted hand "

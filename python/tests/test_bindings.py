@@ -15,9 +15,9 @@ import hapticfield as hf
 
 
 def step_edge(width=40, height=30, edge=20):
-    """White (255) left of column `edge`, black (0) from it on [gray levels]."""
-    image = np.full((height, width), 255.0)
-    image[:, edge:] = 0.0
+    """White (255) left of column `edge`, black (0) from it on [gray levels, uint8]."""
+    image = np.full((height, width), 255, np.uint8)
+    image[:, edge:] = 0
     return image
 
 
@@ -57,8 +57,8 @@ def test_arrays_and_paths_agree_and_rgb_uses_the_paper_weights():
     rgb = np.stack([gray, gray, gray], axis=2).astype(np.uint8)
     xy = np.array([[19.5, 10.0], [20.0, 12.0]])
     np.testing.assert_array_equal(hf.tangible_forces(gray, xy), hf.tangible_forces(rgb, xy))
-    red = np.zeros((30, 40, 3))
-    red[:, :20, 0] = 255.0  # only the red channel: gray 0.3 x 255 on the left
+    red = np.zeros((30, 40, 3), np.uint8)
+    red[:, :20, 0] = 255  # only the red channel: gray 0.3 x 255 on the left
     f = hf.tangible_forces(red, np.array([[19.5, 15.0]]), size=3)
     assert f[0, 0] == pytest.approx(0.3, abs=1e-12)
 
@@ -345,8 +345,10 @@ def test_ctrl_c_stops_a_run_within_ticks_and_keeps_the_trace():
     assert took < 10.0, took
     r = json.loads(out.strip().splitlines()[-1])
     assert r["raised"] == "KeyboardInterrupt" and r["stop_reason"] == "interrupted", r
-    assert r["rows"] == r["ticks"] > 0  # the trace up to the signal
-    assert r["last_force"] == 0.0 and r["pushed"] <= 3.3  # stopped with zero force; never beyond the arm's limit [N]
+    assert r["rows"] == r["ticks"] > 0  # the trace up to the signal, one row a tick
+    # The last row is the last tick's own command (the stop's zero force after it is no tick of the trace);
+    # never beyond the arm's limit [N].
+    assert r["last_force"] <= r["pushed"] <= 3.3
 
 
 def test_another_thread_stops_a_run_with_a_servo_stop_token():
@@ -387,13 +389,13 @@ def test_the_servo_clocks_example_runs():
 
 @pytest.mark.parametrize("call,error,message", [
     (lambda: hf.tangible_forces("/no/such.png", np.zeros((1, 2))), hf.FileError, "no such file"),
-    (lambda: hf.tangible_forces(np.zeros((30, 30)), np.zeros((3, 3))), ValueError, "N x 2"),
-    (lambda: hf.tangible_forces(np.zeros((30, 30)), np.zeros((1, 2)), size=4), ValueError, "size 4 px"),
-    (lambda: hf.tangible_forces(np.zeros((30, 30)), np.zeros((1, 2)), mask="box"), ValueError, "unknown 'box'"),
-    (lambda: hf.tangible_forces(np.zeros((10, 10)), np.zeros((1, 2))), ValueError, "smaller than the 17 x 17"),
-    (lambda: hf.tangible_forces(np.full((30, 30), np.nan), np.zeros((1, 2))), ValueError, "finite"),
-    (lambda: hf.tangible_forces(np.zeros((30, 30, 2)), np.zeros((1, 2))), ValueError, "H x W"),
-    (lambda: hf.tangible_field(np.zeros((30, 30)), gain=-1.0), ValueError, "gain"),
+    (lambda: hf.tangible_forces(np.zeros((30, 30), np.uint8), np.zeros((3, 3))), ValueError, "N x 2"),
+    (lambda: hf.tangible_forces(np.zeros((30, 30), np.uint8), np.zeros((1, 2)), size=4), ValueError, "size 4 px"),
+    (lambda: hf.tangible_forces(np.zeros((30, 30), np.uint8), np.zeros((1, 2)), mask="box"), ValueError, "unknown 'box'"),
+    (lambda: hf.tangible_forces(np.zeros((10, 10), np.uint8), np.zeros((1, 2))), ValueError, "smaller than the 17 x 17"),
+    (lambda: hf.tangible_forces(np.full((30, 30), np.nan), np.zeros((1, 2)), levels=1.0), ValueError, "finite"),
+    (lambda: hf.tangible_forces(np.zeros((30, 30, 2), np.uint8), np.zeros((1, 2))), ValueError, "H x W"),
+    (lambda: hf.tangible_field(np.zeros((30, 30), np.uint8), gain=-1.0), ValueError, "gain"),
     (lambda: hf.zero().forces(np.zeros((4, 2))), ValueError, "N x 3"),
     (lambda: hf.zero().forces(np.zeros((4, 3)), velocities=np.zeros((3, 3))), ValueError, "as many rows"),
     (lambda: hf.zero().forces(np.zeros((4, 3)), period=0.0), ValueError, "period"),
@@ -449,10 +451,10 @@ def test_no_leak_over_repeated_construction():
     picture = np.random.default_rng(1).uniform(0, 255, (200, 300))  # 480 KB of gray levels a copy
 
     def cycle():
-        scene = hf.plane_contact([hf.tangible_field(picture), hf.lattice_texture(), hf.friction(coulomb=0.2),
+        scene = hf.plane_contact([hf.tangible_field(picture, levels=255.0), hf.lattice_texture(), hf.friction(coulomb=0.2),
                                   hf.temporal_texture()])
         scene.forces(positions, velocities)
-        hf.force_map(picture)
+        hf.force_map(picture, levels=255.0)
         try:
             hf.tangible_forces("/no/such.png", np.zeros((1, 2)))
         except hf.FileError:

@@ -67,7 +67,7 @@ def test_at_a_frame_time_the_force_is_that_frames_still_picture_force(clip):
     for k in (3, 5, 12):  # past the fade-in of the first frame and of the cut
         t = np.full(len(xy), k / FPS)
         video = hf.video_forces(clip, t, xy, **PLAIN)
-        still = hf.tangible_forces(frame(k), xy, size=5, border="clamp")
+        still = hf.tangible_forces(frame(k), xy, size=5, border="clamp", levels=255.0)
         np.testing.assert_allclose(video, still, atol=1e-6)  # the frame's gray levels went through float32
         assert np.max(np.abs(still)) > 0.5
 

@@ -1,5 +1,8 @@
 # Builds and runs the consumer project in tests/consumer against this tree.
-#   MODE=find_package     install into a temporary prefix, then find_package
+#   MODE=find_package     install into a temporary prefix, move the prefix elsewhere (an installed
+#                         tree is relocatable), then find_package from there, a tiny consumer
+#                         compiled with `pkg-config --cflags --libs hapticfield`, and the tools
+#                         installed in bin/ (TOOLS=ON) run from there
 #   MODE=add_subdirectory the consumer adds the source tree directly
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
@@ -15,7 +18,8 @@ set(consumer_args -S "${SOURCE_DIR}/tests/consumer" -B "${WORK_DIR}/build" -DCMA
                   -DHAPTICFIELD_CONSUMER_MODE=${MODE})
 if(MODE STREQUAL "find_package")
   run(${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${WORK_DIR}/prefix")
-  list(APPEND consumer_args "-DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix")
+  file(RENAME "${WORK_DIR}/prefix" "${WORK_DIR}/moved")  # nothing may point back at the first place
+  list(APPEND consumer_args "-DCMAKE_PREFIX_PATH=${WORK_DIR}/moved")
 elseif(MODE STREQUAL "add_subdirectory")
   list(APPEND consumer_args "-DHAPTICFIELD_SOURCE=${SOURCE_DIR}")
 else()
@@ -33,10 +37,38 @@ if(EXISTS "${WORK_DIR}/build/consumer_io")
   run("${WORK_DIR}/build/consumer_io" "${WORK_DIR}/meshes")
 endif()
 if(MODE STREQUAL "find_package")
-  # The pkg-config file must name the installed headers.
-  file(GLOB pc "${WORK_DIR}/prefix/*/pkgconfig/hapticfield.pc" "${WORK_DIR}/prefix/*/*/pkgconfig/hapticfield.pc")
+  # The pkg-config file names the headers where the tree now is: a program built with its flags alone.
+  file(GLOB pc "${WORK_DIR}/moved/*/pkgconfig/hapticfield.pc" "${WORK_DIR}/moved/*/*/pkgconfig/hapticfield.pc")
   if(NOT pc)
     message(FATAL_ERROR "hapticfield.pc was not installed")
+  endif()
+  get_filename_component(pc_dir "${pc}" DIRECTORY)
+  find_program(PKG_CONFIG NAMES pkg-config pkgconf)
+  if(PKG_CONFIG AND CXX)
+    set(ENV{PKG_CONFIG_PATH} "${pc_dir}")
+    execute_process(COMMAND "${PKG_CONFIG}" --cflags --libs hapticfield RESULT_VARIABLE rc OUTPUT_VARIABLE flags
+                    ERROR_VARIABLE err OUTPUT_STRIP_TRAILING_WHITESPACE)
+    if(NOT rc EQUAL 0)
+      message(FATAL_ERROR "pkg-config --cflags --libs hapticfield failed (${rc}): ${err}")
+    endif()
+    if(NOT flags MATCHES "-I[^ ]*/moved/")
+      message(FATAL_ERROR "hapticfield.pc does not follow the moved prefix: ${flags}")
+    endif()
+    separate_arguments(flags UNIX_COMMAND "${flags}")
+    run("${CXX}" "${SOURCE_DIR}/tests/consumer/consumer_core.cpp" ${flags} -o "${WORK_DIR}/consumer_pkg_config")
+    run("${WORK_DIR}/consumer_pkg_config")
+  else()
+    message(STATUS "pkg-config or the compiler not given: the pkg-config consumer is not built")
+  endif()
+  if(TOOLS)
+    foreach(tool tangible_image servo_demo)
+      if(NOT EXISTS "${WORK_DIR}/moved/bin/${tool}")
+        message(FATAL_ERROR "the tool ${tool} was not installed in bin/")
+      endif()
+      run("${WORK_DIR}/moved/bin/${tool}" --help)
+    endforeach()
+  elseif(EXISTS "${WORK_DIR}/moved/bin")
+    message(FATAL_ERROR "HAPTICFIELD_INSTALL_TOOLS=OFF, yet bin/ was installed")
   endif()
 endif()
 message(STATUS "consumer (${MODE}) built and ran")
