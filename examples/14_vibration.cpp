@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -106,8 +107,6 @@ std::size_t choose_model(const texture::HattModelSet& set, long long wanted) {
 /// median |dB error| up to 4 kHz.
 double write_spectrum(const std::string& path, const std::vector<double>& played, double rate,
                       const texture::HattModelSet& set, std::size_t m) {
-  if (played.size() < 2 * psd_segment)
-    throw cli::UsageError("--spectrum needs a longer stroke (--seconds) to average a PSD");
   const texture::HattModel& model = set.models[m];
   std::vector<double> a = model.ar_coeff;  // the file's own coefficients when it has them
   if (a.empty()) a = texture::lsf_to_ar(model.ar_lsf);
@@ -158,7 +157,7 @@ int run(const Args& a, const texture::HattModelSet& set, std::size_t m, Sink& si
   const auto block = static_cast<std::size_t>(a.block);
   vib::RendererConfig config;
   config.playout.sample_rate = a.rate;
-  config.playout.delay = static_cast<double>(block) / a.rate + 0.002;  // one block + two ticks
+  config.playout.delay = static_cast<double>(block) / a.rate + 0.002;  // one block + two ticks (as in main)
   auto renderer =
       vib::renderer(ring, config, vib::route(vib::HattSource<64>(set, {.gain = a.gain, .seed = 7}), material));
   Observed<Sink> observed{&sink, std::vector<float>(block)};
@@ -217,11 +216,15 @@ int run_with_sink(const Args& a) {
   }
   if (!a.alsa.empty()) {
 #ifdef HAPTICFIELD_EXAMPLE_ALSA
-    vib::AlsaSink sink({.device = a.alsa,
-                        .sample_rate = static_cast<unsigned>(a.rate),
-                        .format = vib::AlsaFormat::s16,
-                        .period_frames = static_cast<unsigned>(a.block),
-                        .periods = static_cast<unsigned>(a.periods)});
+    // ALSA's library prints its own complaint before failing: muted, the tool reports it once
+    auto opened = cli::quiet_stderr([&] {
+      return std::make_unique<vib::AlsaSink>(vib::AlsaConfig{.device = a.alsa,
+                                                             .sample_rate = static_cast<unsigned>(a.rate),
+                                                             .format = vib::AlsaFormat::s16,
+                                                             .period_frames = static_cast<unsigned>(a.block),
+                                                             .periods = static_cast<unsigned>(a.periods)});
+    });
+    vib::AlsaSink& sink = *opened;
     const double buffer = static_cast<double>(a.block * a.periods) / a.rate;
     const int status = run(a, set, m, sink, ("ALSA '" + a.alsa + "'").c_str(), buffer);
     if (sink.errors() > 0) std::printf("  ALSA: %llu write errors\n", static_cast<unsigned long long>(sink.errors()));
@@ -269,6 +272,11 @@ int main(int argc, char** argv) {
       throw cli::UsageError("choose an output: --wav OUT.wav, --alsa DEVICE or --spectrum OUT.csv");
     if (!a.alsa.empty() && a.rate != std::floor(a.rate))
       throw cli::UsageError("--rate must be a whole number of Hz for --alsa");
+    const double delay = static_cast<double>(a.block) / a.rate + 0.002;
+    const double sliding = a.seconds - approach_time - settle_time - lift_time - delay;  // [s] in the spectrum
+    if (!a.spectrum.empty() && sliding * a.rate < 2.0 * static_cast<double>(psd_segment))
+      throw cli::UsageError("--spectrum needs a longer stroke (--seconds) to average a PSD of " +
+                            std::to_string(psd_segment) + "-frame segments");
     p.finish();
     check_file(a.hatt, std::uintmax_t{64} << 20);
     return run_with_sink(a);
