@@ -2,7 +2,7 @@
 // of the device layer and the safety chain. Prints Markdown tables.
 //
 //   bench_servo [--seconds S] [--load N]   (default 10 s per loop, no load)
-//   bench_servo --pacing [--seconds S] [--spin-margin US[,US...]]
+//   bench_servo --pacing [--seconds S] [--spin-margin US[,US...]] [--run-late]
 //
 // With --load N, N busy processes spin on the CPUs during a third table:
 // each loop with and without SCHED_FIFO (RealTime::best_effort), with the
@@ -265,7 +265,7 @@ double load_average() {
 
 /// Sleep against hybrid pacing with each spin margin, same loop, same run
 /// (see the file comment).
-void pacing_table(double seconds, const std::vector<std::int64_t>& margins_ns) {
+void pacing_table(double seconds, const std::vector<std::int64_t>& margins_ns, bool run_late) {
   std::string margins;
   for (const std::int64_t m : margins_ns)
     margins += (margins.empty() ? "" : ", ") + std::to_string(m / 1000);
@@ -284,6 +284,8 @@ void pacing_table(double seconds, const std::vector<std::int64_t>& margins_ns) {
     double rate;
     int load;
   };
+  std::vector<OverrunPolicy> policies{OverrunPolicy::skip};
+  if (run_late) policies.push_back(OverrunPolicy::run_next_late);
   for (const Case k : {Case{1000.0, 0}, Case{1000.0, 2}, Case{10000.0, 0}, Case{10000.0, 2}}) {
     std::int64_t previous = -2;
     for (const std::int64_t margin_ns : modes) {
@@ -293,44 +295,51 @@ void pacing_table(double seconds, const std::vector<std::int64_t>& margins_ns) {
           hybrid ? std::min<std::int64_t>(margin_ns, static_cast<std::int64_t>(2e8 / k.rate)) : -1;
       if (margin == previous) continue;  // the same clamped margin: one row
       previous = margin;
-      BusyLoad busy(k.load);
-      const double steal0 = steal_seconds();
-      SteadyClock clock;
-      SimulatedArm arm(arm_config());
-      SimulatedTransport link(arm, [&clock] { return clock.now(); });
-      ForceArm device(link);
-      LoopConfig c;
-      c.rate = k.rate;
-      c.realtime = RealTime::best_effort;
-      if (hybrid) c.pacing = {.mode = PacingMode::hybrid, .spin_margin_ns = margin};
-      ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
-      Wall wall;
-      const double cpu0 = thread_cpu_seconds();
-      const std::int64_t t0 = clock.now();
-      loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * k.rate)});
-      const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
-      const double cpu = (thread_cpu_seconds() - cpu0) / elapsed;
-      const LoopSnapshot s = loop.statistics();
-      const DurationHistogram& periods = loop.detailed_statistics().periods();
-      const auto stall_bin = static_cast<std::size_t>(4.0e6 / k.rate);  // [us]: 4 periods
-      std::uint64_t stall_count = 0;
-      std::size_t max_calm = 0;
-      for (std::size_t i = 0; i < DurationHistogram::bins; ++i) {
-        if (periods.bin(i) == 0) continue;
-        if (i >= stall_bin)
-          stall_count += periods.bin(i);
+      for (const OverrunPolicy policy : policies) {
+        BusyLoad busy(k.load);
+        const double steal0 = steal_seconds();
+        SteadyClock clock;
+        SimulatedArm arm(arm_config());
+        SimulatedTransport link(arm, [&clock] { return clock.now(); });
+        ForceArm device(link);
+        LoopConfig c;
+        c.rate = k.rate;
+        c.realtime = RealTime::best_effort;
+        if (hybrid) c.pacing = {.mode = PacingMode::hybrid, .spin_margin_ns = margin};
+        c.pacing.overrun = policy;
+        ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+        Wall wall;
+        const double cpu0 = thread_cpu_seconds();
+        const std::int64_t t0 = clock.now();
+        loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * k.rate)});
+        const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
+        const double cpu = (thread_cpu_seconds() - cpu0) / elapsed;
+        const LoopSnapshot s = loop.statistics();
+        const DurationHistogram& periods = loop.detailed_statistics().periods();
+        const auto stall_bin = static_cast<std::size_t>(4.0e6 / k.rate);  // [us]: 4 periods
+        std::uint64_t stall_count = 0;
+        std::size_t max_calm = 0;
+        for (std::size_t i = 0; i < DurationHistogram::bins; ++i) {
+          if (periods.bin(i) == 0) continue;
+          if (i >= stall_bin)
+            stall_count += periods.bin(i);
+          else
+            max_calm = i;
+        }
+        char name[48];
+        std::snprintf(name, sizeof name, "%.0f kHz, %s", k.rate * 1e-3, k.load ? "2 busy processes" : "idle");
+        char mode[48];
+        if (hybrid)
+          std::snprintf(mode, sizeof mode, "hybrid, %.0f us", static_cast<double>(margin) * 1e-3);
         else
-          max_calm = i;
+          std::snprintf(mode, sizeof mode, "sleep");
+        if (policy == OverrunPolicy::run_next_late) std::strcat(mode, ", run late");
+        std::printf("| %s | %s | %s | %.3f | %.4f | %.4f | %.4f | %.3f | %.3f | %llu | %llu | %.1f | %.1f |\n", name,
+                    mode, loop.realtime_granted() ? "yes" : "no", s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
+                    s.period_p999 * 1e3, s.period_max * 1e3, static_cast<double>(max_calm + 1) * 1e-3,
+                    static_cast<unsigned long long>(stall_count), static_cast<unsigned long long>(s.missed_deadlines),
+                    cpu * 100.0, (steal_seconds() - steal0) * 1e3);
       }
-      char name[48];
-      std::snprintf(name, sizeof name, "%.0f kHz, %s", k.rate * 1e-3, k.load ? "2 busy processes" : "idle");
-      char mode[32];
-      std::snprintf(mode, sizeof mode, "hybrid, %.0f us", static_cast<double>(margin) * 1e-3);
-      std::printf("| %s | %s | %s | %.3f | %.4f | %.4f | %.4f | %.3f | %.3f | %llu | %llu | %.1f | %.1f |\n", name,
-                  hybrid ? mode : "sleep", loop.realtime_granted() ? "yes" : "no", s.rate, s.period_p50 * 1e3,
-                  s.period_p99 * 1e3, s.period_p999 * 1e3, s.period_max * 1e3, static_cast<double>(max_calm + 1) * 1e-3,
-                  static_cast<unsigned long long>(stall_count), static_cast<unsigned long long>(s.missed_deadlines),
-                  cpu * 100.0, (steal_seconds() - steal0) * 1e3);
     }
   }
   std::printf("\nload average %.2f at the end\n", load_average());
@@ -344,6 +353,7 @@ int main(int argc, char** argv) {
   double seconds = 10.0;
   int load = 0;
   bool pacing = false;
+  bool run_late = false;
   std::vector<std::int64_t> margins_ns{100'000};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc)
@@ -352,6 +362,8 @@ int main(int argc, char** argv) {
       load = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--pacing") == 0)
       pacing = true;
+    else if (std::strcmp(argv[i], "--run-late") == 0)
+      run_late = true;
     else if (std::strcmp(argv[i], "--spin-margin") == 0 && i + 1 < argc) {
       margins_ns.clear();
       for (std::string list = argv[++i]; !list.empty();) {
@@ -368,11 +380,12 @@ int main(int argc, char** argv) {
       }
     } else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
       std::printf(
-          "usage: bench_servo [--seconds S] [--load N] [--pacing [--spin-margin US[,US...]]]\n"
+          "usage: bench_servo [--seconds S] [--load N] [--pacing [--spin-margin US[,US...]] [--run-late]]\n"
           "  --seconds S  time per loop [s] (default 10)\n"
           "  --load N     also time the loops under N busy processes (default 0: skip)\n"
           "  --pacing     sleep against hybrid pacing only, idle and loaded, 1 and 10 kHz\n"
-          "  --spin-margin US[,US...]  hybrid pacing's spin margins [us], one row each (default 100)\n");
+          "  --spin-margin US[,US...]  hybrid pacing's spin margins [us], one row each (default 100)\n"
+          "  --run-late   each row again with OverrunPolicy::run_next_late (the tick after an overrun runs late)\n");
       return 0;
     } else {
       std::fprintf(stderr, "bench_servo: unknown or incomplete option '%s' (--help shows the usage)\n", argv[i]);
@@ -388,7 +401,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (pacing) {
-    pacing_table(seconds, margins_ns);
+    pacing_table(seconds, margins_ns, run_late);
     return 0;
   }
   if (load > 0) {
