@@ -66,6 +66,14 @@ SimulatedArmConfig arm_config() {
   return c;
 }
 
+/// A simulated arm on the monotonic clock: what every timed loop here drives.
+struct SteadyArm {
+  SteadyClock clock;
+  SimulatedArm arm{arm_config()};
+  SimulatedTransport link{arm, [this] { return clock.now(); }};
+  ForceArm device{link};
+};
+
 struct TimingRow {
   const char* name;
   std::uint64_t ticks;
@@ -83,13 +91,11 @@ void print_timing(const TimingRow& r, const std::string& more = "") {
 }
 
 TimingRow run_servo_loop(double seconds, double rate) {
-  SteadyClock clock;
-  SimulatedArm arm(arm_config());
-  SimulatedTransport link(arm, [&clock] { return clock.now(); });
-  ForceArm device(link);
+  SteadyArm rig;
+  SteadyClock& clock = rig.clock;
   LoopConfig c;
   c.rate = rate;
-  ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+  ServoLoop<ForceArm, SteadyClock> loop(rig.device, clock, c);
   Wall wall;
   const std::int64_t t0 = clock.now();
   loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * rate)});
@@ -210,13 +216,11 @@ void loaded_table(double seconds, int load) {
     {
       BusyLoad busy(load);
       const double steal0 = steal_seconds();
-      SteadyClock clock;
-      SimulatedArm arm(arm_config());
-      SimulatedTransport link(arm, [&clock] { return clock.now(); });
-      ForceArm device(link);
+      SteadyArm rig;
+      SteadyClock& clock = rig.clock;
       LoopConfig c;
       c.realtime = rt ? RealTime::best_effort : RealTime::off;
-      ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+      ServoLoop<ForceArm, SteadyClock> loop(rig.device, clock, c);
       Wall wall;
       const std::int64_t t0 = clock.now();
       loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * 1000.0)});
@@ -298,16 +302,14 @@ void pacing_table(double seconds, const std::vector<std::int64_t>& margins_ns, b
       for (const OverrunPolicy policy : policies) {
         BusyLoad busy(k.load);
         const double steal0 = steal_seconds();
-        SteadyClock clock;
-        SimulatedArm arm(arm_config());
-        SimulatedTransport link(arm, [&clock] { return clock.now(); });
-        ForceArm device(link);
+        SteadyArm rig;
+        SteadyClock& clock = rig.clock;
         LoopConfig c;
         c.rate = k.rate;
         c.realtime = RealTime::best_effort;
         if (hybrid) c.pacing = {.mode = PacingMode::hybrid, .spin_margin_ns = margin};
         c.pacing.overrun = policy;
-        ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+        ServoLoop<ForceArm, SteadyClock> loop(rig.device, clock, c);
         Wall wall;
         const double cpu0 = thread_cpu_seconds();
         const std::int64_t t0 = clock.now();
