@@ -2,7 +2,7 @@
 // of the device layer and the safety chain. Prints Markdown tables.
 //
 //   bench_servo [--seconds S] [--load N]   (default 10 s per loop, no load)
-//   bench_servo --pacing [--seconds S] [--spin-margin US]
+//   bench_servo --pacing [--seconds S] [--spin-margin US[,US...]] [--run-late]
 //
 // With --load N, N busy processes spin on the CPUs during a third table:
 // each loop with and without SCHED_FIFO (RealTime::best_effort), with the
@@ -16,7 +16,7 @@
 //    loops pace themselves. Same statistics code for both.
 // With --pacing: ServoLoop paced by sleeping (today's default) against the
 // hybrid mode (sleep to a spin margin before the deadline, then spin), at
-// 1 kHz idle and beside two busy processes and at 10 kHz, SCHED_FIFO where
+// 1 and 10 kHz, idle and beside two busy processes, SCHED_FIFO where
 // granted; periods longer than 4 periods are counted apart as stalls, and
 // the loop thread's CPU time is the cost of the pacing.
 //
@@ -66,6 +66,14 @@ SimulatedArmConfig arm_config() {
   return c;
 }
 
+/// A simulated arm on the monotonic clock: what every timed loop here drives.
+struct SteadyArm {
+  SteadyClock clock;
+  SimulatedArm arm{arm_config()};
+  SimulatedTransport link{arm, [this] { return clock.now(); }};
+  ForceArm device{link};
+};
+
 struct TimingRow {
   const char* name;
   std::uint64_t ticks;
@@ -83,13 +91,11 @@ void print_timing(const TimingRow& r, const std::string& more = "") {
 }
 
 TimingRow run_servo_loop(double seconds, double rate) {
-  SteadyClock clock;
-  SimulatedArm arm(arm_config());
-  SimulatedTransport link(arm, [&clock] { return clock.now(); });
-  ForceArm device(link);
+  SteadyArm rig;
+  SteadyClock& clock = rig.clock;
   LoopConfig c;
   c.rate = rate;
-  ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+  ServoLoop<ForceArm, SteadyClock> loop(rig.device, clock, c);
   Wall wall;
   const std::int64_t t0 = clock.now();
   loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * rate)});
@@ -210,13 +216,11 @@ void loaded_table(double seconds, int load) {
     {
       BusyLoad busy(load);
       const double steal0 = steal_seconds();
-      SteadyClock clock;
-      SimulatedArm arm(arm_config());
-      SimulatedTransport link(arm, [&clock] { return clock.now(); });
-      ForceArm device(link);
+      SteadyArm rig;
+      SteadyClock& clock = rig.clock;
       LoopConfig c;
       c.realtime = rt ? RealTime::best_effort : RealTime::off;
-      ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
+      ServoLoop<ForceArm, SteadyClock> loop(rig.device, clock, c);
       Wall wall;
       const std::int64_t t0 = clock.now();
       loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * 1000.0)});
@@ -253,64 +257,94 @@ double thread_cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
-/// Sleep against hybrid pacing, same loop, same run (see the file comment).
-void pacing_table(double seconds, std::int64_t margin_ns) {
+/// The 1-minute load average (/proc/loadavg), or -1.
+double load_average() {
+  std::FILE* f = std::fopen("/proc/loadavg", "r");
+  if (!f) return -1.0;
+  double v = -1.0;
+  if (std::fscanf(f, "%lf", &v) != 1) v = -1.0;
+  std::fclose(f);
+  return v;
+}
+
+/// Sleep against hybrid pacing with each spin margin, same loop, same run
+/// (see the file comment).
+void pacing_table(double seconds, const std::vector<std::int64_t>& margins_ns, bool run_late) {
+  std::string margins;
+  for (const std::int64_t m : margins_ns)
+    margins += (margins.empty() ? "" : ", ") + std::to_string(m / 1000);
   std::printf(
-      "\n## Pacing: sleep (default) against hybrid (spin margin %.0f us, at most a fifth of the period), %.0f s "
-      "per loop, SCHED_FIFO where granted\n\n",
-      static_cast<double>(margin_ns) * 1e-3, seconds);
+      "\n## Pacing: sleep (default) against hybrid (spin margin %s us, at most a fifth of the period), %.0f s "
+      "per loop, SCHED_FIFO where granted; load average %.2f at the start\n\n",
+      margins.c_str(), seconds, load_average());
   std::printf(
-      "| rate, load | pacing | mean rate [Hz] | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | max without stalls [ms] |"
-      " stalls | missed | CPU [%% of a core] | steal [ms] |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+      "| rate, load | pacing | FIFO | mean rate [Hz] | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | max without "
+      "stalls "
+      "[ms] | stalls | missed | CPU [%% of a core] | steal [ms] |\n");
+  std::printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::vector<std::int64_t> modes{-1};  // -1: sleep
+  modes.insert(modes.end(), margins_ns.begin(), margins_ns.end());
   struct Case {
     double rate;
     int load;
   };
-  for (const Case k : {Case{1000.0, 0}, Case{1000.0, 2}, Case{10000.0, 0}}) {
-    for (const bool hybrid : {false, true}) {
-      BusyLoad busy(k.load);
-      const double steal0 = steal_seconds();
-      SteadyClock clock;
-      SimulatedArm arm(arm_config());
-      SimulatedTransport link(arm, [&clock] { return clock.now(); });
-      ForceArm device(link);
-      LoopConfig c;
-      c.rate = k.rate;
-      c.realtime = RealTime::best_effort;
+  std::vector<OverrunPolicy> policies{OverrunPolicy::skip};
+  if (run_late) policies.push_back(OverrunPolicy::run_next_late);
+  for (const Case k : {Case{1000.0, 0}, Case{1000.0, 2}, Case{10000.0, 0}, Case{10000.0, 2}}) {
+    std::int64_t previous = -2;
+    for (const std::int64_t margin_ns : modes) {
+      const bool hybrid = margin_ns >= 0;
       // at most a fifth of the period: the thread must sleep in every period
-      const std::int64_t margin = std::min<std::int64_t>(margin_ns, static_cast<std::int64_t>(2e8 / k.rate));
-      if (hybrid) c.pacing = {.mode = PacingMode::hybrid, .spin_margin_ns = margin};
-      ServoLoop<ForceArm, SteadyClock> loop(device, clock, c);
-      Wall wall;
-      const double cpu0 = thread_cpu_seconds();
-      const std::int64_t t0 = clock.now();
-      loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * k.rate)});
-      const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
-      const double cpu = (thread_cpu_seconds() - cpu0) / elapsed;
-      const LoopSnapshot s = loop.statistics();
-      const DurationHistogram& periods = loop.detailed_statistics().periods();
-      const auto stall_bin = static_cast<std::size_t>(4.0e6 / k.rate);  // [us]: 4 periods
-      std::uint64_t stall_count = 0;
-      std::size_t max_calm = 0;
-      for (std::size_t i = 0; i < DurationHistogram::bins; ++i) {
-        if (periods.bin(i) == 0) continue;
-        if (i >= stall_bin)
-          stall_count += periods.bin(i);
+      const std::int64_t margin =
+          hybrid ? std::min<std::int64_t>(margin_ns, static_cast<std::int64_t>(2e8 / k.rate)) : -1;
+      if (margin == previous) continue;  // the same clamped margin: one row
+      previous = margin;
+      for (const OverrunPolicy policy : policies) {
+        BusyLoad busy(k.load);
+        const double steal0 = steal_seconds();
+        SteadyArm rig;
+        SteadyClock& clock = rig.clock;
+        LoopConfig c;
+        c.rate = k.rate;
+        c.realtime = RealTime::best_effort;
+        if (hybrid) c.pacing = {.mode = PacingMode::hybrid, .spin_margin_ns = margin};
+        c.pacing.overrun = policy;
+        ServoLoop<ForceArm, SteadyClock> loop(rig.device, clock, c);
+        Wall wall;
+        const double cpu0 = thread_cpu_seconds();
+        const std::int64_t t0 = clock.now();
+        loop.run(wall, {.max_ticks = static_cast<std::uint64_t>(seconds * k.rate)});
+        const double elapsed = static_cast<double>(clock.now() - t0) * 1e-9;
+        const double cpu = (thread_cpu_seconds() - cpu0) / elapsed;
+        const LoopSnapshot s = loop.statistics();
+        const DurationHistogram& periods = loop.detailed_statistics().periods();
+        const auto stall_bin = static_cast<std::size_t>(4.0e6 / k.rate);  // [us]: 4 periods
+        std::uint64_t stall_count = 0;
+        std::size_t max_calm = 0;
+        for (std::size_t i = 0; i < DurationHistogram::bins; ++i) {
+          if (periods.bin(i) == 0) continue;
+          if (i >= stall_bin)
+            stall_count += periods.bin(i);
+          else
+            max_calm = i;
+        }
+        char name[48];
+        std::snprintf(name, sizeof name, "%.0f kHz, %s", k.rate * 1e-3, k.load ? "2 busy processes" : "idle");
+        char mode[48];
+        if (hybrid)
+          std::snprintf(mode, sizeof mode, "hybrid, %.0f us", static_cast<double>(margin) * 1e-3);
         else
-          max_calm = i;
+          std::snprintf(mode, sizeof mode, "sleep");
+        if (policy == OverrunPolicy::run_next_late) std::strcat(mode, ", run late");
+        std::printf("| %s | %s | %s | %.3f | %.4f | %.4f | %.4f | %.3f | %.3f | %llu | %llu | %.1f | %.1f |\n", name,
+                    mode, loop.realtime_granted() ? "yes" : "no", s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3,
+                    s.period_p999 * 1e3, s.period_max * 1e3, static_cast<double>(max_calm + 1) * 1e-3,
+                    static_cast<unsigned long long>(stall_count), static_cast<unsigned long long>(s.missed_deadlines),
+                    cpu * 100.0, (steal_seconds() - steal0) * 1e3);
       }
-      char name[48];
-      std::snprintf(name, sizeof name, "%.0f kHz, %s", k.rate * 1e-3, k.load ? "2 busy processes" : "idle");
-      char mode[32];
-      std::snprintf(mode, sizeof mode, "hybrid, %.0f us", static_cast<double>(margin) * 1e-3);
-      std::printf("| %s | %s | %.3f | %.4f | %.4f | %.4f | %.3f | %.3f | %llu | %llu | %.1f | %.1f |\n", name,
-                  hybrid ? mode : "sleep", s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_p999 * 1e3,
-                  s.period_max * 1e3, static_cast<double>(max_calm + 1) * 1e-3,
-                  static_cast<unsigned long long>(stall_count), static_cast<unsigned long long>(s.missed_deadlines),
-                  cpu * 100.0, (steal_seconds() - steal0) * 1e3);
     }
   }
+  std::printf("\nload average %.2f at the end\n", load_average());
   std::printf(
       "\n(stalls: periods longer than 4 periods, the host stalling this virtual machine; max without stalls:\n"
       "upper edge of the longest shorter period's 1 us bin; CPU: the loop thread's CPU time over the run's\n"
@@ -321,7 +355,8 @@ int main(int argc, char** argv) {
   double seconds = 10.0;
   int load = 0;
   bool pacing = false;
-  double margin_us = 100.0;
+  bool run_late = false;
+  std::vector<std::int64_t> margins_ns{100'000};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc)
       seconds = std::atof(argv[++i]);
@@ -329,15 +364,30 @@ int main(int argc, char** argv) {
       load = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--pacing") == 0)
       pacing = true;
-    else if (std::strcmp(argv[i], "--spin-margin") == 0 && i + 1 < argc)
-      margin_us = std::atof(argv[++i]);
-    else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+    else if (std::strcmp(argv[i], "--run-late") == 0)
+      run_late = true;
+    else if (std::strcmp(argv[i], "--spin-margin") == 0 && i + 1 < argc) {
+      margins_ns.clear();
+      for (std::string list = argv[++i]; !list.empty();) {
+        const std::size_t comma = list.find(',');
+        const std::string item = list.substr(0, comma);
+        char* end = nullptr;
+        const double us = std::strtod(item.c_str(), &end);
+        if (item.empty() || *end != '\0' || !(us >= 0.0 && us <= 1000.0)) {
+          std::fprintf(stderr, "bench_servo: --spin-margin values must be within [0, 1000] [us]\n");
+          return 2;
+        }
+        margins_ns.push_back(static_cast<std::int64_t>(us * 1e3));
+        list = comma == std::string::npos ? "" : list.substr(comma + 1);
+      }
+    } else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
       std::printf(
-          "usage: bench_servo [--seconds S] [--load N] [--pacing [--spin-margin US]]\n"
+          "usage: bench_servo [--seconds S] [--load N] [--pacing [--spin-margin US[,US...]] [--run-late]]\n"
           "  --seconds S  time per loop [s] (default 10)\n"
           "  --load N     also time the loops under N busy processes (default 0: skip)\n"
           "  --pacing     sleep against hybrid pacing only, idle and loaded, 1 and 10 kHz\n"
-          "  --spin-margin US  hybrid pacing's spin margin [us] (default 100)\n");
+          "  --spin-margin US[,US...]  hybrid pacing's spin margins [us], one row each (default 100)\n"
+          "  --run-late   each row again with OverrunPolicy::run_next_late (the tick after an overrun runs late)\n");
       return 0;
     } else {
       std::fprintf(stderr, "bench_servo: unknown or incomplete option '%s' (--help shows the usage)\n", argv[i]);
@@ -348,12 +398,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_servo: --seconds must be in (0, 600] and --load in 0..64\n");
     return 2;
   }
-  if (!(margin_us >= 0.0 && margin_us <= 1000.0)) {
-    std::fprintf(stderr, "bench_servo: --spin-margin must be within [0, 1000] [us]\n");
+  if (margins_ns.empty()) {
+    std::fprintf(stderr, "bench_servo: --spin-margin needs at least one value [us]\n");
     return 2;
   }
   if (pacing) {
-    pacing_table(seconds, static_cast<std::int64_t>(margin_us * 1e3));
+    pacing_table(seconds, margins_ns, run_late);
     return 0;
   }
   if (load > 0) {
@@ -424,18 +474,19 @@ int main(int argc, char** argv) {
   std::printf(
       "| path | mean [ns] | p50 [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | mean / 1 ms budget |\n"
       "|---|---:|---:|---:|---:|---:|---:|\n");
-  const double overhead = empty.p50_ns;  // clock reads around one tick
-  const auto row = [&](const char* name, const Cost& c, double sub) {
-    std::printf("| %-50s | %6.0f | %6.0f | %6.0f | %7.0f | %9.0f | %.4f %% |\n", name, c.mean_ns, c.p50_ns - sub,
-                c.p99_ns - sub, c.p999_ns - sub, c.worst_ns - sub, c.mean_ns / 1e6 * 100.0);
+  const auto row = [&](const char* name, const Cost& c) {
+    std::printf("| %-50s | %6.0f | %6.0f | %6.0f | %7.0f | %9.0f | %.4f %% |\n", name, c.mean_ns, c.p50_ns, c.p99_ns,
+                c.p999_ns, c.worst_ns, c.mean_ns / 1e6 * 100.0);
   };
-  row("ForceArm read + write (loopback transport)", device_cost, overhead);
-  row("SafetyChain::process (passivity on)", safety_cost, overhead);
-  row("whole tick: device + safety + wall + simulated arm", full_cost, overhead);
-  row("(empty body: clock-read overhead, not subtracted)", empty, 0.0);
+  row("ForceArm read + write (loopback transport)", device_cost);
+  row("SafetyChain::process (passivity on)", safety_cost);
+  row("whole tick: device + safety + wall + simulated arm", full_cost);
+  row("(empty body: what is left after the clock's cost)", empty);
   std::printf(
-      "\nPercentiles and worst have the empty body's median clock-read overhead subtracted; the worst\n"
-      "case includes preemption by other processes (no real-time priority for this part).\n");
+      "\nMeasured by the tick-budget harness (offline/tick_budget.hpp): percentiles and worst have the median\n"
+      "cost of a clock read pair (%.0f ns) subtracted; the worst case includes preemption by other processes\n"
+      "(no real-time priority for this part).\n",
+      empty.clock_overhead_ns);
 
   // ---- simulated time: ServoLoop::run on VirtualClock, as fast as the CPU allows ----
   constexpr int repeats = 5;

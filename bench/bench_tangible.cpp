@@ -5,6 +5,7 @@
 //
 //   bench_tangible [IMAGE] [--queries N] [--maps N]
 #include <hapticfield/kernels.hpp>
+#include <hapticfield/offline/tick_budget.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -62,32 +63,34 @@ std::vector<glm::dvec2> query_points(int width, int height, int count, bool traj
   return points;
 }
 
-/// Times each query alone (minus the clock's own cost).
+/// Times each query alone through the tick-budget harness
+/// (offline/tick_budget.hpp): a query is a tick whose probe sits at a pixel;
+/// mean from an untimed pass, p99 and worst timed one by one, the clock's
+/// own cost subtracted.
 template <class Source>
-Stats time_queries(const Source& source, const std::vector<glm::dvec2>& points, double clock_cost_ns) {
-  std::vector<double> samples;
-  samples.reserve(points.size());
-  double acc = 0.0;
-  for (const glm::dvec2& p : points) {
-    const auto t0 = Clock::now();
-    const glm::dvec2 f = source.at(p.x, p.y);
-    const auto t1 = Clock::now();
-    acc += f.x + f.y;
-    samples.push_back(std::max(0.0, std::chrono::duration<double, std::nano>(t1 - t0).count() - clock_cost_ns));
-  }
-  sink = acc;
-  return summarise(std::move(samples));
+Stats time_queries(const Source& source, const std::vector<glm::dvec2>& points) {
+  std::vector<hf::Probe> probes(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    probes[i].position = {points[i].x, points[i].y, 0.0};
+  auto query = [&source](const hf::Probe& p) noexcept {
+    const glm::dvec2 f = source.at(p.position.x, p.position.y);
+    return glm::dvec3{f.x, f.y, 0.0};
+  };
+  hf::offline::TickBudgetConfig config;
+  config.warmup = 0;
+  config.allocation_count = nullptr;
+  const hf::offline::TickBudgetReport r = hf::offline::measure_tick_budget(query, probes, config);
+  return {r.mean_ns, r.p99_ns, r.worst_ns};
 }
 
+/// The cost of reading the clock twice [ns] (the harness subtracts it).
 double clock_cost() {
-  std::vector<double> samples;
-  for (int i = 0; i < 100000; ++i) {
-    const auto t0 = Clock::now();
-    const auto t1 = Clock::now();
-    samples.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
-  }
-  std::sort(samples.begin(), samples.end());
-  return samples[samples.size() / 2];
+  hf::offline::TickBudgetConfig config;
+  config.warmup = 0;
+  config.allocation_count = nullptr;
+  return hf::offline::measure_tick_cost(
+             100000, [] {}, config)
+      .clock_overhead_ns;
 }
 
 /// Runs every contender once to warm up, then once per round, rounds times,
@@ -139,8 +142,8 @@ int main(int argc, char** argv) {
     o.kernel = hf::KernelChoice::direct;
     o.size = 5;
     const hf::TangibleImage baseline_image(gray, o);
-    (void)time_queries(baseline_image, points, clock_ns);  // warm-up pass, not reported
-    const Stats baseline = time_queries(baseline_image, points, clock_ns);
+    (void)time_queries(baseline_image, points);  // warm-up pass, not reported
+    const Stats baseline = time_queries(baseline_image, points);
     std::printf("Per-query cost, %s (bilinear: up to 4 pixel kernels); baseline = direct m=5, %.0f ns mean\n",
                 trajectory ? "HIP tracing a circle at 0.64 px/tick" : "random positions (cold caches)", baseline.mean);
     std::printf(
@@ -149,9 +152,9 @@ int main(int argc, char** argv) {
     for (int m : {3, 5, 17, 33, 65, 129}) {
       o.size = m;
       o.kernel = hf::KernelChoice::direct;
-      const Stats direct = time_queries(hf::TangibleImage(gray, o), m >= 33 ? few : points, clock_ns);
+      const Stats direct = time_queries(hf::TangibleImage(gray, o), m >= 33 ? few : points);
       o.kernel = hf::KernelChoice::integral;
-      const Stats fast = time_queries(hf::TangibleImage(gray, o), points, clock_ns);
+      const Stats fast = time_queries(hf::TangibleImage(gray, o), points);
       std::printf("| %d | %.0f / %.0f / %.0f | %.1f / %.0f / %.0f | %.1fx | %.2fx | %.3f%% |\n", m, direct.mean,
                   direct.p99, direct.worst, fast.mean, fast.p99, fast.worst, direct.mean / fast.mean,
                   fast.mean / baseline.mean, 100.0 * fast.worst / 1e6);

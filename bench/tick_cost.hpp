@@ -1,51 +1,31 @@
 #pragma once
 /// @file tick_cost.hpp
-/// What the per-tick benches share: the cost of one tick body measured two
-/// ways, and a ForceArm loopback transport.
+/// What the per-tick benches share: the cost of one tick body (through the
+/// tick-budget harness), and a ForceArm loopback transport.
 
-#include <algorithm>
 #include <cstdint>
 #include <span>
-#include <vector>
 
 #include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/transport.hpp"
-#include "hapticfield/servo/clock.hpp"
+#include "hapticfield/offline/tick_budget.hpp"
 
 namespace hapticfield::bench {
 
-/// The cost of one call [ns].
-struct Cost {
-  double mean_ns{0.0};                                           ///< from one untimed pass: total / n
-  double p50_ns{0.0}, p99_ns{0.0}, p999_ns{0.0}, worst_ns{0.0};  ///< per call, timed one by one
-};
+/// The cost of one call [ns]: the tick-budget harness's report (mean from
+/// an untimed pass; p50, p99, p99.9 and worst timed call by call, the
+/// clock's own cost subtracted).
+using Cost = offline::TickBudgetReport;
 
-/// Mean from an untimed pass of n calls; the per-call distribution from a
-/// second pass that reads the clock around every call (that pass includes
-/// the clock's own cost: time an empty body to know it).
+/// n calls of tick(), untimed then timed one by one, through the harness
+/// (offline/tick_budget.hpp), on wall time or on this thread's CPU time.
 template <class Tick>
-Cost measure(long n, Tick&& tick) {
-  SteadyClock clock;
-  const std::int64_t t0 = clock.now();
-  for (long i = 0; i < n; ++i)
-    tick();
-  Cost c;
-  c.mean_ns = static_cast<double>(clock.now() - t0) / static_cast<double>(n);
-  std::vector<std::int64_t> d(static_cast<std::size_t>(n));
-  for (long i = 0; i < n; ++i) {
-    const std::int64_t a = clock.now();
-    tick();
-    d[static_cast<std::size_t>(i)] = clock.now() - a;
-  }
-  std::sort(d.begin(), d.end());
-  const auto at = [&](double q) {
-    return static_cast<double>(d[static_cast<std::size_t>(q * static_cast<double>(n - 1))]);
-  };
-  c.p50_ns = at(0.5);
-  c.p99_ns = at(0.99);
-  c.p999_ns = at(0.999);
-  c.worst_ns = static_cast<double>(d.back());
-  return c;
+Cost measure(long n, Tick&& tick, offline::TickClock clock = offline::TickClock::wall) {
+  offline::TickBudgetConfig config;
+  config.warmup = 0;
+  config.allocation_count = nullptr;
+  config.clock = clock;
+  return offline::measure_tick_cost(static_cast<std::uint64_t>(n), tick, config);
 }
 
 /// Serves one pre-encoded state report per read, with a fresh sequence and

@@ -3,6 +3,7 @@
 
     hapticfield_plots.py servo --trace T.csv --periods P.csv --nominal-ms MS --limit N --out DIR
     hapticfield_plots.py texture --dir DIR
+    hapticfield_plots.py vibration --spectrum S.csv --out PNG [--title TEXT]
     hapticfield_plots.py --check      exit 0 when matplotlib is present
 
 servo: T.csv is servo_demo's trace (t_s, x_m, y_m, z_m, fx_N, fy_N, fz_N,
@@ -12,6 +13,10 @@ DIR/force.png and DIR/periods.png.
 texture: DIR holds texture_gallery's gallery.csv (stem, name, axis,
 description, rate_Hz) and per texture STEM_trace.csv and STEM_psd.csv.
 Writes DIR/STEM.png per texture and DIR/gallery.png.
+
+vibration: S.csv is the vibration example's --spectrum output
+(frequency_Hz, audio_dB, model_dB): the PSD played on the audio path
+against the HaTT model's own. Writes the PNG named by --out.
 
 Exit status: 0 done, 1 bad input (missing or malformed files), 2 usage
 error, 3 matplotlib missing.
@@ -83,6 +88,26 @@ def servo(args):
     fig.savefig(os.path.join(args.out, "periods.png"))
     plt.close(fig)
     print(f"plots: {os.path.join(args.out, 'force.png')}, {os.path.join(args.out, 'periods.png')} (matplotlib)")
+
+
+def vibration(args):
+    s = read_columns(args.spectrum, ["frequency_Hz", "audio_dB", "model_dB"])
+    f = s["frequency_Hz"]
+    errors = sorted(abs(a - m) for fr, a, m in zip(f, s["audio_dB"], s["model_dB"]) if fr <= 4000.0)
+    fig, ax = plt.subplots(figsize=(7, 3.4), dpi=90, layout="constrained")
+    ax.plot(f, s["audio_dB"], lw=0.8, color="tab:blue", label="played on the audio path (Welch PSD)")
+    ax.plot(f, s["model_dB"], lw=1.4, color="black", ls="--", label="the model's own PSD (closed form)")
+    ax.axvline(500.0, color="tab:red", lw=0.8, ls=":", label="Nyquist of a 1 kHz force loop")
+    if errors:
+        ax.text(0.99, 0.97, f"median |error| up to 4 kHz: {errors[len(errors) // 2]:.2f} dB", ha="right", va="top",
+                transform=ax.transAxes, fontsize="small")
+    ax.set(xlabel="frequency [Hz]", ylabel="acceleration PSD [dB re 1 (m/s²)²/Hz]", title=args.title)
+    ax.set_xlim(0.0, max(f))
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower left", fontsize="small")
+    fig.savefig(args.out)
+    plt.close(fig)
+    print(f"plot: {args.out} (matplotlib)")
 
 
 def texture_panels(axes, entry, trace, psd):
@@ -159,6 +184,10 @@ def main():
     t = sub.add_parser("texture", help="texture_gallery's trace and spectrum plots")
     t.add_argument("--dir", required=True)
     t.add_argument("--gallery-dpi", type=float, default=80.0, help="resolution of gallery.png [dots per inch]")
+    v = sub.add_parser("vibration", help="the vibration example's spectrum against the model's")
+    v.add_argument("--spectrum", required=True)
+    v.add_argument("--out", required=True, help="the PNG to write")
+    v.add_argument("--title", default="A 10 kHz HaTT model played at audio rate")
     args = parser.parse_args()
     if plt is None:
         if args.quiet_missing:  # the examples then try another interpreter or draw their own plots
@@ -167,8 +196,13 @@ def main():
     if args.check:
         return
     if args.command is None:
-        parser.error("choose servo or texture")
-    if args.command == "servo":
+        parser.error("choose servo, texture or vibration")
+    if args.command == "vibration":
+        folder = os.path.dirname(args.out) or "."
+        if not os.path.isdir(folder):
+            fail(f"--out: folder '{folder}' does not exist")
+        vibration(args)
+    elif args.command == "servo":
         if not os.path.isdir(args.out):
             fail(f"--out: '{args.out}' is not a folder")
         servo(args)

@@ -181,3 +181,79 @@ TEST_CASE("pacing: ServoLoop with hybrid pacing wakes on every deadline despite 
   CHECK(h.period_max == Approx(1e-3).margin(1e-12));
   CHECK(h.missed_deadlines == 0);
 }
+
+TEST_CASE("overrun policy: skip (the default) waits for the grid; run_next_late runs the next tick at once, late") {
+  CHECK(PacingConfig{}.overrun == OverrunPolicy::skip);
+  for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
+    for (const OverrunPolicy policy : {OverrunPolicy::skip, OverrunPolicy::run_next_late}) {
+      CAPTURE(static_cast<int>(mode), static_cast<int>(policy));
+      VirtualClock clock;
+      Pacer pacer(period, {.mode = mode, .spin_margin_ns = 100'000, .overrun = policy});
+      std::vector<std::int64_t> skipped;
+      std::vector<bool> overran;
+      std::vector<std::int64_t> wakes;
+      pacer.start(clock.now());
+      for (int i = 0; i < 12; ++i) {
+        wakes.push_back(pacer.wait(clock));
+        // tick 3 works 1.5 ms (ends 0.5 ms past the next deadline), tick 7 works 3.5 ms (2.5 ms past)
+        clock.advance(i == 3 ? 1'500'000 : i == 7 ? 3'500'000 : 100'000);
+        skipped.push_back(pacer.finish(clock.now()));
+        overran.push_back(pacer.overran());
+      }
+      const bool late = policy == OverrunPolicy::run_next_late;
+      for (int i = 0; i < 12; ++i)
+        CHECK(overran[i] == (i == 3 || i == 7));
+      CHECK(skipped[3] == (late ? 0 : 1));
+      CHECK(skipped[7] == (late ? 2 : 3));  // deadlines older than a period are skipped either way
+      if (late) {
+        CHECK(wakes[4] == 4'500'000);   // at once: its deadline (4 ms) passed 0.5 ms ago
+        CHECK(wakes[5] == 5'000'000);   // back on the grid, not a burst
+        CHECK(wakes[8] == 10'500'000);  // deadline 10 ms passed 0.5 ms ago; 8 and 9 ms skipped
+        CHECK(wakes[9] == 11'000'000);
+      } else {
+        CHECK(wakes[4] == 5'000'000);   // 4 ms skipped
+        CHECK(wakes[8] == 12'000'000);  // tick 7 woke at 8 ms, ended at 11.5 ms: 9, 10 and 11 ms skipped
+      }
+      for (std::size_t i = 1; i < wakes.size(); ++i)
+        CHECK(wakes[i] - wakes[i - 1] >= 400'000);  // never two ticks back to back
+    }
+  }
+}
+
+TEST_CASE(
+    "overrun policy: run_next_late keeps ServoLoop's tick count after short overruns; the watchdog still counts "
+    "each") {
+  for (const OverrunPolicy policy : {OverrunPolicy::skip, OverrunPolicy::run_next_late}) {
+    CAPTURE(static_cast<int>(policy));
+    Rig rig({.mode = PacingMode::hybrid, .spin_margin_ns = 100'000, .overrun = policy});
+    std::uint64_t tick = 0;
+    auto sometimes_slow = [&](const TickInput&) {
+      if (++tick % 100 == 50) rig.clock.advance(1'300'000);  // ten overruns of 0.3 ms past the next deadline
+      return glm::dvec3{0.0};
+    };
+    const std::int64_t t0 = rig.clock.now();
+    rig.loop.run(sometimes_slow, {.max_ticks = 1000});
+    const LoopSnapshot s = rig.loop.statistics();
+    const double elapsed_ms = static_cast<double>(rig.clock.now() - t0) * 1e-6;
+    CHECK(s.overruns == 10);
+    if (policy == OverrunPolicy::skip) {
+      CHECK(s.missed_deadlines == 10);
+      CHECK(elapsed_ms >= 1009.0);  // 1000 ticks took 1010 periods
+    } else {
+      CHECK(s.missed_deadlines == 0);
+      CHECK(elapsed_ms < 1001.0);  // 1000 ticks in 1000 periods: the rate kept
+    }
+    CHECK((rig.loop.safety().latched() & safety_events::missed_deadlines) == 0);  // isolated overruns
+  }
+
+  // three overruns in a row still latch the watchdog with run_next_late
+  Rig rig({.mode = PacingMode::sleep, .overrun = OverrunPolicy::run_next_late});
+  std::uint64_t tick = 0;
+  auto slow = [&](const TickInput&) {
+    ++tick;
+    if (tick >= 400 && tick < 403) rig.clock.advance(1'200'000);
+    return glm::dvec3{0.0};
+  };
+  rig.loop.run(slow, {.max_ticks = 420});
+  CHECK((rig.loop.safety().latched() & safety_events::missed_deadlines) != 0);
+}

@@ -4,7 +4,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <ctime>
 #include <iostream>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -86,4 +88,55 @@ TEST_CASE("tick budget: without a counter, allocations are reported as not count
   const auto r = offline::measure_tick_budget(field, c);
   CHECK(r.allocations == -1);
   CHECK(r.summary().find("not counted") != std::string::npos);
+}
+
+TEST_CASE("tick budget: the caller's own probes, warm-up along them, each timed pass over all of them in order") {
+  std::vector<Probe> path(50);
+  for (std::size_t i = 0; i < path.size(); ++i)
+    path[i].position.x = static_cast<double>(i);
+  std::vector<double> seen;
+  auto recorder = [&seen](const Probe& p) noexcept {
+    seen.push_back(p.position.x);
+    return glm::dvec3{0.0};
+  };
+  auto c = small();
+  c.warmup = 70;
+  c.allocation_count = nullptr;  // the recorder allocates as it grows
+  const auto r = offline::measure_tick_budget(recorder, path, c);
+  CHECK(r.ticks == 50);
+  REQUIRE(seen.size() == 2 * (70 + 50));  // warm-up and a pass, twice
+  for (std::size_t i = 0; i < 70; ++i)
+    CHECK(seen[i] == static_cast<double>(i % 50));  // the warm-up cycles through the path
+  for (std::size_t i = 0; i < 50; ++i) {
+    CHECK(seen[70 + i] == static_cast<double>(i));        // untimed pass
+    CHECK(seen[120 + 70 + i] == static_cast<double>(i));  // timed pass
+  }
+  CHECK_THROWS_AS(offline::measure_tick_budget(recorder, std::span<const Probe>{}, c), std::invalid_argument);
+}
+
+TEST_CASE("tick budget: a tick body without a probe; the thread's CPU time leaves out a sleep that wall time counts") {
+  int calls = 0;
+  auto c = small();
+  c.warmup = 3;
+  c.allocation_count = nullptr;
+  const auto counted = offline::measure_tick_cost(
+      10, [&calls] { ++calls; }, c);
+  CHECK(counted.ticks == 10);
+  CHECK(calls == 2 * (3 + 10));
+
+  // a tick that sleeps 2 ms: at least 2 ms of wall time, far less of CPU time (a bound, not a speed)
+  const auto sleeper = [] {
+    timespec ts{0, 2'000'000};
+    while (nanosleep(&ts, &ts) != 0) {
+    }
+  };
+  c.warmup = 0;
+  c.clock = offline::TickClock::wall;
+  const auto wall = offline::measure_tick_cost(5, sleeper, c);
+  c.clock = offline::TickClock::thread_cpu;
+  const auto cpu = offline::measure_tick_cost(5, sleeper, c);
+  CHECK(wall.p50_ns >= 1.9e6);
+  CHECK_FALSE(wall.fits_1khz);
+  CHECK(cpu.p50_ns < 1e6);
+  std::cout << "a 2 ms sleep: wall p50 " << wall.p50_ns << " ns, CPU p50 " << cpu.p50_ns << " ns\n";
 }

@@ -51,6 +51,27 @@ def test_texture_plots_are_drawn(tmp_path):
     assert (tmp_path / "a.png").stat().st_size > 10000 and (tmp_path / "gallery.png").exists()
 
 
+def test_vibration_spectrum_plot_is_drawn(tmp_path):
+    f = np.arange(1, 427) * 48000 / 4096
+    model = -20 - 40 * f / 5000
+    np.savetxt(tmp_path / "s.csv", np.column_stack([f, model + 0.5 * np.sin(f), model]), delimiter=",",
+               header="frequency_Hz,audio_dB,model_dB", comments="")
+    r = plots("vibration", "--spectrum", tmp_path / "s.csv", "--out", tmp_path / "v.png")
+    assert r.returncode == 0, r.stderr
+    image = matplotlib.image.imread(tmp_path / "v.png")
+    assert image.shape[0] > 250 and image.shape[1] > 500
+    assert np.std(image[..., :3]) > 0.05  # not blank
+
+
+def test_vibration_bad_input(tmp_path):
+    (tmp_path / "s.csv").write_text("frequency_Hz,audio_dB\n1,2\n")
+    r = plots("vibration", "--spectrum", tmp_path / "s.csv", "--out", tmp_path / "v.png")
+    assert r.returncode == 1 and "lacks the column" in r.stderr and r.stderr.count("\n") == 1
+    r = plots("vibration", "--spectrum", tmp_path / "s.csv", "--out", tmp_path / "nowhere" / "v.png")
+    assert r.returncode == 1 and "does not exist" in r.stderr
+    assert plots("vibration", "--out", tmp_path / "v.png").returncode == 2  # --spectrum missing
+
+
 @pytest.mark.parametrize("change,status,message", [
     (lambda a, p: a.__setitem__(2, p / "missing.csv"), 1, "cannot read"),
     (lambda a, p: (p / "trace.csv").write_text("t_s,fx_N\n0,1\n"), 1, "lacks the column"),

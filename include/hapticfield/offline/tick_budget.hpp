@@ -20,6 +20,13 @@
 ///
 ///   auto report = hapticfield::offline::measure_tick_budget(field);
 ///   std::puts(report.summary().c_str());
+///
+/// A bench or a user with a path of their own (strokes over a mesh, pixel
+/// positions on a picture) passes its probes instead:
+/// measure_tick_budget(field, probes, config). TickBudgetConfig::clock
+/// chooses wall time (the default, what the servo loop sees) or the
+/// thread's CPU time (what the tick itself costs on a shared, loaded
+/// machine).
 
 #include <algorithm>
 #include <atomic>
@@ -29,6 +36,8 @@
 #include <cstdio>
 #include <ctime>
 #include <exception>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -85,12 +94,18 @@ inline constexpr AllocationCount default_allocation_count = &count_news;
 #else
 inline constexpr AllocationCount default_allocation_count = nullptr;
 #endif
-inline std::int64_t monotonic_ns() noexcept {
+inline std::int64_t read_ns(clockid_t clock) noexcept {
   timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
+  clock_gettime(clock, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 }  // namespace detail
+
+/// What times a tick.
+enum class TickClock : std::uint8_t {
+  wall,        ///< CLOCK_MONOTONIC: includes time the thread was preempted
+  thread_cpu,  ///< CLOCK_THREAD_CPUTIME_ID: the tick's own work only
+};
 
 struct TickBudgetConfig {
   std::uint64_t ticks{20000};  ///< timed ticks
@@ -98,6 +113,7 @@ struct TickBudgetConfig {
   ProbePathConfig path{};      ///< the scripted probe path
   double share{0.25};          ///< share of a period the field may take at p99 [-]
   AllocationCount allocation_count{detail::default_allocation_count};  ///< null: allocations not counted
+  TickClock clock{TickClock::wall};                                    ///< what times a tick
 };
 
 struct TickBudgetReport {
@@ -203,45 +219,46 @@ concept TimedField = requires(F& f, const Probe& p) {
   glm::dvec3(f(p));
 };
 
-/// Measures the field's tick cost over the scripted path (see the file comment).
-/// Stateful fields are reset (when they can be) before each pass.
-template <TimedField F>
-[[nodiscard]] TickBudgetReport measure_tick_budget(F& field, const TickBudgetConfig& config = {}) {
+namespace detail {
+/// The harness itself: warmup ticks on warmup_probe(i), then an untimed
+/// and a timed pass of `ticks` ticks on probe_at(i).
+template <class F, class ProbeAt, class WarmupProbe>
+TickBudgetReport measure(F& field, std::uint64_t ticks, ProbeAt&& probe_at, WarmupProbe&& warmup_probe,
+                         const TickBudgetConfig& config) {
+  const clockid_t clock = config.clock == TickClock::thread_cpu ? CLOCK_THREAD_CPUTIME_ID : CLOCK_MONOTONIC;
   TickBudgetReport r;
   r.share = config.share;
-  r.ticks = config.ticks < 1 ? 1 : config.ticks;
+  r.ticks = ticks;
   std::uint64_t exceptions = 0;
   volatile double sink = 0.0;
-  std::vector<Probe> probes(r.ticks);
-  for (std::uint64_t i = 0; i < r.ticks; ++i)
-    probes[i] = scripted_probe(config.path, config.warmup + i);
   std::vector<std::int64_t> d(r.ticks);
   std::vector<std::int64_t> empty(r.ticks);
   for (std::uint64_t i = 0; i < r.ticks; ++i) {  // the clock's own cost
-    const std::int64_t a = detail::monotonic_ns();
-    empty[i] = detail::monotonic_ns() - a;
+    const std::int64_t a = read_ns(clock);
+    empty[i] = read_ns(clock) - a;
   }
+  const auto warm_up = [&] {
+    reset_if_possible(field);
+    for (std::uint64_t i = 0; i < config.warmup; ++i)
+      sink = sink + call_field(field, warmup_probe(i), exceptions).x;
+  };
   // untimed pass: the mean, allocations and exceptions
-  detail::reset_if_possible(field);
-  for (std::uint64_t i = 0; i < config.warmup; ++i)
-    sink = sink + detail::call_field(field, scripted_probe(config.path, i), exceptions).x;
+  warm_up();
   exceptions = 0;
   const std::int64_t before = config.allocation_count ? config.allocation_count() : 0;
-  const std::int64_t t0 = detail::monotonic_ns();
+  const std::int64_t t0 = read_ns(clock);
   for (std::uint64_t i = 0; i < r.ticks; ++i)
-    sink = sink + detail::call_field(field, probes[i], exceptions).x;
-  const std::int64_t t1 = detail::monotonic_ns();
+    sink = sink + call_field(field, probe_at(i), exceptions).x;
+  const std::int64_t t1 = read_ns(clock);
   if (config.allocation_count) r.allocations = config.allocation_count() - before;
   r.exceptions = exceptions;
   r.mean_ns = static_cast<double>(t1 - t0) / static_cast<double>(r.ticks);
   // timed pass: one clock read around each tick
-  detail::reset_if_possible(field);
-  for (std::uint64_t i = 0; i < config.warmup; ++i)
-    sink = sink + detail::call_field(field, scripted_probe(config.path, i), exceptions).x;
+  warm_up();
   for (std::uint64_t i = 0; i < r.ticks; ++i) {
-    const std::int64_t a = detail::monotonic_ns();
-    sink = sink + detail::call_field(field, probes[i], exceptions).x;
-    d[i] = detail::monotonic_ns() - a;
+    const std::int64_t a = read_ns(clock);
+    sink = sink + call_field(field, probe_at(i), exceptions).x;
+    d[i] = read_ns(clock) - a;
   }
   (void)sink;
   std::sort(empty.begin(), empty.end());
@@ -262,6 +279,50 @@ template <TimedField F>
   r.fits_1khz = clean && r.p99_ns <= config.share * budget_1khz_ns;
   r.fits_10khz = clean && r.p99_ns <= config.share * budget_10khz_ns;
   return r;
+}
+}  // namespace detail
+
+/// Measures the field's tick cost over the caller's probes (a bench's own
+/// path): config.warmup untimed ticks along them, then one untimed pass
+/// (mean, allocations, exceptions) and one timed call by call.
+/// config.ticks and config.path are not used. Stateful fields are reset
+/// (when they can be) before each pass.
+/// @throws std::invalid_argument when probes is empty.
+template <TimedField F>
+[[nodiscard]] TickBudgetReport measure_tick_budget(F& field, std::span<const Probe> probes,
+                                                   const TickBudgetConfig& config) {
+  if (probes.empty()) throw std::invalid_argument("measure_tick_budget: no probes");
+  const auto at = [&](std::uint64_t i) -> const Probe& { return probes[i % probes.size()]; };
+  return detail::measure(field, probes.size(), at, at, config);
+}
+
+/// Times a tick body that needs no probe (a device read and write, a safety
+/// chain, a query on a picture): n calls of tick() after config.warmup
+/// untimed ones, untimed then timed one by one, with the same figures.
+template <class Tick>
+requires std::invocable<Tick&>
+[[nodiscard]] TickBudgetReport measure_tick_cost(std::uint64_t n, Tick&& tick, const TickBudgetConfig& config) {
+  const Probe none{};
+  const auto at = [&](std::uint64_t) -> const Probe& { return none; };
+  auto body = [&](const Probe&) noexcept(std::is_nothrow_invocable_v<Tick&>) {
+    tick();
+    return glm::dvec3{0.0};
+  };
+  return detail::measure(body, n < 1 ? 1 : n, at, at, config);
+}
+
+/// Measures the field's tick cost over the scripted path (see the file
+/// comment): config.ticks probes of config.path, after config.warmup ticks
+/// from the path's start.
+template <TimedField F>
+[[nodiscard]] TickBudgetReport measure_tick_budget(F& field, const TickBudgetConfig& config = {}) {
+  const std::uint64_t ticks = config.ticks < 1 ? 1 : config.ticks;
+  std::vector<Probe> probes(ticks);
+  for (std::uint64_t i = 0; i < ticks; ++i)
+    probes[i] = scripted_probe(config.path, config.warmup + i);
+  return detail::measure(
+      field, ticks, [&](std::uint64_t i) -> const Probe& { return probes[i]; },
+      [&](std::uint64_t i) { return scripted_probe(config.path, i); }, config);
 }
 
 }  // namespace hapticfield::offline

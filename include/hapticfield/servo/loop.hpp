@@ -514,11 +514,11 @@ class ServoLoop {
       const std::int64_t end = clock_->now();
       stats_->record(wake, pacer.period_observed(), wake - deadline, end - wake);
       const std::int64_t skipped = pacer.finish(end);  // overran: whole periods skipped, no burst
-      if (skipped > 0) {
+      if (pacer.overran()) {
         stats_->add_missed(static_cast<std::uint64_t>(skipped));
         stats_->add_overrun();
       }
-      note_deadline(skipped > 0);
+      note_deadline(pacer.overran());
       if (disconnected_) {
         safe_stop();
         return StopReason::disconnected;

@@ -75,13 +75,13 @@ class MultiArmLoop {
       const std::int64_t end = clock_->now();
       stats_->record(wake, pacer.period_observed(), wake - deadline, end - wake);
       const std::int64_t skipped = pacer.finish(end);
-      if (skipped > 0) {
+      if (pacer.overran()) {
         stats_->add_missed(static_cast<std::uint64_t>(skipped));
         stats_->add_overrun();
       }
       std::size_t gone = 0;
       for (auto& arm : arms_) {
-        arm->note_deadline(skipped > 0);
+        arm->note_deadline(pacer.overran());
         gone += arm->disconnected_ ? 1 : 0;
       }
       if (gone == N || (gone > 0 && policy_ == ArmFaultPolicy::stop_all)) return stop_all(StopReason::disconnected);

@@ -4,7 +4,13 @@
 /// and MultiArmLoop. Tick n is due at start + n T. A wake-up before the
 /// deadline (a spurious early return) sleeps again, so no period is cut
 /// short and the next one doubled; after an overrun the deadlines that
-/// already passed are skipped whole, so there is no burst of catch-up ticks.
+/// already passed are skipped whole, so there is no burst of catch-up ticks
+/// (OverrunPolicy::skip, the default). OverrunPolicy::run_next_late runs the
+/// next tick at once, late, when its deadline passed less than a period
+/// ago, and skips only deadlines older than that: a tick that ends a little
+/// past the next deadline then costs no period, which keeps the mean rate
+/// on a host that wakes the loop late now and then (one late tick, never a
+/// burst).
 ///
 /// Two ways to wait (PacingConfig):
 ///   - sleep (the default): clock_nanosleep to the deadline. Costs no CPU;
@@ -31,6 +37,12 @@ enum class PacingMode : std::uint8_t {
   hybrid,  ///< sleep to (deadline - spin margin), then spin to the deadline
 };
 
+/// What the tick after an overrun does.
+enum class OverrunPolicy : std::uint8_t {
+  skip,           ///< every deadline the overrun passed is skipped: the next tick waits for the grid
+  run_next_late,  ///< the next tick runs at once if its deadline passed less than a period ago
+};
+
 /// Default spin margin of the hybrid mode [ns].
 inline constexpr std::int64_t default_spin_margin_ns = 100'000;
 /// Largest spin margin accepted [ns] (a margin of a whole period or more
@@ -40,6 +52,7 @@ inline constexpr std::int64_t max_spin_margin_ns = 1'000'000'000;
 struct PacingConfig {
   PacingMode mode{PacingMode::sleep};
   std::int64_t spin_margin_ns{default_spin_margin_ns};  ///< hybrid: spin this long before each deadline [ns]
+  OverrunPolicy overrun{OverrunPolicy::skip};           ///< what the tick after an overrun does
 
   /// @throws std::invalid_argument for a margin outside [0, 1 s].
   void validate() const {
@@ -97,14 +110,19 @@ class Pacer {
 
   /// Ends the tick that finished at end [ns]: moves to the next deadline and
   /// returns how many periods were skipped because the tick overran (0: on
-  /// time).
+  /// time, or, with OverrunPolicy::run_next_late, an overrun of less than a
+  /// period: see overran()).
   std::int64_t finish(std::int64_t end) noexcept {
     deadline_ += period_ns_;
-    if (end <= deadline_) return 0;
-    const std::int64_t skipped = (end - deadline_) / period_ns_ + 1;
+    overran_ = end > deadline_;
+    if (!overran_) return 0;
+    std::int64_t skipped = (end - deadline_) / period_ns_ + 1;       // every deadline that passed
+    if (pacing_.overrun == OverrunPolicy::run_next_late) --skipped;  // the newest one runs, late
     deadline_ += skipped * period_ns_;
     return skipped;
   }
+  /// The last tick finished after the next deadline (whatever it skipped).
+  [[nodiscard]] bool overran() const noexcept { return overran_; }
 
   [[nodiscard]] std::int64_t deadline() const noexcept { return deadline_; }
   [[nodiscard]] std::int64_t wake() const noexcept { return wake_; }
@@ -129,6 +147,7 @@ class Pacer {
   std::int64_t spun_ns_{0};
   std::uint64_t spins_{0};
   bool first_{true};
+  bool overran_{false};
 };
 
 }  // namespace hapticfield
