@@ -179,6 +179,12 @@ inline E choose(const std::string& what, const std::string& name, const std::map
   throw py::value_error(what + ": unknown '" + name + "' (choose " + names + ")");
 }
 
+/// The gray weights called `name` (paper, bt601).
+GrayWeights gray_weights(const std::string& name);
+/// A picture from a path (any format OpenCV reads) or a numpy array: H x W gray levels [0, 255], or
+/// H x W x 3 / 4 in R, G, B (, A) order (image.cpp).
+GrayImage gray_from(const py::object& image, GrayWeights weights);
+
 /// Mask, border and tangible options as tangible_forces() takes them (image.cpp).
 MaskKind mask_kind(const std::string& name);
 Border border_kind(const std::string& name);
@@ -204,5 +210,6 @@ void bind_texture(py::module_& m);
 void bind_servo(py::module_& m);
 void bind_video(py::module_& m);
 void bind_budget(py::module_& m);
+void bind_surface(py::module_& m);
 
 }  // namespace hapticfield::python

@@ -16,6 +16,8 @@ namespace {
 /// Largest picture accepted as an array [px] (int sizes, 8 bytes a pixel: 2 GiB).
 constexpr py::ssize_t max_array_pixels = py::ssize_t{1} << 28;
 
+}  // namespace
+
 GrayWeights gray_weights(const std::string& name) {
   return choose<GrayWeights>("gray", name, {{"paper", GrayWeights::paper}, {"bt601", GrayWeights::bt601}});
 }
@@ -48,6 +50,8 @@ GrayImage gray_from(const py::object& image, GrayWeights weights) {
     }
   return gray;
 }
+
+namespace {
 
 py::array_t<double> tangible_forces(const py::object& image, const Array& xy, const std::string& mask,
                                     std::optional<int> size, const std::string& border, double sigma,

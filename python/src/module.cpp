@@ -223,4 +223,5 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_servo(m);
   hp::bind_video(m);
   hp::bind_budget(m);
+  hp::bind_surface(m);
 }
