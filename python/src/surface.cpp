@@ -370,7 +370,7 @@ void bind_surface(py::module_& m) {
       .def_property_readonly(
           "footprint", [](const Surface& s) { return s.footprint; },
           "Height field: its extent ((width - 1) spacing_x, (height - 1) spacing_y) [m], from "
-          "(0, 0); the scale that lays a field 1:1 on it by uv (uv runs 0..1 over it). None "
+          "its origin; the scale that lays a field 1:1 on it by uv (uv runs 0..1 over it). None "
           "otherwise.")
       .def_property_readonly(
           "samples", [](const Surface& s) { return s.samples; },
