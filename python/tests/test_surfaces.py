@@ -5,6 +5,7 @@ import pathlib
 import struct
 import threading
 import time
+import zlib
 
 import numpy as np
 import pytest
@@ -109,13 +110,23 @@ def test_a_relief_from_a_picture_reads_as_it_is_seen():
     assert dark.bounds[1][2] == pytest.approx(2.55e-3, rel=1e-3)
 
 
+def write_png(path, levels, bits):
+    """A one-channel PNG of 8 or 16 bits (big-endian samples), written with zlib alone."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    h, w = levels.shape
+    rows = b"".join(b"\0" + levels[j].astype(">u2" if bits == 16 else "u1").tobytes() for j in range(h))
+    with open(path, "wb") as out:
+        out.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, bits, 0, 0, 0, 0)) +
+                  chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
 def test_a_picture_file_and_a_16_bit_depth_map(tmp_path, coffee):
     s = hf.height_field_from_picture(coffee, pixel_size=2e-4, mm_per_level=0.02, blur=1.0)
     assert s.samples[0] > 100 and 0.0 < s.bounds[1][2] <= 255 * 0.02e-3 + 1e-12
-    cv2 = pytest.importorskip("cv2")
     depth = np.tile(np.arange(0, 2000, 100, dtype=np.uint16), (10, 1))  # um, rising along x
     path = tmp_path / "depth.png"
-    assert cv2.imwrite(str(path), depth)
+    write_png(path, depth, 16)
     d = hf.depth_map(path, pixel_size=1e-3, metres_per_unit=1e-6)
     assert d.samples == [20, 10] and d.bounds[1][2] == pytest.approx(1.9e-3)
     field = hf.surface_contact(d, stiffness=K)
@@ -388,15 +399,17 @@ def test_a_hostile_mesh_file_raises_not_crashes(tmp_path, name):
 
 
 def test_a_hostile_depth_map_raises(tmp_path):
-    cv2 = pytest.importorskip("cv2")
     eight_bit = tmp_path / "eight.png"
-    cv2.imwrite(str(eight_bit), np.zeros((4, 4), np.uint8))
+    write_png(eight_bit, np.zeros((4, 4), np.uint8), 8)
     with pytest.raises(hf.FileError, match="8-bit"):
         hf.depth_map(eight_bit)
-    nan = tmp_path / "nan.tiff"
-    cv2.imwrite(str(nan), np.array([[0.0, np.nan], [0.0, 0.0]], np.float32))
-    with pytest.raises(hf.FileError, match="not finite"):
-        hf.depth_map(nan, metres_per_unit=1.0)
+    huge = tmp_path / "huge.png"  # declares 100000 x 100000 px in its header
+    write_png(huge, np.zeros((1, 1), np.uint16), 16)
+    data = bytearray(huge.read_bytes())
+    data[16:24] = struct.pack(">II", 100000, 100000)
+    huge.write_bytes(bytes(data))
+    with pytest.raises(hf.FileError):
+        hf.depth_map(huge)
     garbage = tmp_path / "garbage.png"
     garbage.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 40)
     with pytest.raises(hf.FileError):
