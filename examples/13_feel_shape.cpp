@@ -1,0 +1,269 @@
+// feel_shape: feel a shape off-line. A probe path goes in, the proxy's
+// (god-object's) forces come out, tick by tick, as a servo loop would feel
+// them.
+//
+//   feel_shape SHAPE --probes IN.csv [--forces OUT.csv] [--stiffness K]
+//              [--damping B] [--friction MU_S[,MU_K]] [--scale S] [--smooth]
+//              [--kind mesh|picture|depth] [--height-scale H] [--spacing S]
+//
+// SHAPE is a mesh (.stl, .obj, .gltf, .glb) or a height map: a picture
+// whose gray level is height, or a 16-bit / float depth map. IN.csv holds
+// t,x,y,z per line (seconds, metres, the shape's frame; a header line
+// allowed; '-' reads stdin), t strictly increasing; the HIP velocity is the
+// backward difference of the path. OUT.csv ('-' or no --forces: stdout)
+// gets one line per probe:
+//   t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact
+// the proxy [m], the force on the HIP [N], the contact normal, the touched
+// point's uv, its triangle or grid cell (-1: none) and 1 while touching.
+// Bad input: one line on stderr and exit status 1 (2 for usage errors).
+#include <hapticfield/io.hpp>
+#include <hapticfield/surface.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include <opencv2/core/utils/logger.hpp>
+
+#include "common/cli.hpp"
+#include "common/csv.hpp"
+
+namespace hf = hapticfield;
+
+namespace {
+
+constexpr const char* usage =
+    "usage: feel_shape SHAPE --probes IN.csv [options]\n"
+    "Feels a shape off-line: the proxy (god-object) follows a probe path and\n"
+    "its forces are written tick by tick.\n"
+    "  SHAPE                 a mesh (.stl, .obj, .gltf, .glb) or a height map: a picture\n"
+    "                        (gray level = height) or a 16-bit / float depth map\n"
+    "  --probes IN.csv       t,x,y,z per line [s, m] in the shape's frame, t strictly\n"
+    "                        increasing (a header line allowed); '-' reads stdin (required)\n"
+    "  --forces OUT.csv      where the forces go; '-' (default) is stdout. Columns:\n"
+    "                        t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact\n"
+    "                        [s, m, N, -]; primitive -1 and contact 0 when not touching\n"
+    "  --stiffness K         proxy spring [N/m], in (0, 1e6] (default 1500)\n"
+    "  --damping B           on the normal velocity while touching [N s/m], in [0, 1e4] (default 0)\n"
+    "  --friction MU         static and dynamic friction [-], MU_S,MU_K or one value for both,\n"
+    "                        0 <= MU_K <= MU_S <= 10 (default 0: frictionless)\n"
+    "  --scale S             a mesh file's unit in metres, in (0, 1e6] (default 1; 0.001 for mm)\n"
+    "  --smooth              a mesh without vertex normals gets them from its faces (force shading)\n"
+    "  --kind K              mesh, picture or depth (default: mesh by extension; a one-channel\n"
+    "                        16-bit or float image is a depth map, any other picture a picture)\n"
+    "  --height-scale H      picture: height of one gray level [mm] (default 0.01);\n"
+    "                        depth map: metres per unit (default 1e-6), in (0, 1e6]\n"
+    "  --spacing S           height map: distance between pixel centres [m], in (0, 1e3] (default 1e-4)\n"
+    "  -h, --help            this text\n"
+    "Height maps: pixel (column c, row r) of a W x H map is at x = c S, y = (H - 1 - r) S,\n"
+    "z = its height; the surface is solid below. Reads at most 1000000 probes.\n"
+    "Exit status: 0 done, 1 bad input (files, meshes, probes), 2 usage error.\n";
+
+enum class Kind { automatic, mesh, picture, depth };
+
+struct Arguments {
+  std::string shape;
+  std::string probes;
+  std::string forces = "-";
+  hf::ProxyConfig proxy{};
+  double scale = 1.0;
+  bool scale_given = false;
+  bool smooth = false;
+  Kind kind = Kind::automatic;
+  std::optional<double> height_scale;
+  double spacing = 1e-4;
+  bool spacing_given = false;
+};
+
+/// MU or MU_S,MU_K.
+std::pair<double, double> parse_friction(const std::string& text) {
+  const auto range = hf::cli::closed(0.0, 10.0);
+  if (text.find(',') == std::string::npos) {
+    const double mu = hf::cli::parse_real(text, "--friction");
+    if (!range.contains(mu))
+      throw hf::cli::UsageError("--friction must be in " + range.text() + ", got '" + text + "'");
+    return {mu, mu};
+  }
+  const auto [mu_s, mu_k] = hf::cli::parse_pair(text, "--friction", range);
+  if (mu_k > mu_s)
+    throw hf::cli::UsageError("--friction: the dynamic coefficient (" + text.substr(text.find(',') + 1) +
+                              ") must not exceed the static one");
+  return {mu_s, mu_k};
+}
+
+Arguments parse(hf::cli::Parser& p) {
+  Arguments a;
+  bool probes_given = false;
+  while (p.next()) {
+    if (p.is("--probes")) {
+      a.probes = p.value();
+      probes_given = true;
+    } else if (p.is("--forces")) {
+      const std::string& v = p.value();
+      a.forces = v;
+      if (v != "-") {  // checked by finish() like every output file
+        hf::cli::check_output_file(v, "--forces");
+      }
+    } else if (p.is("--stiffness")) {
+      a.proxy.stiffness = p.real(hf::cli::open_closed(0.0, 1e6));
+    } else if (p.is("--damping")) {
+      a.proxy.damping = p.real(hf::cli::closed(0.0, 1e4));
+    } else if (p.is("--friction")) {
+      std::tie(a.proxy.static_friction, a.proxy.dynamic_friction) = parse_friction(p.value());
+    } else if (p.is("--scale")) {
+      a.scale = p.real(hf::cli::open_closed(0.0, 1e6));
+      a.scale_given = true;
+    } else if (p.is("--smooth")) {
+      a.smooth = true;
+    } else if (p.is("--kind")) {
+      a.kind = p.choice<Kind>("kind", {{"mesh", Kind::mesh}, {"picture", Kind::picture}, {"depth", Kind::depth}});
+    } else if (p.is("--height-scale")) {
+      a.height_scale = p.real(hf::cli::open_closed(0.0, 1e6));
+    } else if (p.is("--spacing")) {
+      a.spacing = p.real(hf::cli::open_closed(0.0, 1e3));
+      a.spacing_given = true;
+    } else if (p.positional() && a.shape.empty()) {
+      a.shape = p.token();
+    } else if (p.positional()) {
+      throw hf::cli::UsageError("more than one SHAPE given ('" + a.shape + "', '" + p.token() + "')");
+    } else {
+      p.unknown();
+    }
+  }
+  if (a.shape.empty()) throw hf::cli::UsageError("no SHAPE given");
+  if (!probes_given) throw hf::cli::UsageError("no --probes given");
+  p.finish();
+  return a;
+}
+
+bool is_mesh_file(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext)
+    c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+  return ext == ".stl" || ext == ".obj" || ext == ".gltf" || ext == ".glb";
+}
+
+/// The probes: t,x,y,z rows, finite, t strictly increasing.
+std::vector<std::array<double, 4>> read_probes(const std::string& path) {
+  const hf::cli::CsvConfig config{.columns = "t,x,y,z", .what = "probes", .finite_only = true};
+  std::vector<std::array<double, 4>> rows;
+  if (path == "-") {
+    std::string text;
+    const std::size_t limit = (config.max_rows + 1) * (config.max_line_bytes + 2);
+    char buffer[65536];
+    std::size_t got = 0;
+    while ((got = std::fread(buffer, 1, sizeof buffer, stdin)) > 0) {
+      text.append(buffer, got);
+      if (text.size() > limit) throw hf::FileError("stdin: more than " + std::to_string(limit) + " bytes of probes");
+    }
+    if (std::ferror(stdin)) throw hf::FileError("cannot read probes from stdin");
+    rows = hf::cli::parse_csv<4>(text, "stdin", config);
+  } else {
+    rows = hf::cli::read_csv<4>(path, config);
+  }
+  const std::string name = path == "-" ? "stdin" : path;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (!(rows[i][0] > rows[i - 1][0]))
+      throw hf::FileError(name + ": t must increase strictly, but probe " + std::to_string(i + 1) +
+                          " has t = " + hf::cli::detail::number_text(rows[i][0]) + " after " +
+                          hf::cli::detail::number_text(rows[i - 1][0]));
+  return rows;
+}
+
+/// Feels the path on one shape and writes a line per probe.
+template <hf::Shape S>
+void feel(S shape, const Arguments& args, const std::vector<std::array<double, 4>>& probes, std::FILE* out,
+          std::size_t& touching, double& largest) {
+  auto field = hf::contact(hf::ProxyConstraint<S>(std::move(shape), args.proxy));
+  std::fprintf(out, "t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact\n");
+  glm::dvec3 previous{0.0};
+  for (std::size_t i = 0; i < probes.size(); ++i) {
+    const auto& [t, x, y, z] = probes[i];
+    hf::Probe probe;
+    probe.position = {x, y, z};
+    probe.time = t;
+    if (i > 0) {
+      probe.period = t - probes[i - 1][0];
+      probe.velocity = (probe.position - previous) / probe.period;
+    }
+    previous = probe.position;
+    const glm::dvec3 f = field.force(probe);
+    const hf::Contact& c = field.last_contact();
+    const glm::dvec3 proxy = field.constraint().proxy();
+    const long long primitive =
+        c.touching && c.primitive != hf::no_primitive ? static_cast<long long>(c.primitive) : -1LL;
+    std::fprintf(out, "%.17g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%lld,%d\n", t, proxy.x,
+                 proxy.y, proxy.z, f.x, f.y, f.z, c.normal.x, c.normal.y, c.normal.z, c.surface_uv.x, c.surface_uv.y,
+                 primitive, c.touching ? 1 : 0);
+    touching += c.touching ? 1 : 0;
+    largest = std::fmax(largest, glm::length(f));
+  }
+}
+
+/// The mesh or height map, ready for the proxy.
+std::variant<hf::MeshShape, hf::HeightFieldShape> load_shape(const Arguments& args, bool mesh) {
+  if (mesh) {
+    hf::io::MeshReadConfig read;
+    read.scale = args.scale;
+    hf::io::LoadedMesh loaded = hf::io::load_mesh(args.shape, read);
+    if (loaded.mesh.triangles.empty()) throw hf::FileError("cannot use '" + args.shape + "': it has no triangles");
+    const bool shade = args.smooth && !loaded.mesh.has_normals();
+    return hf::MeshShape(shade ? hf::with_vertex_normals(std::move(loaded.mesh)) : std::move(loaded.mesh));
+  }
+  const cv::Mat image = hf::cli::quiet_stderr([&] { return hf::load_image(args.shape); });
+  const bool depth =
+      args.kind == Kind::depth || (args.kind == Kind::automatic && image.channels() == 1 &&
+                                   (image.depth() == CV_16U || image.depth() == CV_32F || image.depth() == CV_64F));
+  if (depth) {
+    hf::io::DepthMapConfig config;
+    config.pixel_size = args.spacing;
+    config.metres_per_unit = args.height_scale.value_or(1e-6);
+    return hf::HeightFieldShape(hf::io::height_grid_from_depth(image, args.shape, config));
+  }
+  hf::io::PictureHeightConfig config;
+  config.pixel_size = args.spacing;
+  config.mm_per_level = args.height_scale.value_or(0.01);
+  try {
+    return hf::HeightFieldShape(hf::io::height_grid_from_gray(hf::to_gray(image), config));
+  } catch (const std::invalid_argument& e) {
+    throw hf::ImageError("cannot use '" + args.shape + "': " + e.what());
+  }
+}
+
+int run(const Arguments& args) {
+  const bool mesh = args.kind == Kind::mesh || (args.kind == Kind::automatic && is_mesh_file(args.shape));
+  if (mesh && (args.height_scale || args.spacing_given))
+    throw hf::cli::UsageError("--height-scale and --spacing are for height maps, not meshes");
+  if (!mesh && args.scale_given)
+    throw hf::cli::UsageError("--scale is for meshes; a height map takes --spacing and --height-scale");
+  if (!mesh && args.smooth) throw hf::cli::UsageError("--smooth is for meshes (a height field is always shaded)");
+  // the shape first (a missing or hostile file is reported before stdin is read)
+  std::variant<hf::MeshShape, hf::HeightFieldShape> shape = load_shape(args, mesh);
+  const auto probes = read_probes(args.probes);
+  std::FILE* out = args.forces == "-" ? stdout : std::fopen(args.forces.c_str(), "w");
+  if (!out) throw hf::FileError("cannot write forces file '" + args.forces + "'");
+  std::size_t touching = 0;
+  double largest = 0.0;
+  std::visit([&](auto& s) { feel(std::move(s), args, probes, out, touching, largest); }, shape);
+  const bool failed = std::ferror(out) != 0;
+  if (out != stdout ? std::fclose(out) != 0 || failed : std::fflush(out) != 0 || failed)
+    throw hf::FileError("cannot write forces file '" + args.forces + "'");
+  if (out != stdout)
+    std::printf("%s: %zu probes, %zu touching, largest |F| %.6g N; forces written to %s\n", args.shape.c_str(),
+                probes.size(), touching, largest, args.forces.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
+  return hf::cli::main("feel_shape", usage, argc, argv, [](hf::cli::Parser& p) { return run(parse(p)); });
+}
