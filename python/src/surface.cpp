@@ -3,6 +3,7 @@
 #include "field.hpp"
 
 #include <hapticfield/io/height_map.hpp>
+#include <hapticfield/io/picture_relief.hpp>
 #include <hapticfield/io/stl.hpp>
 #include <hapticfield/surface.hpp>
 #if HAPTICFIELD_PYTHON_IO
@@ -97,9 +98,10 @@ struct SurfaceField : Field {
   void (*trace)(AnyField&, const ProbeArrays&, const ContactArrays&) noexcept = nullptr;
 };
 
-template <Shape S>
+/// Evaluates a contact field of type CF (a ContactField over a ProxyConstraint) and reports its contacts.
+template <class CF>
 void trace_as(AnyField& any, const ProbeArrays& a, const ContactArrays& c) noexcept {
-  auto* field = any.target<SurfaceContact<S>>();
+  auto* field = any.target<CF>();
   if (!field) return;  // never: surface_contact() pairs the type and this function
   Probe probe;
   probe.period = a.period;
@@ -298,7 +300,7 @@ SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& p
       [&]<class S>(const S& shape) {
         SurfaceField out;
         static_cast<Field&>(out) = make_field(contact(ProxyConstraint<S>(shape, config), std::move(sum)), d, shared);
-        out.trace = &trace_as<S>;
+        out.trace = &trace_as<SurfaceContact<S>>;
         return out;
       },
       *surface.shape);
@@ -352,6 +354,41 @@ Field on_surface_of(const Field& field, const Pair& scale, const Pair& offset) {
     throw py::value_error("on_surface: scale [m per uv unit] and offset [m] must be finite");
   return make_field(OnSurface<SharedField>(SharedField{field.impl}, mapping), "on_surface(" + field.description + ")",
                     {&field});
+}
+
+SurfaceField picture_relief_of(const py::object& image, double mm_per_level, double width_m, double blur,
+                               bool dark_is_high, double stiffness, double damping, double static_friction,
+                               double dynamic_friction, double texture_gain, const std::string& mask,
+                               std::optional<int> size, const std::string& border, double sigma,
+                               const std::string& gray) {
+  PictureReliefConfig c;
+  c.mm_per_level = mm_per_level;
+  c.width_m = width_m;
+  c.blur_sigma = blur;
+  c.dark_is_high = dark_is_high;
+  c.stiffness = stiffness;
+  c.damping = damping;
+  c.static_friction = static_friction;
+  c.dynamic_friction = dynamic_friction;
+  c.texture_gain = texture_gain;
+  c.tangible = tangible_options(mask, size, border, sigma);
+  c.weights = gray_weights(gray);
+  std::optional<PictureRelief> relief;
+  std::string name = "a picture";
+  if (is_path(image)) {
+    const std::string path = path_of(image);
+    name = std::filesystem::path(path).filename().string();
+    py::gil_scoped_release release;
+    relief.emplace(picture_relief(path, c));
+  } else {
+    const GrayImage g = gray_from(image, c.weights);
+    py::gil_scoped_release release;
+    relief.emplace(picture_relief(g, c));
+  }
+  SurfaceField out;
+  static_cast<Field&>(out) = make_field(std::move(*relief), "picture relief of " + name);
+  out.trace = &trace_as<PictureRelief>;
+  return out;
 }
 
 }  // namespace
@@ -463,6 +500,18 @@ void bind_surface(py::module_& m) {
         "static_friction >= dynamic_friction >= 0; offset: the proxy's lift relative to a primitive's size. While "
         "touching, the parts see |Fc| [N], the normal, and the touched point's uv and tangent frame: lay a field "
         "on the surface with on_surface(). Returns a SurfaceField (contacts() tells where the proxy is).");
+  m.def("picture_relief", &picture_relief_of, py::arg("image"), py::arg("mm_per_level") = 0.01,
+        py::arg("width_m") = 0.1, py::arg("blur") = 0.0, py::arg("dark_is_high") = false, py::arg("stiffness") = 1500.0,
+        py::arg("damping") = 0.0, py::arg("static_friction") = 0.0, py::arg("dynamic_friction") = 0.0,
+        py::arg("texture_gain") = 1.0, py::arg("mask") = "prewitt", py::arg("size") = py::none(),
+        py::arg("border") = "suspend", py::arg("sigma") = 0.0, py::arg("gray") = "paper",
+        "A picture felt as a relief in one line (a path or an H x W (x 3 / 4) array of levels [0, 255]): its gray "
+        "levels are heights (level x mm_per_level [mm], dark_is_high: 255 - level; blur [px] on the heights only) "
+        "under the proxy (stiffness [N/m], damping [N s/m], static/dynamic friction), and its tangible-image "
+        "forces (texture_gain [N] at a black/white edge; 0: the relief alone; mask, size, border, sigma as "
+        "tangible_field) are laid on the relief in its tangent plane. The picture spans width_m [m] from the first "
+        "to the last pixel centre, its bottom-left pixel at the origin, x right, y up the picture, z toward the "
+        "user. Returns a SurfaceField.");
   m.def("on_surface", &on_surface_of, py::arg("field"), py::arg("scale") = 1.0, py::arg("offset") = 0.0,
         "A field laid on the touched surface by uv (a part of surface_contact()): evaluated at the flat position "
         "offset + scale * uv [m] (scale [m per uv unit] and offset [m], each one number or a pair), with the "

@@ -414,3 +414,47 @@ def test_a_hostile_depth_map_raises(tmp_path):
     garbage.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 40)
     with pytest.raises(hf.FileError):
         hf.depth_map(garbage)
+
+
+# --- a picture as a relief in one line ----------------------------------------------
+
+def test_picture_relief_is_the_relief_with_the_tangible_image_laid_on_it(coffee):
+    # the one-liner against the same scene composed from the pieces: the relief from the picture, and the
+    # tangible image centred on the flat frame at the relief's pitch, laid on it by uv
+    width, mm, gain = 0.1, 0.02, 1.5
+    one = hf.picture_relief(coffee, mm_per_level=mm, width_m=width, texture_gain=gain, stiffness=K)
+    relief = hf.height_field_from_picture(coffee, mm_per_level=mm, pixel_size=1.0)  # for its size only
+    w, h = relief.samples
+    pitch = width / (w - 1)
+    relief = hf.height_field_from_picture(coffee, mm_per_level=mm, pixel_size=pitch)
+    footprint = np.array(relief.footprint)
+    image = hf.tangible_field(coffee, px_per_mm=1e-3 / pitch, gain=gain)
+    composed = hf.surface_contact(relief, [hf.on_surface(image, scale=tuple(footprint), offset=tuple(-footprint / 2))],
+                                  stiffness=K)
+    a = np.linspace(0, 2 * np.pi, 3000)
+    centre = footprint / 2
+    path = np.vstack([press((centre[0], centre[1], 0.01), (centre[0], centre[1], 0.0), 100),
+                      np.column_stack([centre[0] + 0.02 * np.sin(a), centre[1] + 0.015 * (1 - np.cos(a)),
+                                       np.full_like(a, 0.0)])])
+    v = np.gradient(path, 1e-3, axis=0)
+    c = one.contacts(path, velocities=v)
+    assert c["touching"][100:].mean() > 0.9
+    parts = c["force"] - c["contact_force"]
+    assert np.max(np.linalg.norm(parts, axis=1)) > 0.2  # the picture pushes along the relief [N]
+    np.testing.assert_allclose(c["force"], composed.forces(path, velocities=v), atol=1e-9)
+
+
+def test_picture_relief_from_an_array_and_its_bad_inputs():
+    picture = np.zeros((20, 30))
+    picture[:, 15:] = 255.0  # white (high) on the right
+    relief = hf.picture_relief(picture, mm_per_level=0.01, width_m=0.029, texture_gain=0.0, stiffness=K)
+    f = relief.forces(press((0.025, 0.01, 0.006), (0.025, 0.01, 0.002)))[-1]
+    np.testing.assert_allclose(f, [0.0, 0.0, K * 0.55e-3], atol=1e-9)  # the white plateau, 2.55 mm high
+    with pytest.raises(ValueError, match="width_m"):
+        hf.picture_relief(picture, width_m=0.0)
+    with pytest.raises(ValueError, match="texture_gain"):
+        hf.picture_relief(picture, texture_gain=-1.0)
+    with pytest.raises(ValueError, match="2 x 2"):
+        hf.picture_relief(np.zeros((1, 5)))
+    with pytest.raises(OSError, match="photo.png"):
+        hf.picture_relief("/nonexistent/photo.png")
