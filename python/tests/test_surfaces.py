@@ -458,3 +458,15 @@ def test_picture_relief_from_an_array_and_its_bad_inputs():
         hf.picture_relief(np.zeros((1, 5)))
     with pytest.raises(OSError, match="photo.png"):
         hf.picture_relief("/nonexistent/photo.png")
+
+
+def test_the_surfaces_example_runs_and_feels_k_depth(coffee):
+    # python/examples/surfaces.py is the example of python/README.md and docs/surfaces.md
+    import subprocess
+    import sys
+    example = pathlib.Path(__file__).resolve().parents[1] / "examples" / "surfaces.py"
+    r = subprocess.run([sys.executable, str(example), "--picture", coffee], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "touching 100% of ticks, normal force 1.50 N" in r.stdout  # k x 1 mm
+    assert "latches 0" in r.stdout and "picture relief of coffee.png" in r.stdout
