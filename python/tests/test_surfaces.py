@@ -470,3 +470,14 @@ def test_the_surfaces_example_runs_and_feels_k_depth(coffee):
     assert r.returncode == 0, r.stderr
     assert "touching 100% of ticks, normal force 1.50 N" in r.stdout  # k x 1 mm
     assert "latches 0" in r.stdout and "picture relief of coffee.png" in r.stdout
+
+
+@pytest.mark.parametrize("doc,heading", [("python/README.md", "## Surfaces"), ("docs/surfaces.md", "## From Python")])
+def test_the_docs_show_the_example_s_code(doc, heading):
+    root = pathlib.Path(__file__).resolve().parents[2]
+    text = (root / doc).read_text()
+    start = text.index("```python\n", text.index(heading)) + len("```python\n")
+    block = text[start:text.index("```", start)]
+    example = (root / "python" / "examples" / "surfaces.py").read_text()
+    body = "\n".join(("    " + line) if line else "" for line in block.splitlines()[3:])  # after the imports
+    assert body.replace('"examples/data/coffee.png"', "a.picture") in example
