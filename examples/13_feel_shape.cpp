@@ -199,7 +199,7 @@ void feel(S shape, const Arguments& args, const std::vector<std::array<double, 4
     const glm::dvec3 proxy = field.constraint().proxy();
     const long long primitive =
         c.touching && c.primitive != hf::no_primitive ? static_cast<long long>(c.primitive) : -1LL;
-    std::fprintf(out, "%.17g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%lld,%d\n", t, proxy.x,
+    std::fprintf(out, "%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%lld,%d\n", t, proxy.x,
                  proxy.y, proxy.z, f.x, f.y, f.z, c.normal.x, c.normal.y, c.normal.z, c.surface_uv.x, c.surface_uv.y,
                  primitive, c.touching ? 1 : 0);
     touching += c.touching ? 1 : 0;

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
@@ -16,6 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "alloc_counter.hpp"
 #include "hapticfield/io/picture_relief.hpp"
 #include "surface_meshes.hpp"
 
@@ -142,6 +144,27 @@ TEST_CASE("picture relief: the texture is the flat tangible-image force turned i
     if (glm::length(expected) > 0.05 * gain) ++textured;
   }
   CHECK(textured > 100);  // the hills give a texture force almost everywhere
+}
+
+TEST_CASE("picture relief: a tick allocates nothing and stays finite on hostile probes", "[relief]") {
+  auto relief = picture_relief(hills(160, 120), {.width_m = 0.08, .static_friction = 0.5, .dynamic_friction = 0.4});
+  std::vector<Probe> path;
+  for (int i = 0; i < 3000; ++i)
+    path.push_back(probe_at({0.04 + 0.03 * std::sin(i * 0.003), 0.03 + 0.02 * std::cos(i * 0.002),
+                             0.002 - 0.004 * std::fabs(std::sin(i * 0.01))},
+                            {0.09, -0.04, 0.0}));
+  glm::dvec3 sum{0.0};
+  const long n = test::count_allocations([&] {
+    for (const Probe& p : path)
+      sum += relief.force(p);
+  });
+  if (test::allocations_counted) CHECK(n == 0);
+  CHECK(is_finite(sum));
+  CHECK(glm::length(sum) > 0.0);
+  const double nan = std::nan(""), inf = INFINITY;
+  for (const glm::dvec3 p : {glm::dvec3{nan, 0.0, 0.0}, glm::dvec3{0.04, inf, 0.0}, glm::dvec3{1e300, -1e300, 1e300},
+                             glm::dvec3{0.04, 0.03, -1e6}, glm::dvec3{-0.5, 0.03, -0.001}})
+    CHECK(is_finite(relief.force(probe_at(p, {1e6, 0.0, nan}))));
 }
 
 TEST_CASE("picture relief: bad settings and files fail with one clear error", "[relief]") {
