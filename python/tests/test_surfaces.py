@@ -317,6 +317,32 @@ def test_run_servo_on_a_relief_ends_without_safety_events(coffee):
     np.testing.assert_array_equal(trace["force"], again["trace"]["force"])
 
 
+@pytest.mark.parametrize("shape", ["sphere", "icosphere mesh"])
+def test_run_servo_into_a_ball_ends_without_safety_events(tmp_path, shape):
+    # the hand rasters at z = -8 mm through a ball of 10 mm on its first row: the arm meets the ball after
+    # the soft start (0.8 s in), and the force grows within the slew limit: no clamp, no event at all
+    centre = (0.03, 0.03, -0.008)
+    if shape == "sphere":
+        ball = hf.sphere_surface(centre=centre, radius=0.01)
+    else:
+        v, f = icosphere(3)
+        write_stl(tmp_path / "ball.stl", v * 10.0, f)  # [mm]
+        ball = hf.mesh_surface(tmp_path / "ball.stl", scale=1e-3, origin=centre)
+    texture = hf.on_surface(hf.lattice_texture(sigma=0.5, gain=0.1, scale_with_normal_force=True, axes=(1, 1, 0)),
+                            scale=0.03)
+    field = hf.surface_contact(ball, [texture], stiffness=1500.0, damping=0.5)
+    result = hf.run_servo(field, seconds=3.0)
+    stats, trace = result["statistics"], result["trace"]
+    assert stats["ticks"] == 3000 and result["stop_reason"] == "tick_limit"
+    assert stats["safety_events"] == 0 and stats["latches"] == 0 and stats["missed_deadlines"] == 0
+    assert stats["peak_force_n"] > 1.0  # it pushed the hand back off the ball [N]
+    touching = np.linalg.norm(trace["force"], axis=1) > 0.0
+    out = trace["position"][touching] - centre
+    # pushed along the radius, from inside the ball
+    radial = np.einsum("ij,ij->i", trace["force"][touching], out / np.linalg.norm(out, axis=1)[:, None])
+    assert np.all(np.linalg.norm(out, axis=1) < 0.0101) and np.all(radial > 0.0)
+
+
 def test_a_part_of_a_running_surface_is_refused_to_other_threads():
     lattice = hf.lattice_texture()
     field = hf.surface_contact(hf.sphere_surface(), [hf.on_surface(lattice)])
