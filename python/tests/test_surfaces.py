@@ -121,6 +121,37 @@ def write_png(path, levels, bits):
                   chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
 
 
+def write_float_tiff(path, values):
+    """A one-channel 32-bit float TIFF (little-endian, one uncompressed strip), written with struct alone."""
+    h, w = values.shape
+    data = values.astype("<f4").tobytes()
+    tags = [(256, 4, w), (257, 4, h), (258, 3, 32), (259, 3, 1), (262, 3, 1), (273, 4, 0), (277, 3, 1),
+            (278, 4, h), (279, 4, len(data)), (339, 3, 3)]  # 339 SampleFormat 3: IEEE float
+    ifd_size = 2 + 12 * len(tags) + 4
+    tags = [(t, k, 8 + ifd_size if t == 273 else v) for t, k, v in tags]
+    ifd = struct.pack("<H", len(tags)) + b"".join(
+        struct.pack("<HHI", t, k, 1) + (struct.pack("<HH", v, 0) if k == 3 else struct.pack("<I", v))
+        for t, k, v in tags) + struct.pack("<I", 0)
+    path.write_bytes(b"II*\0" + struct.pack("<I", 8) + ifd + data)
+
+
+def test_a_float_tiff_depth_map_in_metres(tmp_path):
+    x = np.arange(16) * 1e-3
+    X, Y = np.meshgrid(x, x[:12])
+    path = tmp_path / "depth.tif"
+    write_float_tiff(path, 0.01 + 0.2 * X)  # [m], a slope of 0.2 rising along x; the picture's rows: y down
+    d = hf.depth_map(path, pixel_size=1e-3, metres_per_unit=1.0)
+    assert d.samples == [16, 12] and d.bounds[1][2] == pytest.approx(0.01 + 0.2 * 0.015, rel=1e-6)
+    field = hf.surface_contact(d, stiffness=K)
+    top = 0.01 + 0.2 * 0.0075
+    f = field.forces(press((0.0075, 0.005, top + 0.004), (0.0075, 0.005, top - 0.001)))[-1]
+    n = np.array([-0.2, 0.0, 1.0]) / np.linalg.norm([-0.2, 0.0, 1.0])
+    np.testing.assert_allclose(f, K * 0.001 * n[2] * n, rtol=1e-5)
+    write_float_tiff(path, np.array([[0.0, np.nan], [0.0, 0.0]]))
+    with pytest.raises(hf.FileError, match="not finite"):
+        hf.depth_map(path, metres_per_unit=1.0)
+
+
 def test_a_picture_file_and_a_16_bit_depth_map(tmp_path, coffee):
     s = hf.height_field_from_picture(coffee, pixel_size=2e-4, mm_per_level=0.02, blur=1.0)
     assert s.samples[0] > 100 and 0.0 < s.bounds[1][2] <= 255 * 0.02e-3 + 1e-12
