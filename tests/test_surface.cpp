@@ -166,6 +166,29 @@ TEST_CASE("a tilted planar height field is hit exactly where the plane is, from 
   }
 }
 
+TEST_CASE("a flat height field is hit by every vertical segment, however its root rounds") {
+  // flat cells have boxes of no height: the root of each segment, computed by division, may lie one ulp
+  // outside the box's entry and exit, computed by a reciprocal; the hit must still be found
+  for (const double z : {0.0, 1e-9, 0.002, -0.03}) {
+    const HeightFieldShape field(sample(21, 21, 4e-3, [z](double, double) { return z; }));
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> u(0.0, 0.08), above(1e-6, 0.01), below(1e-6, 0.01);
+    int missed = 0;
+    for (int n = 0; n < 2000; ++n) {
+      const double x = n % 4 == 0 ? 0.004 * (n % 20) : u(rng), y = n % 3 == 0 ? 0.04 : u(rng);  // cell borders too
+      const double h0 = above(rng), h1 = below(rng);
+      const Hit hit = field.first_hit({x, y, z + h0}, {x, y, z - h1});
+      if (!hit.found()) {
+        ++missed;
+        continue;
+      }
+      CHECK_THAT(hit.t, WithinAbs(h0 / (h0 + h1), 1e-9));  // the closed form
+      CHECK_THAT(hit.point.z, WithinAbs(z, 1e-12));
+    }
+    CHECK(missed == 0);
+  }
+}
+
 TEST_CASE("a cliff in a height field is a wall the proxy does not pass at 2 m/s") {
   // 5 mm step between two samples, 0.1 mm grid
   const HeightFieldShape field(sample(200, 50, 1e-4, [](double x, double) { return x > 0.01 ? 0.005 : 0.0; }));

@@ -179,6 +179,9 @@ inline E choose(const std::string& what, const std::string& name, const std::map
   throw py::value_error(what + ": unknown '" + name + "' (choose " + names + ")");
 }
 
+/// The gray weights called `name` (paper, bt601).
+GrayWeights gray_weights(const std::string& name);
+
 /// Mask, border and tangible options as tangible_forces() takes them (image.cpp).
 MaskKind mask_kind(const std::string& name);
 Border border_kind(const std::string& name);
@@ -215,5 +218,6 @@ void bind_texture(py::module_& m);
 void bind_servo(py::module_& m);
 void bind_video(py::module_& m);
 void bind_budget(py::module_& m);
+void bind_surface(py::module_& m);
 
 }  // namespace hapticfield::python

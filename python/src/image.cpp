@@ -21,11 +21,11 @@ std::string number(double v) {
   return py::str(py::float_(v));
 }
 
+}  // namespace
+
 GrayWeights gray_weights(const std::string& name) {
   return choose<GrayWeights>("gray", name, {{"paper", GrayWeights::paper}, {"bt601", GrayWeights::bt601}});
 }
-
-}  // namespace
 
 /// A picture from a path (any format OpenCV reads; 16-bit files are scaled by 255 / 65535) or a numpy array:
 /// H x W gray levels, or H x W x 3 / 4 colour in the order `channels` names ("rgb": R, G, B (, A), as numpy

@@ -200,8 +200,9 @@ PYBIND11_MODULE(hapticfield, m) {
   namespace py = pybind11;
   m.doc() =
       "hapticfield: haptic fields (tangible images, stochastic textures, friction, HaTT models, normals from a "
-      "picture, contact composition) built in Python and evaluated in C++, and a servo loop on a simulated or "
-      "real arm. Units: [m], [m/s], [N], [s], [px].";
+      "picture, contact composition, surfaces: height fields, meshes and pictures as reliefs felt through a proxy) "
+      "built in Python and evaluated in C++, and a servo loop on a simulated or real arm. Units: [m], [m/s], [N], "
+      "[s], [px].";
   m.attr("__version__") = std::to_string(HAPTICFIELD_VERSION_MAJOR) + "." + std::to_string(HAPTICFIELD_VERSION_MINOR) +
                           "." + std::to_string(HAPTICFIELD_VERSION_PATCH);
   static py::exception<hapticfield::Error> error(m, "Error", PyExc_RuntimeError);
@@ -223,4 +224,5 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_servo(m);
   hp::bind_video(m);
   hp::bind_budget(m);
+  hp::bind_surface(m);
 }

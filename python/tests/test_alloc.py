@@ -64,6 +64,17 @@ def test_a_tick_allocates_nothing_for_a_full_composition(tmp_path, coffee, hatt_
     assert runs[0]["malloc"] > 0  # run_servo's own setup was counted: the counter was live
 
 
+def test_a_tick_allocates_nothing_on_a_surface_with_fields_laid_on_it(coffee):
+    # the proxy on a relief (quadtree queries, friction, the contact report) and the parts by uv
+    runs = counted_runs("surface", "--coffee", coffee)
+    for run in runs:
+        assert run["loop_malloc"] == 0 and run["loop_free"] == 0, runs
+        assert run["peak_force_n"] > 0.3  # the arm rested on the relief [N]
+    short, long = runs
+    assert long["ticks"] - short["ticks"] == 2000
+    assert abs(long["malloc"] - short["malloc"]) <= 4 and abs(long["free"] - short["free"]) <= 4, runs
+
+
 def test_watching_a_wall_clock_run_allocates_nothing(coffee):
     # Only allocation counts: the wall clock makes the rest depend on the load.
     short, long = counted_runs("full", "--coffee", coffee, "--clock", "wall")

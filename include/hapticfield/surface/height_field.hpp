@@ -455,10 +455,12 @@ class HeightFieldShape {
         if (roots[1] < roots[0]) std::swap(roots[0], roots[1]);
       }
     }
+    // the box's entry and exit may round one ulp apart from the root (a flat cell's box has no height)
+    const double slack = 1e-12;  // [-] of the segment
     for (const double tau : roots) {
-      if (!(tau >= entry && tau <= exit && tau < best_t)) continue;
+      if (!(tau >= entry - slack && tau <= exit + slack && tau < best_t)) continue;
       if (!(B + 2.0 * A * tau <= 0.0)) continue;  // must go down through it (from behind: passes)
-      best_t = tau;
+      best_t = std::clamp(tau, entry, exit);
       best_cell = j * (g.width - 1) + i;
       best_st = glm::dvec2{std::clamp(s0 + ds * tau, 0.0, 1.0), std::clamp(t0 + dt * tau, 0.0, 1.0)};
       return;

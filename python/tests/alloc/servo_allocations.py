@@ -4,8 +4,9 @@
                          [--clock virtual|wall]
 
 Builds SCENE (full: plane contact with a tangible image, a lattice texture,
-friction, a HaTT texture and a video; allocating: the test-only field that
-allocates every tick), warms up, then runs the loop for S_short and S_long
+friction, a HaTT texture and a video; surface: a relief from the picture felt
+through the proxy, with the tangible image and a lattice laid on it by uv and
+friction; allocating: the test-only field that allocates every tick), warms up, then runs the loop for S_short and S_long
 seconds, N times each, and prints one JSON line: for each run its ticks and
 the malloc/free calls made on this thread: by the whole run_servo call, and
 by the loop alone (run_servo reports those when this counter is preloaded).
@@ -23,9 +24,23 @@ counter.hapticfield_malloc_calls.restype = ctypes.c_ulong
 counter.hapticfield_free_calls.restype = ctypes.c_ulong
 
 
+# run_servo's hand for the scene (the surface scene lies below where the simulated arm starts)
+HAND = {}
+
+
 def scene(a):
     if a.scene == "allocating":
         return hf.plane_contact([hf._allocating_field()])
+    if a.scene == "surface":
+        relief = hf.height_field_from_picture(a.coffee, pixel_size=6e-4, mm_per_level=0.004, blur=2.0,
+                                              origin=(-0.1, -0.08, -0.022))
+        HAND.update(hand_centre=(0.0, 0.0, -0.024), hand_size=0.04)
+        parts = [hf.on_surface(hf.tangible_field(a.coffee, workspace_mm=80.0), scale=0.08, offset=-0.04),
+                 hf.on_surface(hf.lattice_texture(sigma=0.5, gain=0.3, scale_with_normal_force=True, axes=(1, 1, 0)),
+                               scale=0.08),
+                 hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)]
+        return hf.surface_contact(relief, parts, stiffness=1500.0, damping=0.5, static_friction=0.3,
+                                  dynamic_friction=0.2)
     parts = [hf.tangible_field(a.coffee, workspace_mm=80.0),
              hf.lattice_texture(noise="gaussian", sigma=0.5, gain=0.3, scale_with_normal_force=True, axes=(1, 1, 0)),
              hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)]
@@ -38,7 +53,7 @@ def scene(a):
 
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("scene", choices=["full", "allocating"])
+    p.add_argument("scene", choices=["full", "surface", "allocating"])
     p.add_argument("--clip")
     p.add_argument("--hatt")
     p.add_argument("--coffee")
@@ -48,12 +63,12 @@ def main():
     p.add_argument("--clock", choices=["virtual", "wall"], default="virtual")
     a = p.parse_args()
     field = scene(a)
-    hf.run_servo(field, seconds=0.3, clock=a.clock)  # warm-up: first-use allocations (lazy tables, caches)
+    hf.run_servo(field, seconds=0.3, clock=a.clock, **HAND)  # warm-up: first-use allocations (lazy tables, caches)
     runs = []
     for _ in range(a.pairs):
         for seconds in (a.short, a.long):
             counter.hapticfield_count_here(1)
-            result = hf.run_servo(field, seconds=seconds, clock=a.clock)
+            result = hf.run_servo(field, seconds=seconds, clock=a.clock, **HAND)
             runs.append({"seconds": seconds, "ticks": result["statistics"]["ticks"],
                          "malloc": counter.hapticfield_malloc_calls(), "free": counter.hapticfield_free_calls(),
                          "peak_force_n": result["statistics"]["peak_force_n"],

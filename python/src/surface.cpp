@@ -1,0 +1,532 @@
+// Surfaces from Python: height fields (arrays, pictures, depth maps), meshes (STL, OBJ, glTF) and analytic
+// shapes, felt through the proxy (god-object) and composed with the other fields by uv.
+#include "field.hpp"
+
+#include <hapticfield/io/height_map.hpp>
+#include <hapticfield/io/picture_relief.hpp>
+#include <hapticfield/io/stl.hpp>
+#include <hapticfield/surface.hpp>
+#if HAPTICFIELD_PYTHON_IO
+#include <hapticfield/io/load_mesh.hpp>
+#endif
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+namespace hapticfield::python {
+
+namespace {
+
+/// A shape moved by `origin` [m]: queries in the shape's own frame, hit points back in the device frame
+/// (a height field's footprint, or a mesh, placed where the hand reaches it).
+template <Shape S>
+class Placed {
+ public:
+  static constexpr bool flat_primitives = requires { requires S::flat_primitives; };
+
+  Placed(S shape, const glm::dvec3& origin) : shape_(std::move(shape)), origin_(origin) {}
+
+  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats = nullptr) const noexcept {
+    if constexpr (requires { shape_.closest(p, max_distance, stats); })
+      return moved(shape_.closest(p - origin_, max_distance, stats));
+    else
+      return moved(shape_.closest(p - origin_, max_distance));
+  }
+  [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to,
+                              QueryStats* stats = nullptr) const noexcept {
+    if constexpr (requires { shape_.first_hit(from, to, stats); })
+      return moved(shape_.first_hit(from - origin_, to - origin_, stats));
+    else
+      return moved(shape_.first_hit(from - origin_, to - origin_));
+  }
+  [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p,
+                                 double max_distance) const noexcept requires requires(const S& s) {
+    s.on_primitive(primitive, p, max_distance);
+  }
+  { return moved(shape_.on_primitive(primitive, p - origin_, max_distance)); }
+
+ private:
+  [[nodiscard]] Hit moved(Hit h) const noexcept {
+    h.point += origin_;
+    return h;
+  }
+  S shape_;
+  glm::dvec3 origin_;
+};
+
+using AnyShape = std::variant<Placed<HeightFieldShape>, Placed<MeshShape>, PlaneShape, SphereShape>;
+
+/// A shape built in Python: never changes once built, so it needs no guard (each proxy made on it keeps its
+/// own state).
+struct Surface {
+  std::shared_ptr<const AnyShape> shape;
+  std::string kind;  ///< height_field, mesh, plane, sphere
+  std::string description;
+  std::optional<std::pair<V3, V3>> bounds;          ///< lowest and highest corner of its box [m]
+  std::optional<std::array<double, 2>> footprint;   ///< height field: extent along x and y [m]
+  std::optional<std::array<long long, 2>> samples;  ///< height field: width x height
+  std::optional<std::size_t> triangles;             ///< mesh
+  std::vector<std::string> warnings;                ///< mesh: what the reader accepted but may surprise
+};
+
+/// The state of every probe of a trajectory evaluated on a surface contact, as numpy arrays.
+struct ContactArrays {
+  double* proxy = nullptr;            ///< N x 3 [m]
+  double* normal = nullptr;           ///< N x 3
+  double* uv = nullptr;               ///< N x 2
+  double* depth = nullptr;            ///< N [m]
+  double* contact_force = nullptr;    ///< N x 3, Fc alone [N]
+  std::int64_t* primitive = nullptr;  ///< N, -1: none
+  bool* touching = nullptr;           ///< N
+};
+
+/// A surface contact: F = Fc (the proxy on the shape) + the parts, which see |Fc|, the normal, uv, tangent
+/// frame and primitive of the touched point.
+template <Shape S>
+using SurfaceContact = ContactField<ProxyConstraint<S>, FieldSum>;
+
+/// A field made by surface_contact(): a Field that also tells where the proxy is (contacts()).
+struct SurfaceField : Field {
+  void (*trace)(AnyField&, const ProbeArrays&, const ContactArrays&) noexcept = nullptr;
+};
+
+/// Evaluates a contact field of type CF (a ContactField over a ProxyConstraint) and reports its contacts.
+template <class CF>
+void trace_as(AnyField& any, const ProbeArrays& a, const ContactArrays& c) noexcept {
+  auto* field = any.target<CF>();
+  if (!field) return;  // never: surface_contact() pairs the type and this function
+  Probe probe;
+  probe.period = a.period;
+  const double *p = a.positions, *v = a.velocities;
+  for (py::ssize_t i = 0; i < a.n; ++i) {
+    probe.position = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+    if (v) probe.velocity = {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
+    probe.time = a.start_time + static_cast<double>(i) * a.period;
+    const glm::dvec3 f = field->force(probe);
+    const Contact& k = field->last_contact();
+    const glm::dvec3 x = field->constraint().proxy();
+    for (int j = 0; j < 3; ++j) {
+      a.forces[3 * i + j] = f[j];
+      c.proxy[3 * i + j] = x[j];
+      c.normal[3 * i + j] = k.normal[j];
+      c.contact_force[3 * i + j] = k.force[j];
+    }
+    c.uv[2 * i] = k.surface_uv.x, c.uv[2 * i + 1] = k.surface_uv.y;
+    c.depth[i] = k.depth;
+    c.primitive[i] = k.primitive == no_primitive ? -1 : static_cast<std::int64_t>(k.primitive);
+    c.touching[i] = k.touching;
+  }
+}
+
+using Spacing = std::variant<double, std::array<double, 2>>;
+std::array<double, 2> pair_of(const Spacing& s) {
+  if (const double* d = std::get_if<double>(&s)) return {*d, *d};
+  return std::get<std::array<double, 2>>(s);
+}
+
+std::string metres(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+
+HeightFieldConfig height_config(bool shade_normals, std::uint32_t max_nodes) {
+  if (max_nodes == 0) throw py::value_error("max_nodes: must be > 0");
+  return HeightFieldConfig{shade_normals, max_nodes};
+}
+
+/// A height field from a grid laid out as io::HeightGrid (row j = 0 at y = 0).
+Surface surface_from_grid(const io::HeightGrid& grid, const HeightFieldConfig& config, const V3& origin,
+                          const std::string& what) {
+  if (!is_finite(glm3(origin))) throw py::value_error("origin: must be finite [m]");
+  Surface s;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const double h : grid.heights)
+    lo = std::fmin(lo, h), hi = std::fmax(hi, h);
+  {
+    py::gil_scoped_release release;
+    s.shape = std::make_shared<const AnyShape>(std::in_place_type<Placed<HeightFieldShape>>,
+                                               HeightFieldShape(grid, config), glm3(origin));
+  }
+  const double ex = (grid.width - 1) * grid.spacing_x, ey = (grid.height - 1) * grid.spacing_y;
+  s.kind = "height_field";
+  s.description = what + " " + std::to_string(grid.width) + " x " + std::to_string(grid.height) + " samples, " +
+                  metres(ex) + " x " + metres(ey) + " m";
+  s.bounds =
+      std::pair<V3, V3>{V3{origin[0], origin[1], origin[2] + lo}, V3{origin[0] + ex, origin[1] + ey, origin[2] + hi}};
+  s.footprint = std::array<double, 2>{ex, ey};
+  s.samples = std::array<long long, 2>{grid.width, grid.height};
+  return s;
+}
+
+Surface height_field(const py::array& heights, const Spacing& spacing, const V3& origin, bool shade_normals,
+                     std::uint32_t max_nodes) {
+  const auto [sx, sy] = pair_of(spacing);
+  if (!(std::isfinite(sx) && std::isfinite(sy) && sx > 0.0 && sy > 0.0))
+    throw py::value_error("spacing: must be finite and > 0 [m]");
+  // checked before any conversion: a float32 array of 100 Mpx would take 800 MB as float64
+  if (heights.ndim() != 2)
+    throw py::value_error("heights: expected a 2-D array (rows along y, columns along x), got " +
+                          std::to_string(heights.ndim()) + " dimensions");
+  const py::ssize_t rows = heights.shape(0), cols = heights.shape(1);
+  if (rows < 2 || cols < 2)
+    throw py::value_error("heights: need at least 2 x 2 samples, got " + std::to_string(rows) + " x " +
+                          std::to_string(cols));
+  if (static_cast<std::size_t>(rows) > height_field_max_samples / static_cast<std::size_t>(cols))
+    throw py::value_error("heights: " + std::to_string(rows) + " x " + std::to_string(cols) +
+                          " samples is more than the limit of 100 Mpx");
+  const py::dtype dt = heights.dtype();
+  if (dt.kind() != 'f' && dt.kind() != 'i' && dt.kind() != 'u')
+    throw py::type_error("heights: expected float64 or float32 heights [m] (or integers), got dtype " +
+                         dt.attr("name").cast<std::string>());
+  const Array a = Array::ensure(heights);
+  if (!a) throw py::type_error("heights: cannot be read as float64");
+  io::HeightGrid grid;
+  grid.width = static_cast<int>(cols);
+  grid.height = static_cast<int>(rows);
+  grid.spacing_x = sx;
+  grid.spacing_y = sy;
+  grid.heights.assign(a.data(), a.data() + rows * cols);
+  for (std::size_t k = 0; k < grid.heights.size(); ++k)
+    if (!std::isfinite(grid.heights[k]))
+      throw py::value_error("heights: the height at row " + std::to_string(k / std::size_t(cols)) + ", column " +
+                            std::to_string(k % std::size_t(cols)) + " is not finite (NaN or infinite)");
+  return surface_from_grid(grid, height_config(shade_normals, max_nodes), origin, "height field");
+}
+
+bool is_path(const py::object& o) {
+  return py::isinstance<py::str>(o) || py::hasattr(o, "__fspath__");
+}
+std::string path_of(const py::object& o) {
+  return py::str(py::module_::import("os").attr("fspath")(o));
+}
+
+Surface height_field_from_picture(const py::object& image, double pixel_size, double mm_per_level, double blur,
+                                  bool dark_is_high, const std::string& gray, const std::string& channels,
+                                  std::optional<double> levels, const V3& origin, bool shade_normals,
+                                  std::uint32_t max_nodes) {
+  io::PictureHeightConfig c;
+  c.pixel_size = pixel_size;
+  c.mm_per_level = mm_per_level;
+  c.blur_sigma = blur;
+  c.dark_is_high = dark_is_high;
+  c.weights = gray_weights(gray);
+  const HeightFieldConfig config = height_config(shade_normals, max_nodes);
+  if (is_path(image)) {
+    const std::string path = path_of(image);
+    return surface_from_grid(io::load_height_picture(path, c), config, origin,
+                             "relief of " + std::filesystem::path(path).filename().string());
+  }
+  return surface_from_grid(io::height_grid_from_gray(gray_from(image, c.weights, channels, levels), c), config, origin,
+                           "relief of a picture");
+}
+
+Surface depth_map(const py::object& path, double pixel_size, double metres_per_unit, double blur, const V3& origin,
+                  bool shade_normals, std::uint32_t max_nodes) {
+  if (!is_path(path)) throw py::type_error("depth_map: expected a path (16-bit PNG or TIFF, 32-bit float TIFF)");
+  io::DepthMapConfig c;
+  c.pixel_size = pixel_size;
+  c.metres_per_unit = metres_per_unit;
+  c.blur_sigma = blur;
+  const std::string p = path_of(path);
+  return surface_from_grid(io::load_depth_map(p, c), height_config(shade_normals, max_nodes), origin,
+                           "depth map " + std::filesystem::path(p).filename().string());
+}
+
+Surface mesh_surface(const py::object& path, double scale, const V3& origin, bool shade_normals,
+                     std::uint32_t max_nodes, std::size_t max_triangles) {
+  if (!is_path(path)) throw py::type_error("mesh_surface: expected a path (.stl, .obj, .gltf or .glb)");
+  if (max_nodes == 0) throw py::value_error("max_nodes: must be > 0");
+  if (!is_finite(glm3(origin))) throw py::value_error("origin: must be finite [m]");
+  const std::string p = path_of(path);
+  io::MeshReadConfig c;
+  c.scale = scale;
+  c.max_triangles = max_triangles;
+  Surface s;
+  io::LoadedMesh loaded;
+  {
+    py::gil_scoped_release release;
+#if HAPTICFIELD_PYTHON_IO
+    loaded = io::load_mesh(p, c);
+#else
+    std::string ext = std::filesystem::path(p).extension().string();
+    for (char& ch : ext)
+      ch = static_cast<char>(ch >= 'A' && ch <= 'Z' ? ch - 'A' + 'a' : ch);
+    if (ext != ".stl")
+      throw Error("cannot load '" + p + "': this build of the module reads .stl only (no tinygltf or tinyobjloader)");
+    loaded = io::load_stl(p, c);
+#endif
+  }
+  if (loaded.mesh.triangles.empty()) throw FileError("cannot load '" + p + "': the mesh has no triangles");
+  glm::dvec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
+  for (const glm::dvec3& v : loaded.mesh.positions)
+    lo = glm::min(lo, v + glm3(origin)), hi = glm::max(hi, v + glm3(origin));
+  s.triangles = loaded.mesh.triangles.size();
+  for (const io::MeshWarning& w : loaded.warnings)
+    s.warnings.push_back(w.message);
+  {
+    py::gil_scoped_release release;
+    s.shape = std::make_shared<const AnyShape>(
+        std::in_place_type<Placed<MeshShape>>,
+        MeshShape(with_vertex_normals(loaded.mesh), MeshShapeConfig{shade_normals, max_nodes}), glm3(origin));
+  }
+  s.kind = "mesh";
+  s.description =
+      "mesh " + std::filesystem::path(p).filename().string() + " (" + std::to_string(*s.triangles) + " triangles)";
+  s.bounds = std::pair<V3, V3>{V3{lo.x, lo.y, lo.z}, V3{hi.x, hi.y, hi.z}};
+  return s;
+}
+
+SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& parts, double stiffness, double damping,
+                             double static_friction, double dynamic_friction, double offset) {
+  const ProxyConfig config{stiffness, damping, static_friction, dynamic_friction, offset};
+  FieldSum sum;
+  std::string d = "surface(" + surface.description;
+  std::vector<const Field*> shared;
+  for (const Field& f : parts) {
+    sum.parts.push_back({f.impl});
+    d += " + " + f.description;
+    shared.push_back(&f);
+  }
+  d += ")";
+  return std::visit(
+      [&]<class S>(const S& shape) {
+        SurfaceField out;
+        static_cast<Field&>(out) = make_field(contact(ProxyConstraint<S>(shape, config), std::move(sum)), d, shared);
+        out.trace = &trace_as<SurfaceContact<S>>;
+        return out;
+      },
+      *surface.shape);
+}
+
+py::dict contacts(SurfaceField& self, const Array& positions, const std::optional<Array>& velocities, double period,
+                  double start_time) {
+  if (!(std::isfinite(period) && period > 0.0)) throw py::value_error("contacts: period must be finite and > 0 [s]");
+  const py::ssize_t n = rows_of(positions, 3, "positions");
+  if (velocities && rows_of(*velocities, 3, "velocities") != n)
+    throw py::value_error("velocities: must have as many rows as positions");
+  auto force = matrix(n, 3), proxy = matrix(n, 3), normal = matrix(n, 3), contact_force = matrix(n, 3),
+       uv = matrix(n, 2);
+  py::array_t<double> depth(n);
+  py::array_t<std::int64_t> primitive(n);
+  py::array_t<bool> touching(n);
+  ProbeArrays a;
+  a.positions = positions.data();
+  a.velocities = velocities ? velocities->data() : nullptr;
+  a.forces = force.mutable_data();
+  a.n = n;
+  a.period = period;
+  a.start_time = start_time;
+  const ContactArrays c{proxy.mutable_data(),   normal.mutable_data(),        uv.mutable_data(),
+                        depth.mutable_data(),   contact_force.mutable_data(), primitive.mutable_data(),
+                        touching.mutable_data()};
+  std::shared_ptr<AnyField> field = self.impl;
+  const FieldUse use(self);
+  {
+    py::gil_scoped_release release;
+    self.trace(*field, a, c);
+  }
+  py::dict out;
+  out["force"] = force;
+  out["contact_force"] = contact_force;
+  out["proxy"] = proxy;
+  out["normal"] = normal;
+  out["uv"] = uv;
+  out["depth"] = depth;
+  out["primitive"] = primitive;
+  out["touching"] = touching;
+  return out;
+}
+
+using Pair = std::variant<double, std::array<double, 2>>;
+
+Field on_surface_of(const Field& field, const Pair& scale, const Pair& offset) {
+  const auto s = pair_of(scale), o = pair_of(offset);
+  const UvMapping mapping{glm::dvec2{s[0], s[1]}, glm::dvec2{o[0], o[1]}};
+  if (!is_finite(mapping.scale) || !is_finite(mapping.offset))
+    throw py::value_error("on_surface: scale [m per uv unit] and offset [m] must be finite");
+  return make_field(OnSurface<SharedField>(SharedField{field.impl}, mapping), "on_surface(" + field.description + ")",
+                    {&field});
+}
+
+SurfaceField picture_relief_of(const py::object& image, double mm_per_level, double width_m, double blur,
+                               bool dark_is_high, double stiffness, double damping, double static_friction,
+                               double dynamic_friction, double texture_gain, const std::string& mask,
+                               std::optional<int> size, const std::string& border, double sigma,
+                               const std::string& gray, const std::string& channels, std::optional<double> levels) {
+  PictureReliefConfig c;
+  c.mm_per_level = mm_per_level;
+  c.width_m = width_m;
+  c.blur_sigma = blur;
+  c.dark_is_high = dark_is_high;
+  c.stiffness = stiffness;
+  c.damping = damping;
+  c.static_friction = static_friction;
+  c.dynamic_friction = dynamic_friction;
+  c.texture_gain = texture_gain;
+  c.tangible = tangible_options(mask, size, border, sigma);
+  c.weights = gray_weights(gray);
+  std::optional<PictureRelief> relief;
+  std::string name = "a picture";
+  if (is_path(image)) {
+    const std::string path = path_of(image);
+    name = std::filesystem::path(path).filename().string();
+    py::gil_scoped_release release;
+    relief.emplace(picture_relief(path, c));
+  } else {
+    const GrayImage g = gray_from(image, c.weights, channels, levels);
+    py::gil_scoped_release release;
+    relief.emplace(picture_relief(g, c));
+  }
+  SurfaceField out;
+  static_cast<Field&>(out) = make_field(std::move(*relief), "picture relief of " + name);
+  out.trace = &trace_as<PictureRelief>;
+  return out;
+}
+
+}  // namespace
+
+void bind_surface(py::module_& m) {
+  py::class_<Surface>(
+      m, "Surface",
+      "A shape to touch (a height field, a mesh, a plane or a sphere), built once. surface_contact() makes it a "
+      "field felt through a proxy; one surface may serve several fields (each proxy keeps its own state).")
+      .def_property_readonly(
+          "kind", [](const Surface& s) { return s.kind; }, "height_field, mesh, plane or sphere.")
+      .def_property_readonly("description", [](const Surface& s) { return s.description; })
+      .def_property_readonly(
+          "bounds", [](const Surface& s) { return s.bounds; },
+          "((x, y, z) lowest, (x, y, z) highest) corners of its box [m]; None for a plane.")
+      .def_property_readonly(
+          "footprint", [](const Surface& s) { return s.footprint; },
+          "Height field: its extent ((width - 1) spacing_x, (height - 1) spacing_y) [m], from "
+          "its origin; the scale that lays a field 1:1 on it by uv (uv runs 0..1 over it). None "
+          "otherwise.")
+      .def_property_readonly(
+          "samples", [](const Surface& s) { return s.samples; },
+          "Height field: (width, height) samples. None otherwise.")
+      .def_property_readonly(
+          "triangles", [](const Surface& s) { return s.triangles; }, "Mesh: its number of triangles. None otherwise.")
+      .def_property_readonly(
+          "warnings", [](const Surface& s) { return s.warnings; },
+          "Mesh: what the reader accepted but may surprise (no normals, degenerate triangles...).")
+      .def("__repr__", [](const Surface& s) { return "<hapticfield.Surface " + s.description + ">"; });
+
+  py::class_<SurfaceField, Field>(
+      m, "SurfaceField",
+      "A surface felt through a proxy (surface_contact()): a Field (forces, force, reset, run_servo, sums) that "
+      "also tells, with contacts(), where the proxy is at each probe.")
+      .def("contacts", &contacts, py::arg("positions"), py::arg("velocities") = py::none(),
+           py::arg("period") = servo_period, py::arg("start_time") = 0.0,
+           "Evaluates the field at N probes in order as consecutive ticks (like forces()) and returns a dict of "
+           "arrays: force N x 3 [N] (Fc + parts), contact_force N x 3 [N] (Fc alone), proxy N x 3 [m], normal "
+           "N x 3 (unit, toward the user; zero when not touching), uv N x 2, depth N [m], primitive N (triangle "
+           "or grid cell j (width - 1) + i; -1: none) and touching N (bool). The GIL is released.");
+
+  m.def("height_field", &height_field, py::arg("heights"), py::arg("spacing") = 1e-4,
+        py::arg("origin") = V3{0.0, 0.0, 0.0}, py::arg("shade_normals") = true,
+        py::arg("max_nodes") = bvh_default_max_nodes,
+        "A height field z = h(x, y) [m] from a 2-D numpy array (float64 or float32 [m]): heights[j, i] is the "
+        "height at x = i spacing_x, y = j spacing_y (np.meshgrid's 'xy' layout), spacing [m] one number or "
+        "(spacing_x, spacing_y). Bilinear cells, solid below, felt from above (+z); covers [0, (W - 1) sx] x "
+        "[0, (H - 1) sy] moved by origin (x, y, z) [m], and nothing beyond. At least 2 x 2 and at most 100 M samples, "
+        "all finite (ValueError "
+        "otherwise). shade_normals: blend the corners' normals (force shading); max_nodes: the budget of one "
+        "query.");
+  m.def(
+      "height_field_from_picture", &height_field_from_picture, py::arg("image"), py::arg("pixel_size") = 1e-4,
+      py::arg("mm_per_level") = 0.01, py::arg("blur") = 0.0, py::arg("dark_is_high") = false, py::arg("gray") = "paper",
+      py::arg("channels") = "rgb", py::arg("levels") = py::none(), py::arg("origin") = V3{0.0, 0.0, 0.0},
+      py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
+      (std::string(
+           "A relief from a picture (see below): height = gray level x "
+           "mm_per_level [mm] (dark_is_high: 255 - level), after a Gaussian blur of blur [px]; pixel_size [m] between "
+           "pixel centres; origin [m]: where its bottom-left corner (level 0) goes. The picture's top row is at the "
+           "largest y (x right, y up), so it reads as it is seen. "
+           "A missing or undecodable file raises FileError (an OSError).\n\n") +
+       picture_argument_doc)
+          .c_str());
+  m.def("depth_map", &depth_map, py::arg("path"), py::arg("pixel_size") = 1e-4, py::arg("metres_per_unit") = 1e-6,
+        py::arg("blur") = 0.0, py::arg("origin") = V3{0.0, 0.0, 0.0}, py::arg("shade_normals") = true,
+        py::arg("max_nodes") = bvh_default_max_nodes,
+        "A height field from a depth map: a one-channel 16-bit PNG or TIFF, or a 32-bit float TIFF; height = value "
+        "x metres_per_unit [m] (16-bit in um: 1e-6; float in m: 1.0); pixel_size [m]; blur [px]; origin [m] as for "
+        "height_field. OpenEXR, 8-bit "
+        "and colour files, NaN values and missing files raise FileError naming the file.");
+  m.def("mesh_surface", &mesh_surface, py::arg("path"), py::arg("scale") = 1.0, py::arg("origin") = V3{0.0, 0.0, 0.0},
+        py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
+        py::arg("max_triangles") = io::default_max_mesh_triangles,
+        "A triangle mesh from a file (.stl, .obj, .gltf, .glb by extension); scale: the file's unit in metres "
+        "(0.001 for millimetres; glTF is in metres), then moved by origin [m]. Vertex normals are computed where the "
+        "file has none (force "
+        "shading); each triangle is felt from the side its normal points to. A missing, malformed or oversized "
+        "file raises FileError naming it; Surface.warnings lists what was accepted but may surprise.");
+  m.def(
+      "plane_surface",
+      [](const V3& point, const V3& normal, double size) {
+        Surface s;
+        s.shape = std::make_shared<const AnyShape>(std::in_place_type<PlaneShape>,
+                                                   PlaneShapeConfig{glm3(point), glm3(normal), size});
+        s.kind = "plane";
+        s.description = "plane";
+        return s;
+      },
+      py::arg("point") = V3{0.0, 0.0, 0.0}, py::arg("normal") = V3{0.0, 0.0, 1.0}, py::arg("size") = 0.01,
+      "The solid half-space behind a plane through point [m] with unit normal (toward the user); uv are metres "
+      "along the plane; size [m]: the length its tolerances scale with.");
+  m.def(
+      "sphere_surface",
+      [](const V3& centre, double radius) {
+        Surface s;
+        s.shape =
+            std::make_shared<const AnyShape>(std::in_place_type<SphereShape>, SphereShapeConfig{glm3(centre), radius});
+        s.kind = "sphere";
+        s.description = "sphere r " + metres(radius) + " m";
+        const V3 lo{centre[0] - radius, centre[1] - radius, centre[2] - radius};
+        const V3 hi{centre[0] + radius, centre[1] + radius, centre[2] + radius};
+        s.bounds = std::pair<V3, V3>{lo, hi};
+        return s;
+      },
+      py::arg("centre") = V3{0.0, 0.0, 0.0}, py::arg("radius") = 0.02,
+      "A solid ball: centre [m], radius [m]. uv: u = longitude / 2 pi + 1/2, v = latitude / pi + 1/2.");
+  m.def("surface_contact", &surface_contact, py::arg("surface"), py::arg("parts") = std::vector<Field>{},
+        py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0, py::arg("static_friction") = 0.0,
+        py::arg("dynamic_friction") = 0.0, py::arg("offset") = 1e-6,
+        "F = Fc + parts on a surface, felt through a proxy (god-object, Zilles & Salisbury 1995): Fc = max(0, k d "
+        "- b v.n) n + friction, stiffness k [N/m], damping b [N s/m] on the normal velocity, the friction cone "
+        "static_friction >= dynamic_friction >= 0; offset: the proxy's lift relative to a primitive's size. While "
+        "touching, the parts see |Fc| [N], the normal, and the touched point's uv and tangent frame: lay a field "
+        "on the surface with on_surface(). Returns a SurfaceField (contacts() tells where the proxy is).");
+  m.def(
+      "picture_relief", &picture_relief_of, py::arg("image"), py::arg("mm_per_level") = 0.01, py::arg("width_m") = 0.1,
+      py::arg("blur") = 0.0, py::arg("dark_is_high") = false, py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0,
+      py::arg("static_friction") = 0.0, py::arg("dynamic_friction") = 0.0, py::arg("texture_gain") = 1.0,
+      py::arg("mask") = "prewitt", py::arg("size") = py::none(), py::arg("border") = "suspend", py::arg("sigma") = 0.0,
+      py::arg("gray") = "paper", py::arg("channels") = "rgb", py::arg("levels") = py::none(),
+      (std::string(
+           "A picture felt as a relief in one line (see below): its gray "
+           "levels are heights (level x mm_per_level [mm], dark_is_high: 255 - level; blur [px] on the heights only) "
+           "under the proxy (stiffness [N/m], damping [N s/m], static/dynamic friction), and its tangible-image "
+           "forces (texture_gain [N] at a black/white edge; 0: the relief alone; mask, size, border, sigma as "
+           "tangible_field) are laid on the relief in its tangent plane. The picture spans width_m [m] from the first "
+           "to the last pixel centre, its bottom-left pixel at the origin, x right, y up the picture, z toward the "
+           "user. Returns a SurfaceField.\n\n") +
+       picture_argument_doc)
+          .c_str());
+  m.def("on_surface", &on_surface_of, py::arg("field"), py::arg("scale") = 1.0, py::arg("offset") = 0.0,
+        "A field laid on the touched surface by uv (a part of surface_contact()): evaluated at the flat position "
+        "offset + scale * uv [m] (scale [m per uv unit] and offset [m], each one number or a pair), with the "
+        "velocity in the tangent frame; its force comes back along the surface's tangent, bitangent and normal. "
+        "A tangible image, a texture, friction or a normals field so pushes along a curved surface. No force "
+        "without a tangent frame. The field is shared, not copied.");
+}
+
+}  // namespace hapticfield::python
