@@ -96,8 +96,8 @@ def test_a_paraboloid_height_field_has_the_analytic_normal_to_second_order():
 
 def test_a_relief_from_a_picture_reads_as_it_is_seen():
     # a white square (255) in the top-left quarter of a black picture: high at small x, large y
-    picture = np.zeros((20, 30))
-    picture[:10, :15] = 255.0
+    picture = np.zeros((20, 30), dtype=np.uint8)
+    picture[:10, :15] = 255
     s = hf.height_field_from_picture(picture, pixel_size=1e-3, mm_per_level=0.01)
     assert s.samples == [30, 20] and s.bounds[1][2] == pytest.approx(2.55e-3)
     field = hf.surface_contact(s, stiffness=K)
@@ -405,10 +405,12 @@ def test_a_part_of_a_running_surface_is_refused_to_other_threads():
     (lambda: hf.height_field(np.zeros((3, 3)), spacing=(1e-3, np.nan)), ValueError, "spacing"),
     (lambda: hf.height_field(np.zeros((3, 3)), origin=(0, np.inf, 0)), ValueError, "origin"),
     (lambda: hf.height_field(np.zeros((3, 3)), max_nodes=0), ValueError, "max_nodes"),
-    (lambda: hf.height_field_from_picture(np.zeros((0, 0))), ValueError, "empty"),
-    (lambda: hf.height_field_from_picture(np.full((4, 4), 300.0)), ValueError, "within [0, 255]"),
-    (lambda: hf.height_field_from_picture(np.zeros((4, 4)), mm_per_level=-1.0), ValueError, "mm_per_level"),
-    (lambda: hf.height_field_from_picture(np.zeros((4, 4)), blur=np.nan), ValueError, "blur"),
+    (lambda: hf.height_field_from_picture(np.zeros((0, 0), dtype=np.uint8)), ValueError, "empty"),
+    (lambda: hf.height_field_from_picture(np.full((4, 4), 300.0), levels=255.0), ValueError, "within [0, 255"),
+    (lambda: hf.height_field_from_picture(np.full((4, 4), 0.5)), ValueError, "levels="),
+    (lambda: hf.height_field_from_picture(np.zeros((4, 4), np.uint8), channels="grb"), ValueError, "channels"),
+    (lambda: hf.height_field_from_picture(np.zeros((4, 4), np.uint8), mm_per_level=-1.0), ValueError, "mm_per_level"),
+    (lambda: hf.height_field_from_picture(np.zeros((4, 4), np.uint8), blur=np.nan), ValueError, "blur"),
     (lambda: hf.height_field_from_picture("/nonexistent/photo.png"), OSError, "photo.png"),
     (lambda: hf.depth_map("/nonexistent/depth.png"), OSError, "depth.png"),
     (lambda: hf.depth_map("/nonexistent/depth.exr"), hf.FileError, "OpenEXR"),
@@ -502,8 +504,8 @@ def test_picture_relief_is_the_relief_with_the_tangible_image_laid_on_it(coffee)
 
 
 def test_picture_relief_from_an_array_and_its_bad_inputs():
-    picture = np.zeros((20, 30))
-    picture[:, 15:] = 255.0  # white (high) on the right
+    picture = np.zeros((20, 30), dtype=np.uint8)
+    picture[:, 15:] = 255  # white (high) on the right
     relief = hf.picture_relief(picture, mm_per_level=0.01, width_m=0.029, texture_gain=0.0, stiffness=K)
     f = relief.forces(press((0.025, 0.01, 0.006), (0.025, 0.01, 0.002)))[-1]
     np.testing.assert_allclose(f, [0.0, 0.0, K * 0.55e-3], atol=1e-9)  # the white plateau, 2.55 mm high
@@ -512,7 +514,13 @@ def test_picture_relief_from_an_array_and_its_bad_inputs():
     with pytest.raises(ValueError, match="texture_gain"):
         hf.picture_relief(picture, texture_gain=-1.0)
     with pytest.raises(ValueError, match="2 x 2"):
-        hf.picture_relief(np.zeros((1, 5)))
+        hf.picture_relief(np.zeros((1, 5), dtype=np.uint8))
+    with pytest.raises(ValueError, match="levels="):
+        hf.picture_relief(picture / 255.0)  # a float picture without its white level
+    np.testing.assert_allclose(
+        hf.picture_relief(picture[:, :, None].repeat(3, axis=2) / 255.0, levels=1.0, channels="bgr", width_m=0.029,
+                          texture_gain=0.0, stiffness=K).forces(press((0.025, 0.01, 0.006), (0.025, 0.01, 0.002)))[-1],
+        f, atol=1e-9)
     with pytest.raises(OSError, match="photo.png"):
         hf.picture_relief("/nonexistent/photo.png")
 

@@ -1,7 +1,7 @@
 # Type stubs of the hapticfield module, generated from its bindings by scripts/make_stubs.py:
 # do not edit. Regenerate after changing python/src (see python/README.md):
 #   PYTHONPATH=build/python python3 scripts/make_stubs.py
-"""hapticfield: haptic fields (tangible images, stochastic textures, friction, HaTT models, normals from a picture, contact composition) built in Python and evaluated in C++, and a servo loop on a simulated or real arm. Units: [m], [m/s], [N], [s], [px]."""
+"""hapticfield: haptic fields (tangible images, stochastic textures, friction, HaTT models, normals from a picture, contact composition, surfaces: height fields, meshes and pictures as reliefs felt through a proxy) built in Python and evaluated in C++, and a servo loop on a simulated or real arm. Units: [m], [m/s], [N], [s], [px]."""
 import os
 import typing
 from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Set, Tuple, Union, overload
@@ -48,6 +48,31 @@ class ServoStop:
     def running(self) -> bool: ...
 
 
+class Surface:
+    """A shape to touch (a height field, a mesh, a plane or a sphere), built once. surface_contact() makes it a field felt through a proxy; one surface may serve several fields (each proxy keeps its own state)."""
+    def __repr__(self) -> str: ...
+    @property
+    def bounds(self) -> Optional[Tuple[List[float], List[float]]]: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def footprint(self) -> Optional[List[float]]: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def samples(self) -> Optional[List[int]]: ...
+    @property
+    def triangles(self) -> Optional[int]: ...
+    @property
+    def warnings(self) -> List[str]: ...
+
+
+class SurfaceField(Field):
+    """A surface felt through a proxy (surface_contact()): a Field (forces, force, reset, run_servo, sums) that also tells, with contacts(), where the proxy is at each probe."""
+    def contacts(self, positions: numpy.typing.NDArray[numpy.float64], velocities: Optional[numpy.typing.NDArray[numpy.float64]] = None, period: float = 0.001, start_time: float = 0.0) -> dict:
+        """Evaluates the field at N probes in order as consecutive ticks (like forces()) and returns a dict of arrays: force N x 3 [N] (Fc + parts), contact_force N x 3 [N] (Fc alone), proxy N x 3 [m], normal N x 3 (unit, toward the user; zero when not touching), uv N x 2, depth N [m], primitive N (triangle or grid cell j (width - 1) + i; -1: none) and touching N (bool). The GIL is released."""
+
+
 class VideoField(Field):
     """A video felt as a field: a worker thread decodes and prepares the frames; the servo thread maps its loop time [s] to video time and blends the two frames that bracket it (never waiting, locking or allocating). Use it like any Field (forces, composition, run_servo); the probes' time is the loop time [s]."""
     def cuts(self) -> list:
@@ -87,6 +112,9 @@ def butterworth(signal: numpy.typing.NDArray[numpy.float64], order: int = 4, ban
 def clamp(field: Field, limit: float) -> Field:
     """|F| limited to limit [N] keeping the direction; a non-finite force becomes zero."""
 
+def depth_map(path: object, pixel_size: float = 0.0001, metres_per_unit: float = 1e-06, blur: float = 0.0, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
+    """A height field from a depth map: a one-channel 16-bit PNG or TIFF, or a 32-bit float TIFF; height = value x metres_per_unit [m] (16-bit in um: 1e-6; float in m: 1.0); pixel_size [m]; blur [px]; origin [m] as for height_field. OpenEXR, 8-bit and colour files, NaN values and missing files raise FileError naming the file."""
+
 def estimate_normal(corners: numpy.typing.NDArray[numpy.float64], K: numpy.typing.NDArray[numpy.float64], size: Optional[List[float]] = None, refine: bool = True) -> dict:
     """Normal of a rectangular face from its 4 image corners (4 x 2 [px], in order around the face) and the 3 x 3 camera matrix K [px] (Kim & Kwon 2013): the homography H = s K [r1 r2 t], the rotation R and n = R [0 0 1]^T (camera frame, toward the camera). size (W, H) [mm] if known, else the aspect is recovered. Returns a dict: normal, R, t, H, rms_reprojection_px, max_reprojection_px, width, height, aspect_recovered."""
 
@@ -108,11 +136,22 @@ def hatt_model(path: str) -> dict:
 def hatt_texture(path: str, effective_mass: float = 0.05, surface_normal: List[float] = ..., seed: int = 1, velocity_threshold: float = 0.001, friction: bool = True) -> Field:
     """A HaTT data-driven texture (a modelSet XML file of the Penn Haptic Texture Toolkit): AR/ARMA vibration models chosen by tangential speed and |Fc|, run at the model's own sample rate, acceleration [m/s^2] times effective_mass [kg] along surface_normal, plus mu |Fc| friction. Raises FileError for a bad file."""
 
+def height_field(heights: numpy.ndarray, spacing: Union[float, List[float]] = 0.0001, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
+    """A height field z = h(x, y) [m] from a 2-D numpy array (float64 or float32 [m]): heights[j, i] is the height at x = i spacing_x, y = j spacing_y (np.meshgrid's 'xy' layout), spacing [m] one number or (spacing_x, spacing_y). Bilinear cells, solid below, felt from above (+z); covers [0, (W - 1) sx] x [0, (H - 1) sy] moved by origin (x, y, z) [m], and nothing beyond. At least 2 x 2 and at most 100 M samples, all finite (ValueError otherwise). shade_normals: blend the corners' normals (force shading); max_nodes: the budget of one query."""
+
+def height_field_from_picture(image: object, pixel_size: float = 0.0001, mm_per_level: float = 0.01, blur: float = 0.0, dark_is_high: bool = False, gray: str = 'paper', channels: str = 'rgb', levels: Optional[float] = None, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
+    """A relief from a picture (see below): height = gray level x mm_per_level [mm] (dark_is_high: 255 - level), after a Gaussian blur of blur [px]; pixel_size [m] between pixel centres; origin [m]: where its bottom-left corner (level 0) goes. The picture's top row is at the largest y (x right, y up), so it reads as it is seen. A missing or undecodable file raises FileError (an OSError).
+
+    image: a path (any format OpenCV reads; 16-bit files are scaled by 255/65535) or a numpy array, H x W gray or H x W x 3 / x 4 colour (alpha ignored). channels='rgb' (default: numpy, PIL, imageio order) or 'bgr' (cv2.imread order) names a colour array's channel order. White level: 255 for uint8 and other integer arrays, 65535 for uint16 (as 16-bit files); a float or bool array needs levels= (its white level: 1.0 for a picture in [0, 1], 255 for [0, 255]) and is refused without it; levels= overrides the white level of any array."""
+
 def lattice_texture(noise: str = 'gaussian', sigma: float = 1.0, seed: int = 1, grain: List[float] = ..., dim: int = 2, interpolation: str = 'linear', octaves: int = 0, h: float = 0.5, gain: float = 1.0, velocity_threshold: float = 0.001, scale_with_normal_force: bool = False, axes: List[float] = ...) -> Field:
     """A stochastic texture Ft sampled on a hashed noise lattice (Fritz & Barner 1996): noise gaussian|laplacian|uniform of standard deviation sigma, seed, lattice spacing grain [m] per axis, dim 2 (x, y) or 3, interpolation nearest|linear|cubic. octaves > 0 makes it fBm with self-similarity h (PSD ~ f^-(2h+1)). gain [N per texture unit] (or [N/N] with scale_with_normal_force: Ft proportional to |Fc|), velocity_threshold [m/s] (silent below it), axes: weights along (t1, t2, n) of the surface frame ((1, 1, 0): tangential only)."""
 
 def local_sphere_texture(noise: str = 'gaussian', sigma: float = 1.0, seed: int = 1, radius: float = 0.0005, surface_normal: List[float] = ..., gain: float = 1.0, velocity_threshold: float = 0.001, scale_with_normal_force: bool = False, axes: List[float] = ...) -> Field:
     """A texture that draws a new noise sample each time the HIP leaves a ball of radius [m] (the local circle on a surface of unit surface_normal). gain [N per texture unit] (or [N/N] with scale_with_normal_force: Ft proportional to |Fc|), velocity_threshold [m/s] (silent below it), axes: weights along (t1, t2, n) of the surface frame ((1, 1, 0): tangential only)."""
+
+def mesh_surface(path: object, scale: float = 1.0, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096, max_triangles: int = 20000000) -> Surface:
+    """A triangle mesh from a file (.stl, .obj, .gltf, .glb by extension); scale: the file's unit in metres (0.001 for millimetres; glTF is in metres), then moved by origin [m]. Vertex normals are computed where the file has none (force shading); each triangle is felt from the side its normal points to. A missing, malformed or oversized file raises FileError naming it; Surface.warnings lists what was accepted but may surprise."""
 
 def noise(kind: str = 'gaussian', sigma: float = 1.0, seed: int = 1, n: int = 1000) -> numpy.typing.NDArray[numpy.float64]:
     """n x 3 samples of the library's repeatable noise (gaussian|laplacian|uniform, standard deviation sigma) at lattice points (i, 0, 0), i = 0..n-1: a pure function of (seed, point)."""
@@ -120,8 +159,19 @@ def noise(kind: str = 'gaussian', sigma: float = 1.0, seed: int = 1, n: int = 10
 def normal_field(width: int, height: int, faces: List[Tuple[numpy.typing.NDArray[numpy.float64], List[float]]], mode: str = 'along_motion', max_force: float = 0.6, speed_threshold: float = 0.005, shading_cell_px: float = 0.0, px_per_mm: Optional[float] = None) -> Field:
     """Normals from a picture as a field (Kim & Kwon 2013): faces a list of (polygon K x 2 [px], unit normal (camera frame, n_z <= 0)); F = max_force (n . m) m along the HIP's motion m (mode along_motion) or max_force (n_x, n_y) (gradient). max_force [N], speed_threshold [m/s], shading_cell_px [px] (0: flat faces); picture centred at px_per_mm [px/mm] (default 6.4)."""
 
+def on_surface(field: Field, scale: Union[float, List[float]] = 1.0, offset: Union[float, List[float]] = 0.0) -> Field:
+    """A field laid on the touched surface by uv (a part of surface_contact()): evaluated at the flat position offset + scale * uv [m] (scale [m per uv unit] and offset [m], each one number or a pair), with the velocity in the tangent frame; its force comes back along the surface's tangent, bitangent and normal. A tangible image, a texture, friction or a normals field so pushes along a curved surface. No force without a tangent frame. The field is shared, not copied."""
+
+def picture_relief(image: object, mm_per_level: float = 0.01, width_m: float = 0.1, blur: float = 0.0, dark_is_high: bool = False, stiffness: float = 1500.0, damping: float = 0.0, static_friction: float = 0.0, dynamic_friction: float = 0.0, texture_gain: float = 1.0, mask: str = 'prewitt', size: Optional[int] = None, border: str = 'suspend', sigma: float = 0.0, gray: str = 'paper', channels: str = 'rgb', levels: Optional[float] = None) -> SurfaceField:
+    """A picture felt as a relief in one line (see below): its gray levels are heights (level x mm_per_level [mm], dark_is_high: 255 - level; blur [px] on the heights only) under the proxy (stiffness [N/m], damping [N s/m], static/dynamic friction), and its tangible-image forces (texture_gain [N] at a black/white edge; 0: the relief alone; mask, size, border, sigma as tangible_field) are laid on the relief in its tangent plane. The picture spans width_m [m] from the first to the last pixel centre, its bottom-left pixel at the origin, x right, y up the picture, z toward the user. Returns a SurfaceField.
+
+    image: a path (any format OpenCV reads; 16-bit files are scaled by 255/65535) or a numpy array, H x W gray or H x W x 3 / x 4 colour (alpha ignored). channels='rgb' (default: numpy, PIL, imageio order) or 'bgr' (cv2.imread order) names a colour array's channel order. White level: 255 for uint8 and other integer arrays, 65535 for uint16 (as 16-bit files); a float or bool array needs levels= (its white level: 1.0 for a picture in [0, 1], 255 for [0, 255]) and is refused without it; levels= overrides the white level of any array."""
+
 def plane_contact(parts: List[Field] = ..., point: List[float] = ..., normal: List[float] = ..., stiffness: float = 1500.0, damping: float = 0.0) -> Field:
     """F = Fc + parts: a penalty plane through point [m] with unit normal (toward the user), stiffness [N/m] and damping [N s/m] gives Fc; while touching, the parts see |Fc| [N] and the plane's normal of the same tick."""
+
+def plane_surface(point: List[float] = ..., normal: List[float] = ..., size: float = 0.01) -> Surface:
+    """The solid half-space behind a plane through point [m] with unit normal (toward the user); uv are metres along the plane; size [m]: the length its tolerances scale with."""
 
 def run_servo(field: Field, seconds: float = 1.0, rate: float = 1000.0, device: str = 'sim', hand: str = 'raster', hand_centre: List[float] = ..., hand_size: float = 0.06, hand_speed: float = 0.06, realtime: str = 'off', confirm_hardware: bool = False, clock: Optional[str] = None, stop: Optional[ServoStop] = None) -> dict:
     """Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace (one row a tick: t [s], position N x 3 [m], force N x 3 [N] as that tick commanded after the safety chain, homed and armed N booleans: the tick's device state, False before homing / arming), period_histogram (counts per histogram_bin_s), stop_reason, and loop_allocations / loop_frees (malloc / free calls on this thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None otherwise). device sim: the simulated arm, held by a scripted hand (raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm (needs confirm_hardware=True). clock virtual (the default for sim): the loop runs on simulated time as fast as the CPU allows, with the same ticks, safety chain and trace as in real time, so a run renders the same forces on any machine (its timing statistics are nominal: every period exact, compute time 0); wall (the default for hid, the only choice there): real time, for timing studies and live interaction. realtime off|best_effort|enforce (SCHED_FIFO; wall clock only). The loop runs on a thread of its own, evaluating the field in C++, never taking the GIL; the calling thread waits with the GIL released. stop: a ServoStop token another thread can request() to end the run (stop_reason 'requested'). Ctrl-C (any exception a signal handler raises) stops the loop within a few ms with zero force and is then raised, the result attached as its `result` attribute (stop_reason 'interrupted'): `except KeyboardInterrupt as e: run = e.result`."""
@@ -132,8 +182,14 @@ def scale(field: Field, factor: float) -> Field:
 def sphere_contact(parts: List[Field] = ..., centre: List[float] = ..., radius: float = 0.02, stiffness: float = 1500.0, damping: float = 0.0) -> Field:
     """F = Fc + parts on a solid penalty sphere: centre [m], radius [m], stiffness [N/m], damping [N s/m]."""
 
+def sphere_surface(centre: List[float] = ..., radius: float = 0.02) -> Surface:
+    """A solid ball: centre [m], radius [m]. uv: u = longitude / 2 pi + 1/2, v = latitude / pi + 1/2."""
+
 def sum(fields: List[Field]) -> Field:
     """F = sum of the fields' forces [N]. The parts are shared, not copied."""
+
+def surface_contact(surface: Surface, parts: List[Field] = ..., stiffness: float = 1500.0, damping: float = 0.0, static_friction: float = 0.0, dynamic_friction: float = 0.0, offset: float = 1e-06) -> SurfaceField:
+    """F = Fc + parts on a surface, felt through a proxy (god-object, Zilles & Salisbury 1995): Fc = max(0, k d - b v.n) n + friction, stiffness k [N/m], damping b [N s/m] on the normal velocity, the friction cone static_friction >= dynamic_friction >= 0; offset: the proxy's lift relative to a primitive's size. While touching, the parts see |Fc| [N], the normal, and the touched point's uv and tangent frame: lay a field on the surface with on_surface(). Returns a SurfaceField (contacts() tells where the proxy is)."""
 
 def tangible_field(image: object, mask: str = 'prewitt', size: Optional[int] = None, border: str = 'suspend', sigma: float = 0.0, gain: float = 1.0, px_per_mm: Optional[float] = None, workspace_mm: Optional[float] = None, gray: str = 'paper', channels: str = 'rgb', levels: Optional[float] = None) -> Field:
     """A tangible-image field in the device's x-y plane: the picture centred on the origin at px_per_mm [px/mm] (default 6.4, Kim & Kwon's) or fitted so its longer side spans workspace_mm [mm]; gain [N] at a black/white edge. Device frame x right, y up. image: a path (any format OpenCV reads; 16-bit files are scaled by 255/65535) or a numpy array, H x W gray or H x W x 3 / x 4 colour (alpha ignored). channels='rgb' (default: numpy, PIL, imageio order) or 'bgr' (cv2.imread order) names a colour array's channel order. White level: 255 for uint8 and other integer arrays, 65535 for uint16 (as 16-bit files); a float or bool array needs levels= (its white level: 1.0 for a picture in [0, 1], 255 for [0, 255]) and is refused without it; levels= overrides the white level of any array. Other options as tangible_forces()."""
