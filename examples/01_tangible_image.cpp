@@ -119,7 +119,12 @@ void write_forces(const std::string& path, const std::vector<std::array<double, 
 }
 
 int run(const Arguments& args) {
-  const cv::Mat photo = hf::cli::quiet_stderr([&] { return hf::load_image(args.image, args.max_pixels); });
+  cv::Mat photo;
+  try {
+    photo = hf::cli::quiet_stderr([&] { return hf::load_image(args.image, args.max_pixels); });
+  } catch (const hf::ImageError& e) {
+    throw hf::ImageError(hf::cli::name_limit_flag(e.what(), "--max-mpx"));  // the user's flag, not the library's
+  }
   const hf::GrayImage gray = hf::to_gray(photo, args.gray);  // decoded once
   const auto start = std::chrono::steady_clock::now();
   const hf::TangibleImage image(gray, args.options);

@@ -172,9 +172,13 @@ Arguments parse(hf::cli::Parser& p) {
 
 std::unique_ptr<hf::VideoSource> open_source(const Arguments& a) {
   const hf::VideoSourceConfig config{.max_pixels = a.max_pixels};
-  if (a.video.rfind("camera:", 0) == 0)
-    return std::make_unique<hf::VideoSource>(static_cast<int>(std::stol(a.video.substr(7))), config);
-  return std::make_unique<hf::VideoSource>(a.video, config);
+  try {
+    if (a.video.rfind("camera:", 0) == 0)
+      return std::make_unique<hf::VideoSource>(static_cast<int>(std::stol(a.video.substr(7))), config);
+    return std::make_unique<hf::VideoSource>(a.video, config);
+  } catch (const hf::VideoError& e) {
+    throw hf::VideoError(hf::cli::name_limit_flag(e.what(), "--max-mpx"));  // the user's flag, not the library's
+  }
 }
 
 void warn_variable_rate(const std::string& name) {
@@ -405,7 +409,8 @@ int run_play(const Arguments& a) {
     std::printf("plots: %s/force.png\n", a.plots->c_str());
   }
   // The worker failed on a frame (bad input): one line on stderr, exit 1.
-  if (!stopped.empty()) throw hf::VideoError("the video stopped early: " + stopped);
+  if (!stopped.empty())
+    throw hf::VideoError(hf::cli::name_limit_flag("the video stopped early: " + stopped, "--max-mpx"));
   if (disconnected) throw hf::DeviceError("the device disconnected during the run; zero force was commanded");
   return stop.caught() ? stop.exit_status() : 0;
 }
