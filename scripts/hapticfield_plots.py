@@ -126,7 +126,8 @@ def texture(args):
         texture_panels(axes, e, trace, psd)
         fig.savefig(os.path.join(args.dir, e["stem"] + ".png"))
         plt.close(fig)
-        print(f"  {e['stem']}.png  ({e['description']})")
+        if not args.quiet:
+            print(f"  {e['stem']}.png  ({e['description']})")
     cols = 3
     rows = (len(loaded) + cols - 1) // cols
     fig, axes = plt.subplots(2 * rows, cols, figsize=(4.2 * cols, 3.6 * rows), dpi=args.gallery_dpi, layout="constrained",
@@ -142,7 +143,8 @@ def texture(args):
             axes[r + 1][c].axis("off")
     fig.savefig(os.path.join(args.dir, "gallery.png"))
     plt.close(fig)
-    print(f"  gallery.png ({len(loaded)} plots, matplotlib)")
+    if not args.quiet:
+        print(f"  gallery.png ({len(loaded)} plots, matplotlib)")
 
 
 def main():
@@ -159,6 +161,7 @@ def main():
     t = sub.add_parser("texture", help="texture_gallery's trace and spectrum plots")
     t.add_argument("--dir", required=True)
     t.add_argument("--gallery-dpi", type=float, default=80.0, help="resolution of gallery.png [dots per inch]")
+    t.add_argument("--quiet", action="store_true", help="list no files (texture_gallery lists them itself)")
     args = parser.parse_args()
     if plt is None:
         if args.quiet_missing:  # the examples then try another interpreter or draw their own plots
