@@ -376,6 +376,12 @@ decltype(auto) quiet_stderr(F&& f) {
   return message;
 }
 
+/// True when stdout is a terminal: live status lines redraw themselves with
+/// '\r' only there; a file or a pipe gets whole lines.
+[[nodiscard]] inline bool stdout_is_terminal() {
+  return ::isatty(STDOUT_FILENO) == 1;
+}
+
 /// Prints "tool: message" as one line on stderr.
 inline void report(const char* tool, const std::string& message) {
   std::fflush(stdout);
