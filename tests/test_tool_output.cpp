@@ -81,18 +81,19 @@ std::string step_picture() {
   return p;
 }
 
-/// A vertical run of at least `length` rows in one column going from
-/// `top` (first row) to `bottom` (last row) colour, each within 40 per
-/// channel: a colour bar.
+/// A colour bar: in some column, a run of at least `length` rows from the
+/// `top` colour to the `bottom` colour (each within 40 per channel) whose
+/// neighbouring rows differ by less than 24 per channel (a smooth ramp, not
+/// text or a border).
 bool has_colour_bar(const cv::Mat& img, cv::Vec3b top, cv::Vec3b bottom, int length) {
-  const auto near = [](cv::Vec3b a, cv::Vec3b b) {
-    return std::abs(a[0] - b[0]) < 40 && std::abs(a[1] - b[1]) < 40 && std::abs(a[2] - b[2]) < 40;
+  const auto near = [](cv::Vec3b a, cv::Vec3b b, int tolerance) {
+    return std::abs(a[0] - b[0]) < tolerance && std::abs(a[1] - b[1]) < tolerance && std::abs(a[2] - b[2]) < tolerance;
   };
   for (int x = 0; x < img.cols; ++x)
     for (int y = 0; y + length < img.rows; ++y) {
-      if (!near(img.at<cv::Vec3b>(y, x), top)) continue;
-      for (int end = y + length; end < img.rows; ++end)
-        if (near(img.at<cv::Vec3b>(end, x), bottom)) return true;
+      if (!near(img.at<cv::Vec3b>(y, x), top, 40)) continue;
+      for (int end = y + 1; end < img.rows && near(img.at<cv::Vec3b>(end, x), img.at<cv::Vec3b>(end - 1, x), 24); ++end)
+        if (end - y >= length && near(img.at<cv::Vec3b>(end, x), bottom, 40)) return true;
     }
   return false;
 }
@@ -124,8 +125,8 @@ TEST_CASE("tangible_image --maps: maps.png with colour bars, maps.txt with the s
     const cv::Mat figure = cv::imread(dir + "/maps.png", cv::IMREAD_COLOR);
     REQUIRE(!figure.empty());
     // fx and fy: full red (+scale) at the top to full blue (-scale) at the bottom; |F|: white to black
-    CHECK(has_colour_bar(figure, {0, 0, 255}, {255, 0, 0}, 250));
-    CHECK(has_colour_bar(figure, {255, 255, 255}, {0, 0, 0}, 250));
+    CHECK(has_colour_bar(figure, {0, 0, 255}, {255, 0, 0}, 150));
+    CHECK(has_colour_bar(figure, {255, 255, 255}, {0, 0, 0}, 150));
     // the edge's force, 1, is full colour in fx.png
     CHECK(max_red(cv::imread(dir + "/fx.png", cv::IMREAD_COLOR)) == 255);
   }
