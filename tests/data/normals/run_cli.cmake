@@ -116,3 +116,13 @@ foreach(bad IN ITEMS "--intrinsics;${WORK_DIR}/decl.xml;--face;0,0 10,0 10,10 0,
   endif()
 endforeach()
 run(EXPECT fail OUT out ERR err COMMAND "${PICTURE_NORMALS}" "${WORK_DIR}/no_such.png" --face "0,0 10,0 10,10 0,10")
+
+# docs/picture-normals.md states every exit status --help lists (2: usage errors)
+run(EXPECT ok OUT help ERR err COMMAND "${PICTURE_NORMALS}" --help)
+file(READ "${CMAKE_CURRENT_LIST_DIR}/../../../docs/picture-normals.md" doc)
+string(REGEX REPLACE "[ \n]+" " " doc "${doc}")
+foreach(status IN ITEMS "0 done" "1 bad input" "2 usage error")
+  if(NOT help MATCHES "Exit status:[^\n]*${status}" OR NOT doc MATCHES "Exit status:[^.]*${status}")
+    message(FATAL_ERROR "'${status}' is not stated both by picture_normals --help and docs/picture-normals.md")
+  endif()
+endforeach()
