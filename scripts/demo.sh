@@ -20,4 +20,4 @@ run ./scripts/deps.sh
 run cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release
 run cmake --build "$build" -j"$(nproc)" --target tangible_image servo_demo
 run "$build/examples/tangible_image" examples/data/coffee.png --mask prewitt --size 17 --maps out/tangible
-$dry_run || echo "next: $build/examples/servo_demo --seconds 10 --trace t.csv --plots plots (README, 'A field in a loop')"
+$dry_run || echo "next: $build/examples/servo_demo --seconds 10 --trace t.csv --plots plots (README, 'Device and servo loop')"
