@@ -11,9 +11,11 @@
 // planes, maps.png (the three pictures with axes [px] and colour bars,
 // drawn by matplotlib when present, else by OpenCV) and maps.txt (what each
 // file shows, at what scale). Full colour is the map's largest magnitude,
-// or F with --full-scale (the same F makes two maps compare by eye); --probes reads x,y per line (pixels, x right, y
-// down, integer = pixel centre, a header line allowed) and --forces gets x,y,fx,fy: the normalised force (1 = a
-// black/white edge) before any gain, fy down. Bad input: one line on stderr and exit status 1 (2 for usage errors).
+// or F with --full-scale (the same F makes two maps compare by eye).
+// --probes reads x,y per line (pixels, x right, y down, integer = pixel
+// centre, a header line allowed) and --forces gets x,y,fx,fy: the
+// normalised force (1 = a black/white edge) before any gain, fy down.
+// Bad input: one line on stderr and exit status 1 (2 for usage errors).
 #include <hapticfield/kernels.hpp>
 
 #include <array>
