@@ -14,7 +14,8 @@
 // --intrinsics / --focal the focal length is estimated from the faces'
 // right angles (or guessed from a 60 degree field of view) and a note goes
 // to stderr. Probes: each line of IN.csv is x,y,vx,vy [px, px/s]; OUT.csv
-// gets x,y,fx,fy [N] in the image plane (fy positive downward), each probe
+// gets the header line x,y,fx,fy, then x,y,fx,fy [N] per probe in the image
+// plane (fy positive downward), each probe
 // evaluated from a fresh field state. --force-map draws, over a gray copy of
 // the picture, the force felt moving right at 100 mm/s: red where it
 // resists (climbing), green where it assists (descending). On bad input: one line on stderr,
@@ -74,11 +75,12 @@ constexpr const char* usage =
     "  --overlay OUT.png     draw the faces and their normals over the picture\n"
     "  --probes IN.csv       x,y,vx,vy per line [px, px/s], finite, at most 1000000 lines;\n"
     "                        needs --forces\n"
-    "  --forces OUT.csv      x,y,fx,fy per probe [N], image axes (fy down)\n"
+    "  --forces OUT.csv      a header line x,y,fx,fy, then x,y,fx,fy per probe [N], image axes\n"
+    "                        (fy down)\n"
     "  --force-map OUT.png   the force felt moving right at 100 mm/s: red resists, green assists\n"
     "  --gradient            force from the slope itself instead of along the motion\n"
     "  --shading CELL        force shading on a grid of CELL [px], in [1, 1e4]\n"
-    "  --verbose             per-face diagnostics on stderr\n"
+    "  --verbose             per-face diagnostics on stderr (faces numbered from 1, in --face order)\n"
     "  -h, --help            this text\n"
     "Exit status: 0 done, 1 bad input (files, degenerate faces), 2 usage error.\n";
 
@@ -270,6 +272,7 @@ void evaluate_probes(const Args& a, NormalField& field) {
   const auto rows = cli::read_csv<4>(a.probes, {.columns = "x,y,vx,vy", .what = "probes", .finite_only = true});
   std::ofstream out(a.forces);
   if (!out) throw FileError("--forces: cannot write '" + a.forces + "'");
+  out << "x,y,fx,fy\n";  // the header line, as tangible_image writes it
   for (const auto& r : rows) {
     field.reset();  // each probe on its own: the filter starts from its velocity
     const glm::dvec3 f = field.force(field.probe_at({r[0], r[1]}, {r[2], r[3]}));

@@ -14,6 +14,9 @@
 // box_DEG_probes.csv (probes at the face centres moving right and down).
 // --check compares `normal: nx ny nz` lines (picture_normals' output) with
 // the true normals of that view: exit 0 when each is within 0.5 degrees.
+// FILE "-" reads them from stdin. Faces are numbered from 1 (1 front,
+// 2 side), in the order of the --face arguments box_DEG.args gives, as
+// picture_normals --verbose numbers them.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -55,8 +58,9 @@ constexpr const char* usage =
     "  --trials N       noisy trials per face, 1..100000 (default 200)\n"
     "  --seed S         random seed, 0..4294967295 (default 2013)\n"
     "  --out DIR        write box_DEG.png, box_DEG.args and box_DEG_probes.csv per view\n"
-    "  --check FILE     compare picture_normals' 'normal: nx ny nz' lines with the truth;\n"
-    "                   exit 0 when each is within 0.5 degrees, 1 otherwise\n"
+    "  --check FILE     compare picture_normals' 'normal: nx ny nz' lines with the truth (FILE\n"
+    "                   '-': stdin); faces 1 (front) and 2 (side) as in box_DEG.args; exit 0\n"
+    "                   when each is within 0.5 degrees, 1 otherwise\n"
     "  -h, --help       this text\n"
     "Exit status: 0 done, 1 bad input or a failed check, 2 usage error.\n";
 
@@ -86,11 +90,21 @@ Args parse(cli::Parser& p) {
 
 int check(const Args& a, const BoxScene& scene) {
   const BoxView view = render_box(scene, a.rotations[0], false);
+  constexpr std::size_t max_check_bytes = std::size_t{1} << 20;  // [bytes]
+  const std::string source = a.check == "-" ? std::string("stdin") : "'" + a.check + "'";
   std::string text;
-  try {
-    text = read_file(a.check, std::uintmax_t{1} << 20);
-  } catch (const FileError& e) {
-    throw FileError(std::string("--check: ") + e.what());
+  if (a.check == "-") {  // a pipe: picture_normals ... | box_demo --rotation 45 --check -
+    char buf[4096];
+    while (std::cin.read(buf, sizeof buf) || std::cin.gcount() > 0) {
+      text.append(buf, static_cast<std::size_t>(std::cin.gcount()));
+      if (text.size() > max_check_bytes) throw FileError("--check: stdin holds more than 1 MiB");
+    }
+  } else {
+    try {
+      text = read_file(a.check, max_check_bytes);
+    } catch (const FileError& e) {
+      throw FileError(std::string("--check: ") + e.what());
+    }
   }
   std::istringstream in(text);
   std::string line;
@@ -101,15 +115,16 @@ int check(const Args& a, const BoxScene& scene) {
     std::string tag;
     glm::dvec3 n{0.0};
     if (!(s >> tag >> n.x >> n.y >> n.z) || tag != "normal:") continue;
-    if (f >= 2) throw FileError("--check: more than two normals in '" + a.check + "'");
+    if (f >= 2) throw FileError("--check: more than two normals in " + source);
     const double err = angle_between_deg(n, view.normals[f]);
-    std::printf("face %zu: %.6f %.6f %.6f vs true %.6f %.6f %.6f: %.4f deg\n", f, n.x, n.y, n.z, view.normals[f].x,
-                view.normals[f].y, view.normals[f].z, err);
+    // numbered from 1 in --face order, as picture_normals --verbose numbers them
+    std::printf("face %zu (%s): %.6f %.6f %.6f vs true %.6f %.6f %.6f: %.4f deg\n", f + 1, f == 0 ? "front" : "side",
+                n.x, n.y, n.z, view.normals[f].x, view.normals[f].y, view.normals[f].z, err);
     if (!(err <= 0.5) || std::abs(glm::length(n) - 1.0) > 1e-5) ++failures;
     ++f;
   }
   if (f != 2)
-    throw FileError("--check: expected two 'normal: nx ny nz' lines in '" + a.check + "', got " + std::to_string(f));
+    throw FileError("--check: expected two 'normal: nx ny nz' lines in " + source + ", got " + std::to_string(f));
   return failures == 0 ? 0 : 1;
 }
 

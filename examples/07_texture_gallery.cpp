@@ -166,7 +166,10 @@ void write_index_row(std::ofstream& index, const std::string& stem, const Trace&
   index << quoted(stem) << ',' << quoted(t.name) << ',' << t.axis << ',' << quoted(t.description) << ',' << fs << '\n';
 }
 
-void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<cv::Mat>& tiles, std::ofstream& index) {
+/// Writes a trace's CSV files and simple plot; returns the plot's line for the
+/// file list printed at the end (each file listed once, whoever drew it).
+std::string write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<cv::Mat>& tiles,
+                          std::ofstream& index) {
   std::vector<double> x;
   for (const auto& f : t.force)
     x.push_back(f[t.axis]);
@@ -190,7 +193,7 @@ void write_outputs(const Trace& t, const fs::path& out, double fs, std::vector<c
   const cv::Mat img = plot(t, fs, psd);
   cv::imwrite((out / (stem + ".png")).string(), img);
   tiles.push_back(img);
-  std::cout << "  " << stem << ".png  (" << t.description << ")\n";
+  return "  " + stem + ".png  (" + t.description + ")";
 }
 
 constexpr const char* usage =
@@ -281,12 +284,12 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
         FlowTexture(NoiseLattice<GaussianNoise, 3>(GaussianNoise(0.2), 14, grain * 2.0, Interpolation::cubic),
                     FlowConfig{glm::dvec3{-0.2, 0, 0}, 1.0, 1.0})));
 
-    std::cout << "writing to " << out.string() << ":\n";
     std::vector<cv::Mat> tiles;
+    std::vector<std::string> listed;  // one line per plot, printed once at the end
     std::ofstream index(out / "gallery.csv");
     index << "stem,name,axis,description,rate_Hz\n";
     for (const auto& t : traces)
-      write_outputs(t, out, rate, tiles, index);
+      listed.push_back(write_outputs(t, out, rate, tiles, index));
 
     if (!hatt_dir.empty()) {
       for (const auto& file : hatt_model_files(hatt_dir)) {
@@ -298,7 +301,7 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
                              std::to_string(int(set.sample_rate)) + " Hz",
                          tex, set.sample_rate);
         t.axis = 2;
-        write_outputs(t, out, set.sample_rate, tiles, index);
+        listed.push_back(write_outputs(t, out, set.sample_rate, tiles, index));
       }
     }
 
@@ -313,11 +316,18 @@ int run(const fs::path& out, const fs::path& hatt_dir) {
     }
     if (!cv::imwrite((out / "gallery.png").string(), gallery))
       throw FileError("--out: cannot write '" + (out / "gallery.png").string() + "'");
-    std::cout << "  gallery.png (" << tiles.size() << " plots)\n";
-    // Redrawn with axes, ticks, units and legends by matplotlib when present.
+    // Redrawn with axes, ticks, units and legends by matplotlib when present;
+    // the script lists nothing (--quiet): the files are listed here, once.
     index.close();
     std::string why;
-    if (!plots::matplotlib({"texture", "--dir", out.string()}, why)) std::cout << "(simple plots: " << why << ")\n";
+    const bool matplotlib = plots::matplotlib({"texture", "--dir", out.string(), "--quiet"}, why);
+    std::cout << "writing to " << out.string() << " ("
+              << (matplotlib ? "drawn with matplotlib" : "simple plots: " + why) << "):\n";
+    for (const std::string& line : listed)
+      std::cout << line << '\n';
+    std::cout << "  gallery.png (" << tiles.size() << " plots)\n"
+              << "  gallery.csv and, per plot, STEM_trace.csv (time_s, fx_N, fy_N, fz_N) and STEM_psd.csv "
+                 "(frequency_Hz, psd_N2_per_Hz)\n";
   }
   return 0;
 }

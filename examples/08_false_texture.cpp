@@ -6,11 +6,16 @@
 // the picture into a 100 x 100 mm workspace, strokes it along three
 // horizontal lines at 50 mm/s and writes
 //   false_texture.png  the picture tinted by texture region, with a legend and
-//                      the force along the middle stroke
+//                      the force along the middle stroke (axes in mm and N)
 //   strokes.csv        position, region, false-texture force, brightness-
 //                      modulated friction and data-modulated texture per tick
+//   regions.csv        region, gray range, texture name and colour (the legend)
+//   strokes.png        the three strokes with axes and a legend (matplotlib,
+//                      when python3-matplotlib is present)
 // to DIR (default out/false_texture). No device is driven.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -24,6 +29,8 @@
 
 #include "common/cli.hpp"
 #include "common/picture.hpp"
+#include "common/plots.hpp"
+#include "common/simple_plot.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/texture.hpp"
 #include "hapticfield/texture/image_maps.hpp"
@@ -39,8 +46,8 @@ constexpr const char* usage =
     "False texturing and data visualisation: a texture per gray band of the picture and\n"
     "friction modulated by brightness, stroked along three lines at 50 mm/s.\n"
     "  IMAGE        picture file (any format OpenCV reads), fitted into 100 x 100 mm\n"
-    "  --out DIR    output folder for false_texture.png and strokes.csv, created if needed\n"
-    "               (default out/false_texture)\n"
+    "  --out DIR    output folder for false_texture.png, strokes.csv, regions.csv and (with\n"
+    "               matplotlib) strokes.png, created if needed (default out/false_texture)\n"
     "  --levels N   gray bands, each with its own texture, 2..8 (default 4)\n"
     "  -h, --help   this text\n"
     "Exit status: 0 done, 1 bad input (picture, output folder), 2 usage error.\n";
@@ -130,8 +137,9 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
                                                cv::saturate_cast<std::uint8_t>(0.5 * c[1] + 0.5 * 255 * g),
                                                cv::saturate_cast<std::uint8_t>(0.5 * c[2] + 0.5 * 255 * g));
       }
-    const int legend_h = 22 * levels + 10, plot_h = 160;
-    cv::Mat canvas(image.rows + legend_h + plot_h, image.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+    const int legend_h = 22 * levels + 10, plot_h = 250;
+    const int canvas_w = std::max(image.cols, 520);
+    cv::Mat canvas(image.rows + legend_h + plot_h, canvas_w, CV_8UC3, cv::Scalar(255, 255, 255));
     tinted.copyTo(canvas(cv::Rect(0, 0, image.cols, image.rows)));
     for (int s = 0; s < 3; ++s) {  // the strokes
       const glm::dvec2 a = mapping.to_image(glm::dvec3{-0.05, (-25.0 + 25.0 * s) * 1e-3, 0.0});
@@ -146,29 +154,56 @@ int run(const std::string& image_path, const fs::path& out, int levels) {
                                std::to_string((l + 1) * 256 / levels - 1) + ": " + names[static_cast<std::size_t>(l)];
       cv::putText(canvas, text, {32, y + 13}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     }
+    // the middle stroke (thick line above) against x [mm], force [N] on a
+    // stated scale, the region under the probe as a colour strip
     const int top = image.rows + legend_h;
-    cv::putText(canvas, "middle stroke: texture Fx (black), friction Fx (red), region (colour bar)", {8, top + 14},
-                cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    const int n = static_cast<int>(middle_ft.size());
+    plots::text(canvas, "middle stroke (thick line), 50 mm/s, 1 N: force along x; strip: region under the probe",
+                {8, top + 14}, 0.38);
+    const std::size_t n = middle_ft.size();
     double peak = 1e-9;
-    for (int i = 0; i < n; ++i)
-      peak = std::max(
-          {peak, std::fabs(middle_ft[static_cast<std::size_t>(i)]), std::fabs(middle_ff[static_cast<std::size_t>(i)])});
-    const int mid = top + 90;
-    for (int i = 0; i + 1 < n; ++i) {
-      const int x0 = i * (image.cols - 1) / n, x1 = (i + 1) * (image.cols - 1) / n;
-      const auto yv = [&](double v) { return mid - static_cast<int>(v / peak * 60.0); };
-      cv::line(canvas, {x0, yv(middle_ft[static_cast<std::size_t>(i)])},
-               {x1, yv(middle_ft[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-      cv::line(canvas, {x0, yv(middle_ff[static_cast<std::size_t>(i)])},
-               {x1, yv(middle_ff[static_cast<std::size_t>(i + 1)])}, cv::Scalar(0, 0, 220), 1, cv::LINE_AA);
-      const int r = middle_region[static_cast<std::size_t>(i)];
-      if (r >= 0) cv::line(canvas, {x0, top + 22}, {x1, top + 22}, palette[r], 5);
+    for (std::size_t i = 0; i < n; ++i)
+      peak = std::max({peak, std::fabs(middle_ft[i]), std::fabs(middle_ff[i])});
+    const plots::Axes axes(cv::Rect(60, top + 52, canvas_w - 80, plot_h - 108), -50.0, 50.0, -1.05 * peak, 1.05 * peak);
+    axes.draw(canvas, "x along the stroke [mm]", "force [N]");
+    std::vector<double> x_mm;
+    for (std::size_t i = 0; i < n; ++i)
+      x_mm.push_back(-50.0 + 100.0 * static_cast<double>(i) / static_cast<double>(std::max<std::size_t>(n - 1, 1)));
+    for (std::size_t i = 0; i + 1 < n; ++i) {  // region strip just above the axes
+      const int r = middle_region[i];
+      if (r < 0) continue;
+      const cv::Point a = axes.at(x_mm[i], 0.0), b = axes.at(x_mm[i + 1], 0.0);
+      cv::rectangle(canvas, cv::Rect(a.x, top + 22, std::max(1, b.x - a.x), 6), palette[r], cv::FILLED);
     }
+    plots::text(canvas, "region", {8, top + 29}, 0.38);
+    const cv::Scalar black(0, 0, 0), red(0, 0, 220);
+    axes.line(canvas, x_mm, middle_ft, black);
+    axes.line(canvas, x_mm, middle_ff, red);
+    plots::legend(canvas, {axes.box().x + 6, axes.box().y + 6},
+                  {{black, "false texture Fx [N]"}, {red, "brightness-modulated friction Fx [N]"}});
     if (!csv.flush()) throw FileError("--out: cannot write '" + (out / "strokes.csv").string() + "'");
+    csv.close();
     if (!cv::imwrite((out / "false_texture.png").string(), canvas))
       throw FileError("--out: cannot write '" + (out / "false_texture.png").string() + "'");
-    std::cout << "wrote " << (out / "false_texture.png").string() << " and " << (out / "strokes.csv").string() << '\n';
+    {  // the legend as data, for strokes.png
+      std::ofstream regions(out / "regions.csv");
+      regions << "region,gray_lo,gray_hi,name,colour\n";
+      for (int l = 0; l < levels; ++l) {
+        char colour[8];  // #rrggbb, the legend's colour
+        std::snprintf(colour, sizeof colour, "#%02x%02x%02x", static_cast<int>(palette[l][2]),
+                      static_cast<int>(palette[l][1]), static_cast<int>(palette[l][0]));
+        regions << l << ',' << l * 256 / levels << ',' << (l + 1) * 256 / levels - 1 << ','
+                << names[static_cast<std::size_t>(l)] << ',' << colour << '\n';
+      }
+      if (!regions) throw FileError("--out: cannot write '" + (out / "regions.csv").string() + "'");
+    }
+    std::cout << "wrote " << (out / "false_texture.png").string() << ", " << (out / "strokes.csv").string() << " and "
+              << (out / "regions.csv").string() << '\n';
+    // all three strokes with axes, units and a legend: matplotlib when present
+    std::string why;
+    if (plots::matplotlib({"strokes", "--dir", out.string()}, why))
+      std::cout << "wrote " << (out / "strokes.png").string() << " (drawn with matplotlib)\n";
+    else
+      std::cout << "no strokes.png (" << why << "); false_texture.png shows the middle stroke\n";
   }
   return 0;
 }

@@ -43,6 +43,8 @@
 #include "common/csv.hpp"
 #include "common/hid_device.hpp"
 #include "common/loop_thread.hpp"
+#include "common/plots.hpp"
+#include "common/simple_plot.hpp"
 #include "common/stop_signal.hpp"
 
 #include "hapticfield/core.hpp"
@@ -77,7 +79,9 @@ constexpr const char* usage =
     "                        time, each tick waits for its frame, none dropped: the same trace on any\n"
     "                        machine)\n"
     "  --trace OUT.csv       write t, position [m], force [N] per tick (play mode)\n"
-    "  --plots DIR           write force.png (play mode) or forces.png (probe mode) into DIR\n"
+    "  --plots DIR           write force.png (play mode: the lateral force sent to the arm [N]) or\n"
+    "                        forces.png (probe mode: the normalised force), with the cuts found,\n"
+    "                        their data (force.csv / forces.csv, cuts.csv) into DIR\n"
     "  --max-mpx N           largest frame accepted [megapixels], in (0, 1e6] (default 100),\n"
     "                        checked before any frame is decoded\n"
     "  --verbose             let OpenCV's and FFmpeg's own log lines through\n"
@@ -172,9 +176,13 @@ Arguments parse(hf::cli::Parser& p) {
 
 std::unique_ptr<hf::VideoSource> open_source(const Arguments& a) {
   const hf::VideoSourceConfig config{.max_pixels = a.max_pixels};
-  if (a.video.rfind("camera:", 0) == 0)
-    return std::make_unique<hf::VideoSource>(static_cast<int>(std::stol(a.video.substr(7))), config);
-  return std::make_unique<hf::VideoSource>(a.video, config);
+  try {
+    if (a.video.rfind("camera:", 0) == 0)
+      return std::make_unique<hf::VideoSource>(static_cast<int>(std::stol(a.video.substr(7))), config);
+    return std::make_unique<hf::VideoSource>(a.video, config);
+  } catch (const hf::VideoError& e) {
+    throw hf::VideoError(hf::cli::name_limit_flag(e.what(), "--max-mpx"));  // the user's flag, not the library's
+  }
 }
 
 void warn_variable_rate(const std::string& name) {
@@ -200,35 +208,80 @@ void write_cuts(const std::string& path, const std::vector<hf::SceneCut>& cuts) 
   if (std::fclose(out) != 0) throw std::runtime_error("cannot write cuts file '" + path + "'");
 }
 
-/// fx, fy and |F| against t, with the cuts marked.
-void plot_forces(const std::string& path, const std::vector<std::array<double, 5>>& rows,
-                 const std::vector<hf::SceneCut>& cuts) {
-  const int w = 1000, h = 400, m = 50;
+/// What a force plot shows: play mode, the lateral force commanded to the
+/// arm [N]; probe mode, the normalised force at the probes.
+enum class PlotMode { play, probes };
+
+/// The simple force plot (OpenCV, when matplotlib is absent): fx, fy and
+/// |F| against video time with numbered axes, units, a legend and the
+/// scene cuts found drawn and numbered by frame.
+cv::Mat simple_force_plot(const std::vector<std::array<double, 3>>& rows, const std::vector<hf::SceneCut>& cuts,
+                          PlotMode mode) {
+  namespace plot = hf::plots;
+  const int w = 1000, h = 440;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   double t0 = rows.front()[0], t1 = rows.back()[0], peak = 1e-9;
   for (const auto& r : rows)
-    peak = std::max({peak, std::abs(r[3]), std::abs(r[4]), std::hypot(r[3], r[4])});
+    peak = std::max(peak, std::hypot(r[1], r[2]));
   if (t1 <= t0) t1 = t0 + 1e-3;
-  const auto px = [&](double t, double f) {
-    return cv::Point(m + static_cast<int>((w - 2 * m) * (t - t0) / (t1 - t0)),
-                     h / 2 - static_cast<int>((h / 2 - m) * f / peak));
-  };
-  cv::line(img, px(t0, 0), px(t1, 0), cv::Scalar(180, 180, 180));
-  for (const hf::SceneCut& c : cuts)
-    if (c.time >= t0 && c.time <= t1) cv::line(img, px(c.time, -peak), px(c.time, peak), cv::Scalar(0, 140, 255), 1);
-  const cv::Scalar colours[3] = {{200, 0, 0}, {0, 150, 0}, {0, 0, 0}};
-  for (std::size_t i = 1; i < rows.size(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      const auto value = [c](const std::array<double, 5>& r) { return c < 2 ? r[3 + c] : std::hypot(r[3], r[4]); };
-      cv::line(img, px(rows[i - 1][0], value(rows[i - 1])), px(rows[i][0], value(rows[i])), colours[c], 1, cv::LINE_AA);
-    }
-  char text[160];
-  std::snprintf(text, sizeof text,
-                "normalised force over video time %.2f..%.2f s: fx blue, fy green, |F| black; "
-                "cuts orange; peak %.3f",
-                t0, t1, peak);
-  cv::putText(img, text, {m, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
-  cv::imwrite(path, img);
+  const plot::Axes axes(cv::Rect(80, 60, w - 110, h - 120), t0, t1, -1.05 * peak, 1.05 * peak);
+  const bool play = mode == PlotMode::play;
+  plot::text(img,
+             play ? "Force sent to the arm while playing: fx, fy (device frame), lateral |F|"
+                  : "Force at the probes (normalised, fy down)",
+             {10, 20}, 0.5);
+  plot::text(
+      img,
+      "scene cuts found: " + std::to_string(cuts.size()) + " (orange, numbered by the first frame of the new scene)",
+      {10, 40}, 0.42);
+  axes.draw(img, play ? "video time [s] (1x from the first tick)" : "video time [s]",
+            play ? "lateral force commanded [N]" : "normalised force (1 = black/white edge)");
+  const cv::Scalar cut_colour(0, 140, 255);
+  for (const hf::SceneCut& c : cuts) {
+    if (c.time < t0 || c.time > t1) continue;
+    const cv::Point top = axes.at(c.time, 1.05 * peak), bottom = axes.at(c.time, -1.05 * peak);
+    cv::line(img, top, bottom, cut_colour, 1);
+    plot::text(img, "cut " + std::to_string(c.frame), {top.x + 3, top.y + 12}, 0.35, cut_colour);
+  }
+  std::vector<double> t, fx, fy, magnitude;
+  for (const auto& r : rows) {
+    t.push_back(r[0]);
+    fx.push_back(r[1]);
+    fy.push_back(r[2]);
+    magnitude.push_back(std::hypot(r[1], r[2]));
+  }
+  const cv::Scalar blue(200, 0, 0), green(0, 150, 0), black(0, 0, 0);
+  axes.line(img, t, fx, blue);
+  axes.line(img, t, fy, green);
+  axes.line(img, t, magnitude, black);
+  plot::legend(img, {axes.box().x + axes.box().width - 170, axes.box().y + 6},
+               {{blue, "fx"}, {green, "fy"}, {black, play ? "|F| lateral" : "|F|"}, {cut_colour, "scene cut"}});
+  return img;
+}
+
+/// Writes DIR/NAME.png: t, fx, fy rows and the cuts go to DIR/NAME.csv and
+/// DIR/cuts.csv for scripts/hapticfield_plots.py (matplotlib) when present,
+/// else the simple plot is drawn. Returns who drew it.
+std::string plot_forces(const std::string& dir, const std::string& name, const std::vector<std::array<double, 3>>& rows,
+                        const std::vector<hf::SceneCut>& cuts, PlotMode mode) {
+  std::filesystem::create_directories(dir);
+  const std::string png = dir + "/" + name + ".png", data = dir + "/" + name + ".csv", cut_file = dir + "/cuts.csv";
+  {
+    std::ofstream out(data);
+    out << "t_s,fx,fy\n";
+    for (const auto& r : rows)
+      out << r[0] << ',' << r[1] << ',' << r[2] << '\n';
+    if (!out) throw hf::FileError("--plots: cannot write '" + data + "'");
+  }
+  write_cuts(cut_file, cuts);
+  std::string why;
+  if (hf::plots::matplotlib({"video", "--forces", data, "--cuts", cut_file, "--mode",
+                             mode == PlotMode::play ? "play" : "probes", "--out", png},
+                            why))
+    return "drawn with matplotlib";
+  if (!cv::imwrite(png, simple_force_plot(rows, cuts, mode)))
+    throw hf::FileError("--plots: cannot write '" + png + "'");
+  return "simple plots: " + why;
 }
 
 int run_probes(const Arguments& a) {
@@ -267,12 +320,11 @@ int run_probes(const Arguments& a) {
     std::printf("cuts: %s\n", a.cuts->c_str());
   }
   if (a.plots && !rows.empty()) {
-    std::filesystem::create_directories(*a.plots);
-    std::vector<std::array<double, 5>> sorted;
+    std::vector<std::array<double, 3>> sorted;
     for (std::size_t i : order)
-      sorted.push_back(rows[i]);
-    plot_forces(*a.plots + "/forces.png", sorted, timeline.cuts());
-    std::printf("plots: %s/forces.png\n", a.plots->c_str());
+      sorted.push_back({rows[i][0], rows[i][3], rows[i][4]});
+    const std::string drawn_by = plot_forces(*a.plots, "forces", sorted, timeline.cuts(), PlotMode::probes);
+    std::printf("plots: %s/forces.png (%s)\n", a.plots->c_str(), drawn_by.c_str());
   }
   return 0;
 }
@@ -352,23 +404,26 @@ int run_play(const Arguments& a) {
     return field.force(in.probe);
   };
   hf::cli::LoopThread servo(loop, callback, {.max_ticks = ticks});
+  // On a terminal one live line, redrawn in place with '\r' every 200 ms;
+  // into a file or a pipe a plain line every 10 s and the last one, no '\r'.
+  const bool terminal = hf::cli::stdout_is_terminal();
   const auto status = [&] {
     const hf::LoopSnapshot s = loop.statistics();
     const hf::VideoStatistics v = video_ptr->statistics();
     std::printf(
-        "\r video %7.2f s | frames %5ld dropped %4ld bad %3ld | cuts %3ld | rate %8.2f Hz | p99 %6.3f ms | "
-        "peak %5.2f N%s   ",
-        v.video_time, v.prepared, v.dropped, v.bad, v.cuts, s.rate, s.period_p99 * 1e3, s.peak_force,
-        loop.safety().latched() ? " | ZERO FORCE" : "");
+        "%s video %7.2f s | frames %5ld dropped %4ld bad %3ld | cuts %3ld | rate %8.2f Hz | p99 %6.3f ms | "
+        "peak %5.2f N%s%s",
+        terminal ? "\r" : "", v.video_time, v.prepared, v.dropped, v.bad, v.cuts, s.rate, s.period_p99 * 1e3,
+        s.peak_force, loop.safety().latched() ? " | ZERO FORCE" : "", terminal ? "   " : "\n");
     std::fflush(stdout);
   };
-  while (!servo.done()) {
+  for (int polls = 1; !servo.done(); ++polls) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    status();
+    if (terminal || polls % 50 == 0) status();
   }
   servo.join();
   status();
-  std::printf("\n");
+  if (terminal) std::printf("\n");
   const bool disconnected = servo.outcome() == hf::StopReason::disconnected;  // rethrows what the loop threw
   if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
   if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
@@ -396,16 +451,17 @@ int run_play(const Arguments& a) {
     std::printf("trace: %s (%zu rows)\n", a.trace->c_str(), rows.size());
   }
   if (a.plots && !rows.empty()) {
-    std::filesystem::create_directories(*a.plots);
-    std::vector<std::array<double, 5>> plot;
+    // video time = loop time since the first tick (playback at 1x from 0)
+    std::vector<std::array<double, 3>> plot;
     const double t_start = rows.front().t;
     for (const Row& r : rows)
-      plot.push_back({r.t - t_start, r.position.x, r.position.y, r.force.x, r.force.y});
-    plot_forces(*a.plots + "/force.png", plot, {});
-    std::printf("plots: %s/force.png\n", a.plots->c_str());
+      plot.push_back({r.t - t_start, r.force.x, r.force.y});
+    const std::string drawn_by = plot_forces(*a.plots, "force", plot, cuts, PlotMode::play);
+    std::printf("plots: %s/force.png (%s)\n", a.plots->c_str(), drawn_by.c_str());
   }
   // The worker failed on a frame (bad input): one line on stderr, exit 1.
-  if (!stopped.empty()) throw hf::VideoError("the video stopped early: " + stopped);
+  if (!stopped.empty())
+    throw hf::VideoError(hf::cli::name_limit_flag("the video stopped early: " + stopped, "--max-mpx"));
   if (disconnected) throw hf::DeviceError("the device disconnected during the run; zero force was commanded");
   return stop.caught() ? stop.exit_status() : 0;
 }

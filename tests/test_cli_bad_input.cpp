@@ -337,6 +337,11 @@ TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
     cases.push_back({"picture_normals", {file, "--face", face}, bad_input, file});
     cases.push_back({"false_texture", {file, "--out", in_tmp("false_texture")}, bad_input, file});
   }
+  // a picture above --max-mpx: the message names the flag that raises the limit
+  cases.push_back({"tangible_image",
+                   {picture, "--max-mpx", "0.001"},
+                   bad_input,
+                   "60 x 40 px (2400 px) is larger than the limit of 1000 px (raise --max-mpx to allow it)"});
   for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_csv, b.garbage_csv, b.text_png}) {
     cases.push_back(
         {"tangible_image", {picture, "--size", "3", "--probes", file, "--forces", in_tmp("f.csv")}, bad_input, file});
@@ -657,7 +662,8 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
   for (const std::vector<std::string>& mode : {std::vector<std::string>{}, {"--probes", probes, "--forces", forces}}) {
     std::vector<std::string> args = {clip, "--max-mpx", "0.001"};
     args.insert(args.end(), mode.begin(), mode.end());
-    cases.push_back({"tangible_video", args, bad_input, "64 x 48 px (3072 px), larger than the limit of 1000 px"});
+    cases.push_back({"tangible_video", args, bad_input,
+                     "64 x 48 px (3072 px), larger than the limit of 1000 px (raise --max-mpx to allow it)"});
     args = {tiny};
     args.insert(args.end(), mode.begin(), mode.end());
     cases.push_back({"tangible_video", args, bad_input, "(16 x 12 px) are smaller than the 17 x 17 mask"});

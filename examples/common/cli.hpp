@@ -364,6 +364,24 @@ decltype(auto) quiet_stderr(F&& f) {
   return f();
 }
 
+/// The library's size limits end their message with "(raise max_pixels to
+/// allow it)"; a tool's user sets the limit with a flag, so the message names
+/// that flag instead: "(raise --max-mpx to allow it)". Other messages pass
+/// unchanged.
+[[nodiscard]] inline std::string name_limit_flag(std::string message, std::string_view flag) {
+  const std::string library_hint = "(raise max_pixels to allow it)";
+  const auto at = message.find(library_hint);
+  if (at != std::string::npos)
+    message.replace(at, library_hint.size(), "(raise " + std::string(flag) + " to allow it)");
+  return message;
+}
+
+/// True when stdout is a terminal: live status lines redraw themselves with
+/// '\r' only there; a file or a pipe gets whole lines.
+[[nodiscard]] inline bool stdout_is_terminal() {
+  return ::isatty(STDOUT_FILENO) == 1;
+}
+
 /// Prints "tool: message" as one line on stderr.
 inline void report(const char* tool, const std::string& message) {
   std::fflush(stdout);

@@ -130,3 +130,93 @@ def test_without_matplotlib_the_script_exits_3(tmp_path):
     assert r.returncode == 3 and "matplotlib is not installed" in r.stderr
     r = subprocess.run(args + ["--quiet-missing", "texture", "--dir", str(tmp_path)], capture_output=True, text=True)
     assert r.returncode == 3 and r.stderr == ""
+
+
+def load_script():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("hapticfield_plots", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def drawn_figures(monkeypatch, command, argv):
+    """Runs the script's command in this process; returns the figures it saved."""
+    import matplotlib.figure
+    saved = []
+    original = matplotlib.figure.Figure.savefig
+
+    def record(fig, *args, **kwargs):
+        saved.append(fig)
+        return original(fig, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", record)
+    module = load_script()
+    monkeypatch.setattr(sys, "argv", ["hapticfield_plots.py", command, *map(str, argv)])
+    module.main()
+    return saved
+
+
+def write_planes(tmp_path, w=40, h=30):
+    from PIL import Image
+    x = np.linspace(-1, 1, w, dtype=np.float32)
+    fx = np.tile(x, (h, 1))
+    fy = np.tile(np.linspace(0, 0.5, h, dtype=np.float32)[:, None], (1, w))
+    Image.fromarray(fx, mode="F").save(tmp_path / "fx.tiff")
+    Image.fromarray(fy, mode="F").save(tmp_path / "fy.tiff")
+
+
+def test_forcemap_has_a_colour_bar_per_panel_at_the_stated_scale(tmp_path, monkeypatch):
+    write_planes(tmp_path)
+    figures = drawn_figures(monkeypatch, "forcemap", ["--dir", tmp_path, "--full-scale", 2, "--title", "step",
+                                                      "--scale-note", "fixed by --full-scale"])
+    assert len(figures) == 1 and (tmp_path / "maps.png").stat().st_size > 10000
+    fig = figures[0]
+    images = [im for ax in fig.axes for im in ax.get_images()]
+    assert len(images) == 3
+    assert [im.get_clim() for im in images] == [(-2, 2), (-2, 2), (0, 2)]  # the common scale, stated
+    colour_bars = [ax for ax in fig.axes if "normalised force" in ax.get_ylabel()]
+    assert len(colour_bars) == 3
+    panels = [ax for ax in fig.axes if ax.get_images()]
+    assert all(ax.get_xlabel() == "x [px]" and ax.get_ylabel().startswith("y [px]") for ax in panels)
+    assert "full colour = 2 (fixed by --full-scale)" in fig._suptitle.get_text()
+
+
+def test_forcemap_bad_input(tmp_path):
+    r = plots("forcemap", "--dir", tmp_path, "--full-scale", 1)
+    assert r.returncode == 1 and "cannot read" in r.stderr and r.stderr.count("\n") == 1
+    r = plots("forcemap", "--dir", tmp_path, "--full-scale", 0)
+    assert r.returncode == 2
+
+
+def test_video_plot_says_what_it_plots_and_draws_the_cuts(tmp_path, monkeypatch):
+    t = np.arange(100) / 100.0
+    np.savetxt(tmp_path / "force.csv", np.column_stack([t, np.sin(6 * t), np.cos(6 * t)]), delimiter=",",
+               header="t_s,fx,fy", comments="")
+    (tmp_path / "cuts.csv").write_text("frame,time\n8,0.32\n20,0.8\n")
+    figures = drawn_figures(monkeypatch, "video", ["--forces", tmp_path / "force.csv", "--cuts", tmp_path / "cuts.csv",
+                                                   "--mode", "play", "--out", tmp_path / "force.png"])
+    ax = figures[0].axes[0]
+    assert "lateral force commanded [N]" == ax.get_ylabel() and "video time [s]" in ax.get_xlabel()
+    assert "scene cuts found: 2" in ax.get_title()
+    cut_lines = [line for line in ax.get_lines() if list(line.get_xdata()) in ([0.32, 0.32], [0.8, 0.8])]
+    assert len(cut_lines) == 2
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    assert labels == ["fx", "fy", "|F| lateral", "scene cut"]
+
+
+def test_strokes_plot_has_a_legend_with_the_regions(tmp_path, monkeypatch):
+    rows = ["stroke,x_mm,y_mm,region,ft_x_N,ff_x_N,data_texture_x_N"]
+    for s in range(3):
+        for i in range(200):
+            x = -50 + i * 0.5
+            rows.append(f"{s},{x},{-25 + 25 * s},{0 if x < 0 else 1},{np.sin(x)},{-0.2},{0.1 * np.cos(x)}")
+    (tmp_path / "strokes.csv").write_text("\n".join(rows) + "\n")
+    (tmp_path / "regions.csv").write_text("region,gray_lo,gray_hi,name\n0,0,127,grating\n1,128,255,smooth\n")
+    figures = drawn_figures(monkeypatch, "strokes", ["--dir", tmp_path])
+    axes = figures[0].axes
+    assert len(axes) == 3 and all(ax.get_ylabel() == "force [N]" for ax in axes)
+    assert axes[-1].get_xlabel().startswith("x along the stroke [mm]")
+    labels = [text.get_text() for text in axes[0].get_legend().get_texts()]
+    assert "gray 0..127: grating" in labels and "gray 128..255: smooth" in labels and "false texture Fx" in labels
+    assert (tmp_path / "strokes.png").stat().st_size > 10000

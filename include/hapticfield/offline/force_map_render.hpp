@@ -97,11 +97,21 @@ inline unsigned char to_byte(double v) {
   return out;
 }
 
+/// The colour scale the pictures use: full_scale when it is positive and
+/// finite, else the map's largest magnitude (1 for a map without force).
+/// Two maps drawn with the same full_scale compare by eye; each drawn with
+/// its own largest magnitude does not.
+[[nodiscard]] inline double force_picture_scale(const ForceMap& map, double full_scale = 0.0) {
+  return detail::full_scale_or_max(map, full_scale);
+}
+
 /// Writes fx.png, fy.png, magnitude.png, arrows.png and the float planes
-/// fx.tiff, fy.tiff (32-bit) into dir; returns the paths.
+/// fx.tiff, fy.tiff (32-bit) into dir; returns the paths. Full colour (and
+/// a full-length arrow) is full_scale (<= 0: the map's largest magnitude,
+/// see force_picture_scale()).
 /// @throws std::runtime_error when the folder or a file cannot be written.
-inline std::vector<std::string> write_force_pictures(const std::string& dir, const cv::Mat& photo,
-                                                     const ForceMap& map) {
+inline std::vector<std::string> write_force_pictures(const std::string& dir, const cv::Mat& photo, const ForceMap& map,
+                                                     double full_scale = 0.0) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create '" + dir + "': " + ec.message());
@@ -117,10 +127,10 @@ inline std::vector<std::string> write_force_pictures(const std::string& dir, con
     if (!ok) throw std::runtime_error("cannot write '" + path + "'");
     written.push_back(path);
   };
-  save("fx.png", component_picture(map, ForceComponent::x));
-  save("fy.png", component_picture(map, ForceComponent::y));
-  save("magnitude.png", magnitude_picture(map));
-  save("arrows.png", arrow_overlay(photo, map));
+  save("fx.png", component_picture(map, ForceComponent::x, full_scale));
+  save("fy.png", component_picture(map, ForceComponent::y, full_scale));
+  save("magnitude.png", magnitude_picture(map, full_scale));
+  save("arrows.png", arrow_overlay(photo, map, 16, full_scale));
   save("fx.tiff", cv::Mat(map.height, map.width, CV_32FC1, const_cast<float*>(map.fx.data())).clone());
   save("fy.tiff", cv::Mat(map.height, map.width, CV_32FC1, const_cast<float*>(map.fy.data())).clone());
   return written;
