@@ -689,6 +689,17 @@ TEST_CASE("bad video input is one clear error, and a damaged stream plays what d
     }
   }
   CHECK_THROWS_AS(FrameDenoiser(DenoiseConfig{.weight = 0.0}), std::invalid_argument);
+  for (const DenoiseConfig& bad :
+       {DenoiseConfig{.motion_floor = -1.0}, DenoiseConfig{.motion_floor = std::nan("")},
+        DenoiseConfig{.motion_floor = 8.0, .motion_threshold = 8.0}, DenoiseConfig{.motion_threshold = INFINITY},
+        DenoiseConfig{.motion_window = 6}, DenoiseConfig{.motion_window = 1}, DenoiseConfig{.motion_window = 33}}) {
+    try {
+      FrameDenoiser d(bad);
+      FAIL("a bad denoise setting was accepted");
+    } catch (const std::invalid_argument& e) {
+      CHECK(std::string(e.what()).find("motion_") != std::string::npos);
+    }
+  }
   CHECK_THROWS_AS(SceneCutDetector(SceneCutConfig{.ratio = 0.5}), std::invalid_argument);
   CHECK_THROWS_AS(PlaybackClock(PlaybackConfig{.rate = -1.0}), std::invalid_argument);
   // A frame of another size in the stream, or smaller than the mask.
@@ -1095,6 +1106,36 @@ RealClipDenoising measure_real_clip_denoising(const std::string& clip, long max_
 }
 
 }  // namespace
+
+TEST_CASE("temporal denoising: one pixel's change is averaged, a region's change is followed at once",
+          "[video][denoise]") {
+  DenoiseConfig c;  // weight 0.1, floor 3, threshold 8 levels, 7 x 7 px
+  FrameDenoiser d(c);
+  cv::Mat first(64, 64, CV_32FC1, cv::Scalar(100.0f));
+  d.apply(first, true);
+  cv::Mat next(64, 64, CV_32FC1, cv::Scalar(100.0f));
+  next.at<float>(32, 32) = 120.0f;                          // a lone pixel: ringing, not motion
+  next(cv::Rect(0, 40, 16, 16)).setTo(cv::Scalar(160.0f));  // a 16 x 16 px region: motion
+  next(cv::Rect(40, 4, 16, 16)).setTo(cv::Scalar(102.0f));  // a region below the floor: noise
+  d.apply(next, false);
+  // The lone pixel: measure 20 / 49 levels, below the floor, gain 0.1.
+  CHECK_THAT(next.at<float>(32, 32), Catch::Matchers::WithinAbs(102.0, 1e-4));
+  // The region, inside and on its rim (the 7 x 7 mean there is 4/7 of 60): the frame at once.
+  CHECK_THAT(next.at<float>(48, 8), Catch::Matchers::WithinAbs(160.0, 1e-4));
+  CHECK_THAT(next.at<float>(48, 15), Catch::Matchers::WithinAbs(160.0, 1e-4));
+  // A change of 2 levels over a region: gain 0.1.
+  CHECK_THAT(next.at<float>(12, 48), Catch::Matchers::WithinAbs(100.2, 1e-4));
+  CHECK_THAT(next.at<float>(10, 30), Catch::Matchers::WithinAbs(100.0, 1e-6));
+  // Between floor and threshold the gain is linear: a 5.5-level change over
+  // a region is half way, gain 0.55.
+  FrameDenoiser e(c);
+  cv::Mat base(64, 64, CV_32FC1, cv::Scalar(100.0f));
+  e.apply(base, true);
+  cv::Mat half(64, 64, CV_32FC1, cv::Scalar(100.0f));
+  half(cv::Rect(16, 16, 32, 32)).setTo(cv::Scalar(105.5f));
+  e.apply(half, false);
+  CHECK_THAT(half.at<float>(32, 32), Catch::Matchers::WithinAbs(100.0 + 0.55 * 5.5, 1e-4));
+}
 
 TEST_CASE("temporal denoising on real compressed clips: static edges flicker less, moving edges do not lag",
           "[video][real][denoise]") {
