@@ -8,8 +8,8 @@
 #include <span>
 #include <vector>
 
-#include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/transport.hpp"
+#include "hapticfield/protocol/reports.hpp"
 #include "hapticfield/servo/clock.hpp"
 
 namespace hapticfield::bench {

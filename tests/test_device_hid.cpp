@@ -5,7 +5,7 @@
 #include <cerrno>
 #include <string>
 
-#include "hapticfield/device/hid_transport.hpp"
+#include "hapticfield/transport/hid_transport.hpp"
 
 using namespace hapticfield;
 
