@@ -80,6 +80,33 @@ inline void hid_init_once() {
   static const int r = hid_init();
   if (r != 0) throw DeviceError("HidTransport: hid_init failed");
 }
+/// One report as it waits in a queue between the servo and I/O threads:
+/// its bytes (at most 64) and how many.
+struct QueuedReport {
+  std::array<std::uint8_t, protocol::max_report_size> bytes{};
+  std::size_t size{0};
+};
+
+/// Queues a report (cut to 64 bytes); false when the ring is full.
+template <std::size_t N>
+bool push_report(rt::SpscRing<QueuedReport, N>& ring, std::span<const std::uint8_t> report) noexcept {
+  QueuedReport queued;
+  queued.size = report.size() < queued.bytes.size() ? report.size() : queued.bytes.size();
+  std::memcpy(queued.bytes.data(), report.data(), queued.size);
+  return ring.try_push(queued);
+}
+
+/// Copies the oldest queued report into out (cut to out's size) and its
+/// length into size; false when none is queued.
+template <std::size_t N>
+bool pop_report(rt::SpscRing<QueuedReport, N>& ring, std::span<std::uint8_t> out, std::size_t& size) noexcept {
+  const std::optional<QueuedReport> queued = ring.try_pop();
+  if (!queued) return false;
+  size = queued->size < out.size() ? queued->size : out.size();
+  std::memcpy(out.data(), queued->bytes.data(), size);
+  return true;
+}
+
 }  // namespace detail
 
 class HidTransport final : public Transport {
@@ -126,11 +153,11 @@ class HidTransport final : public Transport {
   /// Pops the oldest queued input report; with timeout_us > 0 spins (with
   /// yields) up to that long for one, then returns Status::timeout.
   Status read(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept override {
-    if (pop_report(input_, buffer, size)) return Status::ok;
+    if (detail::pop_report(input_, buffer, size)) return Status::ok;
     if (timeout_us > 0) {
       const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(timeout_us);
       while (std::chrono::steady_clock::now() < deadline) {
-        if (pop_report(input_, buffer, size)) return Status::ok;
+        if (detail::pop_report(input_, buffer, size)) return Status::ok;
         if (disconnected_.load(std::memory_order_acquire)) return Status::disconnected;
         std::this_thread::yield();
       }
@@ -141,7 +168,7 @@ class HidTransport final : public Transport {
 
   Status write(std::span<const std::uint8_t> report) noexcept override {
     if (disconnected_.load(std::memory_order_acquire)) return Status::disconnected;
-    return push_report(output_, report) ? Status::ok : Status::overflow;
+    return detail::push_report(output_, report) ? Status::ok : Status::overflow;
   }
 
   /// Feature reports are setup calls: they take the device lock the I/O
@@ -165,31 +192,6 @@ class HidTransport final : public Transport {
   [[nodiscard]] std::uint64_t input_overflows() const noexcept { return overflows_.load(std::memory_order_relaxed); }
 
  private:
-  /// One report as it waits in a ring: its bytes (at most 64) and how many.
-  struct QueuedReport {
-    std::array<std::uint8_t, protocol::max_report_size> bytes{};
-    std::size_t size{0};
-  };
-
-  /// Queues a report (cut to 64 bytes); false when the ring is full.
-  template <std::size_t N>
-  static bool push_report(rt::SpscRing<QueuedReport, N>& ring, std::span<const std::uint8_t> report) noexcept {
-    QueuedReport queued;
-    queued.size = report.size() < queued.bytes.size() ? report.size() : queued.bytes.size();
-    std::memcpy(queued.bytes.data(), report.data(), queued.size);
-    return ring.try_push(queued);
-  }
-
-  /// Copies the oldest queued report into out (cut to out's size); false when none is queued.
-  template <std::size_t N>
-  static bool pop_report(rt::SpscRing<QueuedReport, N>& ring, std::span<std::uint8_t> out, std::size_t& size) noexcept {
-    const std::optional<QueuedReport> queued = ring.try_pop();
-    if (!queued) return false;
-    size = queued->size < out.size() ? queued->size : out.size();
-    std::memcpy(out.data(), queued->bytes.data(), size);
-    return true;
-  }
-
   void open(const std::string& path) {
     path_ = path;
     if (::access(path.c_str(), F_OK) != 0) throw DeviceError(detail::open_error_message(path, errno));
@@ -213,11 +215,11 @@ class HidTransport final : public Transport {
         disconnected_.store(true, std::memory_order_release);
         return;
       }
-      if (n > 0 && !push_report(input_, std::span<const std::uint8_t>(in.data(), static_cast<std::size_t>(n))))
+      if (n > 0 && !detail::push_report(input_, std::span<const std::uint8_t>(in.data(), static_cast<std::size_t>(n))))
         overflows_.fetch_add(1, std::memory_order_relaxed);
       // Write only the newest pending command; older ones are stale.
       std::size_t size = 0, newest = 0;
-      while (pop_report(output_, out, size))
+      while (detail::pop_report(output_, out, size))
         newest = size;
       if (newest) {
         std::lock_guard<std::mutex> lock(device_mutex_);
@@ -233,8 +235,8 @@ class HidTransport final : public Transport {
   std::string path_;
   std::thread io_;
   std::mutex device_mutex_;
-  rt::SpscRing<QueuedReport, 256> input_;
-  rt::SpscRing<QueuedReport, 16> output_;
+  rt::SpscRing<detail::QueuedReport, 256> input_;
+  rt::SpscRing<detail::QueuedReport, 16> output_;
   std::atomic<bool> running_{false};
   std::atomic<bool> disconnected_{false};
   std::atomic<std::uint64_t> overflows_{0};
