@@ -13,8 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "hapticfield/device.hpp"
+#include "hapticfield/arms.hpp"
 #include "hapticfield/servo/clock.hpp"
+#include "hapticfield/transport.hpp"
 #include "tick_cost.hpp"
 
 using namespace hapticfield;

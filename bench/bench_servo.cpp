@@ -41,9 +41,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
 #include "tick_cost.hpp"
 
 using namespace hapticfield;

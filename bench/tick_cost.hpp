@@ -6,9 +6,9 @@
 #include <cstdint>
 #include <span>
 
-#include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/transport.hpp"
 #include "hapticfield/offline/tick_budget.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield::bench {
 

@@ -31,14 +31,15 @@
 #include "common/plots.hpp"
 #include "common/stop_signal.hpp"
 
+#include "hapticfield/arms.hpp"
+#include "hapticfield/arms/inverse3/inverse3.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device.hpp"
-#include "hapticfield/device/inverse3.hpp"
-#include "hapticfield/device/serial_transport.hpp"
 #include "hapticfield/kernels.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
+#include "hapticfield/transport/serial_transport.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
-#include "hapticfield/device/hid_transport.hpp"
+#include "hapticfield/transport/hid_transport.hpp"
 #endif
 
 using namespace hapticfield;

@@ -5,8 +5,9 @@
 #include <cstdio>
 
 #include "common/cli.hpp"
-#include "hapticfield/device.hpp"
+#include "hapticfield/arms.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
 
 using namespace hapticfield;
 

@@ -47,11 +47,12 @@
 #include "common/simple_plot.hpp"
 #include "common/stop_signal.hpp"
 
+#include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
-#include "hapticfield/device/hid_transport.hpp"
+#include "hapticfield/transport/hid_transport.hpp"
 #endif
 
 namespace hf = hapticfield;

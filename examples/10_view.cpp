@@ -40,10 +40,11 @@
 #include "common/loop_thread.hpp"
 #include "common/picture.hpp"
 #include "common/stop_signal.hpp"
+#include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device.hpp"
 #include "hapticfield/image.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
 #include "hapticfield/video.hpp"
 #include "view/mouse_device.hpp"
 #include "view/sample_ring.hpp"
@@ -52,7 +53,7 @@
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
-#include "hapticfield/device/hid_transport.hpp"
+#include "hapticfield/transport/hid_transport.hpp"
 #endif
 
 using namespace hapticfield;

@@ -11,9 +11,10 @@
 
 #include "common/cli.hpp"
 #include "common/stop_signal.hpp"
+#include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
 
 using namespace hapticfield;
 

@@ -13,8 +13,9 @@
 #include <random>
 #include <vector>
 
-#include "hapticfield/device.hpp"
+#include "hapticfield/arms.hpp"
 #include "hapticfield/offline/crc16_reference.hpp"
+#include "hapticfield/transport.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;

@@ -1,11 +1,15 @@
 // Tests of the hidapi transport on a machine without the arm: it compiles,
-// enumerates, and reports clear errors.
+// enumerates, reports clear errors, and its report queues keep order,
+// bounds and lengths.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cerrno>
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
-#include "hapticfield/device/hid_transport.hpp"
+#include "hapticfield/transport/hid_transport.hpp"
 
 using namespace hapticfield;
 
@@ -54,4 +58,38 @@ TEST_CASE("permission denied names the udev rule that fixes it") {
 
 TEST_CASE("enumeration works without devices") {
   CHECK_NOTHROW(HidTransport::enumerate());
+}
+
+TEST_CASE("the report queues keep order and lengths, cut long reports and refuse when full") {
+  rt::SpscRing<detail::QueuedReport, 4> ring;
+  std::array<std::uint8_t, 80> long_report{};
+  for (std::size_t i = 0; i < long_report.size(); ++i)
+    long_report[i] = static_cast<std::uint8_t>(i + 1);
+  const std::array<std::uint8_t, 3> short_report{0xA1, 0xB2, 0xC3};
+
+  REQUIRE(detail::push_report(ring, long_report));  // 80 bytes: more than any report of the protocol
+  REQUIRE(detail::push_report(ring, short_report));
+  REQUIRE(detail::push_report(ring, short_report));
+  REQUIRE(detail::push_report(ring, short_report));
+  CHECK_FALSE(detail::push_report(ring, short_report));  // full: refused, not overwritten
+  CHECK(ring.rejected() == 1);
+
+  std::array<std::uint8_t, 64> out{};
+  std::size_t size = 0;
+  REQUIRE(detail::pop_report(ring, out, size));
+  CHECK(size == protocol::max_report_size);  // cut to 64 bytes
+  CHECK(out[0] == 1);
+  CHECK(out[63] == 64);
+
+  std::array<std::uint8_t, 2> small{};
+  REQUIRE(detail::pop_report(ring, small, size));
+  CHECK(size == 2);  // cut to the reader's buffer
+  CHECK(small[0] == 0xA1);
+  CHECK(small[1] == 0xB2);
+
+  REQUIRE(detail::pop_report(ring, out, size));
+  CHECK(size == 3);
+  CHECK(out[2] == 0xC3);
+  REQUIRE(detail::pop_report(ring, out, size));
+  CHECK_FALSE(detail::pop_report(ring, out, size));  // empty
 }

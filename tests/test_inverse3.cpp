@@ -23,12 +23,12 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "hapticfield/device/inverse3.hpp"
-#include "hapticfield/device/inverse3_codec.hpp"
-#include "hapticfield/device/serial_transport.hpp"
-#include "hapticfield/device/simulated_inverse3.hpp"
-#include "hapticfield/device/stream_framer.hpp"
+#include "hapticfield/arms/inverse3/inverse3.hpp"
+#include "hapticfield/arms/inverse3/inverse3_codec.hpp"
+#include "hapticfield/arms/inverse3/simulated_inverse3.hpp"
+#include "hapticfield/protocol/stream_framer.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport/serial_transport.hpp"
 #include "pty_pair.hpp"
 #include "test_fields.hpp"
 

@@ -7,9 +7,10 @@
 #include <stdexcept>
 #include <vector>
 
+#include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
 
 using namespace hapticfield;
 

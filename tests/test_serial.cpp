@@ -19,10 +19,11 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "hapticfield/device.hpp"
-#include "hapticfield/device/serial_transport.hpp"
+#include "hapticfield/arms.hpp"
 #include "hapticfield/firmware/stream_port.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
+#include "hapticfield/transport/serial_transport.hpp"
 #include "pty_pair.hpp"
 #include "test_fields.hpp"
 

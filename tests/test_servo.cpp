@@ -15,9 +15,10 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device.hpp"
 #include "hapticfield/servo.hpp"
+#include "hapticfield/transport.hpp"
 #include "test_fields.hpp"
 
 using namespace hapticfield;

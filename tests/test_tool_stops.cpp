@@ -40,10 +40,10 @@
 #endif
 
 #include "child_process.hpp"
-#include "hapticfield/device/firmware_loopback.hpp"
-#include "hapticfield/device/simulated_inverse3.hpp"
-#include "hapticfield/device/simulated_woody.hpp"
-#include "hapticfield/device/woody_codec.hpp"
+#include "hapticfield/arms/force_arm/firmware_loopback.hpp"
+#include "hapticfield/arms/inverse3/simulated_inverse3.hpp"
+#include "hapticfield/arms/woody/simulated_woody.hpp"
+#include "hapticfield/arms/woody/woody_codec.hpp"
 #include "hapticfield/firmware/stream_port.hpp"
 #include "pty_pair.hpp"
 

@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "hapticfield/arms/woody/simulated_woody.hpp"
+#include "hapticfield/arms/woody/woody_arm.hpp"
+#include "hapticfield/arms/woody/woody_codec.hpp"
+#include "hapticfield/arms/woody/woody_kinematics.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/device/simulated_woody.hpp"
-#include "hapticfield/device/woody_arm.hpp"
-#include "hapticfield/device/woody_codec.hpp"
-#include "hapticfield/device/woody_kinematics.hpp"
 #include "hapticfield/servo.hpp"
 #include "test_fields.hpp"
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "hapticfield/device/protocol.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield::cli {
 

@@ -2,10 +2,11 @@
 // simulated or real arm, with the GIL released for the whole run.
 #include "field.hpp"
 
-#include <hapticfield/device.hpp>
+#include <hapticfield/arms.hpp>
 #include <hapticfield/servo.hpp>
+#include <hapticfield/transport.hpp>
 #if HAPTICFIELD_PYTHON_HID
-#include <hapticfield/device/hid_transport.hpp>
+#include <hapticfield/transport/hid_transport.hpp>
 #endif
 
 #include <pybind11/stl.h>

@@ -11,7 +11,8 @@
 #include <cstring>
 #include <span>
 
-#include "hapticfield/device.hpp"
+#include "hapticfield/arms.hpp"
+#include "hapticfield/transport.hpp"
 
 namespace {
 

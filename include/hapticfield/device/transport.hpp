@@ -2,9 +2,10 @@
 /// @file transport.hpp
 /// The one seam between the protocol and the wire: read an input report
 /// (with a timeout), write an output report, get/send feature reports.
-/// Implementations: SimulatedTransport, ReplayTransport, RecordingTransport
-/// (a decorator) and HidTransport (hid_transport.hpp, the only code that
-/// includes hidapi.h).
+/// Implementations: HidTransport (transport/hid_transport.hpp, the only
+/// code that includes hidapi.h), SerialTransport, ReplayTransport,
+/// RecordingTransport (a decorator; all in transport/) and each arm
+/// family's simulated transport (arms/<family>/).
 
 #include <cstddef>
 #include <cstdint>

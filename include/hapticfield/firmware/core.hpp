@@ -19,8 +19,8 @@
 #include <cstdint>
 #include <span>
 
-#include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/status.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield::firmware {
 

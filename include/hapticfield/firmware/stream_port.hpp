@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <span>
 
-#include "hapticfield/device/stream_framer.hpp"
 #include "hapticfield/firmware/core.hpp"
+#include "hapticfield/protocol/stream_framer.hpp"
 
 namespace hapticfield::firmware {
 

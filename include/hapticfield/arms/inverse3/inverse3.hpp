@@ -23,8 +23,8 @@
 #include <glm/matrix.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/arms/inverse3/inverse3_codec.hpp"
 #include "hapticfield/core/error.hpp"
-#include "hapticfield/device/inverse3_codec.hpp"
 #include "hapticfield/device/state.hpp"
 #include "hapticfield/device/transport.hpp"
 

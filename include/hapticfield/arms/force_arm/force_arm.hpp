@@ -13,10 +13,10 @@
 
 #include <glm/vec3.hpp>
 
-#include "hapticfield/device/kinematics.hpp"
-#include "hapticfield/device/protocol.hpp"
+#include "hapticfield/arms/force_arm/kinematics.hpp"
 #include "hapticfield/device/state.hpp"
 #include "hapticfield/device/transport.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield {
 

@@ -19,11 +19,14 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <cwchar>
 #include <mutex>
+#include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -31,9 +34,9 @@
 
 #include "hapticfield/core/error.hpp"
 #include "hapticfield/device/device_error.hpp"
-#include "hapticfield/device/protocol.hpp"
-#include "hapticfield/device/spsc_ring.hpp"
 #include "hapticfield/device/transport.hpp"
+#include "hapticfield/protocol/reports.hpp"
+#include "hapticfield/rt/spsc_ring.hpp"
 
 namespace hapticfield {
 
@@ -77,6 +80,33 @@ inline void hid_init_once() {
   static const int r = hid_init();
   if (r != 0) throw DeviceError("HidTransport: hid_init failed");
 }
+/// One report as it waits in a queue between the servo and I/O threads:
+/// its bytes (at most 64) and how many.
+struct QueuedReport {
+  std::array<std::uint8_t, protocol::max_report_size> bytes{};
+  std::size_t size{0};
+};
+
+/// Queues a report (cut to 64 bytes); false when the ring is full.
+template <std::size_t N>
+bool push_report(rt::SpscRing<QueuedReport, N>& ring, std::span<const std::uint8_t> report) noexcept {
+  QueuedReport queued;
+  queued.size = report.size() < queued.bytes.size() ? report.size() : queued.bytes.size();
+  std::memcpy(queued.bytes.data(), report.data(), queued.size);
+  return ring.try_push(queued);
+}
+
+/// Copies the oldest queued report into out (cut to out's size) and its
+/// length into size; false when none is queued.
+template <std::size_t N>
+bool pop_report(rt::SpscRing<QueuedReport, N>& ring, std::span<std::uint8_t> out, std::size_t& size) noexcept {
+  const std::optional<QueuedReport> queued = ring.try_pop();
+  if (!queued) return false;
+  size = queued->size < out.size() ? queued->size : out.size();
+  std::memcpy(out.data(), queued->bytes.data(), size);
+  return true;
+}
+
 }  // namespace detail
 
 class HidTransport final : public Transport {
@@ -123,11 +153,11 @@ class HidTransport final : public Transport {
   /// Pops the oldest queued input report; with timeout_us > 0 spins (with
   /// yields) up to that long for one, then returns Status::timeout.
   Status read(std::span<std::uint8_t> buffer, std::size_t& size, int timeout_us) noexcept override {
-    if (input_.pop(buffer, size)) return Status::ok;
+    if (detail::pop_report(input_, buffer, size)) return Status::ok;
     if (timeout_us > 0) {
       const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(timeout_us);
       while (std::chrono::steady_clock::now() < deadline) {
-        if (input_.pop(buffer, size)) return Status::ok;
+        if (detail::pop_report(input_, buffer, size)) return Status::ok;
         if (disconnected_.load(std::memory_order_acquire)) return Status::disconnected;
         std::this_thread::yield();
       }
@@ -138,7 +168,7 @@ class HidTransport final : public Transport {
 
   Status write(std::span<const std::uint8_t> report) noexcept override {
     if (disconnected_.load(std::memory_order_acquire)) return Status::disconnected;
-    return output_.push(report) ? Status::ok : Status::overflow;
+    return detail::push_report(output_, report) ? Status::ok : Status::overflow;
   }
 
   /// Feature reports are setup calls: they take the device lock the I/O
@@ -185,11 +215,11 @@ class HidTransport final : public Transport {
         disconnected_.store(true, std::memory_order_release);
         return;
       }
-      if (n > 0 && !input_.push(std::span<const std::uint8_t>(in.data(), static_cast<std::size_t>(n))))
+      if (n > 0 && !detail::push_report(input_, std::span<const std::uint8_t>(in.data(), static_cast<std::size_t>(n))))
         overflows_.fetch_add(1, std::memory_order_relaxed);
       // Write only the newest pending command; older ones are stale.
       std::size_t size = 0, newest = 0;
-      while (output_.pop(out, size))
+      while (detail::pop_report(output_, out, size))
         newest = size;
       if (newest) {
         std::lock_guard<std::mutex> lock(device_mutex_);
@@ -205,8 +235,8 @@ class HidTransport final : public Transport {
   std::string path_;
   std::thread io_;
   std::mutex device_mutex_;
-  detail::ReportRing<256> input_;
-  detail::ReportRing<16> output_;
+  rt::SpscRing<detail::QueuedReport, 256> input_;
+  rt::SpscRing<detail::QueuedReport, 16> output_;
   std::atomic<bool> running_{false};
   std::atomic<bool> disconnected_{false};
   std::atomic<std::uint64_t> overflows_{0};

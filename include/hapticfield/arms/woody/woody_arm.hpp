@@ -20,11 +20,11 @@
 
 #include <glm/vec3.hpp>
 
+#include "hapticfield/arms/woody/woody_codec.hpp"
+#include "hapticfield/arms/woody/woody_kinematics.hpp"
 #include "hapticfield/core/error.hpp"
 #include "hapticfield/device/state.hpp"
 #include "hapticfield/device/transport.hpp"
-#include "hapticfield/device/woody_codec.hpp"
-#include "hapticfield/device/woody_kinematics.hpp"
 
 namespace hapticfield {
 

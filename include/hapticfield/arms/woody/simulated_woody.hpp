@@ -1,9 +1,10 @@
 #pragma once
 /// @file simulated_woody.hpp
 /// A simulated WoodenHaptics arm for tests and demos: the serial woody
-/// kinematics, the joint dynamics of SimulatedArm (inertia, viscous and
-/// Coulomb friction, joint stops, the scripted Hand), and the firmware
-/// behaviour of each wire generation (arm-protocols.md section 1):
+/// kinematics, the joint dynamics (inertia, viscous and Coulomb friction,
+/// joint stops) and the scripted Hand every simulated arm uses
+/// (simulation/), and the firmware behaviour of each wire generation
+/// (arm-protocols.md section 1):
 ///   P1: an 8-byte report every tick; 0.5 s watchdog; |I| saturates at 3 A.
 ///   P2: lock-step (one 14-byte report per command, one at power-up); the
 ///       calibrate command; 0.5 s watchdog; |I| saturates at 3 A.
@@ -23,10 +24,11 @@
 
 #include <glm/vec3.hpp>
 
-#include "hapticfield/device/simulated_arm.hpp"
+#include "hapticfield/arms/woody/woody_codec.hpp"
+#include "hapticfield/arms/woody/woody_kinematics.hpp"
 #include "hapticfield/device/transport.hpp"
-#include "hapticfield/device/woody_codec.hpp"
-#include "hapticfield/device/woody_kinematics.hpp"
+#include "hapticfield/simulation/joint_dynamics.hpp"
+#include "hapticfield/simulation/scripted_hand.hpp"
 
 namespace hapticfield {
 

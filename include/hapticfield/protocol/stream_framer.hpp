@@ -26,8 +26,8 @@
 #include <cstring>
 #include <span>
 
-#include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/status.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield {
 

@@ -19,9 +19,9 @@
 
 #include <glm/vec3.hpp>
 
-#include "hapticfield/device/inverse3_codec.hpp"
-#include "hapticfield/device/stream_framer.hpp"
+#include "hapticfield/arms/inverse3/inverse3_codec.hpp"
 #include "hapticfield/device/transport.hpp"
+#include "hapticfield/protocol/stream_framer.hpp"
 
 namespace hapticfield {
 

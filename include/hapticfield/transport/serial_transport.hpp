@@ -33,9 +33,9 @@
 #include <string_view>
 
 #include "hapticfield/device/device_error.hpp"
-#include "hapticfield/device/protocol.hpp"
-#include "hapticfield/device/stream_framer.hpp"
 #include "hapticfield/device/transport.hpp"
+#include "hapticfield/protocol/reports.hpp"
+#include "hapticfield/protocol/stream_framer.hpp"
 
 namespace hapticfield {
 

@@ -19,11 +19,11 @@
 
 #include <glm/vec3.hpp>
 
-#include "hapticfield/device/link_faults.hpp"
-#include "hapticfield/device/protocol.hpp"
-#include "hapticfield/device/simulated_arm.hpp"
+#include "hapticfield/arms/force_arm/link_faults.hpp"
+#include "hapticfield/arms/force_arm/simulated_arm.hpp"
 #include "hapticfield/device/transport.hpp"
 #include "hapticfield/firmware/core.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield {
 

@@ -17,8 +17,8 @@
 #include <utility>
 #include <vector>
 
-#include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/transport.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield {
 

@@ -12,8 +12,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "hapticfield/device/protocol.hpp"
 #include "hapticfield/device/status.hpp"
+#include "hapticfield/protocol/reports.hpp"
 
 namespace hapticfield {
 
