@@ -87,7 +87,7 @@ struct ShapeScene {
     hi = {(grid.width - 1) * spacing, (grid.height - 1) * spacing, *zhi};
     scene.shift = glm::dvec3{-0.5 * (lo.x + hi.x), -0.5 * (lo.y + hi.y), config.top_mm * 1e-3 - hi.z};
     scene.display = display_height_grid(grid, scene.shift, config.display_triangles);
-    std::snprintf(text, sizeof text, "%s: height map %d x %d px, %.1f mm high", name.c_str(), grid.width, grid.height,
+    std::snprintf(text, sizeof text, "%s: %d x %d heights, %.1f mm", name.c_str(), grid.width, grid.height,
                   config.height_mm);
   } else {
     io::LoadedMesh loaded = io::load_mesh(path);
@@ -109,7 +109,7 @@ struct ShapeScene {
     hi *= scale;
     scene.shift = glm::dvec3{-0.5 * (lo.x + hi.x), -0.5 * (lo.y + hi.y), config.top_mm * 1e-3 - hi.z};
     scene.display = display_mesh(mesh, scene.shift, config.display_triangles);
-    std::snprintf(text, sizeof text, "%s: %zu triangles, scaled x%.3g", name.c_str(), mesh.triangles.size(), scale);
+    std::snprintf(text, sizeof text, "%s: %zu triangles", name.c_str(), mesh.triangles.size());
     scene.mesh.emplace(with_vertex_normals(std::move(mesh)));
   }
   scene.label = text;
@@ -120,28 +120,46 @@ struct ShapeScene {
 }
 
 /// The proxy on a shape placed with `shift`, as a field in the device
-/// frame: F = Fc of the proxy. Servo path: noexcept, no allocation.
+/// frame: F = Fc of the proxy. The proxy starts at `outside` (a free point
+/// above the shape, device frame) and sweeps from there to the first HIP,
+/// so a handle that is already inside the solid when the field starts (or
+/// restarts: reset()) is pushed out rather than taken as free. Servo path:
+/// noexcept, no allocation.
 template <Shape S>
 class ShapeProxyField {
  public:
-  ShapeProxyField(S shape, const glm::dvec3& shift, const ProxyConfig& config = {})
-      : proxy_(std::move(shape), config), shift_(shift) {}
+  ShapeProxyField(S shape, const glm::dvec3& shift, const glm::dvec3& outside, const ProxyConfig& config = {})
+      : proxy_(std::move(shape), config), shift_(shift), outside_(outside) {}
 
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
     Probe local = probe;
+    if (fresh_) {  // the proxy's first position: outside
+      fresh_ = false;
+      proxy_.reset();
+      local.position = outside_ - shift_;
+      local.velocity = glm::dvec3{0.0};
+      (void)proxy_.contact(local);
+      local = probe;
+    }
     local.position -= shift_;
     contact_ = proxy_.contact(local);
     return contact_.force;
   }
-  void reset() noexcept { proxy_.reset(); }
+  /// The next tick starts the proxy from `outside` again.
+  void reset() noexcept {
+    fresh_ = true;
+    contact_ = Contact{};
+  }
 
-  /// The proxy in the device frame [m] (the HIP before the first tick).
-  [[nodiscard]] glm::dvec3 proxy() const noexcept { return proxy_.proxy() + shift_; }
+  /// The proxy in the device frame [m] (`outside` before the first tick).
+  [[nodiscard]] glm::dvec3 proxy() const noexcept { return fresh_ ? outside_ : proxy_.proxy() + shift_; }
   [[nodiscard]] const Contact& last_contact() const noexcept { return contact_; }
 
  private:
   ProxyConstraint<S> proxy_;
   glm::dvec3 shift_;
+  glm::dvec3 outside_;
+  bool fresh_{true};
   Contact contact_{};
 };
 
