@@ -3,14 +3,17 @@
 // pinhole projection of known points, the pixels a known triangle covers,
 // the z-buffer keeping the nearer of two triangles, back faces culled, a
 // sphere's silhouette radius f r / sqrt(d^2 - r^2), and decimation for
-// display within its budget.
+// display within its budget, and the mouse's 3D handle position.
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <numbers>
 
+#include "hapticfield/core/plane_mapping.hpp"
+#include "hapticfield/servo/clock.hpp"
 #include "view/display_mesh.hpp"
 #include "view/mesh_render.hpp"
+#include "view/mouse_device.hpp"
 #include "view/orbit_camera.hpp"
 #include "view/scene3d.hpp"
 #include "view/uv_sphere.hpp"
@@ -242,4 +245,22 @@ TEST_CASE("the 3D frame marks the proxy and the HIP where they project", "[view3
   CHECK(t.image.at<cv::Vec3b>(marks.proxy) == cv::Vec3b(255, 0, 255));
   CHECK(marks.hip.x == static_cast<int>(std::lround(h.pixel.x - 0.5)));
   CHECK(t.image.at<cv::Vec3b>(marks.hip + cv::Point(hip_radius_px, 0)) == cv::Vec3b(0, 255, 0));
+}
+
+TEST_CASE("MouseDevice in the 3D view: the handle where set_position put it, to 0.25 um", "[view3d]") {
+  VirtualClock clock;
+  MouseDevice<VirtualClock> mouse(PlaneMapping::fit(800, 600, 80.0), clock);
+  DeviceState state;
+  for (const glm::dvec3 p : {glm::dvec3{0.0123456, -0.0456789, 0.001}, glm::dvec3{-0.25, 0.25, -0.1234567}}) {
+    mouse.set_position(p);
+    clock.advance(1'000'000);
+    REQUIRE(mouse.read(state) == Status::ok);
+    for (int k = 0; k < 3; ++k)
+      CHECK(std::abs(state.position[k] - p[k]) <= 0.125e-6 + 1e-15);
+  }
+  mouse.set_position(glm::dvec3{1.0, -1.0, 0.0});  // beyond the range: clamped, finite
+  clock.advance(1'000'000);
+  REQUIRE(mouse.read(state) == Status::ok);
+  CHECK(state.position.x == Approx(0.262144).epsilon(1e-5));
+  CHECK(state.position.y == Approx(-0.262144).epsilon(1e-5));
 }
