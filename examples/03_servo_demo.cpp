@@ -95,8 +95,8 @@ constexpr const char* usage_text =
     "                        Inverse3 on the tty PATH (never run on a real one: check its frame)\n"
     "  --shape FILE          feel a mesh (.stl, .obj, .gltf, .glb) or a height map picture (white\n"
     "                        high) through a proxy (k = 1500 N/m) instead of --field: scaled so its\n"
-    "                        footprint spans 80 mm, its top 1 mm below the start; the hand scans 8 mm\n"
-    "                        below its top\n"
+    "                        footprint spans 80 mm, its top 1 mm below the start; the hand scans 70 %\n"
+    "                        of the footprint 8 mm below its top\n"
     "  --height-mm H         a height map's height of white over black [mm], in (0, 100] (default 4)\n"
     "  --snapshot OUT.png    with --shape: write the 3D view of the shape, the proxy, the HIP and the\n"
     "                        force at the end of the run (800 x 600 px, no display needed)\n"
@@ -505,9 +505,13 @@ int run(const Arguments& o) {
   const auto now = [&clocks] { return clocks.now(); };
   // The hand aims 8 mm behind the picture plane or the shape's top (its
   // spring then presses with up to 300 N/m * 8 mm = 2.4 N) and raster-scans
-  // 90 % of the picture or of the shape's footprint.
+  // 90 % of the picture or 70 % of the shape's footprint.
+  // A shape's scan keeps to 70 %: the handle overshoots the scan's first
+  // corner as the hand catches it, and a hand that leaves a height map's
+  // edge below its top is under the sheet (surfaces are one-sided).
+  const double cover = o.shape.empty() ? 0.9 : 0.7;
   const auto scan = [&](glm::dvec3 centre) {
-    return HandPath::raster(centre + surface + glm::dvec3{0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
+    return HandPath::raster(centre + surface + glm::dvec3{0.0, 0.0, -0.008}, width * cover, height * cover, 8, 0.06);
   };
 
   if (o.device.rfind("inverse3:", 0) == 0) {

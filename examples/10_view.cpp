@@ -786,11 +786,13 @@ int run_shape_with(const Arguments& o, const ShapeScene& scene, Field& field) {
   std::unique_ptr<Transport> transport;
   bool hardware = false;
   if (o.device == "sim") {
-    // the hand aims 8 mm below the shape's top and raster-scans 90 % of its footprint
+    // the hand aims 8 mm below the shape's top and raster-scans 70 % of its
+    // footprint (the handle overshoots the first corner as the hand catches
+    // it; past a height map's edge below its top it would be under the sheet)
     SimulatedArmConfig c;
     const glm::vec3 extent = scene.display.hi - scene.display.lo;
-    c.hand.path = HandPath::raster(glm::dvec3{scene.centre.x, scene.centre.y, scene.top.z - 0.008}, extent.x * 0.9,
-                                   extent.y * 0.9, 8, 0.06);
+    c.hand.path = HandPath::raster(glm::dvec3{scene.centre.x, scene.centre.y, scene.top.z - 0.008}, extent.x * 0.7,
+                                   extent.y * 0.7, 8, 0.06);
     arm = std::make_unique<SimulatedArm>(c);
     transport = std::make_unique<SimulatedTransport>(*arm, now);
   } else {
