@@ -68,7 +68,8 @@ int main() {
       frames(name, sphere, default_display_triangles);
     }
   }
-  const std::filesystem::path data = std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / ".." / "shared" / "data" / "meshes";
+  const std::filesystem::path data =
+      std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / ".." / "shared" / "data" / "meshes";
   for (const char* file : {"stanford-bunny.obj", "rocker-arm.obj", "fandisk.obj"}) {
     const auto path = data / file;
     if (!std::filesystem::exists(path)) {
