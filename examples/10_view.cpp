@@ -46,6 +46,7 @@
 #include "common/stop_signal.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/device.hpp"
+#include "hapticfield/device/device_error.hpp"
 #include "hapticfield/image.hpp"
 #include "hapticfield/servo.hpp"
 #include "hapticfield/video.hpp"
