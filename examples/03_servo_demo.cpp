@@ -5,6 +5,7 @@
 //   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
 //              [--realtime off|best_effort|enforce] [--clock wall|virtual] [--trace OUT.csv] [--plots DIR]
 //              [--device sim|hid[:VID:PID]|serial:PATH|woody:p1|p2|p4[:PRESET][:sim|:PATH]|inverse3:PATH]
+//              [--shape FILE [--height-mm H] [--snapshot OUT.png] [--view YAW,PITCH] [--distance MM]]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -13,8 +14,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -41,6 +44,10 @@
 #if HAPTICFIELD_EXAMPLE_HID
 #include "hapticfield/transport/hid_transport.hpp"
 #endif
+#if HAPTICFIELD_EXAMPLE_SHAPES
+#include "view/scene3d.hpp"
+#include "view/shape_scene.hpp"
+#endif
 
 using namespace hapticfield;
 
@@ -56,6 +63,13 @@ struct Arguments {
   std::string plots;
   std::string device{"sim"};
   bool virtual_clock{false};  ///< --clock virtual: simulated time, as fast as the CPU allows
+  bool field_given{false};
+  // a shape felt through a proxy (--shape)
+  std::string shape;
+  double height_mm{4.0};
+  std::string snapshot;
+  double view_yaw{25.0}, view_pitch{30.0};  ///< [degrees]
+  double distance_mm{0.0};                  ///< 0: the shape fills about 70 % of the view
 };
 
 constexpr const char* usage_text =
@@ -81,6 +95,15 @@ constexpr const char* usage_text =
     "                        tty PATH), PRESET woody_v2015 (default), woodenhaptics_v2019,\n"
     "                        aluhaptics_v2 or vintage; :sim simulates it; inverse3:PATH: a Haply\n"
     "                        Inverse3 on the tty PATH (never run on a real one: check its frame)\n"
+    "  --shape FILE          feel a mesh (.stl, .obj, .gltf, .glb) or a height map picture (white\n"
+    "                        high) through a proxy (k = 1500 N/m) instead of --field: scaled so its\n"
+    "                        footprint spans 80 mm, its top 1 mm below the start; the hand scans 70 %\n"
+    "                        of the footprint 8 mm below its top\n"
+    "  --height-mm H         a height map's height of white over black [mm], in (0, 100] (default 4)\n"
+    "  --snapshot OUT.png    with --shape: write the 3D view of the shape, the proxy, the HIP and the\n"
+    "                        force at the end of the run (800 x 600 px, no display needed)\n"
+    "  --view YAW,PITCH      the snapshot's camera orbit [degrees] (default 25,30; see hapticfield_view)\n"
+    "  --distance MM         the snapshot camera's distance from the shape's centre [mm], in [1, 1e5]\n"
     "  -h, --help            this text\n"
     "Ctrl-C or SIGTERM stops the loop through its stop (zero force, then disarm).\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error, 128 + N stopped by signal N\n"
@@ -141,6 +164,20 @@ Arguments parse(cli::Parser& p) {
     if (p.is("--field")) {
       o.field = p.choice<const char*>(
           "field", {{"tangible", "tangible"}, {"wall", "wall"}, {"spring", "spring"}, {"none", "none"}});
+      o.field_given = true;
+    } else if (p.is("--shape")) {
+      o.shape = p.value();
+    } else if (p.is("--height-mm")) {
+      o.height_mm = p.real(cli::open_closed(0.0, 100.0));
+    } else if (p.is("--snapshot")) {
+      o.snapshot = p.output_file();
+    } else if (p.is("--view")) {
+      const auto [yaw, pitch] = p.pair(cli::closed(-180.0, 180.0));
+      if (pitch < -89.0 || pitch > 89.0) usage("--view pitch must be in [-89, 89] degrees");
+      o.view_yaw = yaw;
+      o.view_pitch = pitch;
+    } else if (p.is("--distance")) {
+      o.distance_mm = p.real(cli::closed(1.0, 1e5));
     } else if (p.is("--seconds")) {
       o.seconds = p.real(cli::open_closed(0.0, 3600.0));
     } else if (p.is("--rate")) {
@@ -169,6 +206,9 @@ Arguments parse(cli::Parser& p) {
       p.unknown();
     }
   }
+  if (!o.shape.empty() && (o.field_given || image_given))
+    usage("--shape is felt through its proxy: give no IMAGE or --field with it");
+  if (!o.snapshot.empty() && o.shape.empty()) usage("--snapshot draws the 3D view of --shape FILE: give --shape");
   WoodySpec woody_spec;
   const bool simulated = o.device == "sim" || (parse_woody(o.device, woody_spec) && woody_spec.simulated);
   if (o.virtual_clock && !simulated)
@@ -184,7 +224,7 @@ Arguments parse(cli::Parser& p) {
   }
   p.finish();  // the trace and plot paths, before the run
   // the picture, before the run (decoders' own complaints muted: one line)
-  (void)cli::quiet_stderr([&] { return load_image(o.image); });
+  if (o.shape.empty()) (void)cli::quiet_stderr([&] { return load_image(o.image); });
   return o;
 }
 
@@ -339,15 +379,16 @@ void write_period_histogram(const std::string& path, const DurationHistogram& pe
       << '\n';
 }
 
-/// One status line, rewritten in place; a latch is shown with its reason
-/// for as long as it holds.
-void print_status(const LoopSnapshot& s, std::uint32_t latched, double t) {
+/// One status line: on a terminal rewritten in place with '\r', into a file
+/// or a pipe a whole line; a latch is shown with its reason for as long as
+/// it holds.
+void print_status(const LoopSnapshot& s, std::uint32_t latched, double t, bool terminal) {
   std::printf(
-      "\r t %6.2f s | rate %8.2f Hz | period p50 %6.3f p99 %6.3f max %6.3f ms | late %3llu | peak %5.2f N | "
-      "latches %llu%s%s   ",
-      t, s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
+      "%s t %6.2f s | rate %8.2f Hz | period p50 %6.3f p99 %6.3f max %6.3f ms | late %3llu | peak %5.2f N | "
+      "latches %llu%s%s%s",
+      terminal ? "\r" : "", t, s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
       static_cast<unsigned long long>(s.overruns), s.peak_force, static_cast<unsigned long long>(s.latches),
-      latched ? " | ZERO FORCE: " : "", latched ? safety_events::names(latched).c_str() : "");
+      latched ? " | ZERO FORCE: " : "", latched ? safety_events::names(latched).c_str() : "", terminal ? "   " : "\n");
   std::fflush(stdout);
 }
 
@@ -381,37 +422,137 @@ struct Clocks {
   [[nodiscard]] std::int64_t now() const noexcept { return use_simulated ? simulated.now() : wall.now(); }
 };
 
+/// What the loop runs, and what happens after it.
+struct Felt {
+  AnyField field;
+  /// A shape's proxy starts only once the arm is armed (its pose before is
+  /// not to be felt); until then the field is reset and the force is zero.
+  bool wait_for_arm{false};
+  /// Called after the run with the last HIP [m] and commanded force [N]
+  /// (the --snapshot of a shape); may be empty.
+  std::function<void(const glm::dvec3&, const glm::dvec3&)> at_end;
+};
+
 template <Device D, ServoClock C>
-int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hardware);
+int run_demo(const Arguments& o, D& device, Felt& felt, C& clock, bool hardware);
 
 /// run_demo on the clock --clock chose.
 template <Device D>
-int run_on_clock(const Arguments& o, D& device, AnyField& field, Clocks& clocks, bool hardware) {
-  if (clocks.use_simulated) return run_demo(o, device, field, clocks.simulated, hardware);
-  return run_demo(o, device, field, clocks.wall, hardware);
+int run_on_clock(const Arguments& o, D& device, Felt& felt, Clocks& clocks, bool hardware) {
+  if (clocks.use_simulated) return run_demo(o, device, felt, clocks.simulated, hardware);
+  return run_demo(o, device, felt, clocks.wall, hardware);
 }
 
+#if HAPTICFIELD_EXAMPLE_SHAPES
+/// A field that forwards to one that stays put (the shape's proxy, read
+/// again after the run).
+template <class F>
+struct FieldRef {
+  F* field;
+  glm::dvec3 force(const Probe& p) noexcept { return field->force(p); }
+  void reset() noexcept { field->reset(); }
+};
+
+/// --shape: the scene, its proxy field, and the snapshot after the run.
+struct ShapeRun {
+  view::ShapeScene scene;
+  std::unique_ptr<view::ShapeProxyField<MeshShape>> mesh;
+  std::unique_ptr<view::ShapeProxyField<HeightFieldShape>> height_field;
+
+  [[nodiscard]] glm::dvec3 proxy() const { return mesh ? mesh->proxy() : height_field->proxy(); }
+  [[nodiscard]] bool touching() const {
+    return mesh ? mesh->last_contact().touching : height_field->last_contact().touching;
+  }
+};
+
+/// Loads --shape and sets `felt` up to feel it; the snapshot writes --snapshot.
+std::unique_ptr<ShapeRun> load_shape(const Arguments& o, Felt& felt) {
+  auto run = std::make_unique<ShapeRun>();
+  view::ShapeSceneConfig config;
+  config.height_mm = o.height_mm;
+  run->scene = cli::quiet_stderr([&] { return view::load_shape_scene(o.shape, config); });
+  const glm::dvec3 above = run->scene.top + glm::dvec3{0.0, 0.0, 0.005};  // where the proxy starts
+  if (run->scene.mesh) {
+    run->mesh =
+        std::make_unique<view::ShapeProxyField<MeshShape>>(std::move(*run->scene.mesh), run->scene.shift, above);
+    felt.field = AnyField(FieldRef<view::ShapeProxyField<MeshShape>>{run->mesh.get()});
+  } else {
+    run->height_field = std::make_unique<view::ShapeProxyField<HeightFieldShape>>(std::move(*run->scene.height_field),
+                                                                                  run->scene.shift, above);
+    felt.field = AnyField(FieldRef<view::ShapeProxyField<HeightFieldShape>>{run->height_field.get()});
+  }
+  felt.wait_for_arm = true;
+  std::printf("shape: %s\n", run->scene.label.c_str());
+  if (!o.snapshot.empty()) {
+    felt.at_end = [&o, shape = run.get()](const glm::dvec3& hip, const glm::dvec3& force) {
+      view::OrbitCamera camera;
+      camera.frame(shape->scene.centre, shape->scene.radius);
+      if (o.distance_mm > 0.0) camera.distance = o.distance_mm * 1e-3;
+      camera.yaw = o.view_yaw * std::numbers::pi / 180.0;
+      camera.pitch = o.view_pitch * std::numbers::pi / 180.0;
+      view::Sample3d now;
+      now.hip = hip;
+      now.proxy = shape->proxy();
+      now.force = force;
+      now.touching = shape->touching();
+      view::RenderTarget target;
+      const auto t0 = std::chrono::steady_clock::now();
+      const view::Scene3dMarks marks = view::draw_scene3d(target, shape->scene.display, camera, now);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (!cv::imwrite(o.snapshot, target.image)) throw FileError("--snapshot: cannot write '" + o.snapshot + "'");
+      std::printf("snapshot: %s, proxy at %d,%d and HIP at %d,%d px, %s; %zu triangles drawn in %.1f ms\n",
+                  o.snapshot.c_str(), marks.proxy.x, marks.proxy.y, marks.hip.x, marks.hip.y,
+                  now.touching ? "touching" : "not touching", marks.stats.drawn, ms);
+    };
+  }
+  return run;
+}
+#endif
+
 int run(const Arguments& o) {
-  const cv::Mat image = cv::imread(o.image, cv::IMREAD_COLOR);
-  if (image.empty()) throw std::runtime_error("cannot read image " + o.image);
-  const double workspace_mm = 80.0;  // the picture spans 80 mm of the device plane
-  const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, workspace_mm);
-  AnyField field = make_field(o.field, image, mapping);
+  Felt felt;
+  double width = 0.0, height = 0.0;  // the area scanned [m]
+  glm::dvec3 surface{0.0};           // the scan's centre on the surface (its top) [m]
+#if HAPTICFIELD_EXAMPLE_SHAPES
+  std::unique_ptr<ShapeRun> shape;
+#endif
+  if (o.shape.empty()) {
+    const cv::Mat image = cv::imread(o.image, cv::IMREAD_COLOR);
+    if (image.empty()) throw std::runtime_error("cannot read image " + o.image);
+    const double workspace_mm = 80.0;  // the picture spans 80 mm of the device plane
+    const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, workspace_mm);
+    felt.field = make_field(o.field, image, mapping);
+    width = image.cols / mapping.px_per_mm() * 1e-3;
+    height = image.rows / mapping.px_per_mm() * 1e-3;
+  } else {
+#if HAPTICFIELD_EXAMPLE_SHAPES
+    shape = load_shape(o, felt);
+    width = shape->scene.display.hi.x - shape->scene.display.lo.x;
+    height = shape->scene.display.hi.y - shape->scene.display.lo.y;
+    surface = shape->scene.top;
+#else
+    throw std::runtime_error("this build has no mesh readers (tinygltf and tinyobjloader): --shape is unavailable");
+#endif
+  }
 
   Clocks clocks;
   clocks.use_simulated = o.virtual_clock;
   const auto now = [&clocks] { return clocks.now(); };
-  const double width = image.cols / mapping.px_per_mm() * 1e-3, height = image.rows / mapping.px_per_mm() * 1e-3;
-  // The hand aims 8 mm behind the picture plane (its spring then presses
-  // with up to 300 N/m * 8 mm = 2.4 N) and raster-scans the picture.
+  // The hand aims 8 mm behind the picture plane or the shape's top (its
+  // spring then presses with up to 300 N/m * 8 mm = 2.4 N) and raster-scans
+  // 90 % of the picture or 70 % of the shape's footprint.
+  // A shape's scan keeps to 70 %: the handle overshoots the scan's first
+  // corner as the hand catches it, and a hand that leaves a height map's
+  // edge below its top is under the sheet (surfaces are one-sided).
+  const double cover = o.shape.empty() ? 0.9 : 0.7;
   const auto scan = [&](glm::dvec3 centre) {
-    return HandPath::raster(centre + glm::dvec3{0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
+    return HandPath::raster(centre + surface + glm::dvec3{0.0, 0.0, -0.008}, width * cover, height * cover, 8, 0.06);
   };
 
   if (o.device.rfind("inverse3:", 0) == 0) {
     SerialTransport port(o.device.substr(9), SerialConfig{.framing = Framing::fixed});
     Inverse3 device(port);  // throws hapticfield::Error naming the port when it stays silent
-    return run_on_clock(o, device, field, clocks, true);
+    return run_on_clock(o, device, felt, clocks, true);
   }
 
   WoodySpec woody_spec;
@@ -439,7 +580,7 @@ int run(const Arguments& o) {
       woody_link = std::make_unique<SerialTransport>(woody_spec.port, SerialConfig{.framing = Framing::lines});
     }
     WoodyArm device(*woody_link, wc);
-    return run_on_clock(o, device, field, clocks, !woody_spec.simulated);
+    return run_on_clock(o, device, felt, clocks, !woody_spec.simulated);
   }
 
   std::unique_ptr<SimulatedArm> arm;
@@ -466,11 +607,11 @@ int run(const Arguments& o) {
   }
 
   ForceArm device(*transport);
-  return run_on_clock(o, device, field, clocks, hardware);
+  return run_on_clock(o, device, felt, clocks, hardware);
 }
 
 template <Device D, ServoClock C>
-int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hardware) {
+int run_demo(const Arguments& o, D& device, Felt& felt, C& clock, bool hardware) {
   constexpr bool simulated_time = std::is_same_v<C, VirtualClock>;
   LoopConfig config;
   config.rate = o.rate;
@@ -495,7 +636,11 @@ int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hard
   auto callback = [&](const TickInput& in) noexcept {
     traced.open(in, in.probe.time - previous_time);
     previous_time = in.probe.time;
-    return field.force(in.probe);
+    if (felt.wait_for_arm && !(in.trusted && in.state.armed())) {
+      felt.field.reset();
+      return glm::dvec3{0.0};
+    }
+    return felt.field.force(in.probe);
   };
 
   cli::LoopThread servo(loop, callback, {.max_ticks = ticks});
@@ -509,21 +654,28 @@ int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hard
   const auto elapsed = [&] {
     return simulated_time ? static_cast<double>(clock.now() - loop_start) * 1e-9 : wall_elapsed();
   };
+  // On a terminal one live line every 200 ms; into a file or a pipe a
+  // whole line every 10 s and the last one.
+  const bool terminal = cli::stdout_is_terminal();
+  double printed_at = wall_elapsed();
   while (!servo.done()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const LoopSnapshot s = loop.statistics();
     if (s.latches > latches_shown) {  // every latch gets a line of its own
       latches_shown = s.latches;
       std::printf(
-          "\n t %6.2f s: the safety chain latched (%s): zero force, disarmed; re-arming once states are "
+          "%s t %6.2f s: the safety chain latched (%s): zero force, disarmed; re-arming once states are "
           "fresh for %.1f s\n",
-          elapsed(), safety_events::names(s.last_latch).c_str(), config.recover_after);
+          terminal ? "\n" : "", elapsed(), safety_events::names(s.last_latch).c_str(), config.recover_after);
     }
-    print_status(s, loop.safety().latched(), elapsed());
+    if (terminal || wall_elapsed() - printed_at >= 10.0) {
+      print_status(s, loop.safety().latched(), elapsed(), terminal);
+      printed_at = wall_elapsed();
+    }
   }
   servo.join();
-  print_status(loop.statistics(), loop.safety().latched(), elapsed());
-  std::printf("\n");
+  print_status(loop.statistics(), loop.safety().latched(), elapsed(), terminal);
+  if (terminal) std::printf("\n");
   const bool disconnected = servo.outcome() == StopReason::disconnected;
   if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
   if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
@@ -550,6 +702,7 @@ int run_demo(const Arguments& o, D& device, AnyField& field, C& clock, bool hard
                 loop.safety().latched() ? "; still latched at the end" : "");
   }
   print_link(device);
+  if (felt.at_end) felt.at_end(rows.empty() ? glm::dvec3{0.0} : rows.back().position, loop.last_command());
   if (!o.trace.empty()) {
     write_trace(o.trace, rows);
     std::printf("trace: %s (%zu rows)\n", o.trace.c_str(), rows.size());

@@ -9,9 +9,12 @@
 // LiveField. --screenshot draws the same view off-screen (no display).
 // A video is felt through a VideoField, and the window shows the frame
 // being felt (the newest decoded frame at the loop's video time).
+// --shape shows a mesh or a height map in a 3D view (our own software
+// renderer, view/mesh_render.hpp) with the proxy, the HIP and the force.
 //
 //   hapticfield_view SOURCE [--field tangible|video|normals|texture] [field options]
 //       [--device mouse|sim|hid[:VID:PID]] [--screenshot OUT.png --seconds S]
+//   hapticfield_view --shape FILE [--height-mm H] [--view YAW,PITCH] [--distance MM] [same probe options]
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -24,6 +27,7 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -42,18 +46,24 @@
 #include "common/stop_signal.hpp"
 #include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
+#include "hapticfield/device/device_error.hpp"
 #include "hapticfield/image.hpp"
 #include "hapticfield/servo.hpp"
 #include "hapticfield/transport.hpp"
 #include "hapticfield/video.hpp"
 #include "view/mouse_device.hpp"
+#include "view/orbit_camera.hpp"
 #include "view/sample_ring.hpp"
 #include "view/scene.hpp"
+#include "view/scene3d.hpp"
 #include "view/scope.hpp"
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
 #include "hapticfield/transport/hid_transport.hpp"
+#endif
+#if HAPTICFIELD_EXAMPLE_SHAPES
+#include "view/shape_scene.hpp"
 #endif
 
 using namespace hapticfield;
@@ -90,11 +100,19 @@ constexpr const char* usage_text =
     "stochastic texture:\n"
     "  --grain MM           Gaussian lattice spacing [mm], in [0.1, 50] (default 2)\n"
     "  --texture-gain N     force per texture unit [N], in [0, 5] (default 0.5)\n"
+    "a shape in 3D (instead of SOURCE; felt through a proxy, k = 1500 N/m):\n"
+    "  --shape FILE         a mesh (.stl, .obj, .gltf, .glb) or a height map picture (white high),\n"
+    "                       scaled so its footprint spans 80 mm, its top 1 mm below the start\n"
+    "  --height-mm H        a height map's height of white over black [mm], in (0, 100] (default 4)\n"
+    "  --view YAW,PITCH     the camera's orbit [degrees]: yaw in [-180, 180] about y (up), pitch in\n"
+    "                       [-89, 89] (default 25,30; 0,0 looks from +z, the user's side)\n"
+    "  --distance MM        the camera's distance from the shape's centre [mm], in [1, 1e5]\n"
+    "                       (default: the shape fills about 70 % of the view's height)\n"
     "probe and loop:\n"
     "  --device D           mouse (default: forces shown, not felt), sim (the simulated arm's\n"
     "                       scripted hand raster-scans the picture) or hid[:VID:PID] (a real arm)\n"
     "  --start X,Y          the mouse probe's position before the pointer moves [px]\n"
-    "                       (default: the picture's centre)\n"
+    "                       (default: the picture's centre); a shape's HIP starts 5 mm above its top\n"
     "  --rate HZ            servo rate [Hz], in [1, 10000] (default 1000)\n"
     "  --realtime R         off, best_effort (default) or enforce\n"
     "  --seconds S          stop after S [s], in (0, 3600] (window: default until q or Esc)\n"
@@ -103,6 +121,8 @@ constexpr const char* usage_text =
     "  -h, --help           this text\n"
     "Keys: f field, m mask, + / - size (texture: grain), b border, d denoise, space pause and\n"
     "resume, [ ] seek -5 s / +5 s (the video field), s screenshot, q or Esc quit.\n"
+    "A shape: the mouse moves the HIP in the view plane, the wheel or [ ] push it in and out\n"
+    "(1 mm), right-drag or j l i k orbit, + - zoom, r resets the view, s screenshot, q or Esc quit.\n"
     "Ctrl-C or SIGTERM stops the loop through its stop (zero force, then disarm).\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error, 128 + N stopped by signal N.\n";
 
@@ -121,6 +141,11 @@ struct Arguments {
   std::optional<double> seconds;
   std::string screenshot;
   std::string shots{"."};
+  // a shape in 3D
+  std::string shape;
+  double height_mm{4.0};
+  glm::dvec2 view_deg{25.0, 30.0};  ///< yaw, pitch [degrees]
+  std::optional<double> distance_mm;
 };
 
 [[noreturn]] void usage(const std::string& error) {
@@ -147,6 +172,11 @@ bool is_still_picture(const std::string& path) {
   } catch (const std::exception&) {
     return false;
   }
+}
+
+/// The status panel's name of the device: the simulated arm says so.
+std::string device_label(const std::string& option, const std::string& name) {
+  return option == "sim" ? "simulated arm (no real device)" : name;
 }
 
 bool valid_device(const std::string& d) {
@@ -244,13 +274,30 @@ Arguments parse(cli::Parser& p) {
       o.screenshot = p.output_file();
     } else if (p.is("--shots")) {
       o.shots = p.output_dir();
+    } else if (p.is("--shape")) {
+      o.shape = p.value();
+    } else if (p.is("--height-mm")) {
+      o.height_mm = p.real(cli::open_closed(0.0, 100.0));
+    } else if (p.is("--view")) {
+      const auto [yaw, pitch] = p.pair(cli::closed(-180.0, 180.0));
+      if (pitch < -89.0 || pitch > 89.0)
+        usage("--view pitch must be in [-89, 89] degrees, got " + cli::detail::number_text(pitch));
+      o.view_deg = glm::dvec2{yaw, pitch};
+    } else if (p.is("--distance")) {
+      o.distance_mm = p.real(cli::closed(1.0, 1e5));
     } else if (p.positional() && o.source.empty()) {
       o.source = p.token();
     } else {
       p.unknown();
     }
   }
-  if (o.source.empty()) usage("missing SOURCE (a picture or a video file)");
+  if (!o.shape.empty()) {
+    if (!o.source.empty()) usage("give SOURCE or --shape, not both ('" + o.source + "' and --shape " + o.shape + ")");
+    if (o.kind_given) usage("--field is for a picture or a video; --shape is felt through its proxy");
+    if (o.start) usage("--start is a picture's pixel; a shape's HIP starts 5 mm above its top");
+    if (!o.video_only.empty()) usage(o.video_only.front() + " is for a video, not --shape");
+  }
+  if (o.source.empty() && o.shape.empty()) usage("missing SOURCE (a picture or a video file) or --shape FILE");
   if (!o.screenshot.empty() && !o.seconds) usage("--screenshot needs --seconds (how long the loop runs first)");
   if (o.seconds && std::llround(*o.seconds * o.rate) < 1) {
     char text[160];
@@ -329,7 +376,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   now.pixel = o.start ? *o.start : glm::dvec2{picture.cols / 2.0, picture.rows / 2.0};
   ViewStatus status;
   status.source = std::filesystem::path(o.source).filename().string();
-  status.device = device.info().name;
+  status.device = device_label(o.device, device.info().name);
   status.field = scene.label;
   const bool window = o.screenshot.empty();
   double note_until = 0.0;  // [s of loop time]
@@ -506,7 +553,291 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   return stop.caught() ? stop.exit_status() : 0;
 }
 
+// ---- a shape in 3D (--shape) ------------------------------------------------
+
+#if HAPTICFIELD_EXAMPLE_SHAPES
+
+/// What the window thread shares with the mouse callback in the 3D view.
+struct ShapePointer {
+  const ViewLayout* layout{nullptr};
+  OrbitCamera* camera{nullptr};
+  MouseDevice<SteadyClock>* mouse{nullptr};  ///< null: an arm moves the HIP
+  glm::dvec3 hip{0.0};                       ///< where the mouse put the HIP [m]
+  cv::Point drag{-1, -1};                    ///< right-drag start (canvas px)
+  double drag_yaw{0.0}, drag_pitch{0.0};     ///< the camera's angles then [rad]
+};
+
+constexpr double degree = std::numbers::pi / 180.0;
+constexpr double push_step = 1e-3;  ///< one wheel notch or [ ] key [m]
+
+void push_hip(ShapePointer& p, double steps) {
+  if (!p.mouse) return;
+  p.hip += steps * push_step * p.camera->forward();
+  p.mouse->set_position(p.hip);
+}
+
+void on_shape_mouse(int event, int x, int y, int flags, void* user) {
+  auto* p = static_cast<ShapePointer*>(user);
+  if (event == cv::EVENT_RBUTTONDOWN) {
+    p->drag = {x, y};
+    p->drag_yaw = p->camera->yaw;
+    p->drag_pitch = p->camera->pitch;
+    return;
+  }
+  if (event == cv::EVENT_RBUTTONUP) {
+    p->drag = {-1, -1};
+    return;
+  }
+  if (event == cv::EVENT_MOUSEMOVE && (flags & cv::EVENT_FLAG_RBUTTON) && p->drag.x >= 0) {  // orbit
+    p->camera->yaw = p->drag_yaw - (x - p->drag.x) * 0.5 * degree;
+    p->camera->pitch =
+        std::clamp(p->drag_pitch + (y - p->drag.y) * 0.5 * degree, -OrbitCamera::max_pitch, OrbitCamera::max_pitch);
+    return;
+  }
+  if (event == cv::EVENT_MOUSEWHEEL || event == cv::EVENT_MOUSEHWHEEL) {
+    push_hip(*p, cv::getMouseWheelDelta(flags) > 0 ? 1.0 : -1.0);
+    return;
+  }
+  if (event != cv::EVENT_MOUSEMOVE || !p->mouse) return;
+  // the HIP moves in the view plane: same depth, under the pointer
+  const glm::dvec2 px = p->layout->to_picture(x, y) + glm::dvec2{0.5};
+  const double depth = std::max(1e-3, p->camera->project(p->hip).depth);
+  p->hip = p->camera->unproject(
+      glm::dvec2{std::clamp(px.x, 0.0, p->camera->width * 1.0), std::clamp(px.y, 0.0, p->camera->height * 1.0)}, depth);
+  p->mouse->set_position(p->hip);
+}
+
+/// The loop on its own thread, the 3D view on this one.
+template <Device D, class Field>
+int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene& scene, SteadyClock& clock,
+                   bool hardware, MouseDevice<SteadyClock>* mouse, const glm::dvec3& start) {
+  LoopConfig config;
+  config.rate = o.rate;
+  config.realtime = o.realtime;
+  config.recover_after = 0.5;
+  ServoLoop<D, SteadyClock> loop(device, clock, config);
+  cli::StopOnSignal stop(loop);
+  SampleRing<8192, Sample3d> ring;
+  if (hardware) cli::wait_for_operator();
+  if (stop.caught()) return stop.exit_status();
+  std::printf("%s on %s (Ctrl-C stops; so do q and Esc in the window)\n", o.shape.c_str(),
+              device_label(o.device, device.info().name).c_str());
+  std::fflush(stdout);
+
+  auto tick = [&](const TickInput& in) noexcept {
+    // an arm's pose before it is armed is not to be felt: the proxy starts
+    // (from above the shape) once it is
+    glm::dvec3 f{0.0};
+    if (in.trusted && in.state.armed())
+      f = field.force(in.probe);
+    else
+      field.reset();
+    (void)ring.push(
+        {in.probe.time, in.probe.position, field.proxy(), loop.last_command(), field.last_contact().touching});
+    return f;
+  };
+  const std::uint64_t ticks = o.seconds ? static_cast<std::uint64_t>(std::llround(*o.seconds * o.rate)) : no_tick_limit;
+  cli::LoopThread servo(loop, tick, {.max_ticks = ticks});
+
+  OrbitCamera camera;
+  const auto reset_view = [&] {
+    camera.frame(scene.centre, scene.radius);
+    if (o.distance_mm) camera.distance = *o.distance_mm * 1e-3;
+    camera.yaw = o.view_deg.x * degree;
+    camera.pitch = o.view_deg.y * degree;
+  };
+  reset_view();
+  const ViewLayout layout = ViewLayout::for_picture(camera.width, camera.height);
+  Scope scope;
+  Sample3d now;
+  now.hip = now.proxy = start;
+  ViewStatus status;
+  status.source = scene.label;
+  status.device = device_label(o.device, device.info().name);
+  status.field = "proxy (god-object), k 1500 N/m";
+  status.keys = {"mouse: HIP in the view plane; wheel or [ ]:", "push it in / out 1 mm; right-drag or j l i k:",
+                 "orbit; + - zoom, r reset, s shot, q quit"};
+  const bool window = o.screenshot.empty();
+  double note_until = 0.0;
+  double frame_ms = 0.0;
+  const auto drain = [&] {
+    Sample3d s;
+    while (ring.pop(s)) {
+      scope.add(ViewSample{s.t, glm::dvec2{0.0}, s.force});
+      now = s;
+    }
+    status.loop = loop.statistics();
+    status.latched = loop.safety().latched() != 0;
+    status.latch_bits = loop.safety().latched();
+    status.dropped = ring.dropped();
+    char text[160];
+    std::snprintf(text, sizeof text, "depth %.2f mm   3D frame %.1f ms",
+                  now.touching ? glm::length(now.proxy - now.hip) * 1e3 : 0.0, frame_ms);
+    status.probe_line = text;
+  };
+  RenderTarget target;
+  cv::Mat canvas;
+  ViewDrawConfig draw;
+  draw.probe_marks = false;
+  Scene3dMarks marks;
+  const auto draw_frame = [&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    marks = draw_scene3d(target, scene.display, camera, now);
+    frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    draw_view(canvas, layout, target.image, scope, ViewSample{now.t, glm::dvec2{0.0}, now.force}, status, draw);
+  };
+  ShapePointer pointer{&layout, &camera, mouse, start};
+  int shot = 0;
+  if (window) {
+    cv::namedWindow(window_title, cv::WINDOW_AUTOSIZE);
+    cv::setMouseCallback(window_title, on_shape_mouse, &pointer);
+  }
+  while (!servo.done()) {
+    drain();
+    if (!window) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
+    if (now.t > note_until) status.note.clear();
+    draw_frame();
+    cv::imshow(window_title, canvas);
+    const int key = cv::waitKey(10) & 0xff;
+    if (cv::getWindowProperty(window_title, cv::WND_PROP_VISIBLE) < 1.0) break;
+    switch (key) {
+      case 'q':
+      case 27:
+        loop.request_stop();
+        break;
+      case '[':
+      case ']':
+        if (mouse)
+          push_hip(pointer, key == '[' ? 1.0 : -1.0);
+        else
+          status.note = "an arm moves the HIP here", note_until = now.t + 3.0;
+        break;
+      case 'j':
+      case 'l':
+        camera.yaw += (key == 'j' ? 10.0 : -10.0) * degree;
+        break;
+      case 'i':
+      case 'k':
+        camera.pitch = std::clamp(camera.pitch + (key == 'i' ? 10.0 : -10.0) * degree, -OrbitCamera::max_pitch,
+                                  OrbitCamera::max_pitch);
+        break;
+      case '+':
+      case '=':
+      case '-':
+        camera.distance *= key == '-' ? 1.2 : 1.0 / 1.2;
+        break;
+      case 'r':
+        reset_view();
+        break;
+      case 's': {
+        const std::string path =
+            (std::filesystem::path(o.shots) / ("hapticfield_view_" + std::to_string(++shot) + ".png")).string();
+        status.note = cv::imwrite(path, canvas) ? "saved " + path : "cannot write " + path;
+        note_until = now.t + 3.0;
+        break;
+      }
+      default:
+        break;
+    }
+  }
+  loop.request_stop();
+  servo.join();
+  drain();
+  if (window) cv::destroyAllWindows();
+  const bool disconnected = servo.outcome() == StopReason::disconnected;
+  if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
+  const LoopSnapshot& s = status.loop;
+  std::printf(
+      "%llu ticks at %.2f Hz, period p50 %.4f / p99 %.4f / max %.4f ms, late ticks %llu, missed deadlines "
+      "%llu, safety events %llu (ticks whose force the safety chain clamped, slowed, damped or zeroed), latches "
+      "%llu\n",
+      static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
+      static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines),
+      static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
+  if (!o.screenshot.empty()) {
+    draw_frame();  // once to time it, then with the time shown
+    drain();
+    draw_frame();
+    if (!cv::imwrite(o.screenshot, canvas)) throw FileError("--screenshot: cannot write '" + o.screenshot + "'");
+    const cv::Point off = layout.picture.tl();
+    std::printf(
+        "screenshot: %s, proxy at %d,%d and HIP at %d,%d (on the screenshot), %s; %zu triangles drawn in %.1f ms\n",
+        o.screenshot.c_str(), marks.proxy.x + off.x, marks.proxy.y + off.y, marks.hip.x + off.x, marks.hip.y + off.y,
+        now.touching ? "touching" : "not touching", marks.stats.drawn, frame_ms);
+  }
+  if (disconnected) throw DeviceError("the device disconnected during the run; zero force was commanded");
+  return stop.caught() ? stop.exit_status() : 0;
+}
+
+/// The shape's proxy against the mouse, the simulated arm or a real arm.
+template <class Field>
+int run_shape_with(const Arguments& o, const ShapeScene& scene, Field& field) {
+  SteadyClock clock;
+  const auto now = [&clock] { return clock.now(); };
+  const glm::dvec3 start = scene.top + glm::dvec3{0.0, 0.0, 0.005};  // the mouse: 5 mm above the top
+  if (o.device == "mouse") {
+    MouseDevice<SteadyClock> mouse(PlaneMapping::fit(800, 600, 80.0), clock);
+    mouse.set_position(start);
+    return run_shape_view(o, mouse, field, scene, clock, false, &mouse, start);
+  }
+  std::unique_ptr<SimulatedArm> arm;
+  std::unique_ptr<Transport> transport;
+  bool hardware = false;
+  if (o.device == "sim") {
+    // the hand aims 8 mm below the shape's top and raster-scans 70 % of its
+    // footprint (the handle overshoots the first corner as the hand catches
+    // it; past a height map's edge below its top it would be under the sheet)
+    SimulatedArmConfig c;
+    const glm::vec3 extent = scene.display.hi - scene.display.lo;
+    c.hand.path = HandPath::raster(glm::dvec3{scene.centre.x, scene.centre.y, scene.top.z - 0.008}, extent.x * 0.7,
+                                   extent.y * 0.7, 8, 0.06);
+    arm = std::make_unique<SimulatedArm>(c);
+    transport = std::make_unique<SimulatedTransport>(*arm, now);
+  } else {
+#if HAPTICFIELD_EXAMPLE_HID
+    const cli::HidIds ids = *cli::hid_device(o.device);
+    transport = std::make_unique<HidTransport>(ids.vendor, ids.product);
+    hardware = true;
+#else
+    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
+#endif
+  }
+  ForceArm device(*transport);
+  return run_shape_view(o, device, field, scene, clock, hardware, nullptr, start);
+}
+
+int run_shape(const Arguments& o) {
+  if (o.screenshot.empty() && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
+    throw Error(
+        "no display (DISPLAY is not set): run it on a desktop, or draw off-screen with --screenshot OUT.png "
+        "--seconds S");
+  ShapeSceneConfig config;
+  config.height_mm = o.height_mm;
+  config.max_pixels = o.max_pixels;
+  ShapeScene scene = cli::quiet_stderr([&] { return load_shape_scene(o.shape, config); });
+  const glm::dvec3 above = scene.top + glm::dvec3{0.0, 0.0, 0.005};  // where the proxy starts
+  if (scene.mesh) {
+    ShapeProxyField<MeshShape> field(std::move(*scene.mesh), scene.shift, above);
+    return run_shape_with(o, scene, field);
+  }
+  ShapeProxyField<HeightFieldShape> field(std::move(*scene.height_field), scene.shift, above);
+  return run_shape_with(o, scene, field);
+}
+
+#else
+
+int run_shape(const Arguments&) {
+  throw Error("this build has no mesh readers (tinygltf and tinyobjloader): --shape is unavailable");
+}
+
+#endif
+
 int run(const Arguments& o) {
+  if (!o.shape.empty()) return run_shape(o);
   SceneConfig first = o.scene;
   const bool still = is_still_picture(o.source);
   if (still) {

@@ -753,3 +753,50 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
   }
 }
 #endif
+
+#if HAPTICFIELD_TEST_SHAPES
+TEST_CASE("--shape: bad shapes exit 1, bad shape options exit 2, before any window or run") {
+  const BadFiles b = make_bad_files();
+  const std::string picture = make_step_picture();
+  const std::string mesh = in_tmp("triangle.obj");
+  write(mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string no_triangles = in_tmp("points.obj");
+  write(no_triangles, "v 0 0 0\nv 1 0 0\n");
+  const std::string unknown = in_tmp("shape.xyz");
+  write(unknown, "0 0 0\n");
+  const std::string shot = in_tmp("shape_view.png");
+  fs::remove(shot);
+  const std::vector<std::string> offscreen = {"--seconds", "0.01", "--screenshot", shot};
+  std::vector<Case> cases = {
+      {"servo_demo", {"--snapshot", shot}, usage, "give --shape"},
+      {"servo_demo", {"--shape", mesh, "--field", "wall"}, usage, "--shape"},
+      {"servo_demo", {picture, "--shape", mesh}, usage, "--shape"},
+      {"servo_demo", {"--shape", mesh, "--view", "10,90"}, usage, "[-89, 89]"},
+      {"servo_demo", {"--shape", b.missing}, bad_input, b.missing},
+      {"servo_demo", {"--shape", unknown}, bad_input, "unknown mesh format"},
+      {"servo_demo", {"--shape", no_triangles}, bad_input, no_triangles},
+      {"servo_demo", {"--shape", b.truncated_png}, bad_input, b.truncated_png},
+  };
+#ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
+  const auto view = [&](std::vector<std::string> args) {
+    args.insert(args.end(), offscreen.begin(), offscreen.end());
+    return args;
+  };
+  cases.push_back({"hapticfield_view", view({picture, "--shape", mesh}), usage, "not both"});
+  cases.push_back({"hapticfield_view", view({"--shape", mesh, "--field", "texture"}), usage, "--field"});
+  cases.push_back({"hapticfield_view", view({"--shape", mesh, "--start", "1,2"}), usage, "--start"});
+  cases.push_back({"hapticfield_view", view({"--shape", mesh, "--loop"}), usage, "--loop"});
+  cases.push_back({"hapticfield_view", view({"--shape", mesh, "--view", "10,90"}), usage, "[-89, 89]"});
+  add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--height-mm", {}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--distance", {}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--view", {"0", "-1", " 3"}, "", ",10", offscreen);
+  for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_png, unknown, no_triangles})
+    cases.push_back({"hapticfield_view", view({"--shape", file}), bad_input, file});
+#endif
+  add_numeric(cases, "servo_demo", {"--shape", mesh}, "--height-mm");
+  add_numeric(cases, "servo_demo", {"--shape", mesh}, "--distance");
+  for (const Case& c : cases)
+    check_error(c);
+  CHECK_FALSE(fs::exists(shot));  // no case drew anything
+}
+#endif

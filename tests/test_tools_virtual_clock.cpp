@@ -53,6 +53,9 @@ TEST_CASE("servo_demo --clock virtual: 60 s of the simulated arm, the same trace
   CHECK(out.find("late ticks 0 (0 periods skipped)") != std::string::npos);
   CHECK(out.find("safety: no latch") != std::string::npos);
   CHECK(out.find("simulated time: 60.000 s") != std::string::npos);
+  // Into a pipe the status comes as whole lines, never redrawn with '\r'.
+  CHECK(out.find('\r') == std::string::npos);
+  CHECK(out.find(" | rate ") != std::string::npos);
   const std::vector<std::string> rows_a = trace_rows(tmp / "a.csv"), rows_b = trace_rows(tmp / "b.csv");
   REQUIRE(rows_a.size() == 60001);  // a header and a row per tick
   CHECK(rows_a == rows_b);          // bit for bit, whatever the load was during either run

@@ -3,9 +3,12 @@
 /// The mouse as a force arm that feels nothing: the viewer's thread stores
 /// the pointer's picture position, the servo loop reads it as the handle's
 /// position on the picture plane (z = 0) and the commanded force goes
-/// nowhere (it is shown, not felt). Satisfies the Device concept; read()
+/// nowhere (it is shown, not felt). The 3D view of a shape stores a device
+/// position instead (set_position: the pointer moves the handle in the view
+/// plane, the wheel and keys push it in and out). Satisfies the Device concept; read()
 /// and write() are lock-free and allocation-free.
 
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cmath>
@@ -42,6 +45,28 @@ class MouseDevice {
     pixel_.store((static_cast<std::uint64_t>(fx) << 32) | fy, std::memory_order_relaxed);
   }
 
+  /// Viewer thread: the handle at p [m] in the device frame (the 3D view),
+  /// from then on instead of the pixel. Each axis is kept to 0.25 um within
+  /// +-0.26 m (clamped), the three packed in one atomic word.
+  void set_position(const glm::dvec3& p) noexcept {
+    std::uint64_t packed = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double q = std::clamp(std::round(p[k] / position_unit), -position_limit, position_limit);
+      packed |= (static_cast<std::uint64_t>(static_cast<std::int64_t>(q) + (1 << 20)) & 0x1fffffu) << (21 * k);
+    }
+    position_.store(packed, std::memory_order_relaxed);
+    three_d_.store(true, std::memory_order_release);
+  }
+
+  /// The handle's device position last stored with set_position() [m].
+  [[nodiscard]] glm::dvec3 position() const noexcept {
+    const std::uint64_t packed = position_.load(std::memory_order_relaxed);
+    glm::dvec3 p{0.0};
+    for (int k = 0; k < 3; ++k)
+      p[k] = (static_cast<double>((packed >> (21 * k)) & 0x1fffffu) - (1 << 20)) * position_unit;
+    return p;
+  }
+
   /// The pointer's picture position last stored [px].
   [[nodiscard]] glm::dvec2 pixel() const noexcept {
     const std::uint64_t packed = pixel_.load(std::memory_order_relaxed);
@@ -51,7 +76,7 @@ class MouseDevice {
 
   Status read(DeviceState& state) noexcept {
     const double t = static_cast<double>(clock_->now()) * 1e-9;  // [s]
-    const glm::dvec3 p = mapping_.to_device(pixel());
+    const glm::dvec3 p = three_d_.load(std::memory_order_acquire) ? position() : mapping_.to_device(pixel());
     if (primed_ && t > last_t_) {
       const double dt = t - last_t_;
       const glm::dvec3 raw = (p - last_p_) / dt;  // [m/s]
@@ -82,7 +107,11 @@ class MouseDevice {
   Clock* clock_;
   MouseDeviceConfig config_;
   DeviceInfo info_{};
+  static constexpr double position_unit = 0.25e-6;         ///< [m]
+  static constexpr double position_limit = (1 << 20) - 1;  ///< [position units]
   std::atomic<std::uint64_t> pixel_{0};
+  std::atomic<std::uint64_t> position_{0};
+  std::atomic<bool> three_d_{false};
   bool primed_{false};
   double last_t_{0.0};
   glm::dvec3 last_p_{0.0};

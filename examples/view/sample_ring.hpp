@@ -22,12 +22,12 @@ struct ViewSample {
   glm::dvec3 force{0.0};  ///< commanded force, device frame [N]
 };
 
-/// SPSC ring of N samples (N a power of two).
-template <std::size_t N>
+/// SPSC ring of N samples (N a power of two) of type Sample.
+template <std::size_t N, class Sample = ViewSample>
 requires(N >= 2 && (N & (N - 1)) == 0) class SampleRing {
  public:
   /// Producer (servo thread): false when full (the sample is dropped).
-  bool push(const ViewSample& s) noexcept {
+  bool push(const Sample& s) noexcept {
     const std::size_t tail = tail_.load(std::memory_order_relaxed);
     if (tail - head_.load(std::memory_order_acquire) == N) {
       dropped_.fetch_add(1, std::memory_order_relaxed);
@@ -39,7 +39,7 @@ requires(N >= 2 && (N & (N - 1)) == 0) class SampleRing {
   }
 
   /// Consumer (viewer thread): false when empty.
-  bool pop(ViewSample& out) noexcept {
+  bool pop(Sample& out) noexcept {
     const std::size_t head = head_.load(std::memory_order_relaxed);
     if (head == tail_.load(std::memory_order_acquire)) return false;
     out = slots_[head % N];
@@ -51,7 +51,7 @@ requires(N >= 2 && (N & (N - 1)) == 0) class SampleRing {
   [[nodiscard]] std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
 
  private:
-  std::array<ViewSample, N> slots_{};
+  std::array<Sample, N> slots_{};
   alignas(64) std::atomic<std::size_t> head_{0};
   alignas(64) std::atomic<std::size_t> tail_{0};
   alignas(64) std::atomic<std::uint64_t> dropped_{0};

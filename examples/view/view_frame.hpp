@@ -81,12 +81,16 @@ struct ViewStatus {
   long frames_dropped{0};      ///< frames the video's worker skipped
   long scene_cuts{0};          ///< scene cuts detected
   std::string note;            ///< a transient message (a saved screenshot, a refused key)
+  std::string probe_line;      ///< replaces the "probe x, y px" line when set (the 3D view)
+  std::vector<std::string> keys{"keys: f field  m mask  +/- size  b border", "d denoise  space pause  [ ] seek",
+                                "s screenshot  q / Esc quit"};  ///< the key help at the panel's foot
 };
 
 /// Settings of the drawing.
 struct ViewDrawConfig {
   double arrow_px_per_newton{150.0};  ///< [px/N]
   double arrow_max_px{120.0};         ///< longest arrow [px]
+  bool probe_marks{true};             ///< draw the cursor and arrow (false: the underlay has its own, the 3D view)
 };
 
 /// Draws the whole view into `canvas` (allocated here, BGR).
@@ -108,15 +112,17 @@ inline void draw_view(cv::Mat& canvas, const ViewLayout& layout, const cv::Mat& 
   glm::dvec2 arrow{now.force.x, -now.force.y};
   arrow *= config.arrow_px_per_newton;
   if (const double len = glm::length(arrow); len > config.arrow_max_px) arrow *= config.arrow_max_px / len;
-  if (glm::length(arrow) >= 3.0) {
+  if (config.probe_marks && glm::length(arrow) >= 3.0) {
     const cv::Point tip =
         probe + cv::Point(static_cast<int>(std::lround(arrow.x)), static_cast<int>(std::lround(arrow.y)));
     cv::arrowedLine(pic, probe, tip, cv::Scalar(0, 0, 0), 4, cv::LINE_AA, 0, 0.25);
     cv::arrowedLine(pic, probe, tip, arrow_colour, 2, cv::LINE_AA, 0, 0.25);
   }
-  cv::circle(pic, probe, 9, cv::Scalar(255, 255, 255), 3, cv::LINE_8);
-  cv::circle(pic, probe, 9, cv::Scalar(0, 0, 0), 1, cv::LINE_8);
-  cv::circle(pic, probe, 4, cursor_colour, cv::FILLED, cv::LINE_8);
+  if (config.probe_marks) {
+    cv::circle(pic, probe, 9, cv::Scalar(255, 255, 255), 3, cv::LINE_8);
+    cv::circle(pic, probe, 9, cv::Scalar(0, 0, 0), 1, cv::LINE_8);
+    cv::circle(pic, probe, 4, cursor_colour, cv::FILLED, cv::LINE_8);
+  }
   // status panel
   cv::rectangle(canvas, layout.panel, cv::Scalar(250, 250, 250), cv::FILLED);
   int y = layout.panel.y + 20;
@@ -151,13 +157,20 @@ inline void draw_view(cv::Mat& canvas, const ViewLayout& layout, const cv::Mat& 
   std::snprintf(text, sizeof text, "safety events %llu   latches %llu",
                 static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
   line(text);
+  // what the count counts (ServoLoop: a tick with any event but "not armed")
+  line("  = ticks on which the safety chain clamped,", {110, 110, 110}, 0.36);
+  line("    slowed, damped or zeroed the force", {110, 110, 110}, 0.36);
   if (status.latched)
     line("ZERO FORCE: " + safety_events::names(status.latch_bits), {0, 0, 220});
   else if (s.latches > 0)
     line("last latch: " + safety_events::names(s.last_latch), {0, 90, 200});
   y += 6;
-  std::snprintf(text, sizeof text, "probe %.1f, %.1f px", now.pixel.x, now.pixel.y);
-  line(text);
+  if (status.probe_line.empty()) {
+    std::snprintf(text, sizeof text, "probe %.1f, %.1f px", now.pixel.x, now.pixel.y);
+    line(text);
+  } else {
+    line(status.probe_line);
+  }
   std::snprintf(text, sizeof text, "force %+.3f %+.3f %+.3f N", now.force.x, now.force.y, now.force.z);
   line(text);
   if (status.dropped > 0) {
@@ -177,8 +190,7 @@ inline void draw_view(cv::Mat& canvas, const ViewLayout& layout, const cv::Mat& 
   if (status.paused) line("PAUSED", {0, 0, 220});
   if (!status.note.empty()) line(status.note, {0, 110, 0});
   y = std::max(y + 4, layout.panel.y + layout.panel.height - 4 * 16 - 4);
-  for (const char* help : {"keys: f field  m mask  +/- size  b border", "d denoise  space pause  [ ] seek",
-                           "s screenshot  q / Esc quit"}) {
+  for (const std::string& help : status.keys) {
     cv::putText(canvas, help, {layout.panel.x + 8, y}, cv::FONT_HERSHEY_SIMPLEX, 0.38, cv::Scalar(90, 90, 90), 1,
                 cv::LINE_AA);
     y += 16;
