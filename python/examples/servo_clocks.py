@@ -60,7 +60,8 @@ def main():
     stop.request()
     loop.join()
     summary("stopped", result[0], time.perf_counter() - start)
-    print(f"last commanded force {np.linalg.norm(result[0]['trace']['force'][-1]):.3f} N")
+    print(f"last traced force {np.linalg.norm(result[0]['trace']['force'][-1]):.3f} N (the last tick's command)")
+    print(f"force the arm was left with {np.linalg.norm(result[0]['final_force']):.3f} N (the stop's command)")
 
 
 if __name__ == "__main__":

@@ -44,8 +44,11 @@ class TracedDevice {
   Status read(DeviceState& state) noexcept { return device_->read(state); }
   Status write(const glm::dvec3& force) noexcept {
     if (open_) rows_->back().force = force, open_ = false;
+    last_written_ = force;
     return device_->write(force);
   }
+  /// The last force written to the device [N], the stop's own command included.
+  [[nodiscard]] const glm::dvec3& last_written() const noexcept { return last_written_; }
   Status set_armed(bool on) noexcept { return device_->set_armed(on); }
   Status request_home() noexcept { return device_->request_home(); }
   decltype(auto) info() const noexcept { return device_->info(); }
@@ -62,6 +65,7 @@ class TracedDevice {
   D* device_;
   std::vector<TraceRow>* rows_;
   bool open_{false};
+  glm::dvec3 last_written_{0.0};
 };
 
 HandPath hand_path(const std::string& kind, const V3& centre, double size, double speed) {
@@ -257,6 +261,8 @@ py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, 
   result["histogram_bin_s"] = DurationHistogram::bin_ns * 1e-9;
   result["nominal_period_s"] = loop.period();
   result["max_force_n"] = device.info().max_force;
+  result["final_force"] = std::vector<double>{traced.last_written().x, traced.last_written().y,
+                                              traced.last_written().z};  // what the arm was left with [N]
   if (loop_mallocs >= 0) {
     result["loop_allocations"] = loop_mallocs;
     result["loop_frees"] = loop_frees;
@@ -392,7 +398,8 @@ void bind_servo(py::module_& m) {
         "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace "
         "(one row a tick: t [s], position N x 3 [m], force N x 3 [N] as that tick commanded after the safety chain, "
         "homed and armed N booleans: the tick's device state, False before homing / arming), period_histogram "
-        "(counts per histogram_bin_s), stop_reason, and loop_allocations / loop_frees (malloc / free calls on this "
+        "(counts per histogram_bin_s), stop_reason, final_force (the last force written to the arm [N], the stop's "
+        "zero after a stop), and loop_allocations / loop_frees (malloc / free calls on this "
         "thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None "
         "otherwise). device sim: the simulated arm, held by a scripted hand "
         "(raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm "

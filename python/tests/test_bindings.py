@@ -382,7 +382,7 @@ def test_the_servo_clocks_example_runs():
                         "--seconds", "0.3"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert "virtual runs equal bit for bit: True" in r.stdout and "stop requested" in r.stdout
-    assert "last commanded force 0.000 N" in r.stdout
+    assert "force the arm was left with 0.000 N" in r.stdout
 
 
 # --- bad input ------------------------------------------------------------------
