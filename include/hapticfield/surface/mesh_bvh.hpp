@@ -117,11 +117,20 @@ struct BvhNode {
   std::uint32_t count{0};     ///< 0: inner node; else the leaf's triangle count
 };
 
-/// Two sibling nodes in one 64-byte cache line: a traversal step tests both
-/// children's boxes with one memory access. Pairs are stored depth first
-/// (a pair, then its left child's subtree, then its right child's).
+/// Two sibling nodes in one 64-byte cache line, each field side by side
+/// ([0]: left child, [1]: right child), so that a traversal step tests both
+/// children's boxes with one memory access and the same arithmetic on both.
+/// Pairs are stored depth first (a pair, then its left child's subtree,
+/// then its right child's).
 struct alignas(64) BvhNodePair {
-  std::array<BvhNode, 2> child{};
+  std::array<std::array<float, 2>, 3> lo{};  ///< lo[axis][child]: box minima [m]
+  std::array<std::array<float, 2>, 3> hi{};  ///< hi[axis][child]: box maxima [m]
+  std::array<std::uint32_t, 2> index{};      ///< as BvhNode::index
+  std::array<std::uint32_t, 2> count{};      ///< as BvhNode::count
+  [[nodiscard]] BvhNode child(std::size_t side) const noexcept {
+    return BvhNode{
+        {lo[0][side], lo[1][side], lo[2][side]}, index[side], {hi[0][side], hi[1][side], hi[2][side]}, count[side]};
+  }
 };
 
 /// A low-level query answer: the triangle (mesh index), the point and its
@@ -171,7 +180,7 @@ class MeshBvh {
     const Slabs slabs(from, d);
     std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
     std::size_t top = 0;
-    const BvhNode* node = &root_;
+    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     double best_t = 1.0;
     double entry = 0.0;
     if (!slabs.cross(root_, best_t, entry)) return best;
@@ -182,30 +191,26 @@ class MeshBvh {
         best.complete = false;
         break;
       }
-      const BvhNode& n = *node;
-      if (n.count > 0) {
-        for (std::uint32_t i = n.index; i < n.index + n.count; ++i) {
+      if (count > 0) {
+        for (std::uint32_t i = index; i < index + count; ++i) {
           ++work.primitives;
           intersect(triangles_[i], from, d, best_t, best);
         }
       } else {
-        const BvhNodePair& pair = pairs_[n.index];
-        const BvhNode* near = &pair.child[0];
-        const BvhNode* far = &pair.child[1];
-        double t_near = 0.0, t_far = 0.0;
-        const bool hit_near = slabs.cross(*near, best_t, t_near);
-        const bool hit_far = slabs.cross(*far, best_t, t_far);
-        if (hit_near && hit_far) {
-          if (t_far < t_near) {
-            std::swap(near, far);
-            std::swap(t_near, t_far);
-          }
-          stack[top++] = Pending{far, t_far};
-          node = near;
+        const BvhNodePair& pair = pairs_[index];
+        std::array<double, 2> t{};
+        const std::array<bool, 2> hit = slabs.cross(pair, best_t, t);
+        if (hit[0] && hit[1]) {
+          const std::size_t near = t[1] < t[0] ? 1 : 0, far = 1 - near;
+          stack[top++] = Pending{pair.index[far], pair.count[far], t[far]};
+          index = pair.index[near];
+          count = pair.count[near];
           continue;
         }
-        if (hit_near || hit_far) {
-          node = hit_near ? near : far;
+        if (hit[0] || hit[1]) {
+          const std::size_t side = hit[0] ? 0 : 1;
+          index = pair.index[side];
+          count = pair.count[side];
           continue;
         }
       }
@@ -215,7 +220,8 @@ class MeshBvh {
       while (top > 0) {
         const Pending& candidate = stack[--top];
         if (Slabs::within(candidate.key, best_t)) {
-          node = candidate.node;
+          index = candidate.index;
+          count = candidate.count;
           next = true;
           break;
         }
@@ -237,16 +243,15 @@ class MeshBvh {
     double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
     std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
     std::size_t top = 0;
-    const BvhNode* node = &root_;
+    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     if (!(box_distance2(root_, p) <= best_d2)) return best;
     for (;;) {
       if (++work.nodes > config_.max_nodes) {
         best.complete = false;
         break;
       }
-      const BvhNode& n = *node;
-      if (n.count > 0) {
-        for (std::uint32_t i = n.index; i < n.index + n.count; ++i) {
+      if (count > 0) {
+        for (std::uint32_t i = index; i < index + count; ++i) {
           ++work.primitives;
           const Triangle& tri = triangles_[i];
           double b1 = 0.0, b2 = 0.0;
@@ -262,18 +267,13 @@ class MeshBvh {
           }
         }
       } else {
-        const BvhNodePair& pair = pairs_[n.index];
-        const BvhNode* near = &pair.child[0];
-        const BvhNode* far = &pair.child[1];
-        double d_near = box_distance2(*near, p);
-        double d_far = box_distance2(*far, p);
-        if (d_far < d_near) {
-          std::swap(near, far);
-          std::swap(d_near, d_far);
-        }
-        if (d_near <= best_d2) {
-          if (d_far <= best_d2) stack[top++] = Pending{far, d_far};
-          node = near;
+        const BvhNodePair& pair = pairs_[index];
+        const std::array<double, 2> d2 = box_distance2(pair, p);
+        const std::size_t near = d2[1] < d2[0] ? 1 : 0, far = 1 - near;
+        if (d2[near] <= best_d2) {
+          if (d2[far] <= best_d2) stack[top++] = Pending{pair.index[far], pair.count[far], d2[far]};
+          index = pair.index[near];
+          count = pair.count[near];
           continue;
         }
       }
@@ -282,7 +282,8 @@ class MeshBvh {
       while (top > 0) {
         const Pending& candidate = stack[--top];
         if (candidate.key <= best_d2) {
-          node = candidate.node;
+          index = candidate.index;
+          count = candidate.count;
           next = true;
           break;
         }
@@ -318,7 +319,7 @@ class MeshBvh {
   /// first_hit, the entry parameter of the segment into its box; closest,
   /// the squared distance to its box [m^2].
   struct Pending {
-    const BvhNode* node;
+    std::uint32_t index, count;  ///< the node's (BvhNode)
     double key;
   };
 
@@ -357,6 +358,29 @@ class MeshBvh {
       return within(t0, t1);
     }
 
+    /// Both children of a pair at once (same arithmetic on both, which the
+    /// compiler may do in one vector register); t receives the entries.
+    std::array<bool, 2> cross(const BvhNodePair& pair, double t_max, std::array<double, 2>& t) const noexcept {
+      std::array<double, 2> t0{0.0, 0.0}, t1{t_max, t_max};
+      std::array<bool, 2> outside{false, false};
+      for (std::size_t k = 0; k < 3; ++k) {
+        for (std::size_t c = 0; c < 2; ++c) {
+          const auto lo = static_cast<double>(pair.lo[k][c]);
+          const auto hi = static_cast<double>(pair.hi[k][c]);
+          if (still_[k]) {
+            outside[c] = outside[c] || from_[static_cast<int>(k)] < lo || from_[static_cast<int>(k)] > hi;
+            continue;
+          }
+          const double a = (lo - from_[static_cast<int>(k)]) * inv_[static_cast<int>(k)];
+          const double b = (hi - from_[static_cast<int>(k)]) * inv_[static_cast<int>(k)];
+          t0[c] = detail::larger(t0[c], detail::smaller(a, b));
+          t1[c] = detail::smaller(t1[c], detail::larger(a, b));
+        }
+      }
+      t = t0;
+      return {!outside[0] && within(t0[0], t1[0]), !outside[1] && within(t0[1], t1[1])};
+    }
+
     /// The box test's last step: entry t0 no later than exit t1 (with a
     /// rounding allowance). A box met before t_max is still met before a
     /// smaller t_max' exactly when within(entry, t_max').
@@ -367,6 +391,19 @@ class MeshBvh {
     glm::dvec3 inv_{0.0};
     std::array<bool, 3> still_{};
   };
+
+  /// Squared distances from p to both boxes of a pair [m^2].
+  static std::array<double, 2> box_distance2(const BvhNodePair& pair, const glm::dvec3& p) noexcept {
+    std::array<double, 2> d2{0.0, 0.0};
+    for (std::size_t k = 0; k < 3; ++k)
+      for (std::size_t c = 0; c < 2; ++c) {
+        const double below = static_cast<double>(pair.lo[k][c]) - p[static_cast<int>(k)];
+        const double above = p[static_cast<int>(k)] - static_cast<double>(pair.hi[k][c]);
+        const double out = detail::larger(0.0, detail::larger(below, above));
+        d2[c] += out * out;
+      }
+    return d2;
+  }
 
   static double box_distance2(const BvhNode& n, const glm::dvec3& p) noexcept {
     double d2 = 0.0;
@@ -463,19 +500,31 @@ class MeshBvh {
 
     /// A node being built: root_ref, or 2 pair + side.
     static constexpr std::uint32_t root_ref = std::numeric_limits<std::uint32_t>::max();
-    BvhNode& at(std::uint32_t ref) noexcept {
-      return ref == root_ref ? out_.root_ : out_.pairs_[ref / 2].child[ref % 2];
+
+    void set_node(std::uint32_t ref, std::uint32_t index, std::uint32_t count) noexcept {
+      if (ref == root_ref) {
+        out_.root_.index = index;
+        out_.root_.count = count;
+      } else {
+        out_.pairs_[ref / 2].index[ref % 2] = index;
+        out_.pairs_[ref / 2].count[ref % 2] = count;
+      }
     }
 
-    void set_box(std::uint32_t node, const Bounds& b) {
-      BvhNode& n = at(node);
+    void set_box(std::uint32_t ref, const Bounds& b) {
       for (int k = 0; k < 3; ++k) {
         float lo = static_cast<float>(b.lo[k]);
         float hi = static_cast<float>(b.hi[k]);
         if (static_cast<double>(lo) > b.lo[k]) lo = std::nextafter(lo, -std::numeric_limits<float>::infinity());
         if (static_cast<double>(hi) < b.hi[k]) hi = std::nextafter(hi, std::numeric_limits<float>::infinity());
-        n.lo[static_cast<std::size_t>(k)] = lo;
-        n.hi[static_cast<std::size_t>(k)] = hi;
+        const auto axis = static_cast<std::size_t>(k);
+        if (ref == root_ref) {
+          out_.root_.lo[axis] = lo;
+          out_.root_.hi[axis] = hi;
+        } else {
+          out_.pairs_[ref / 2].lo[axis][ref % 2] = lo;
+          out_.pairs_[ref / 2].hi[axis][ref % 2] = hi;
+        }
       }
     }
 
@@ -489,8 +538,7 @@ class MeshBvh {
       set_box(node, box);
       const std::uint32_t count = end - begin;
       if (count <= bvh_max_leaf) {
-        at(node).index = begin;
-        at(node).count = count;
+        set_node(node, begin, count);
         return;
       }
       std::uint32_t middle = begin;
@@ -498,8 +546,7 @@ class MeshBvh {
       if (middle == begin || middle == end) middle = median_split(begin, end, centres);
       const auto pair = static_cast<std::uint32_t>(out_.pairs_.size());
       out_.pairs_.emplace_back();
-      at(node).index = pair;
-      at(node).count = 0;
+      set_node(node, pair, 0);
       split(2 * pair, begin, middle, depth + 1);
       split(2 * pair + 1, middle, end, depth + 1);
     }
