@@ -284,7 +284,7 @@ TEST_CASE("friction: the proxy sticks inside the cone and slides with |Ft| = mu_
   CHECK_THAT(c.force.z, WithinAbs(2.0, 1e-6));
 }
 
-TEST_CASE("stick_first: a stuck proxy makes no sweep and feels as the full tick does on a flat face") {
+TEST_CASE("stick_first: a proxy stuck or sliding on its face makes no sweep and feels as the full tick does") {
   const double k = 1000.0, mu_s = 0.6, mu_k = 0.4;
   ProxyConfig first{k, 0.0, mu_s, mu_k};
   first.stick_first = true;
@@ -295,7 +295,7 @@ TEST_CASE("stick_first: a stuck proxy makes no sweep and feels as the full tick 
     path.push_back({0.0001 * i, 0.00005 * i, -0.002});
   for (int i = 1; i <= 20; ++i)  // past it: slides
     path.push_back({0.0011 + 0.001 * i, 0.00055, -0.002});
-  int stuck_without_sweep = 0;
+  int stuck_without_sweep = 0, slid_without_sweep = 0;
   for (std::size_t i = 0; i < path.size(); ++i) {
     const Contact a = quick.contact(probe_at(path[i]));
     const Contact b = full.contact(probe_at(path[i]));
@@ -309,8 +309,10 @@ TEST_CASE("stick_first: a stuck proxy makes no sweep and feels as the full tick 
       CHECK_THAT(a.force.x, WithinAbs(-k * path[i].x, 1e-6));
       CHECK_THAT(a.force.y, WithinAbs(-k * path[i].y, 1e-6));
     }
+    slid_without_sweep += quick.last_tick().sliding && quick.last_tick().moves == 0;
   }
   CHECK(stuck_without_sweep == 10);
+  CHECK(slid_without_sweep > 0);
   CHECK(quick.last_tick().sliding);
   CHECK(quick.last_tick().moves > 0);
 }

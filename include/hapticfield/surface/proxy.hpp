@@ -22,9 +22,9 @@
 ///      past a convex edge) starts another from there with no planes, at
 ///      most four; if the last one still floats the proxy goes back to where
 ///      it last met a face.
-///   0. With ProxyConfig::stick_first, a proxy that stuck last tick and is
-///      still inside the static friction cone on last tick's planes (and
-///      still over its face) stays, with no sweep; else steps 1-4.
+///   0. With ProxyConfig::stick_first, the friction cone is tested first on
+///      last tick's planes: a proxy that sticks, or slides and stays over
+///      its face, needs no sweep; else steps 1-4.
 ///   3. Friction (the friction cone of Salisbury et al. 1995 and of Ruspini
 ///      1997): with d the depth and s the distance the proxy would slide from
 ///      where it was, it stays where it was (sticks) while s <= mu_s d, and
@@ -86,12 +86,11 @@ struct ProxyConfig {
   double static_friction{0.0};   ///< mu_s [-]: the proxy sticks while the HIP is inside this cone
   double dynamic_friction{0.0};  ///< mu_k [-] <= mu_s: the cone while sliding
   double offset{1e-6};           ///< the proxy's height above the surface, relative to the primitive's size [-]
-  /// Test the static friction cone first, on last tick's planes at the held
-  /// point: a proxy that stays stuck makes no swept query (about 2.3x
-  /// cheaper in the mean on a 1M-triangle mesh). Off: the cone is tested
-  /// against the frictionless proxy, found by sweeping over the surface; on
-  /// a curved mesh the two differ a little (stick or slide near the cone's
-  /// edge); on a flat face they agree.
+  /// Test the friction cone first, on last tick's planes at the held point:
+  /// a proxy that sticks, or slides without leaving its face, makes no
+  /// swept query. Off: the cone is tested against the frictionless proxy,
+  /// found by sweeping over the surface; on a flat face the two agree, on a
+  /// curved mesh they differ a little (stick or slide near the cone's edge).
   bool stick_first{false};
 };
 
@@ -409,14 +408,15 @@ class ProxyConstraint {
     return c;
   }
 
-  /// Static friction first (the friction cone of Salisbury et al. 1995 at
-  /// the point the proxy holds): a proxy that stuck last tick stays where it
-  /// is while the HIP presses on every one of last tick's planes and stays
-  /// inside the cone on them, and the proxy is still over the face it
-  /// touched. A proxy that does not move needs no sweep; anything else
-  /// (false) takes the full tick.
+  /// The friction cone first (Salisbury et al. 1995), on last tick's
+  /// planes at the point the proxy holds: while the HIP presses on every
+  /// one of them, the proxy sticks inside the cone, or slides mu_k d behind
+  /// the HIP's point on them outside it, as steps 1-3 would on a flat face;
+  /// when it ends over the face it touched, nothing lies between (one flat,
+  /// convex face) and no sweep is needed. Anything else (false) takes the
+  /// full tick.
   [[nodiscard]] bool stick(const Probe& probe, Contact& out) noexcept {
-    if (!config_.stick_first || !touching_ || sliding_ || !(config_.static_friction > 0.0) || held_planes_.count == 0 ||
+    if (!config_.stick_first || !touching_ || !(config_.static_friction > 0.0) || held_planes_.count == 0 ||
         !held_face_.found())
       return false;
     Planes planes = held_planes_;
@@ -424,15 +424,20 @@ class ProxyConstraint {
     if (planes.count != held_planes_.count) return false;  // the HIP has left a plane
     const glm::dvec3 on_surface = planes.project_equal(probe.position, false);
     const double depth = glm::length(on_surface - probe.position);
+    if (!(depth > 0.0)) return false;
     const glm::dvec3 held = planes.project_equal(proxy_);
-    if (!(depth > 0.0) || !(glm::length(held - frictionless) <= config_.static_friction * depth)) return false;
-    const Hit touched = on_same_face(held, 4.0 * planes.max_offset + planes.tolerance, held_face_);
-    if (!touched.found()) return false;
+    const glm::dvec3 slide = held - frictionless;
+    const double s = glm::length(slide);
+    const bool sliding = s > (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth;
+    const glm::dvec3 x = sliding ? frictionless + (config_.dynamic_friction * depth / s) * slide : held;
+    const Hit touched = on_same_face(x, 4.0 * planes.max_offset + planes.tolerance, held_face_);
+    if (!touched.found() || !is_finite(x)) return false;
     tick_.planes = planes.count;
-    tick_.sliding = false;
-    proxy_ = held;
+    sliding_ = sliding;
+    tick_.sliding = sliding;
+    proxy_ = x;
     held_face_ = touched;
-    out = respond(probe, planes, held, frictionless, on_surface, depth, touched);
+    out = respond(probe, planes, x, frictionless, on_surface, depth, touched);
     return true;
   }
 
