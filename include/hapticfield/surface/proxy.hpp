@@ -136,7 +136,10 @@ class ProxyConstraint {
       return Contact{};
     }
     const glm::dvec3 start = proxy_;
-    if (Contact held; stick(probe, held)) return held;  // 0: still inside the friction cone: no sweep
+    if (config_.stick_first) {  // 0: the friction cone first
+      Contact held;
+      if (stick(probe, held)) return held;
+    }
 
     // 1-2: frictionless constrained motion toward the HIP; a second pass
     // when the first left the proxy off every face (past a convex edge)
@@ -231,8 +234,10 @@ class ProxyConstraint {
     proxy_ = x;
     const bool touching = planes.count > 0 || (blocked && touching_);
     touching_ = touching;
-    held_planes_ = touching && !blocked ? planes : Planes{};
-    held_face_ = touched.found() ? touched : last_hit;
+    if (config_.stick_first) {  // what step 0 starts from next tick
+      held_planes_ = touching && !blocked ? planes : Planes{};
+      held_face_ = touched.found() ? touched : last_hit;
+    }
     if (!touching) return Contact{};
 
     return respond(probe, planes, x, frictionless, on_surface, depth, touched.found() ? touched : last_hit);
