@@ -211,8 +211,9 @@ int main(int argc, char** argv) {
               base.p99_ns, base.worst_ns);
   std::printf(
       "| triangles | build [ms] | build [s per M] | depth | mean [ns] | p99 [ns] | worst [ns] | "
-      "mean / plane | p99 / plane | nodes mean | nodes worst | brute mean / tree mean |\n");
-  std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+      "mean / plane | p99 / plane | nodes mean | nodes worst | brute mean / tree mean | stick_first mean [ns] | "
+      "stick_first p99 [ns] | stick_first worst [ns] |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const std::size_t target : {1'000ul, 16'000ul, 250'000ul, 1'000'000ul, 4'000'000ul}) {
     if (target > max_triangles) break;
     const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0)));
@@ -233,10 +234,19 @@ int main(int argc, char** argv) {
       const hf::bench::Cost b = tick_cost(slow, few, unused, unused_worst);
       brute = std::to_string(static_cast<int>(std::lround(b.mean_ns / c.mean_ns))) + " x";
     }
+    // the same proxy testing the static friction cone first (ProxyConfig::stick_first)
+    hf::ProxyConfig first{1500.0, 1.0, 0.5, 0.4};
+    first.stick_first = true;
+    hf::ProxyConstraint quick(shape, first);
+    double quick_nodes = 0.0;
+    std::uint32_t quick_worst_nodes = 0;
+    const hf::bench::Cost q = tick_cost(quick, path, quick_nodes, quick_worst_nodes);
     const double mtri = static_cast<double>(mesh.triangles.size()) / 1e6;
-    std::printf("| %zu | %.1f | %.2f | %zu | %.0f | %.0f | %.0f | %.1f | %.1f | %.1f | %u | %s |\n",
-                mesh.triangles.size(), build_s * 1e3, build_s / mtri, shape.bvh().depth(), c.mean_ns, c.p99_ns,
-                c.worst_ns, c.mean_ns / base.mean_ns, c.p99_ns / base.p99_ns, nodes, worst_nodes, brute.c_str());
+    std::printf(
+        "| %zu | %.1f | %.2f | %zu | %.0f | %.0f | %.0f | %.1f | %.1f | %.1f | %u | %s | %.0f | %.0f | %.0f |\n",
+        mesh.triangles.size(), build_s * 1e3, build_s / mtri, shape.bvh().depth(), c.mean_ns, c.p99_ns, c.worst_ns,
+        c.mean_ns / base.mean_ns, c.p99_ns / base.p99_ns, nodes, worst_nodes, brute.c_str(), q.mean_ns, q.p99_ns,
+        q.worst_ns);
   }
 
   // --- height field vs tangible image, on a picture-sized grid ---

@@ -13,6 +13,10 @@
 /// of its longest edge) or non-finite corners are left out: they have no
 /// normal and are never hit.
 ///
+/// Layout: the root, then the other nodes as sibling pairs, one 64-byte
+/// cache line each, depth first; the triangles (corner, two edges, double)
+/// in leaf order, so a leaf's triangles are contiguous.
+///
 /// Queries (const, noexcept, no allocation): first_hit(from, to), the
 /// first front-facing triangle a segment crosses (Moller & Trumbore, "Fast,
 /// minimum storage ray/triangle intersection", JGT 1997, with a barycentric
@@ -104,13 +108,29 @@ inline constexpr std::uint32_t bvh_max_leaf = 4;
 /// Default node budget of one query: a few microseconds at worst.
 inline constexpr std::uint32_t bvh_default_max_nodes = 4096;
 
-/// One node: its box (float, rounded outward) and either its right child
-/// (an inner node; the left child follows it) or its triangles (a leaf).
+/// One node (32 bytes): its box (float, rounded outward) and either its
+/// children (an inner node: a BvhNodePair) or its triangles (a leaf).
 struct BvhNode {
   std::array<float, 3> lo{};  ///< box minimum [m]
-  std::uint32_t index{0};     ///< inner: right child; leaf: first triangle in MeshBvh order
+  std::uint32_t index{0};     ///< inner: its children's BvhNodePair; leaf: first triangle in MeshBvh order
   std::array<float, 3> hi{};  ///< box maximum [m]
   std::uint32_t count{0};     ///< 0: inner node; else the leaf's triangle count
+};
+
+/// Two sibling nodes in one 64-byte cache line, each field side by side
+/// ([0]: left child, [1]: right child), so that a traversal step tests both
+/// children's boxes with one memory access and the same arithmetic on both.
+/// Pairs are stored depth first (a pair, then its left child's subtree,
+/// then its right child's).
+struct alignas(64) BvhNodePair {
+  std::array<std::array<float, 2>, 3> lo{};  ///< lo[axis][child]: box minima [m]
+  std::array<std::array<float, 2>, 3> hi{};  ///< hi[axis][child]: box maxima [m]
+  std::array<std::uint32_t, 2> index{};      ///< as BvhNode::index
+  std::array<std::uint32_t, 2> count{};      ///< as BvhNode::count
+  [[nodiscard]] BvhNode child(std::size_t side) const noexcept {
+    return BvhNode{
+        {lo[0][side], lo[1][side], lo[2][side]}, index[side], {hi[0][side], hi[1][side], hi[2][side]}, count[side]};
+  }
 };
 
 /// A low-level query answer: the triangle (mesh index), the point and its
@@ -156,14 +176,14 @@ class MeshBvh {
     QueryStats work;
     if (stats) *stats = work;
     const glm::dvec3 d = to - from;
-    if (nodes_.empty() || !is_finite(from) || !is_finite(d)) return best;
-    const glm::dvec3 inv{1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
-    std::array<std::uint32_t, bvh_max_depth> stack{};
+    if (triangles_.empty() || !is_finite(from) || !is_finite(d)) return best;
+    const Slabs slabs(from, d);
+    std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
     std::size_t top = 0;
-    std::uint32_t node = 0;
+    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     double best_t = 1.0;
     double entry = 0.0;
-    if (!segment_box(nodes_[0], from, inv, best_t, entry)) return best;
+    if (!slabs.cross(root_, best_t, entry)) return best;
     for (;;) {
       if (++work.nodes > config_.max_nodes) {
         best = BvhHit{};
@@ -171,35 +191,37 @@ class MeshBvh {
         best.complete = false;
         break;
       }
-      const BvhNode& n = nodes_[node];
-      if (n.count > 0) {
-        for (std::uint32_t i = n.index; i < n.index + n.count; ++i) {
+      if (count > 0) {
+        for (std::uint32_t i = index; i < index + count; ++i) {
           ++work.primitives;
           intersect(triangles_[i], from, d, best_t, best);
         }
       } else {
-        std::uint32_t near = node + 1, far = n.index;
-        double t_near = 0.0, t_far = 0.0;
-        bool hit_near = segment_box(nodes_[near], from, inv, best_t, t_near);
-        bool hit_far = segment_box(nodes_[far], from, inv, best_t, t_far);
-        if (hit_near && hit_far) {
-          if (t_far < t_near) std::swap(near, far);
-          stack[top++] = far;
-          node = near;
+        const BvhNodePair& pair = pairs_[index];
+        std::array<double, 2> t{};
+        const std::array<bool, 2> hit = slabs.cross(pair, best_t, t);
+        if (hit[0] && hit[1]) {
+          const std::size_t near = t[1] < t[0] ? 1 : 0, far = 1 - near;
+          stack[top++] = Pending{pair.index[far], pair.count[far], t[far]};
+          index = pair.index[near];
+          count = pair.count[near];
           continue;
         }
-        if (hit_near || hit_far) {
-          node = hit_near ? near : far;
+        if (hit[0] || hit[1]) {
+          const std::size_t side = hit[0] ? 0 : 1;
+          index = pair.index[side];
+          count = pair.count[side];
           continue;
         }
       }
-      // pop, skipping boxes the best hit so far has made too far
+      // pop, skipping boxes the best hit so far has made too far (the box
+      // test again: its entry no longer before the segment's end)
       bool next = false;
       while (top > 0) {
-        const std::uint32_t candidate = stack[--top];
-        double t_box = 0.0;
-        if (segment_box(nodes_[candidate], from, inv, best_t, t_box)) {
-          node = candidate;
+        const Pending& candidate = stack[--top];
+        if (Slabs::within(candidate.key, best_t)) {
+          index = candidate.index;
+          count = candidate.count;
           next = true;
           break;
         }
@@ -217,20 +239,19 @@ class MeshBvh {
     BvhHit best;
     QueryStats work;
     if (stats) *stats = work;
-    if (nodes_.empty() || !is_finite(p) || !(max_distance >= 0.0)) return best;
+    if (triangles_.empty() || !is_finite(p) || !(max_distance >= 0.0)) return best;
     double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
-    std::array<std::uint32_t, bvh_max_depth> stack{};
+    std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
     std::size_t top = 0;
-    std::uint32_t node = 0;
-    if (!(box_distance2(nodes_[0], p) <= best_d2)) return best;
+    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
+    if (!(box_distance2(root_, p) <= best_d2)) return best;
     for (;;) {
       if (++work.nodes > config_.max_nodes) {
         best.complete = false;
         break;
       }
-      const BvhNode& n = nodes_[node];
-      if (n.count > 0) {
-        for (std::uint32_t i = n.index; i < n.index + n.count; ++i) {
+      if (count > 0) {
+        for (std::uint32_t i = index; i < index + count; ++i) {
           ++work.primitives;
           const Triangle& tri = triangles_[i];
           double b1 = 0.0, b2 = 0.0;
@@ -246,24 +267,23 @@ class MeshBvh {
           }
         }
       } else {
-        std::uint32_t near = node + 1, far = n.index;
-        double d_near = box_distance2(nodes_[near], p);
-        double d_far = box_distance2(nodes_[far], p);
-        if (d_far < d_near) {
-          std::swap(near, far);
-          std::swap(d_near, d_far);
-        }
-        if (d_near <= best_d2) {
-          if (d_far <= best_d2) stack[top++] = far;
-          node = near;
+        const BvhNodePair& pair = pairs_[index];
+        const std::array<double, 2> d2 = box_distance2(pair, p);
+        const std::size_t near = d2[1] < d2[0] ? 1 : 0, far = 1 - near;
+        if (d2[near] <= best_d2) {
+          if (d2[far] <= best_d2) stack[top++] = Pending{pair.index[far], pair.count[far], d2[far]};
+          index = pair.index[near];
+          count = pair.count[near];
           continue;
         }
       }
+      // pop, skipping boxes farther than the best point so far
       bool next = false;
       while (top > 0) {
-        const std::uint32_t candidate = stack[--top];
-        if (box_distance2(nodes_[candidate], p) <= best_d2) {
-          node = candidate;
+        const Pending& candidate = stack[--top];
+        if (candidate.key <= best_d2) {
+          index = candidate.index;
+          count = candidate.count;
           next = true;
           break;
         }
@@ -275,13 +295,17 @@ class MeshBvh {
     return best;
   }
 
-  [[nodiscard]] std::size_t node_count() const noexcept { return nodes_.size(); }
+  /// Nodes in the tree (the root and the pairs below it; 0: empty).
+  [[nodiscard]] std::size_t node_count() const noexcept { return triangles_.empty() ? 0 : 1 + 2 * pairs_.size(); }
   /// Triangles in the tree (the mesh's, less those with no area).
   [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles_.size(); }
   /// Deepest leaf (root: 1), <= bvh_max_depth.
   [[nodiscard]] std::size_t depth() const noexcept { return depth_; }
   [[nodiscard]] const MeshBvhConfig& config() const noexcept { return config_; }
-  [[nodiscard]] const std::vector<BvhNode>& nodes() const noexcept { return nodes_; }
+  /// The root node (its box bounds every triangle in the tree).
+  [[nodiscard]] const BvhNode& root() const noexcept { return root_; }
+  /// The inner nodes' children, depth first (BvhNode::index of an inner node).
+  [[nodiscard]] const std::vector<BvhNodePair>& pairs() const noexcept { return pairs_; }
 
  private:
   /// A triangle as the queries want it: corner a, edges e1 = b - a,
@@ -291,28 +315,94 @@ class MeshBvh {
     std::uint32_t id{0};
   };
 
-  /// Segment [0, t_max] of from + t d against a node's box (slabs); entry
-  /// receives the entry parameter. An axis along which the segment does not
-  /// move (inv infinite) limits nothing when `from` lies within the box's
-  /// extent on it and rejects the box otherwise (no 0 * inf = NaN slab).
-  static bool segment_box(const BvhNode& n, const glm::dvec3& from, const glm::dvec3& inv, double t_max,
-                          double& entry) noexcept {
-    double t0 = 0.0, t1 = t_max;
-    for (int k = 0; k < 3; ++k) {
-      const auto lo = static_cast<double>(n.lo[static_cast<std::size_t>(k)]);
-      const auto hi = static_cast<double>(n.hi[static_cast<std::size_t>(k)]);
-      if (!std::isfinite(inv[k])) {
-        if (from[k] < lo || from[k] > hi) return false;
-        continue;
+  /// A node put on the traversal stack, with the key it was tested with:
+  /// first_hit, the entry parameter of the segment into its box; closest,
+  /// the squared distance to its box [m^2].
+  struct Pending {
+    std::uint32_t index, count;  ///< the node's (BvhNode)
+    double key;
+  };
+
+  /// The segment from + t d, t in [0, t_max], against node boxes (slabs),
+  /// with the reciprocals of d computed once per query. An axis along which
+  /// the segment does not move limits nothing when `from` lies within the
+  /// box's extent on it and rejects the box otherwise (no 0 * inf = NaN
+  /// slab); that test's branch goes the same way for the whole query.
+  class Slabs {
+   public:
+    Slabs(const glm::dvec3& from, const glm::dvec3& d) noexcept : from_(from) {
+      for (int k = 0; k < 3; ++k) {
+        inv_[k] = 1.0 / d[k];
+        still_[static_cast<std::size_t>(k)] = !std::isfinite(inv_[k]);
       }
-      const double a = (lo - from[k]) * inv[k];
-      const double b = (hi - from[k]) * inv[k];
-      // plain comparisons (std::fmin / fmax are library calls here): no NaN can occur
-      t0 = detail::larger(t0, detail::smaller(a, b));
-      t1 = detail::smaller(t1, detail::larger(a, b));
     }
-    entry = t0;
-    return t0 <= t1 * (1.0 + 1e-12) + 1e-300;
+
+    /// True when the segment meets the box before t_max; entry receives
+    /// the entry parameter.
+    bool cross(const BvhNode& n, double t_max, double& entry) const noexcept {
+      double t0 = 0.0, t1 = t_max;
+      for (int k = 0; k < 3; ++k) {
+        const auto lo = static_cast<double>(n.lo[static_cast<std::size_t>(k)]);
+        const auto hi = static_cast<double>(n.hi[static_cast<std::size_t>(k)]);
+        if (still_[static_cast<std::size_t>(k)]) {
+          if (from_[k] < lo || from_[k] > hi) return false;
+          continue;
+        }
+        const double a = (lo - from_[k]) * inv_[k];
+        const double b = (hi - from_[k]) * inv_[k];
+        // plain comparisons (std::fmin / fmax are library calls here): no NaN can occur
+        t0 = detail::larger(t0, detail::smaller(a, b));
+        t1 = detail::smaller(t1, detail::larger(a, b));
+      }
+      entry = t0;
+      return within(t0, t1);
+    }
+
+    /// Both children of a pair at once (same arithmetic on both, which the
+    /// compiler may do in one vector register); t receives the entries.
+    std::array<bool, 2> cross(const BvhNodePair& pair, double t_max, std::array<double, 2>& t) const noexcept {
+      std::array<double, 2> t0{0.0, 0.0}, t1{t_max, t_max};
+      std::array<bool, 2> outside{false, false};
+      for (std::size_t k = 0; k < 3; ++k) {
+        for (std::size_t c = 0; c < 2; ++c) {
+          const auto lo = static_cast<double>(pair.lo[k][c]);
+          const auto hi = static_cast<double>(pair.hi[k][c]);
+          if (still_[k]) {
+            outside[c] = outside[c] || from_[static_cast<int>(k)] < lo || from_[static_cast<int>(k)] > hi;
+            continue;
+          }
+          const double a = (lo - from_[static_cast<int>(k)]) * inv_[static_cast<int>(k)];
+          const double b = (hi - from_[static_cast<int>(k)]) * inv_[static_cast<int>(k)];
+          t0[c] = detail::larger(t0[c], detail::smaller(a, b));
+          t1[c] = detail::smaller(t1[c], detail::larger(a, b));
+        }
+      }
+      t = t0;
+      return {!outside[0] && within(t0[0], t1[0]), !outside[1] && within(t0[1], t1[1])};
+    }
+
+    /// The box test's last step: entry t0 no later than exit t1 (with a
+    /// rounding allowance). A box met before t_max is still met before a
+    /// smaller t_max' exactly when within(entry, t_max').
+    static bool within(double t0, double t1) noexcept { return t0 <= t1 * (1.0 + 1e-12) + 1e-300; }
+
+   private:
+    glm::dvec3 from_;
+    glm::dvec3 inv_{0.0};
+    std::array<bool, 3> still_{};
+  };
+
+  /// Squared distances from p to both boxes of a pair [m^2].
+  static std::array<double, 2> box_distance2(const BvhNodePair& pair, const glm::dvec3& p) noexcept {
+    std::array<double, 2> d2{0.0, 0.0};
+    for (std::size_t k = 0; k < 3; ++k)
+      for (std::size_t c = 0; c < 2; ++c) {
+        const double below = static_cast<double>(pair.lo[k][c]) - p[static_cast<int>(k)];
+        const double above = p[static_cast<int>(k)] - static_cast<double>(pair.hi[k][c]);
+        const double out = detail::larger(0.0, detail::larger(below, above));
+        d2[c] += out * out;
+      }
+    return d2;
   }
 
   static double box_distance2(const BvhNode& n, const glm::dvec3& p) noexcept {
@@ -373,9 +463,8 @@ class MeshBvh {
         centre_.push_back((a + b + c) / 3.0);
       }
       if (order_.empty()) return;
-      out_.nodes_.reserve(2 * order_.size());
-      out_.nodes_.emplace_back();
-      split(0, 0, static_cast<std::uint32_t>(order_.size()), 1);
+      out_.pairs_.reserve(order_.size());  // at most n - 1 inner nodes: never reallocated while building
+      split(root_ref, 0, static_cast<std::uint32_t>(order_.size()), 1);
       out_.triangles_.reserve(order_.size());
       for (const std::uint32_t i : order_) {
         const auto& t = mesh_.triangles[i];
@@ -409,15 +498,33 @@ class MeshBvh {
       return k;
     }
 
-    void set_box(std::uint32_t node, const Bounds& b) {
-      BvhNode& n = out_.nodes_[node];
+    /// A node being built: root_ref, or 2 pair + side.
+    static constexpr std::uint32_t root_ref = std::numeric_limits<std::uint32_t>::max();
+
+    void set_node(std::uint32_t ref, std::uint32_t index, std::uint32_t count) noexcept {
+      if (ref == root_ref) {
+        out_.root_.index = index;
+        out_.root_.count = count;
+      } else {
+        out_.pairs_[ref / 2].index[ref % 2] = index;
+        out_.pairs_[ref / 2].count[ref % 2] = count;
+      }
+    }
+
+    void set_box(std::uint32_t ref, const Bounds& b) {
       for (int k = 0; k < 3; ++k) {
         float lo = static_cast<float>(b.lo[k]);
         float hi = static_cast<float>(b.hi[k]);
         if (static_cast<double>(lo) > b.lo[k]) lo = std::nextafter(lo, -std::numeric_limits<float>::infinity());
         if (static_cast<double>(hi) < b.hi[k]) hi = std::nextafter(hi, std::numeric_limits<float>::infinity());
-        n.lo[static_cast<std::size_t>(k)] = lo;
-        n.hi[static_cast<std::size_t>(k)] = hi;
+        const auto axis = static_cast<std::size_t>(k);
+        if (ref == root_ref) {
+          out_.root_.lo[axis] = lo;
+          out_.root_.hi[axis] = hi;
+        } else {
+          out_.pairs_[ref / 2].lo[axis][ref % 2] = lo;
+          out_.pairs_[ref / 2].hi[axis][ref % 2] = hi;
+        }
       }
     }
 
@@ -431,21 +538,17 @@ class MeshBvh {
       set_box(node, box);
       const std::uint32_t count = end - begin;
       if (count <= bvh_max_leaf) {
-        out_.nodes_[node].index = begin;
-        out_.nodes_[node].count = count;
+        set_node(node, begin, count);
         return;
       }
       std::uint32_t middle = begin;
       if (depth + ceil_log2(count) + 1 < bvh_max_depth) middle = sah_split(begin, end, centres);
       if (middle == begin || middle == end) middle = median_split(begin, end, centres);
-      const auto left = static_cast<std::uint32_t>(out_.nodes_.size());
-      out_.nodes_.emplace_back();
-      split(left, begin, middle, depth + 1);
-      const auto right = static_cast<std::uint32_t>(out_.nodes_.size());
-      out_.nodes_.emplace_back();
-      out_.nodes_[node].index = right;
-      out_.nodes_[node].count = 0;
-      split(right, middle, end, depth + 1);
+      const auto pair = static_cast<std::uint32_t>(out_.pairs_.size());
+      out_.pairs_.emplace_back();
+      set_node(node, pair, 0);
+      split(2 * pair, begin, middle, depth + 1);
+      split(2 * pair + 1, middle, end, depth + 1);
     }
 
     /// Binned SAH on all three axes; returns the partition point, or begin
@@ -553,7 +656,8 @@ class MeshBvh {
     std::vector<glm::dvec3> lo_, hi_, centre_;
   };
 
-  std::vector<BvhNode> nodes_;
+  BvhNode root_{};
+  std::vector<BvhNodePair> pairs_;
   std::vector<Triangle> triangles_;
   std::size_t depth_{0};
   MeshBvhConfig config_{};

@@ -22,6 +22,9 @@
 ///      past a convex edge) starts another from there with no planes, at
 ///      most four; if the last one still floats the proxy goes back to where
 ///      it last met a face.
+///   0. With ProxyConfig::stick_first, the friction cone is tested first on
+///      last tick's planes: a proxy that sticks, or slides and stays over
+///      its face, needs no sweep; else steps 1-4.
 ///   3. Friction (the friction cone of Salisbury et al. 1995 and of Ruspini
 ///      1997): with d the depth and s the distance the proxy would slide from
 ///      where it was, it stays where it was (sticks) while s <= mu_s d, and
@@ -83,6 +86,12 @@ struct ProxyConfig {
   double static_friction{0.0};   ///< mu_s [-]: the proxy sticks while the HIP is inside this cone
   double dynamic_friction{0.0};  ///< mu_k [-] <= mu_s: the cone while sliding
   double offset{1e-6};           ///< the proxy's height above the surface, relative to the primitive's size [-]
+  /// Test the friction cone first, on last tick's planes at the held point:
+  /// a proxy that sticks, or slides without leaving its face, makes no
+  /// swept query. Off: the cone is tested against the frictionless proxy,
+  /// found by sweeping over the surface; on a flat face the two agree, on a
+  /// curved mesh they differ a little (stick or slide near the cone's edge).
+  bool stick_first{false};
 };
 
 /// What the last tick did (for tests and benches).
@@ -127,6 +136,10 @@ class ProxyConstraint {
       return Contact{};
     }
     const glm::dvec3 start = proxy_;
+    if (config_.stick_first) {  // 0: the friction cone first
+      Contact held;
+      if (stick(probe, held)) return held;
+    }
 
     // 1-2: frictionless constrained motion toward the HIP; a second pass
     // when the first left the proxy off every face (past a convex edge)
@@ -221,36 +234,13 @@ class ProxyConstraint {
     proxy_ = x;
     const bool touching = planes.count > 0 || (blocked && touching_);
     touching_ = touching;
+    if (config_.stick_first) {  // what step 0 starts from next tick
+      held_planes_ = touching && !blocked ? planes : Planes{};
+      held_face_ = touched.found() ? touched : last_hit;
+    }
     if (!touching) return Contact{};
 
-    // 4: the force and what the parts see
-    if (!touched.found()) touched = last_hit;
-    glm::dvec3 n = planes.count == 1 ? planes.normal[0] : (depth > 0.0 ? (on_surface - goal) / depth : glm::dvec3{0.0});
-    if (glm::length(n) == 0.0 && touched.found()) n = touched.face_normal;
-    // force shading: the touched point's interpolated normal (the touched
-    // face may be the next one past a convex edge, within a few offsets)
-    if (planes.count == 1 && touched.found() && glm::dot(touched.normal, n) > 0.5) n = touched.normal;
-    if (!is_finite(n) || glm::length(n) == 0.0) n = glm::dvec3{0.0, 0.0, 1.0};
-    const double push = config_.stiffness * depth - config_.damping * glm::dot(probe.velocity, n);  // [N]
-    const glm::dvec3 force = (push > 0.0 ? push : 0.0) * n + config_.stiffness * (x - frictionless);
-    if (!is_finite(force)) {
-      proxy_ = goal;
-      touching_ = false;
-      return Contact{};
-    }
-    Contact c;
-    c.touching = true;
-    c.depth = depth;
-    c.normal = n;
-    c.force = force;
-    if (touched.found()) {
-      c.surface_uv = touched.uv;
-      c.surface_tangent = touched.tangent;
-      c.surface_bitangent = touched.bitangent;
-      c.primitive = touched.primitive;
-      c.material = touched.material;
-    }
-    return c;
+    return respond(probe, planes, x, frictionless, on_surface, depth, touched.found() ? touched : last_hit);
   }
 
   /// Fc alone [N].
@@ -262,6 +252,8 @@ class ProxyConstraint {
     touching_ = false;
     sliding_ = false;
     proxy_ = glm::dvec3{0.0};
+    held_planes_ = Planes{};
+    held_face_ = Hit{};
   }
 
   /// The proxy's position [m] (on the surface while touching, else the HIP).
@@ -387,6 +379,73 @@ class ProxyConstraint {
     }
   };
 
+  /// 4: the force and what the parts see, for the proxy at x on `planes`
+  /// (the HIP's surface point on_surface, depth [m], the touched face).
+  [[nodiscard]] Contact respond(const Probe& probe, const Planes& planes, const glm::dvec3& x,
+                                const glm::dvec3& frictionless, const glm::dvec3& on_surface, double depth,
+                                const Hit& touched) noexcept {
+    const glm::dvec3 goal = probe.position;
+    glm::dvec3 n = planes.count == 1 ? planes.normal[0] : (depth > 0.0 ? (on_surface - goal) / depth : glm::dvec3{0.0});
+    if (glm::length(n) == 0.0 && touched.found()) n = touched.face_normal;
+    // force shading: the touched point's interpolated normal (the touched
+    // face may be the next one past a convex edge, within a few offsets)
+    if (planes.count == 1 && touched.found() && glm::dot(touched.normal, n) > 0.5) n = touched.normal;
+    if (!is_finite(n) || glm::length(n) == 0.0) n = glm::dvec3{0.0, 0.0, 1.0};
+    const double push = config_.stiffness * depth - config_.damping * glm::dot(probe.velocity, n);  // [N]
+    const glm::dvec3 force = (push > 0.0 ? push : 0.0) * n + config_.stiffness * (x - frictionless);
+    if (!is_finite(force)) {
+      proxy_ = goal;
+      touching_ = false;
+      return Contact{};
+    }
+    Contact c;
+    c.touching = true;
+    c.depth = depth;
+    c.normal = n;
+    c.force = force;
+    if (touched.found()) {
+      c.surface_uv = touched.uv;
+      c.surface_tangent = touched.tangent;
+      c.surface_bitangent = touched.bitangent;
+      c.primitive = touched.primitive;
+      c.material = touched.material;
+    }
+    return c;
+  }
+
+  /// The friction cone first (Salisbury et al. 1995), on last tick's
+  /// planes at the point the proxy holds: while the HIP presses on every
+  /// one of them, the proxy sticks inside the cone, or slides mu_k d behind
+  /// the HIP's point on them outside it, as steps 1-3 would on a flat face;
+  /// when it ends over the face it touched, nothing lies between (one flat,
+  /// convex face) and no sweep is needed. Anything else (false) takes the
+  /// full tick.
+  [[nodiscard]] bool stick(const Probe& probe, Contact& out) noexcept {
+    if (!config_.stick_first || !touching_ || !(config_.static_friction > 0.0) || held_planes_.count == 0 ||
+        !held_face_.found())
+      return false;
+    Planes planes = held_planes_;
+    const glm::dvec3 frictionless = planes.project(probe.position);
+    if (planes.count != held_planes_.count) return false;  // the HIP has left a plane
+    const glm::dvec3 on_surface = planes.project_equal(probe.position, false);
+    const double depth = glm::length(on_surface - probe.position);
+    if (!(depth > 0.0)) return false;
+    const glm::dvec3 held = planes.project_equal(proxy_);
+    const glm::dvec3 slide = held - frictionless;
+    const double s = glm::length(slide);
+    const bool sliding = s > (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth;
+    const glm::dvec3 x = sliding ? frictionless + (config_.dynamic_friction * depth / s) * slide : held;
+    const Hit touched = on_same_face(x, 4.0 * planes.max_offset + planes.tolerance, held_face_);
+    if (!touched.found() || !is_finite(x)) return false;
+    tick_.planes = planes.count;
+    sliding_ = sliding;
+    tick_.sliding = sliding;
+    proxy_ = x;
+    held_face_ = touched;
+    out = respond(probe, planes, x, frictionless, on_surface, depth, touched);
+    return true;
+  }
+
   /// shape_.first_hit, counting the nodes it visits when the shape can.
   [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to) noexcept {
     if constexpr (requires(QueryStats * q) { shape_.first_hit(from, to, q); }) {
@@ -445,6 +504,8 @@ class ProxyConstraint {
   bool started_{false};
   bool touching_{false};
   bool sliding_{false};
+  Planes held_planes_{};  ///< the constraint planes of the last tick that touched
+  Hit held_face_{};       ///< the face the proxy last touched
   ProxyTick tick_{};
 };
 
