@@ -162,6 +162,11 @@ __attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(
   return bad | rest;
 }
 
+/// All-lanes masks for the AVX-512 intrinsics: the masked forms name no
+/// undefined register, which GCC 12 would warn about.
+inline constexpr __mmask8 all8 = 0xFF;
+inline constexpr __mmask16 all16 = 0xFFFF;
+
 /// convert_levels_avx2() sixteen levels at a time (AVX-512F: eight doubles
 /// to eight int32 in one instruction); the rest through the AVX2 version.
 __attribute__((target("avx512f"))) inline std::uint64_t convert_levels_avx512(
@@ -174,13 +179,15 @@ __attribute__((target("avx512f"))) inline std::uint64_t convert_levels_avx512(
   for (; i + 16 <= n; i += 16) {
     const __m512d q0 = _mm512_sub_pd(top, _mm512_mul_pd(_mm512_loadu_pd(p + i), vd));
     const __m512d q1 = _mm512_sub_pd(top, _mm512_mul_pd(_mm512_loadu_pd(p + i + 8), vd));
-    const __m256i k0 = _mm512_cvtpd_epi32(q0);
-    const __m256i k1 = _mm512_cvtpd_epi32(q1);
+    const __m256i k0 = _mm512_maskz_cvtpd_epi32(all8, q0);
+    const __m256i k1 = _mm512_maskz_cvtpd_epi32(all8, q1);
     // as in convert_levels_avx2: a NaN distance leaves the maximum alone
-    worst_off = _mm512_max_pd(_mm512_abs_pd(_mm512_sub_pd(q0, _mm512_cvtepi32_pd(k0))), worst_off);
-    worst_off = _mm512_max_pd(_mm512_abs_pd(_mm512_sub_pd(q1, _mm512_cvtepi32_pd(k1))), worst_off);
-    const __m512i k = _mm512_inserti64x4(_mm512_castsi256_si512(k0), k1, 1);
-    worst_q = _mm512_max_epu32(worst_q, k);
+    worst_off =
+        _mm512_maskz_max_pd(all8, _mm512_abs_pd(_mm512_sub_pd(q0, _mm512_maskz_cvtepi32_pd(all8, k0))), worst_off);
+    worst_off =
+        _mm512_maskz_max_pd(all8, _mm512_abs_pd(_mm512_sub_pd(q1, _mm512_maskz_cvtepi32_pd(all8, k1))), worst_off);
+    const __m512i k = _mm512_maskz_inserti64x4(all8, _mm512_castsi256_si512(k0), k1, 1);
+    worst_q = _mm512_maskz_max_epu32(all16, worst_q, k);
     _mm512_storeu_si512(out + i, k);
   }
   alignas(64) double offs[8];
@@ -489,10 +496,10 @@ __attribute__((target("avx2"))) inline void prefix_sums_avx2(const std::uint32_t
 /// 1, 2, 4 and 8 lanes across the whole register.
 __attribute__((target("avx512f"), always_inline)) inline __m512i scan16(__m512i x, __m512i carry) noexcept {
   const __m512i zero = _mm512_setzero_si512();
-  x = _mm512_add_epi32(x, _mm512_alignr_epi32(x, zero, 15));
-  x = _mm512_add_epi32(x, _mm512_alignr_epi32(x, zero, 14));
-  x = _mm512_add_epi32(x, _mm512_alignr_epi32(x, zero, 12));
-  x = _mm512_add_epi32(x, _mm512_alignr_epi32(x, zero, 8));
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 15));
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 14));
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 12));
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 8));
   return _mm512_add_epi32(x, carry);
 }
 
@@ -518,9 +525,9 @@ __attribute__((target("avx512f"))) inline void prefix_sums_avx512(const std::uin
     _mm512_storeu_si512(c0 + t + 1, s0);
     _mm512_storeu_si512(d0 + t + 1, sd);
     _mm512_storeu_si512(c1 + t + 1, s1);
-    k0 = _mm512_permutexvar_epi32(last, s0);
-    kd = _mm512_permutexvar_epi32(last, sd);
-    k1 = _mm512_permutexvar_epi32(last, s1);
+    k0 = _mm512_maskz_permutexvar_epi32(all16, last, s0);
+    kd = _mm512_maskz_permutexvar_epi32(all16, last, sd);
+    k1 = _mm512_maskz_permutexvar_epi32(all16, last, s1);
     index = _mm512_add_epi32(index, sixteen);
   }
   prefix_sums_scalar(b, r, n, c0, d0, c1, t, c0[t], d0[t], c1[t]);
@@ -599,9 +606,12 @@ __attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint3
 
 /// Sixteen exact int32 forces to float, through double (one rounding).
 __attribute__((target("avx512f"), always_inline)) inline __m512 scale16(__m512i v, __m512d scale) noexcept {
-  const __m256 lo = _mm512_cvtpd_ps(_mm512_mul_pd(_mm512_cvtepi32_pd(_mm512_castsi512_si256(v)), scale));
-  const __m256 hi = _mm512_cvtpd_ps(_mm512_mul_pd(_mm512_cvtepi32_pd(_mm512_extracti64x4_epi64(v, 1)), scale));
-  return _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_castps_pd(lo)), _mm256_castps_pd(hi), 1));
+  const __m256 lo = _mm512_maskz_cvtpd_ps(
+      all8, _mm512_mul_pd(_mm512_maskz_cvtepi32_pd(all8, _mm512_maskz_extracti64x4_epi64(all8, v, 0)), scale));
+  const __m256 hi = _mm512_maskz_cvtpd_ps(
+      all8, _mm512_mul_pd(_mm512_maskz_cvtepi32_pd(all8, _mm512_maskz_extracti64x4_epi64(all8, v, 1)), scale));
+  return _mm512_castpd_ps(
+      _mm512_maskz_insertf64x4(all8, _mm512_castpd256_pd512(_mm256_castps_pd(lo)), _mm256_castps_pd(hi), 1));
 }
 
 /// integer_output_avx2() sixteen pixels at a time, with 64-byte
