@@ -169,7 +169,7 @@ inline constexpr __mmask16 all16 = 0xFFFF;
 
 /// convert_levels_avx2() sixteen levels at a time (AVX-512F: eight doubles
 /// to eight int32 in one instruction); the rest through the AVX2 version.
-__attribute__((target("avx512f"))) inline std::uint64_t convert_levels_avx512(
+__attribute__((target("avx512f"), optimize("fp-contract=off"))) inline std::uint64_t convert_levels_avx512(
     const double* HAPTICFIELD_RESTRICT p, int n, double d, std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
   const __m512d vd = _mm512_set1_pd(d);
   const __m512d top = _mm512_set1_pd(gray_full_scale * d);
@@ -652,6 +652,94 @@ __attribute__((target("avx512f"))) inline void integer_output_avx512(
 }
 #endif
 
+#if HAPTICFIELD_X86_DISPATCH
+/// One output row of the integer route straight from the column sums, with
+/// no prefix tables: along the row the window's box B, first moment R (fx)
+/// and the box F of V1 (fy) change by
+///   B(x) - B(x-1) = V0(x+2h) - V0(x-1),
+///   R(x) - R(x-1) = h V0(x-1) + (h+1) V0(x+2h) - B(x),
+///   F(x) - F(x-1) = V1(x+2h) - V1(x-1),
+/// so B, R and F are running sums of those differences, sixteen at a time
+/// by scan16(). Same integers (modulo 2^32) as the prefix tables, hence the
+/// same planes. Non-temporal 64-byte stores; `next` is prefetched as in
+/// integer_output_avx512().
+__attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uint32_t* HAPTICFIELD_RESTRICT v0,
+                                                                  const std::uint32_t* HAPTICFIELD_RESTRICT v1, int h,
+                                                                  int n_out, double scale,
+                                                                  float* HAPTICFIELD_RESTRICT fx,
+                                                                  float* HAPTICFIELD_RESTRICT fy, const double* next,
+                                                                  int n_next) noexcept {
+  using U = std::uint32_t;
+  using A = MapArithmetic<U>;
+  const int span = 2 * h;
+  U b = 0;
+  U r = 0;
+  U f = 0;
+  for (int j = 0; j <= span; ++j) {
+    b += v0[j];
+    r += static_cast<U>(j - h) * v0[j];
+    f += v1[j];
+  }
+  fx[0] = A::out(r, scale);
+  fy[0] = A::out(f, scale);
+  const U hh = static_cast<U>(h);
+  const auto step = [&](int x) HAPTICFIELD_ALWAYS_INLINE {
+    const U in = v0[x + span];
+    const U out = v0[x - 1];
+    b += in - out;
+    r += hh * (out + in) + in - b;
+    f += v1[x + span] - v1[x - 1];
+    fx[x] = A::out(r, scale);
+    fy[x] = A::out(f, scale);
+  };
+  int x = 1;
+  const bool same_phase = ((reinterpret_cast<std::uintptr_t>(fx) ^ reinterpret_cast<std::uintptr_t>(fy)) & 63u) == 0;
+  if (same_phase)
+    for (; x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 63u) != 0; ++x)
+      step(x);
+  else
+    for (; x < n_out; ++x)  // unusual layout: scalar throughout
+      step(x);
+  const __m512i last = _mm512_set1_epi32(15);
+  const __m512i vh = _mm512_set1_epi32(h);
+  const __m512d vs = _mm512_set1_pd(scale);
+  __m512i kb = _mm512_set1_epi32(static_cast<int>(b));
+  __m512i kr = _mm512_set1_epi32(static_cast<int>(r));
+  __m512i kf = _mm512_set1_epi32(static_cast<int>(f));
+  const int vector_end = x + (n_out - x) / 16 * 16;
+  for (; x < vector_end; x += 16) {
+    const __m512i in0 = _mm512_loadu_si512(v0 + x + span);
+    const __m512i out0 = _mm512_loadu_si512(v0 + x - 1);
+    const __m512i in1 = _mm512_loadu_si512(v1 + x + span);
+    const __m512i out1 = _mm512_loadu_si512(v1 + x - 1);
+    const __m512i vb = scan16(_mm512_sub_epi32(in0, out0), kb);
+    const __m512i dr = _mm512_sub_epi32(_mm512_add_epi32(_mm512_mullo_epi32(vh, _mm512_add_epi32(out0, in0)), in0), vb);
+    const __m512i vr = scan16(dr, kr);
+    const __m512i vf = scan16(_mm512_sub_epi32(in1, out1), kf);
+    _mm512_stream_ps(fx + x, scale16(vr, vs));
+    _mm512_stream_ps(fy + x, scale16(vf, vs));
+    if (x < n_next) {
+      _mm_prefetch(reinterpret_cast<const char*>(next + x), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(next + x + 8), _MM_HINT_T0);
+    }
+    kb = _mm512_maskz_permutexvar_epi32(all16, last, vb);
+    kr = _mm512_maskz_permutexvar_epi32(all16, last, vr);
+    kf = _mm512_maskz_permutexvar_epi32(all16, last, vf);
+  }
+  if (x < n_out && x > 1) {  // the running sums from the last vector
+    alignas(64) U lanes[16];
+    _mm512_store_si512(lanes, kb);
+    b = lanes[0];
+    _mm512_store_si512(lanes, kr);
+    r = lanes[0];
+    _mm512_store_si512(lanes, kf);
+    f = lanes[0];
+  }
+  for (; x < n_out; ++x)
+    step(x);
+}
+#endif
+
 /// The integer route for one band: vertical first, then prefix sums along
 /// the row. Down the columns, V0 = sum of Q over the window's rows (running,
 /// vectorised across the row) and V1 = sum of i Q(y + i) (a running ramp).
@@ -711,9 +799,15 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
       }
     }
 #if HAPTICFIELD_X86_DISPATCH
-    if constexpr (Simd == MapSimd::avx512)
+    if constexpr (Simd == MapSimd::avx512) {
+      if (border != Border::fade) {  // straight from the column sums
+        integer_row_avx512(v0.data(), v1.data(), h, n_out, scale, &map.fx[map.index(lo, y)], &map.fy[map.index(lo, y)],
+                           y < y_last ? gray.row(border_index(y + 1 + h, height, border)) : nullptr,
+                           y < y_last ? gray.width() : 0);
+        continue;
+      }
       prefix_sums_avx512(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
-    else if constexpr (Simd == MapSimd::avx2)
+    } else if constexpr (Simd == MapSimd::avx2)
       prefix_sums_avx2(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
     else
       prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
@@ -792,9 +886,11 @@ __attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand&
 }
 
 /// The integer route again for AVX-512F (16 lanes, 512-bit loops in the
-/// compiler's own vectorisation too). The double route stays on AVX2, whose
-/// planes it reproduces to the bit.
-__attribute__((target("avx512f,prefer-vector-width=512"))) inline bool prewitt_band_avx512(const PrewittBand& a) {
+/// compiler's own vectorisation too). AVX-512F brings fused multiply-adds,
+/// which would round the level conversion differently: contraction is off.
+/// The double route stays on AVX2, whose planes it reproduces to the bit.
+__attribute__((target("avx512f,prefer-vector-width=512"), optimize("fp-contract=off"))) inline bool prewitt_band_avx512(
+    const PrewittBand& a) {
   return prewitt_band_integer<MapSimd::avx512>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi,
                                                a.y_first, a.y_last, *a.map);
 }
