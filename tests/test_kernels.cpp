@@ -655,6 +655,41 @@ TEST_CASE("every instruction-set route of the Prewitt map gives OpenCV's sepFilt
   }
 }
 
+TEST_CASE("a map whose planes are aligned differently gets the same values on every route") {
+  // The vector routes write 32- or 64-byte blocks with non-temporal stores
+  // when fx and fy share their alignment, ordinary stores otherwise: find
+  // an fy allocation whose 64-byte phase differs from fx's.
+  GrayImage gray = test_picture(301, 40, 17);
+  for (double& v : const_cast<std::vector<double>&>(gray.pixels()))
+    v = std::round(v);
+  const std::size_t n = gray.pixels().size();
+  ForceMap reference{gray.width(), gray.height(), std::vector<float>(n), std::vector<float>(n)};
+  const detail::PrewittBand base{
+      &gray,     5, Border::reflect, 10.0, 1e-3, 1.0, 0, gray.width() - 1, gray.height() - 1, 0, gray.height() - 1,
+      &reference};
+  REQUIRE(detail::prewitt_band(base, detail::MapSimd::baseline));
+  for (const detail::MapSimd simd : {detail::MapSimd::avx2, detail::MapSimd::avx512}) {
+    ForceMap map{gray.width(), gray.height(), std::vector<float>(n), {}};
+    std::vector<std::vector<float>> spacers;
+    for (int attempt = 0; attempt < 64; ++attempt) {
+      map.fy = std::vector<float>(n);
+      if (((reinterpret_cast<std::uintptr_t>(map.fx.data()) ^ reinterpret_cast<std::uintptr_t>(map.fy.data())) & 63u) !=
+          0)
+        break;
+      spacers.emplace_back(static_cast<std::size_t>(attempt % 7 + 1) * 4);
+    }
+    if (((reinterpret_cast<std::uintptr_t>(map.fx.data()) ^ reinterpret_cast<std::uintptr_t>(map.fy.data())) & 63u) ==
+        0)
+      WARN("the allocator gave fx and fy the same 64-byte phase every time");
+    CAPTURE(static_cast<int>(simd));
+    detail::PrewittBand band = base;
+    band.map = &map;
+    REQUIRE(detail::prewitt_band(band, simd));  // the widest route the CPU runs, at most simd
+    CHECK(map.fx == reference.fx);
+    CHECK(map.fy == reference.fy);
+  }
+}
+
 TEST_CASE("each route's level check catches a level that is not an integer or leaves [0, 255]") {
   // One bad level among exact integers, placed inside a vector block and in
   // the scalar tail: the integer band must report it (the map then takes the

@@ -614,42 +614,6 @@ __attribute__((target("avx512f"), always_inline)) inline __m512 scale16(__m512i 
       _mm512_maskz_insertf64x4(all8, _mm512_castpd256_pd512(_mm256_castps_pd(lo)), _mm256_castps_pd(hi), 1));
 }
 
-/// integer_output_avx2() sixteen pixels at a time, with 64-byte
-/// non-temporal stores; meanwhile it prefetches `next` (n_next levels: the
-/// picture row the band converts next), one cache line per step.
-__attribute__((target("avx512f"))) inline void integer_output_avx512(
-    const std::uint32_t* HAPTICFIELD_RESTRICT c0, const std::uint32_t* HAPTICFIELD_RESTRICT d0,
-    const std::uint32_t* HAPTICFIELD_RESTRICT c1, int h, int n_out, double scale, float* HAPTICFIELD_RESTRICT fx,
-    float* HAPTICFIELD_RESTRICT fy, const double* next, int n_next) noexcept {
-  const int width = 2 * h + 1;
-  int x = 0;
-  const bool same_phase = ((reinterpret_cast<std::uintptr_t>(fx) ^ reinterpret_cast<std::uintptr_t>(fy)) & 63u) == 0;
-  if (same_phase)
-    while (x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 63u) != 0)
-      ++x;
-  else
-    x = n_out;  // unusual layout: scalar throughout
-  integer_output_scalar(c0, d0, c1, h, 0, x, scale, fx, fy);
-  const __m512d vs = _mm512_set1_pd(scale);
-  __m512i centre = _mm512_add_epi32(_mm512_set1_epi32(x + h),
-                                    _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
-  const __m512i sixteen = _mm512_set1_epi32(16);
-  for (; x + 16 <= n_out; x += 16) {
-    const __m512i box = _mm512_sub_epi32(_mm512_loadu_si512(c0 + x + width), _mm512_loadu_si512(c0 + x));
-    const __m512i mx =
-        _mm512_sub_epi32(_mm512_sub_epi32(_mm512_loadu_si512(d0 + x + width), _mm512_loadu_si512(d0 + x)),
-                         _mm512_mullo_epi32(centre, box));
-    const __m512i my = _mm512_sub_epi32(_mm512_loadu_si512(c1 + x + width), _mm512_loadu_si512(c1 + x));
-    _mm512_stream_ps(fx + x, scale16(mx, vs));
-    _mm512_stream_ps(fy + x, scale16(my, vs));
-    if (x < n_next) {
-      _mm_prefetch(reinterpret_cast<const char*>(next + x), _MM_HINT_T0);
-      _mm_prefetch(reinterpret_cast<const char*>(next + x + 8), _MM_HINT_T0);
-    }
-    centre = _mm512_add_epi32(centre, sixteen);
-  }
-  integer_output_scalar(c0, d0, c1, h, x, n_out, scale, fx, fy);
-}
 #endif
 
 #if HAPTICFIELD_X86_DISPATCH
@@ -661,8 +625,10 @@ __attribute__((target("avx512f"))) inline void integer_output_avx512(
 ///   F(x) - F(x-1) = V1(x+2h) - V1(x-1),
 /// so B, R and F are running sums of those differences, sixteen at a time
 /// by scan16(). Same integers (modulo 2^32) as the prefix tables, hence the
-/// same planes. Non-temporal 64-byte stores; `next` is prefetched as in
-/// integer_output_avx512().
+/// same planes. Non-temporal 64-byte stores where fx and fy are equally
+/// aligned (ordinary ones otherwise); meanwhile it prefetches `next`
+/// (n_next levels: the picture row the band converts next), one cache line
+/// per 8 levels.
 __attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uint32_t* HAPTICFIELD_RESTRICT v0,
                                                                   const std::uint32_t* HAPTICFIELD_RESTRICT v1, int h,
                                                                   int n_out, double scale,
@@ -697,9 +663,6 @@ __attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uin
   if (same_phase)
     for (; x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 63u) != 0; ++x)
       step(x);
-  else
-    for (; x < n_out; ++x)  // unusual layout: scalar throughout
-      step(x);
   const __m512i last = _mm512_set1_epi32(15);
   const __m512i vh = _mm512_set1_epi32(h);
   const __m512d vs = _mm512_set1_pd(scale);
@@ -716,8 +679,13 @@ __attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uin
     const __m512i dr = _mm512_sub_epi32(_mm512_add_epi32(_mm512_mullo_epi32(vh, _mm512_add_epi32(out0, in0)), in0), vb);
     const __m512i vr = scan16(dr, kr);
     const __m512i vf = scan16(_mm512_sub_epi32(in1, out1), kf);
-    _mm512_stream_ps(fx + x, scale16(vr, vs));
-    _mm512_stream_ps(fy + x, scale16(vf, vs));
+    if (same_phase) {
+      _mm512_stream_ps(fx + x, scale16(vr, vs));
+      _mm512_stream_ps(fy + x, scale16(vf, vs));
+    } else {  // unusual layout: the planes cannot both be 64-byte aligned
+      _mm512_storeu_ps(fx + x, scale16(vr, vs));
+      _mm512_storeu_ps(fy + x, scale16(vf, vs));
+    }
     if (x < n_next) {
       _mm_prefetch(reinterpret_cast<const char*>(next + x), _MM_HINT_T0);
       _mm_prefetch(reinterpret_cast<const char*>(next + x + 8), _MM_HINT_T0);
@@ -823,9 +791,7 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
 #if HAPTICFIELD_X86_DISPATCH
       const double* next = y < y_last ? gray.row(border_index(y + 1 + h, height, border)) : nullptr;
       const int n_next = y < y_last ? gray.width() : 0;
-      if constexpr (Simd == MapSimd::avx512)
-        integer_output_avx512(pc0, pd0, pc1, h, n_out, scale, fx, fy, next, n_next);
-      else if constexpr (Simd == MapSimd::avx2)
+      if constexpr (Simd != MapSimd::baseline)  // AVX-512 rows seldom come here (see above)
         integer_output_avx2(pc0, pd0, pc1, h, n_out, scale, fx, fy, next, n_next);
       else
         integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
