@@ -32,6 +32,17 @@
 #if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
 #define HAPTICFIELD_X86_DISPATCH 1
 #include <immintrin.h>
+// AVX-512F code whose double arithmetic must round as the other routes do:
+// GCC would fuse a multiply and an add into one FMA there (AVX-512F has
+// them), so contraction is off; clang fuses only within one expression.
+#if defined(__clang__)
+#define HAPTICFIELD_AVX512_EXACT __attribute__((target("avx512f")))
+#define HAPTICFIELD_AVX512_EXACT_WIDE __attribute__((target("avx512f")))
+#else
+#define HAPTICFIELD_AVX512_EXACT __attribute__((target("avx512f"), optimize("fp-contract=off")))
+#define HAPTICFIELD_AVX512_EXACT_WIDE \
+  __attribute__((target("avx512f,prefer-vector-width=512"), optimize("fp-contract=off")))
+#endif
 #else
 #define HAPTICFIELD_X86_DISPATCH 0
 #endif
@@ -169,8 +180,9 @@ inline constexpr __mmask16 all16 = 0xFFFF;
 
 /// convert_levels_avx2() sixteen levels at a time (AVX-512F: eight doubles
 /// to eight int32 in one instruction); the rest through the AVX2 version.
-__attribute__((target("avx512f"), optimize("fp-contract=off"))) inline std::uint64_t convert_levels_avx512(
-    const double* HAPTICFIELD_RESTRICT p, int n, double d, std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
+HAPTICFIELD_AVX512_EXACT inline std::uint64_t convert_levels_avx512(const double* HAPTICFIELD_RESTRICT p, int n,
+                                                                    double d,
+                                                                    std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
   const __m512d vd = _mm512_set1_pd(d);
   const __m512d top = _mm512_set1_pd(gray_full_scale * d);
   __m512d worst_off = _mm512_setzero_pd();
@@ -852,11 +864,10 @@ __attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand&
 }
 
 /// The integer route again for AVX-512F (16 lanes, 512-bit loops in the
-/// compiler's own vectorisation too). AVX-512F brings fused multiply-adds,
-/// which would round the level conversion differently: contraction is off.
+/// compiler's own vectorisation too), with no multiply-add contraction
+/// (see HAPTICFIELD_AVX512_EXACT).
 /// The double route stays on AVX2, whose planes it reproduces to the bit.
-__attribute__((target("avx512f,prefer-vector-width=512"), optimize("fp-contract=off"))) inline bool prewitt_band_avx512(
-    const PrewittBand& a) {
+HAPTICFIELD_AVX512_EXACT_WIDE inline bool prewitt_band_avx512(const PrewittBand& a) {
   return prewitt_band_integer<MapSimd::avx512>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi,
                                                a.y_first, a.y_last, *a.map);
 }
