@@ -641,15 +641,34 @@ __attribute__((target("avx512f"), always_inline)) inline __m512 scale16(__m512i 
 /// aligned (ordinary ones otherwise); meanwhile it prefetches `next`
 /// (n_next levels: the picture row the band converts next), one cache line
 /// per 8 levels.
-__attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uint32_t* HAPTICFIELD_RESTRICT v0,
-                                                                  const std::uint32_t* HAPTICFIELD_RESTRICT v1, int h,
-                                                                  int n_out, double scale,
-                                                                  float* HAPTICFIELD_RESTRICT fx,
-                                                                  float* HAPTICFIELD_RESTRICT fy, const double* next,
-                                                                  int n_next) noexcept {
+///
+/// Given q_in and q_out, the column sums are first slid down one row on the
+/// way (q_in enters, q_out leaves, as in prewitt_band_integer()), `ahead`
+/// columns before the row pass reads them: each column is read and written
+/// twice while it is in the first-level cache, and the stores have left
+/// the store buffer before the (unaligned) loads that read them back.
+__attribute__((target("avx512f"))) inline void integer_row_avx512(
+    std::uint32_t* v0, std::uint32_t* v1, int h, int n_out, double scale, float* HAPTICFIELD_RESTRICT fx,
+    float* HAPTICFIELD_RESTRICT fy, const double* next, int n_next,
+    const std::uint32_t* HAPTICFIELD_RESTRICT q_in = nullptr,
+    const std::uint32_t* HAPTICFIELD_RESTRICT q_out = nullptr) noexcept {
   using U = std::uint32_t;
   using A = MapArithmetic<U>;
   const int span = 2 * h;
+  const int n = n_out + span;  // columns of the column sums
+  const U hh = static_cast<U>(h);
+  constexpr int ahead = 128;
+  int slid = q_in == nullptr ? n : 0;  // columns [0, slid) are slid
+  const auto slide_to = [&](int end) HAPTICFIELD_ALWAYS_INLINE {
+    end = std::min(end, n);
+    for (int t = slid; t < end; ++t) {
+      const U box = v0[t] + (q_in[t] - q_out[t]);
+      v0[t] = box;
+      v1[t] += hh * (q_out[t] + q_in[t]) + q_in[t] - box;
+    }
+    slid = std::max(slid, end);
+  };
+  slide_to(span + 16 + ahead);
   U b = 0;
   U r = 0;
   U f = 0;
@@ -660,7 +679,6 @@ __attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uin
   }
   fx[0] = A::out(r, scale);
   fy[0] = A::out(f, scale);
-  const U hh = static_cast<U>(h);
   const auto step = [&](int x) HAPTICFIELD_ALWAYS_INLINE {
     const U in = v0[x + span];
     const U out = v0[x - 1];
@@ -682,7 +700,24 @@ __attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uin
   __m512i kr = _mm512_set1_epi32(static_cast<int>(r));
   __m512i kf = _mm512_set1_epi32(static_cast<int>(f));
   const int vector_end = x + (n_out - x) / 16 * 16;
+  slide_to(x + span + ahead);
   for (; x < vector_end; x += 16) {
+    if (slid < n) {  // slide columns [x + span + ahead, + 16)
+      const int t = slid;
+      if (t + 16 <= n) {
+        const __m512i qi = _mm512_loadu_si512(q_in + t);
+        const __m512i qo = _mm512_loadu_si512(q_out + t);
+        const __m512i box = _mm512_add_epi32(_mm512_loadu_si512(v0 + t), _mm512_sub_epi32(qi, qo));
+        _mm512_storeu_si512(v0 + t, box);
+        _mm512_storeu_si512(
+            v1 + t, _mm512_add_epi32(
+                        _mm512_loadu_si512(v1 + t),
+                        _mm512_sub_epi32(_mm512_add_epi32(_mm512_mullo_epi32(vh, _mm512_add_epi32(qo, qi)), qi), box)));
+        slid = t + 16;
+      } else {
+        slide_to(n);
+      }
+    }
     const __m512i in0 = _mm512_loadu_si512(v0 + x + span);
     const __m512i out0 = _mm512_loadu_si512(v0 + x - 1);
     const __m512i in1 = _mm512_loadu_si512(v1 + x + span);
@@ -715,6 +750,7 @@ __attribute__((target("avx512f"))) inline void integer_row_avx512(const std::uin
     _mm512_store_si512(lanes, kf);
     f = lanes[0];
   }
+  slide_to(n);
   for (; x < n_out; ++x)
     step(x);
 }
@@ -766,8 +802,10 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
   const U hh = A::weight(h);
   const int width = 2 * h + 1;
   for (int y = y_first; y <= y_last; ++y) {
-    if (y > y_first) {  // row y - 1 - h leaves the window, row y + h enters
-      convert(y + h);
+    // AVX-512 slides the column sums inside the row pass
+    const bool slide_in_row = Simd == MapSimd::avx512 && border != Border::fade;
+    if (y > y_first) convert(y + h);  // row y - 1 - h leaves the window, row y + h enters
+    if (y > y_first && !slide_in_row) {
       const U* HAPTICFIELD_RESTRICT in = q_row(y + h);
       const U* HAPTICFIELD_RESTRICT out = q_row(y - 1 - h);
       U* HAPTICFIELD_RESTRICT b = v0.data();
@@ -783,7 +821,8 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
       if (border != Border::fade) {  // straight from the column sums
         integer_row_avx512(v0.data(), v1.data(), h, n_out, scale, &map.fx[map.index(lo, y)], &map.fy[map.index(lo, y)],
                            y < y_last ? gray.row(border_index(y + 1 + h, height, border)) : nullptr,
-                           y < y_last ? gray.width() : 0);
+                           y < y_last ? gray.width() : 0, y > y_first ? q_row(y + h) : nullptr,
+                           y > y_first ? q_row(y - 1 - h) : nullptr);
         continue;
       }
       prefix_sums_avx512(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
