@@ -1024,7 +1024,9 @@ inline void prewitt_force_map_on(MapSimd simd, const GrayImage& gray, int size, 
 /// give fx and a running ramp over H0 gives fy, vectorised across the row.
 /// Rows live in a small ring buffer, so memory traffic stays near one read
 /// of the picture and one write of the map. `threads` > 1 splits the rows
-/// into bands computed in parallel (setup work, never a servo tick). Equals
+/// into bands computed in parallel (setup work, never a servo tick). The
+/// widest route the CPU runs is taken (baseline, AVX2, AVX-512F for exact
+/// integers); all give the same planes. Equals
 /// force_map() of TangibleImage{prewitt, size, border} to float rounding,
 /// the edge fades of ImageForce included.
 /// @throws std::invalid_argument as TangibleImage, or for threads < 1.
