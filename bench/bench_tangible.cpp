@@ -3,7 +3,10 @@
 // the same run: the direct kernel at m = 5 for queries, OpenCV's filter2D
 // and sepFilter2D for the full map.
 //
-//   bench_tangible [IMAGE] [--queries N] [--maps N]
+// The map is also set against the memory floor of the same run: the time to
+// read the picture and write the two float planes with nothing else.
+//
+//   bench_tangible [IMAGE] [--queries N] [--maps N] [--floor-only]
 #include <hapticfield/kernels.hpp>
 #include <hapticfield/offline/tick_budget.hpp>
 
@@ -11,12 +14,20 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <numeric>
 #include <random>
 #include <string>
 #include <thread>
 #include <vector>
+
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define BENCH_X86 1
+#else
+#define BENCH_X86 0
+#endif
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -111,24 +122,168 @@ std::vector<Stats> time_rounds(int rounds, const std::vector<std::function<void(
   return out;
 }
 
+// --- memory floor --------------------------------------------------------------
+// The least any full map can cost: read every gray level of the picture (a
+// double, as GrayImage stores it: 8 bytes) and write the two float planes
+// (4 + 4 bytes), with no arithmetic worth the name. Several ways of moving
+// those bytes; the fastest one in the run is the floor.
+
+/// One float per plane from each level: a plain loop the compiler vectorises.
+void floor_loop(const double* __restrict in, std::size_t n, float* __restrict fx, float* __restrict fy) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const float v = static_cast<float>(in[i]);
+    fx[i] = v;
+    fy[i] = v;
+  }
+}
+
+#if BENCH_X86
+/// The same with non-temporal stores (no read of the output lines before
+/// they are written), as the map's AVX2 route writes.
+__attribute__((target("avx2"))) void floor_stream(const double* __restrict in, std::size_t n, float* __restrict fx,
+                                                  float* __restrict fy) {
+  std::size_t i = 0;
+  while (i < n && (reinterpret_cast<std::uintptr_t>(fx + i) & 31u) != 0) {
+    fx[i] = static_cast<float>(in[i]);
+    fy[i] = static_cast<float>(in[i]);
+    ++i;
+  }
+  const bool same_phase = ((reinterpret_cast<std::uintptr_t>(fx) ^ reinterpret_cast<std::uintptr_t>(fy)) & 31u) == 0;
+  if (same_phase)
+    for (; i + 8 <= n; i += 8) {
+      const __m128 lo = _mm256_cvtpd_ps(_mm256_loadu_pd(in + i));
+      const __m128 hi = _mm256_cvtpd_ps(_mm256_loadu_pd(in + i + 4));
+      const __m256 v = _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+      _mm256_stream_ps(fx + i, v);
+      _mm256_stream_ps(fy + i, v);
+    }
+  for (; i < n; ++i) {
+    fx[i] = static_cast<float>(in[i]);
+    fy[i] = static_cast<float>(in[i]);
+  }
+  _mm_sfence();
+}
+#endif
+
+/// The picture's bytes copied as they are: its first half into fx, its
+/// second into fy (8 bytes a pixel in, 4 + 4 out), by the C library.
+void floor_memcpy(const double* in, std::size_t n, float* fx, float* fy) {
+  const auto* bytes = reinterpret_cast<const unsigned char*>(in);
+  std::memcpy(fx, bytes, n * sizeof(float));
+  std::memcpy(fy, bytes + n * sizeof(float), n * sizeof(float));
+}
+
+/// A summing read of the picture, then the planes filled by memset.
+void floor_read_memset(const double* __restrict in, std::size_t n, float* fx, float* fy) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  std::size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s0 += in[i];
+    s1 += in[i + 1];
+    s2 += in[i + 2];
+    s3 += in[i + 3];
+  }
+  for (; i < n; ++i)
+    s0 += in[i];
+  sink = s0 + s1 + s2 + s3;
+  std::memset(fx, 0, n * sizeof(float));
+  std::memset(fy, 0, n * sizeof(float));
+}
+
+/// The map at m = 17 against the memory floor, for square pictures of
+/// 1, 4 and 16 Mpx (8 to 128 MB of doubles: at and beyond the last-level
+/// cache), one thread. Contenders run in interleaved rounds.
+void floor_table(const cv::Mat& photo, int rounds) {
+  const int m = 17;
+  std::printf(
+      "Full map against the memory floor (read the picture's doubles, write the fx and fy float planes; "
+      "fastest of: vectorised loop%s, memcpy, read + memset), m = %d, reflect border, 1 thread, %d interleaved "
+      "rounds\n",
+      BENCH_X86 && hf::detail::has_avx2() ? ", non-temporal AVX2 loop" : "", m, rounds);
+  std::printf(
+      "| picture | map mean / worst [ms] | floor mean / worst [ms] (fastest way) | map / floor (mean) | "
+      "map / floor (worst) | loop / NT loop / memcpy / read+memset, mean [ms] |\n|---|---|---|---|---|---|\n");
+  for (const int side : {1024, 2048, 4096}) {
+    cv::Mat resized;
+    cv::resize(photo, resized, cv::Size(side, side), 0, 0, cv::INTER_CUBIC);
+    const hf::GrayImage gray = hf::to_gray(resized);
+    const std::size_t n = gray.pixels().size();
+    const double* in = gray.pixels().data();
+    std::vector<float> fx(n);
+    std::vector<float> fy(n);
+    hf::ForceMap map;
+    std::vector<std::function<void()>> contenders{
+        [&] {
+          hf::prewitt_force_map(gray, m, hf::Border::reflect, map);
+          sink = map.fx[n / 2];
+        },
+        [&] {
+          floor_loop(in, n, fx.data(), fy.data());
+          sink = fx[n / 2];
+        },
+        [&] {
+          floor_memcpy(in, n, fx.data(), fy.data());
+          sink = fx[n / 2];
+        },
+        [&] {
+          floor_read_memset(in, n, fx.data(), fy.data());
+          sink = fx[n / 2];
+        },
+    };
+#if BENCH_X86
+    const bool stream = hf::detail::has_avx2();
+    if (stream)
+      contenders.push_back([&] {
+        floor_stream(in, n, fx.data(), fy.data());
+        sink = fx[n / 2];
+      });
+#else
+    const bool stream = false;
+#endif
+    const std::vector<Stats> r = time_rounds(rounds, contenders);
+    static const char* const names[] = {"map", "loop", "memcpy", "read+memset", "NT loop"};
+    std::size_t best = 1;
+    for (std::size_t i = 2; i < r.size(); ++i)
+      if (r[i].mean < r[best].mean) best = i;
+    const Stats& map_t = r[0];
+    const Stats& floor_t = r[best];
+    char nt[32] = "-";
+    if (stream) std::snprintf(nt, sizeof nt, "%.2f", r[4].mean / 1e6);
+    std::printf(
+        "| %d x %d (%.0f Mpx, %.0f MB in + %.0f MB out) | %.2f / %.2f | %.2f / %.2f (%s) | %.2fx | %.2fx | "
+        "%.2f / %s / %.2f / %.2f |\n",
+        side, side, n / 1048576.0, n * 8.0 / 1048576.0, n * 8.0 / 1048576.0, map_t.mean / 1e6, map_t.worst / 1e6,
+        floor_t.mean / 1e6, floor_t.worst / 1e6, names[best], map_t.mean / floor_t.mean, map_t.worst / floor_t.worst,
+        r[1].mean / 1e6, nt, r[2].mean / 1e6, r[3].mean / 1e6);
+  }
+  std::printf("\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string path = std::string(HAPTICFIELD_SOURCE_DIR) + "/examples/data/coffee.png";
   int queries = 200000;
   int map_runs = 30;
+  bool floor_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--queries" && i + 1 < argc)
       queries = std::atoi(argv[++i]);
     else if (a == "--maps" && i + 1 < argc)
       map_runs = std::atoi(argv[++i]);
+    else if (a == "--floor-only")
+      floor_only = true;
     else
       path = a;
   }
   // The paper's picture size: 1000 x 1504 px.
   cv::Mat photo;
   cv::resize(hf::load_image(path), photo, cv::Size(1504, 1000), 0, 0, cv::INTER_CUBIC);
+  if (floor_only) {
+    floor_table(hf::load_image(path), map_runs);
+    return 0;
+  }
   const hf::GrayImage gray = hf::to_gray(photo);
   const double clock_ns = clock_cost();
   std::printf("picture %s resized to %d x %d px; clock read cost %.1f ns (subtracted)\n\n", path.c_str(), gray.width(),
@@ -262,5 +417,7 @@ int main(int argc, char** argv) {
   std::printf("Map route: %s; AVX2 build in use: %s\n",
               hf::detail::guess_fixed_point_scale(gray) > 0.0 ? "exact 32-bit integers" : "double",
               hf::detail::has_avx2() ? "yes" : "no");
+  std::printf("\n");
+  floor_table(hf::load_image(path), map_runs);
   return 0;
 }

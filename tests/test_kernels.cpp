@@ -594,6 +594,136 @@ TEST_CASE("the AVX2 and baseline builds of a map band give the same planes") {
   }
 }
 
+TEST_CASE("every instruction-set route of the Prewitt map gives OpenCV's sepFilter2D planes, to the bit alike") {
+  // Oracle: sepFilter2D in double on the inverted picture (box across the
+  // derivative, ramp along it), normalised by the step response. Widths
+  // that are no multiple of 8 or 16 exercise the vector loops' tails.
+  std::vector<detail::MapSimd> routes{detail::MapSimd::baseline};
+  if (detail::has_avx2()) routes.push_back(detail::MapSimd::avx2);
+  if (detail::has_avx512()) routes.push_back(detail::MapSimd::avx512);
+  cv::theRNG().state = 9;
+  cv::Mat colour(67, 203, CV_8UC3);
+  cv::randu(colour, cv::Scalar::all(0), cv::Scalar::all(256));
+  cv::GaussianBlur(colour, colour, cv::Size(0, 0), 1.2);
+  cv::Mat eight;
+  cv::cvtColor(colour, eight, cv::COLOR_BGR2GRAY);
+  GrayImage rounded = test_picture(37, 41, 12);
+  for (double& v : const_cast<std::vector<double>&>(rounded.pixels()))
+    v = std::round(v);
+  const std::vector<GrayImage> pictures = {to_gray(eight), to_gray(colour, GrayWeights::paper), rounded,
+                                           test_picture(90, 45, 13)};
+  for (std::size_t p = 0; p < pictures.size(); ++p) {
+    const GrayImage& gray = pictures[p];
+    cv::Mat inverted;
+    cv::subtract(cv::Scalar::all(gray_full_scale), to_mat(gray), inverted);
+    for (int size : {3, 5, 17, 33}) {
+      if (size > std::min(gray.width(), gray.height())) continue;
+      const int h = size / 2;
+      cv::Mat ramp(1, size, CV_64F);
+      const cv::Mat ones(1, size, CV_64F, cv::Scalar(1.0));
+      for (int c = 0; c < size; ++c)
+        ramp.at<double>(c) = c - h;
+      const double step = gray_full_scale * size * h * (h + 1) / 2.0;
+      for (Border border : border_kinds) {
+        CAPTURE(p, size, to_string(border));
+        const int cv_b = needs_full_mask(border) ? cv::BORDER_REPLICATE : cv_border(border);
+        cv::Mat fx;
+        cv::Mat fy;
+        cv::sepFilter2D(inverted, fx, CV_64F, ramp, ones, cv::Point(-1, -1), 0.0, cv_b);
+        cv::sepFilter2D(inverted, fy, CV_64F, ones, ramp, cv::Point(-1, -1), 0.0, cv_b);
+        ForceMap first;
+        for (const detail::MapSimd simd : routes) {
+          CAPTURE(static_cast<int>(simd));
+          ForceMap map;
+          detail::prewitt_force_map_on(simd, gray, size, border, map, default_fade_px, 1);
+          if (simd == routes.front()) first = map;
+          REQUIRE(map.fx == first.fx);  // the same planes, bit for bit
+          REQUIRE(map.fy == first.fy);
+          double worst = 0.0;
+          for (int y = 0; y < gray.height(); ++y)
+            for (int x = 0; x < gray.width(); ++x) {
+              // suspend and fade: only where the mask lies inside and no fade applies
+              const int inside = std::min({x - h, gray.width() - 1 - h - x, y - h, gray.height() - 1 - h - y});
+              if (needs_full_mask(border) && inside < (border == Border::fade ? default_fade_px : 0.0)) continue;
+              worst = std::max({worst, std::abs(map.fx[map.index(x, y)] - fx.at<double>(y, x) / step),
+                                std::abs(map.fy[map.index(x, y)] - fy.at<double>(y, x) / step)});
+            }
+          CHECK(worst <= 1e-6);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("a map whose planes are aligned differently gets the same values on every route") {
+  // The vector routes write 32- or 64-byte blocks with non-temporal stores
+  // when fx and fy share their alignment, ordinary stores otherwise: find
+  // an fy allocation whose 64-byte phase differs from fx's.
+  GrayImage gray = test_picture(301, 40, 17);
+  for (double& v : const_cast<std::vector<double>&>(gray.pixels()))
+    v = std::round(v);
+  const std::size_t n = gray.pixels().size();
+  ForceMap reference{gray.width(), gray.height(), std::vector<float>(n), std::vector<float>(n)};
+  const detail::PrewittBand base{
+      &gray,     5, Border::reflect, 10.0, 1e-3, 1.0, 0, gray.width() - 1, gray.height() - 1, 0, gray.height() - 1,
+      &reference};
+  REQUIRE(detail::prewitt_band(base, detail::MapSimd::baseline));
+  for (const detail::MapSimd simd : {detail::MapSimd::avx2, detail::MapSimd::avx512}) {
+    ForceMap map{gray.width(), gray.height(), std::vector<float>(n), {}};
+    std::vector<std::vector<float>> spacers;
+    for (int attempt = 0; attempt < 64; ++attempt) {
+      map.fy = std::vector<float>(n);
+      if (((reinterpret_cast<std::uintptr_t>(map.fx.data()) ^ reinterpret_cast<std::uintptr_t>(map.fy.data())) & 63u) !=
+          0)
+        break;
+      spacers.emplace_back(static_cast<std::size_t>(attempt % 7 + 1) * 4);
+    }
+    if (((reinterpret_cast<std::uintptr_t>(map.fx.data()) ^ reinterpret_cast<std::uintptr_t>(map.fy.data())) & 63u) ==
+        0)
+      WARN("the allocator gave fx and fy the same 64-byte phase every time");
+    CAPTURE(static_cast<int>(simd));
+    detail::PrewittBand band = base;
+    band.map = &map;
+    REQUIRE(detail::prewitt_band(band, simd));  // the widest route the CPU runs, at most simd
+    CHECK(map.fx == reference.fx);
+    CHECK(map.fy == reference.fy);
+  }
+}
+
+TEST_CASE("each route's level check catches a level that is not an integer or leaves [0, 255]") {
+  // One bad level among exact integers, placed inside a vector block and in
+  // the scalar tail: the integer band must report it (the map then takes the
+  // double route), whatever the instruction set.
+  std::vector<detail::MapSimd> routes{detail::MapSimd::baseline};
+  if (detail::has_avx2()) routes.push_back(detail::MapSimd::avx2);
+  if (detail::has_avx512()) routes.push_back(detail::MapSimd::avx512);
+  GrayImage levels = test_picture(75, 40, 21);
+  for (double& v : const_cast<std::vector<double>&>(levels.pixels()))
+    v = std::round(v);
+  for (const double bad : {100.3, 256.0, -1.0, 255.001, std::numeric_limits<double>::quiet_NaN()}) {
+    for (const int column : {20, 73}) {
+      GrayImage g = levels;
+      g.at(column, 19) = bad;
+      for (const detail::MapSimd simd : routes) {
+        CAPTURE(bad, column, static_cast<int>(simd));
+        ForceMap map{g.width(), g.height(), std::vector<float>(g.pixels().size()),
+                     std::vector<float>(g.pixels().size())};
+        const detail::PrewittBand band{
+            &g, 4, Border::clamp, 10.0, 1e-3, 1.0, 0, g.width() - 1, g.height() - 1, 0, g.height() - 1, &map};
+        CHECK_FALSE(detail::prewitt_band(band, simd));
+      }
+    }
+  }
+  for (const detail::MapSimd simd : routes) {  // and the clean picture passes
+    ForceMap map{levels.width(), levels.height(), std::vector<float>(levels.pixels().size()),
+                 std::vector<float>(levels.pixels().size())};
+    const detail::PrewittBand band{
+        &levels, 4, Border::clamp, 10.0, 1e-3, 1.0, 0, levels.width() - 1, levels.height() - 1, 0, levels.height() - 1,
+        &map};
+    CHECK(detail::prewitt_band(band, simd));
+  }
+}
+
 TEST_CASE("the Prewitt map computed in bands on several threads equals one thread's") {
   const GrayImage gray = test_picture(257, 301, 33);
   for (Border border : {Border::suspend, Border::reflect, Border::fade}) {

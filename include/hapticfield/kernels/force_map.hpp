@@ -32,6 +32,17 @@
 #if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
 #define HAPTICFIELD_X86_DISPATCH 1
 #include <immintrin.h>
+// AVX-512F code whose double arithmetic must round as the other routes do:
+// GCC would fuse a multiply and an add into one FMA there (AVX-512F has
+// them), so contraction is off; clang fuses only within one expression.
+#if defined(__clang__)
+#define HAPTICFIELD_AVX512_EXACT __attribute__((target("avx512f")))
+#define HAPTICFIELD_AVX512_EXACT_WIDE __attribute__((target("avx512f")))
+#else
+#define HAPTICFIELD_AVX512_EXACT __attribute__((target("avx512f"), optimize("fp-contract=off")))
+#define HAPTICFIELD_AVX512_EXACT_WIDE \
+  __attribute__((target("avx512f,prefer-vector-width=512"), optimize("fp-contract=off")))
+#endif
 #else
 #define HAPTICFIELD_X86_DISPATCH 0
 #endif
@@ -77,6 +88,9 @@ template <class Source>
 
 namespace detail {
 
+/// Instruction sets the integer route is compiled for, chosen at run time.
+enum class MapSimd { baseline, avx2, avx512 };
+
 /// Arithmetic of the map's running sums. double: the gray levels as they
 /// are. std::uint32_t: gray levels as exact integers Q = P D (see
 /// integral_kernel.hpp), summed modulo 2^32; the final force is exact as
@@ -116,34 +130,89 @@ struct MapArithmetic<std::uint32_t> {
 };
 
 #if HAPTICFIELD_X86_DISPATCH
-/// Q = round((255 - p) d) for n contiguous levels, four at a time; returns
+/// Q = round((255 - p) d) for n contiguous levels, eight at a time; returns
 /// non-zero when one is not an integer to integer_tolerance or lies outside
 /// [0, 255 d] (NaN included). The conversion is exact for integers whatever
-/// the rounding mode.
+/// the rounding mode. The checks are folded into two running maxima (the
+/// distance to the integer, and Q as unsigned: a negative or out-of-range Q,
+/// NaN included, converts to a value above 255 d), tested once at the end.
 __attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(
     const double* HAPTICFIELD_RESTRICT p, int n, double d, std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
   const __m256d vd = _mm256_set1_pd(d);
   const __m256d top = _mm256_set1_pd(gray_full_scale * d);
-  const __m256d tol = _mm256_set1_pd(integer_tolerance);
-  const __m256d low = _mm256_set1_pd(-integer_tolerance);
-  const __m256d high = _mm256_set1_pd(gray_full_scale * d + integer_tolerance);
   const __m256d sign = _mm256_set1_pd(-0.0);
-  int bad = 0;
+  __m256d worst_off = _mm256_setzero_pd();
+  __m256i worst_q = _mm256_setzero_si256();
   int i = 0;
-  for (; i + 4 <= n; i += 4) {
-    const __m256d q = _mm256_sub_pd(top, _mm256_mul_pd(_mm256_loadu_pd(p + i), vd));
-    const __m128i k = _mm256_cvtpd_epi32(q);
-    const __m256d off = _mm256_andnot_pd(sign, _mm256_sub_pd(q, _mm256_cvtepi32_pd(k)));
-    const __m256d ok =
-        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(off, tol, _CMP_LE_OQ), _mm256_cmp_pd(q, low, _CMP_GE_OQ)),
-                      _mm256_cmp_pd(q, high, _CMP_LE_OQ));
-    bad |= _mm256_movemask_pd(ok) ^ 0xF;
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), k);
+  for (; i + 8 <= n; i += 8) {
+    const __m256d q0 = _mm256_sub_pd(top, _mm256_mul_pd(_mm256_loadu_pd(p + i), vd));
+    const __m256d q1 = _mm256_sub_pd(top, _mm256_mul_pd(_mm256_loadu_pd(p + i + 4), vd));
+    const __m128i k0 = _mm256_cvtpd_epi32(q0);
+    const __m128i k1 = _mm256_cvtpd_epi32(q1);
+    // max_pd returns its second operand when the first is NaN; a NaN level
+    // is caught by the range test instead.
+    worst_off = _mm256_max_pd(_mm256_andnot_pd(sign, _mm256_sub_pd(q0, _mm256_cvtepi32_pd(k0))), worst_off);
+    worst_off = _mm256_max_pd(_mm256_andnot_pd(sign, _mm256_sub_pd(q1, _mm256_cvtepi32_pd(k1))), worst_off);
+    const __m256i k = _mm256_inserti128_si256(_mm256_castsi128_si256(k0), k1, 1);
+    worst_q = _mm256_max_epu32(worst_q, k);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), k);
   }
+  alignas(32) double offs[4];
+  alignas(32) std::uint32_t qs[8];
+  _mm256_store_pd(offs, worst_off);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(qs), worst_q);
+  const auto highest = static_cast<std::uint32_t>(gray_full_scale * d);
+  std::uint64_t bad = 0;
+  for (const double o : offs)
+    bad |= static_cast<std::uint64_t>(!(o <= integer_tolerance));
+  for (const std::uint32_t q : qs)
+    bad |= static_cast<std::uint64_t>(q > highest);
   std::uint64_t rest = 0;
   for (; i < n; ++i)
     out[i] = MapArithmetic<std::uint32_t>::value(gray_full_scale - p[i], d, rest);
-  return static_cast<std::uint64_t>(bad) | rest;
+  return bad | rest;
+}
+
+/// All-lanes masks for the AVX-512 intrinsics: the masked forms name no
+/// undefined register, which GCC 12 would warn about.
+inline constexpr __mmask8 all8 = 0xFF;
+inline constexpr __mmask16 all16 = 0xFFFF;
+
+/// convert_levels_avx2() sixteen levels at a time (AVX-512F: eight doubles
+/// to eight int32 in one instruction); the rest through the AVX2 version.
+HAPTICFIELD_AVX512_EXACT inline std::uint64_t convert_levels_avx512(const double* HAPTICFIELD_RESTRICT p, int n,
+                                                                    double d,
+                                                                    std::uint32_t* HAPTICFIELD_RESTRICT out) noexcept {
+  const __m512d vd = _mm512_set1_pd(d);
+  const __m512d top = _mm512_set1_pd(gray_full_scale * d);
+  __m512d worst_off = _mm512_setzero_pd();
+  __m512i worst_q = _mm512_setzero_si512();
+  int i = 0;
+  for (; i + 16 <= n; i += 16) {
+    const __m512d q0 = _mm512_sub_pd(top, _mm512_mul_pd(_mm512_loadu_pd(p + i), vd));
+    const __m512d q1 = _mm512_sub_pd(top, _mm512_mul_pd(_mm512_loadu_pd(p + i + 8), vd));
+    const __m256i k0 = _mm512_maskz_cvtpd_epi32(all8, q0);
+    const __m256i k1 = _mm512_maskz_cvtpd_epi32(all8, q1);
+    // as in convert_levels_avx2: a NaN distance leaves the maximum alone
+    worst_off =
+        _mm512_maskz_max_pd(all8, _mm512_abs_pd(_mm512_sub_pd(q0, _mm512_maskz_cvtepi32_pd(all8, k0))), worst_off);
+    worst_off =
+        _mm512_maskz_max_pd(all8, _mm512_abs_pd(_mm512_sub_pd(q1, _mm512_maskz_cvtepi32_pd(all8, k1))), worst_off);
+    const __m512i k = _mm512_maskz_inserti64x4(all8, _mm512_castsi256_si512(k0), k1, 1);
+    worst_q = _mm512_maskz_max_epu32(all16, worst_q, k);
+    _mm512_storeu_si512(out + i, k);
+  }
+  alignas(64) double offs[8];
+  alignas(64) std::uint32_t qs[16];
+  _mm512_store_pd(offs, worst_off);
+  _mm512_store_si512(qs, worst_q);
+  const auto highest = static_cast<std::uint32_t>(gray_full_scale * d);
+  std::uint64_t bad = 0;
+  for (const double o : offs)
+    bad |= static_cast<std::uint64_t>(!(o <= integer_tolerance));
+  for (const std::uint32_t q : qs)
+    bad |= static_cast<std::uint64_t>(q > highest);
+  return bad | convert_levels_avx2(p + i, n - i, d, out + i);
 }
 #endif
 
@@ -151,7 +220,7 @@ __attribute__((target("avx2"))) inline std::uint64_t convert_levels_avx2(
 /// past the picture's sides by the border policy, into out[q * stride], in
 /// the arithmetic T (scale d for integers). Returns non-zero when a scaled
 /// value was not an integer (always 0 for double).
-template <class T, bool Avx2 = false>
+template <class T, MapSimd Simd = MapSimd::baseline>
 HAPTICFIELD_ALWAYS_INLINE inline std::uint64_t inverted_padded_row(const GrayImage& gray, int row, int c_first, int n,
                                                                    Border border, T* HAPTICFIELD_RESTRICT out,
                                                                    int stride, double d) {
@@ -165,10 +234,13 @@ HAPTICFIELD_ALWAYS_INLINE inline std::uint64_t inverted_padded_row(const GrayIma
     out[q * stride] = A::value(gray_full_scale - src[border_index(c_first + q, w, border)], d, worst);
   bool done = false;
 #if HAPTICFIELD_X86_DISPATCH
-  if constexpr (Avx2 && std::is_same_v<T, std::uint32_t>) {
+  if constexpr (Simd != MapSimd::baseline && std::is_same_v<T, std::uint32_t>) {
     if (stride == 1) {
-      worst |=
-          convert_levels_avx2(src + c_first + interior_begin, interior_end - interior_begin, d, out + interior_begin);
+      const int count = interior_end - interior_begin;
+      if constexpr (Simd == MapSimd::avx512)
+        worst |= convert_levels_avx512(src + c_first + interior_begin, count, d, out + interior_begin);
+      else
+        worst |= convert_levels_avx2(src + c_first + interior_begin, count, d, out + interior_begin);
       done = true;
     }
   }
@@ -431,6 +503,47 @@ __attribute__((target("avx2"))) inline void prefix_sums_avx2(const std::uint32_t
   }
   prefix_sums_scalar(b, r, n, c0, d0, c1, t, c0[t], d0[t], c1[t]);
 }
+
+/// Inclusive prefix sum of sixteen uint32 lanes, plus carry: four shifts by
+/// 1, 2, 4 and 8 lanes across the whole register.
+__attribute__((target("avx512f"), always_inline)) inline __m512i scan16(__m512i x, __m512i carry) noexcept {
+  const __m512i zero = _mm512_setzero_si512();
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 15));
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 14));
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 12));
+  x = _mm512_add_epi32(x, _mm512_maskz_alignr_epi32(all16, x, zero, 8));
+  return _mm512_add_epi32(x, carry);
+}
+
+/// prefix_sums_avx2() sixteen sums at a time.
+__attribute__((target("avx512f"))) inline void prefix_sums_avx512(const std::uint32_t* HAPTICFIELD_RESTRICT b,
+                                                                  const std::uint32_t* HAPTICFIELD_RESTRICT r,
+                                                                  std::size_t n, std::uint32_t* HAPTICFIELD_RESTRICT c0,
+                                                                  std::uint32_t* HAPTICFIELD_RESTRICT d0,
+                                                                  std::uint32_t* HAPTICFIELD_RESTRICT c1) noexcept {
+  const __m512i last = _mm512_set1_epi32(15);
+  __m512i k0 = _mm512_setzero_si512();
+  __m512i kd = _mm512_setzero_si512();
+  __m512i k1 = _mm512_setzero_si512();
+  __m512i index = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __m512i sixteen = _mm512_set1_epi32(16);
+  std::size_t t = 0;
+  for (; t + 16 <= n; t += 16) {
+    const __m512i vb = _mm512_loadu_si512(b + t);
+    const __m512i vr = _mm512_loadu_si512(r + t);
+    const __m512i s0 = scan16(vb, k0);
+    const __m512i sd = scan16(_mm512_mullo_epi32(vb, index), kd);
+    const __m512i s1 = scan16(vr, k1);
+    _mm512_storeu_si512(c0 + t + 1, s0);
+    _mm512_storeu_si512(d0 + t + 1, sd);
+    _mm512_storeu_si512(c1 + t + 1, s1);
+    k0 = _mm512_maskz_permutexvar_epi32(all16, last, s0);
+    kd = _mm512_maskz_permutexvar_epi32(all16, last, sd);
+    k1 = _mm512_maskz_permutexvar_epi32(all16, last, s1);
+    index = _mm512_add_epi32(index, sixteen);
+  }
+  prefix_sums_scalar(b, r, n, c0, d0, c1, t, c0[t], d0[t], c1[t]);
+}
 #endif
 
 /// One output row of the integer route: for x in [0, n_out), the window
@@ -474,7 +587,8 @@ __attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint3
                                                                 const std::uint32_t* HAPTICFIELD_RESTRICT d0,
                                                                 const std::uint32_t* HAPTICFIELD_RESTRICT c1, int h,
                                                                 int n_out, double scale, float* HAPTICFIELD_RESTRICT fx,
-                                                                float* HAPTICFIELD_RESTRICT fy) noexcept {
+                                                                float* HAPTICFIELD_RESTRICT fy,
+                                                                const double* next = nullptr, int n_next = 0) noexcept {
   const int width = 2 * h + 1;
   // Head: up to the first x where both rows are 32-byte aligned (they are
   // equally misaligned when the planes were allocated alike).
@@ -496,9 +610,149 @@ __attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint3
     const __m256i my = _mm256_sub_epi32(load8(c1 + x + width), load8(c1 + x));
     _mm256_stream_ps(fx + x, scale8(mx, vs));
     _mm256_stream_ps(fy + x, scale8(my, vs));
+    if (x < n_next) _mm_prefetch(reinterpret_cast<const char*>(next + x), _MM_HINT_T0);
     centre = _mm256_add_epi32(centre, eight);
   }
   integer_output_scalar(c0, d0, c1, h, x, n_out, scale, fx, fy);
+}
+
+/// Sixteen exact int32 forces to float, through double (one rounding).
+__attribute__((target("avx512f"), always_inline)) inline __m512 scale16(__m512i v, __m512d scale) noexcept {
+  const __m256 lo = _mm512_maskz_cvtpd_ps(
+      all8, _mm512_mul_pd(_mm512_maskz_cvtepi32_pd(all8, _mm512_maskz_extracti64x4_epi64(all8, v, 0)), scale));
+  const __m256 hi = _mm512_maskz_cvtpd_ps(
+      all8, _mm512_mul_pd(_mm512_maskz_cvtepi32_pd(all8, _mm512_maskz_extracti64x4_epi64(all8, v, 1)), scale));
+  return _mm512_castpd_ps(
+      _mm512_maskz_insertf64x4(all8, _mm512_castpd256_pd512(_mm256_castps_pd(lo)), _mm256_castps_pd(hi), 1));
+}
+
+#endif
+
+#if HAPTICFIELD_X86_DISPATCH
+/// One output row of the integer route straight from the column sums, with
+/// no prefix tables: along the row the window's box B, first moment R (fx)
+/// and the box F of V1 (fy) change by
+///   B(x) - B(x-1) = V0(x+2h) - V0(x-1),
+///   R(x) - R(x-1) = h V0(x-1) + (h+1) V0(x+2h) - B(x),
+///   F(x) - F(x-1) = V1(x+2h) - V1(x-1),
+/// so B, R and F are running sums of those differences, sixteen at a time
+/// by scan16(). Same integers (modulo 2^32) as the prefix tables, hence the
+/// same planes. Non-temporal 64-byte stores where fx and fy are equally
+/// aligned (ordinary ones otherwise); meanwhile it prefetches `next`
+/// (n_next levels: the picture row the band converts next), one cache line
+/// per 8 levels.
+///
+/// Given q_in and q_out, the column sums are first slid down one row on the
+/// way (q_in enters, q_out leaves, as in prewitt_band_integer()), `ahead`
+/// columns before the row pass reads them: each column is read and written
+/// twice while it is in the first-level cache, and the stores have left
+/// the store buffer before the (unaligned) loads that read them back.
+__attribute__((target("avx512f"))) inline void integer_row_avx512(
+    std::uint32_t* v0, std::uint32_t* v1, int h, int n_out, double scale, float* HAPTICFIELD_RESTRICT fx,
+    float* HAPTICFIELD_RESTRICT fy, const double* next, int n_next,
+    const std::uint32_t* HAPTICFIELD_RESTRICT q_in = nullptr,
+    const std::uint32_t* HAPTICFIELD_RESTRICT q_out = nullptr) noexcept {
+  using U = std::uint32_t;
+  using A = MapArithmetic<U>;
+  const int span = 2 * h;
+  const int n = n_out + span;  // columns of the column sums
+  const U hh = static_cast<U>(h);
+  constexpr int ahead = 128;
+  int slid = q_in == nullptr ? n : 0;  // columns [0, slid) are slid
+  const auto slide_to = [&](int end) HAPTICFIELD_ALWAYS_INLINE {
+    end = std::min(end, n);
+    for (int t = slid; t < end; ++t) {
+      const U box = v0[t] + (q_in[t] - q_out[t]);
+      v0[t] = box;
+      v1[t] += hh * (q_out[t] + q_in[t]) + q_in[t] - box;
+    }
+    slid = std::max(slid, end);
+  };
+  slide_to(span + 16 + ahead);
+  U b = 0;
+  U r = 0;
+  U f = 0;
+  for (int j = 0; j <= span; ++j) {
+    b += v0[j];
+    r += static_cast<U>(j - h) * v0[j];
+    f += v1[j];
+  }
+  fx[0] = A::out(r, scale);
+  fy[0] = A::out(f, scale);
+  const auto step = [&](int x) HAPTICFIELD_ALWAYS_INLINE {
+    const U in = v0[x + span];
+    const U out = v0[x - 1];
+    b += in - out;
+    r += hh * (out + in) + in - b;
+    f += v1[x + span] - v1[x - 1];
+    fx[x] = A::out(r, scale);
+    fy[x] = A::out(f, scale);
+  };
+  int x = 1;
+  const bool same_phase = ((reinterpret_cast<std::uintptr_t>(fx) ^ reinterpret_cast<std::uintptr_t>(fy)) & 63u) == 0;
+  if (same_phase)
+    for (; x < n_out && (reinterpret_cast<std::uintptr_t>(fx + x) & 63u) != 0; ++x)
+      step(x);
+  const __m512i last = _mm512_set1_epi32(15);
+  const __m512i vh = _mm512_set1_epi32(h);
+  const __m512d vs = _mm512_set1_pd(scale);
+  __m512i kb = _mm512_set1_epi32(static_cast<int>(b));
+  __m512i kr = _mm512_set1_epi32(static_cast<int>(r));
+  __m512i kf = _mm512_set1_epi32(static_cast<int>(f));
+  const int vector_end = x + (n_out - x) / 16 * 16;
+  slide_to(x + span + ahead);
+  for (; x < vector_end; x += 16) {
+    if (slid < n) {  // slide columns [x + span + ahead, + 16)
+      const int t = slid;
+      if (t + 16 <= n) {
+        const __m512i qi = _mm512_loadu_si512(q_in + t);
+        const __m512i qo = _mm512_loadu_si512(q_out + t);
+        const __m512i box = _mm512_add_epi32(_mm512_loadu_si512(v0 + t), _mm512_sub_epi32(qi, qo));
+        _mm512_storeu_si512(v0 + t, box);
+        _mm512_storeu_si512(
+            v1 + t, _mm512_add_epi32(
+                        _mm512_loadu_si512(v1 + t),
+                        _mm512_sub_epi32(_mm512_add_epi32(_mm512_mullo_epi32(vh, _mm512_add_epi32(qo, qi)), qi), box)));
+        slid = t + 16;
+      } else {
+        slide_to(n);
+      }
+    }
+    const __m512i in0 = _mm512_loadu_si512(v0 + x + span);
+    const __m512i out0 = _mm512_loadu_si512(v0 + x - 1);
+    const __m512i in1 = _mm512_loadu_si512(v1 + x + span);
+    const __m512i out1 = _mm512_loadu_si512(v1 + x - 1);
+    const __m512i vb = scan16(_mm512_sub_epi32(in0, out0), kb);
+    const __m512i dr = _mm512_sub_epi32(_mm512_add_epi32(_mm512_mullo_epi32(vh, _mm512_add_epi32(out0, in0)), in0), vb);
+    const __m512i vr = scan16(dr, kr);
+    const __m512i vf = scan16(_mm512_sub_epi32(in1, out1), kf);
+    if (same_phase) {
+      _mm512_stream_ps(fx + x, scale16(vr, vs));
+      _mm512_stream_ps(fy + x, scale16(vf, vs));
+    } else {  // unusual layout: the planes cannot both be 64-byte aligned
+      _mm512_storeu_ps(fx + x, scale16(vr, vs));
+      _mm512_storeu_ps(fy + x, scale16(vf, vs));
+    }
+    if (x < n_next) {
+      _mm_prefetch(reinterpret_cast<const char*>(next + x), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(next + x + 8), _MM_HINT_T0);
+    }
+    kb = _mm512_maskz_permutexvar_epi32(all16, last, vb);
+    kr = _mm512_maskz_permutexvar_epi32(all16, last, vr);
+    kf = _mm512_maskz_permutexvar_epi32(all16, last, vf);
+  }
+  if (x < n_out && x > 1) {  // the running sums from the last vector
+    alignas(64) U lanes[16];
+    _mm512_store_si512(lanes, kb);
+    b = lanes[0];
+    _mm512_store_si512(lanes, kr);
+    r = lanes[0];
+    _mm512_store_si512(lanes, kf);
+    f = lanes[0];
+  }
+  slide_to(n);
+  for (; x < n_out; ++x)
+    step(x);
 }
 #endif
 
@@ -510,7 +764,7 @@ __attribute__((target("avx2"))) inline void integer_output_avx2(const std::uint3
 /// add per table and element, the rest vectorised. All modulo 2^32 (see
 /// MapArithmetic<std::uint32_t>). Returns false when a gray level was not
 /// an integer in the fixed point d.
-template <bool Avx2>
+template <MapSimd Simd>
 HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray, int h, Border border, double fade_px,
                                                            double scale, double d, int lo, int x_hi, int y_hi,
                                                            int y_first, int y_last, ForceMap& map) {
@@ -527,7 +781,7 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
   };
   std::uint64_t bad = 0;  // non-zero once a scaled gray level was not an integer
   const auto convert = [&](int r) HAPTICFIELD_ALWAYS_INLINE {
-    bad |= inverted_padded_row<U, Avx2>(gray, border_index(r, height, border), lo - h, n_in, border, q_row(r), 1, d);
+    bad |= inverted_padded_row<U, Simd>(gray, border_index(r, height, border), lo - h, n_in, border, q_row(r), 1, d);
   };
   std::vector<U> v0(n, 0u);
   std::vector<U> v1(n, 0u);
@@ -548,8 +802,10 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
   const U hh = A::weight(h);
   const int width = 2 * h + 1;
   for (int y = y_first; y <= y_last; ++y) {
-    if (y > y_first) {  // row y - 1 - h leaves the window, row y + h enters
-      convert(y + h);
+    // AVX-512 slides the column sums inside the row pass
+    const bool slide_in_row = Simd == MapSimd::avx512 && border != Border::fade;
+    if (y > y_first) convert(y + h);  // row y - 1 - h leaves the window, row y + h enters
+    if (y > y_first && !slide_in_row) {
       const U* HAPTICFIELD_RESTRICT in = q_row(y + h);
       const U* HAPTICFIELD_RESTRICT out = q_row(y - 1 - h);
       U* HAPTICFIELD_RESTRICT b = v0.data();
@@ -561,7 +817,16 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
       }
     }
 #if HAPTICFIELD_X86_DISPATCH
-    if constexpr (Avx2)
+    if constexpr (Simd == MapSimd::avx512) {
+      if (border != Border::fade) {  // straight from the column sums
+        integer_row_avx512(v0.data(), v1.data(), h, n_out, scale, &map.fx[map.index(lo, y)], &map.fy[map.index(lo, y)],
+                           y < y_last ? gray.row(border_index(y + 1 + h, height, border)) : nullptr,
+                           y < y_last ? gray.width() : 0, y > y_first ? q_row(y + h) : nullptr,
+                           y > y_first ? q_row(y - 1 - h) : nullptr);
+        continue;
+      }
+      prefix_sums_avx512(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
+    } else if constexpr (Simd == MapSimd::avx2)
       prefix_sums_avx2(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
     else
       prefix_sums_scalar(v0.data(), v1.data(), n, c0.data(), d0.data(), c1.data());
@@ -575,8 +840,10 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
     const U* HAPTICFIELD_RESTRICT pc1 = c1.data();
     if (border != Border::fade) {
 #if HAPTICFIELD_X86_DISPATCH
-      if constexpr (Avx2)
-        integer_output_avx2(pc0, pd0, pc1, h, n_out, scale, fx, fy);
+      const double* next = y < y_last ? gray.row(border_index(y + 1 + h, height, border)) : nullptr;
+      const int n_next = y < y_last ? gray.width() : 0;
+      if constexpr (Simd != MapSimd::baseline)  // AVX-512 rows seldom come here (see above)
+        integer_output_avx2(pc0, pd0, pc1, h, n_out, scale, fx, fy, next, n_next);
       else
         integer_output_scalar(pc0, pd0, pc1, h, 0, n_out, scale, fx, fy);
 #else
@@ -596,7 +863,7 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_integer(const GrayImage& gray
     }
   }
 #if HAPTICFIELD_X86_DISPATCH
-  if constexpr (Avx2) _mm_sfence();  // the non-temporal stores are visible before the band returns
+  if constexpr (Simd != MapSimd::baseline) _mm_sfence();  // the non-temporal stores are visible before the band returns
 #endif
   return bad == 0;
 }
@@ -614,10 +881,10 @@ struct PrewittBand {
 };
 
 /// Returns false when the integer arithmetic met a non-integer level.
-template <bool Avx2>
+template <MapSimd Simd>
 HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_any(const PrewittBand& a) {
   if (a.d > 0.0)
-    return prewitt_band_integer<Avx2>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi, a.y_first,
+    return prewitt_band_integer<Simd>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi, a.y_first,
                                       a.y_last, *a.map);
   return prewitt_band_in<double>(*a.gray, a.h, a.border, a.fade_px, a.scale, 1.0, a.lo, a.x_hi, a.y_hi, a.y_first,
                                  a.y_last, *a.map);
@@ -625,14 +892,23 @@ HAPTICFIELD_ALWAYS_INLINE inline bool prewitt_band_any(const PrewittBand& a) {
 
 /// The band for baseline x86-64 (or any other target).
 inline bool prewitt_band_baseline(const PrewittBand& a) {
-  return prewitt_band_any<false>(a);
+  return prewitt_band_any<MapSimd::baseline>(a);
 }
 
 #if HAPTICFIELD_X86_DISPATCH
 /// The same code compiled for AVX2 (8 integer or 4 double lanes), chosen at
 /// run time when the CPU has it.
 __attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand& a) {
-  return prewitt_band_any<true>(a);
+  return prewitt_band_any<MapSimd::avx2>(a);
+}
+
+/// The integer route again for AVX-512F (16 lanes, 512-bit loops in the
+/// compiler's own vectorisation too), with no multiply-add contraction
+/// (see HAPTICFIELD_AVX512_EXACT).
+/// The double route stays on AVX2, whose planes it reproduces to the bit.
+HAPTICFIELD_AVX512_EXACT_WIDE inline bool prewitt_band_avx512(const PrewittBand& a) {
+  return prewitt_band_integer<MapSimd::avx512>(*a.gray, a.h, a.border, a.fade_px, a.scale, a.d, a.lo, a.x_hi, a.y_hi,
+                                               a.y_first, a.y_last, *a.map);
 }
 #endif
 
@@ -645,29 +921,40 @@ __attribute__((target("avx2"))) inline bool prewitt_band_avx2(const PrewittBand&
 #endif
 }
 
-inline bool prewitt_band(const PrewittBand& a) {
+/// True when the CPU runs prewitt_band_avx512().
+[[nodiscard]] inline bool has_avx512() noexcept {
 #if HAPTICFIELD_X86_DISPATCH
-  if (has_avx2()) return prewitt_band_avx2(a);
+  return __builtin_cpu_supports("avx512f");
+#else
+  return false;
+#endif
+}
+
+/// The widest route the CPU runs (tests pick one to compare the routes).
+[[nodiscard]] inline MapSimd best_map_simd() noexcept {
+  if (has_avx512()) return MapSimd::avx512;
+  if (has_avx2()) return MapSimd::avx2;
+  return MapSimd::baseline;
+}
+
+inline bool prewitt_band(const PrewittBand& a, MapSimd simd) {
+#if HAPTICFIELD_X86_DISPATCH
+  if (simd == MapSimd::avx512 && a.d > 0.0 && has_avx512()) return prewitt_band_avx512(a);
+  if (simd != MapSimd::baseline && has_avx2()) return prewitt_band_avx2(a);
+#else
+  (void)simd;
 #endif
   return prewitt_band_baseline(a);
 }
 
 }  // namespace detail
 
-/// The Prewitt map of a gray picture in O(1) per pixel whatever the mask
-/// size, written into `map` (its buffers are reused when already large
-/// enough). Along each border-extended row, running sums give the row's box
-/// sum H0 and first moment H1 under the mask, four rows at a time so their
-/// dependency chains run side by side; down the columns, running sums of H1
-/// give fx and a running ramp over H0 gives fy, vectorised across the row.
-/// Rows live in a small ring buffer, so memory traffic stays near one read
-/// of the picture and one write of the map. `threads` > 1 splits the rows
-/// into bands computed in parallel (setup work, never a servo tick). Equals
-/// force_map() of TangibleImage{prewitt, size, border} to float rounding,
-/// the edge fades of ImageForce included.
-/// @throws std::invalid_argument as TangibleImage, or for threads < 1.
-inline void prewitt_force_map(const GrayImage& gray, int size, Border border, ForceMap& map,
-                              double fade_px = default_fade_px, int threads = 1) {
+namespace detail {
+
+/// prewitt_force_map() on the instruction set `simd` (or the widest below
+/// it that the CPU runs); every route gives the same planes.
+inline void prewitt_force_map_on(MapSimd simd, const GrayImage& gray, int size, Border border, ForceMap& map,
+                                 double fade_px, int threads) {
   validate_mask_size(MaskKind::prewitt, size);
   validate_image_for_mask(gray, size);
   if (!std::isfinite(fade_px) || fade_px <= 0.0)
@@ -708,7 +995,7 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
       auto work = [&, band, first, last] {
         try {
           exact[static_cast<std::size_t>(band)] = detail::prewitt_band(
-              {&gray, h, border, fade_px, d > 0.0 ? scale / d : scale, d, lo, x_hi, y_hi, first, last, &map});
+              {&gray, h, border, fade_px, d > 0.0 ? scale / d : scale, d, lo, x_hi, y_hi, first, last, &map}, simd);
         } catch (...) {
           errors[static_cast<std::size_t>(band)] = std::current_exception();
         }
@@ -726,6 +1013,26 @@ inline void prewitt_force_map(const GrayImage& gray, int size, Border border, Fo
   };
   if (!run(integer ? guess : 0.0)) (void)run(0.0);
   if (full_mask) detail::extend_outside(map, lo, x_hi, lo, y_hi, fade_px);
+}
+}  // namespace detail
+
+/// The Prewitt map of a gray picture in O(1) per pixel whatever the mask
+/// size, written into `map` (its buffers are reused when already large
+/// enough). Along each border-extended row, running sums give the row's box
+/// sum H0 and first moment H1 under the mask, four rows at a time so their
+/// dependency chains run side by side; down the columns, running sums of H1
+/// give fx and a running ramp over H0 gives fy, vectorised across the row.
+/// Rows live in a small ring buffer, so memory traffic stays near one read
+/// of the picture and one write of the map. `threads` > 1 splits the rows
+/// into bands computed in parallel (setup work, never a servo tick). The
+/// widest route the CPU runs is taken (baseline, AVX2, AVX-512F for exact
+/// integers); all give the same planes. Equals
+/// force_map() of TangibleImage{prewitt, size, border} to float rounding,
+/// the edge fades of ImageForce included.
+/// @throws std::invalid_argument as TangibleImage, or for threads < 1.
+inline void prewitt_force_map(const GrayImage& gray, int size, Border border, ForceMap& map,
+                              double fade_px = default_fade_px, int threads = 1) {
+  detail::prewitt_force_map_on(detail::best_map_simd(), gray, size, border, map, fade_px, threads);
 }
 
 /// The Prewitt map in a new ForceMap; see the overload that writes into one.
