@@ -29,6 +29,23 @@ inline std::string slurp(const fs::path& p) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
+/// Starts `tool args...` with the given file actions (destroyed here) and
+/// returns its pid; a failed spawn fails the test.
+inline pid_t spawn_tool(const std::string& tool, const std::vector<std::string>& args,
+                        posix_spawn_file_actions_t& actions) {
+  std::vector<std::string> text{tool};
+  text.insert(text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : text)
+    argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  REQUIRE(spawned == 0);
+  return pid;
+}
+
 /// A tool running as a child: stdin a pipe that carries one Enter (the
 /// operator's go-ahead), stdout and stderr to files.
 class Child {
@@ -48,16 +65,8 @@ class Child {
     posix_spawn_file_actions_addclose(&actions, in[1]);
     posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<std::string> text{tool};
-    text.insert(text.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : text)
-      argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int spawned = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
+    pid_ = spawn_tool(tool, args, actions);
     ::close(in[0]);
-    REQUIRE(spawned == 0);
     if (press_enter) (void)!::write(in[1], "\n", 1);  // Enter at the prompt; the pipe stays open
     stdin_ = in[1];
   }

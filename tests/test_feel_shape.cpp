@@ -7,6 +7,8 @@
 // F = k (height - z); the real meshes of the shared data run end to end.
 #include <catch2/catch.hpp>
 
+#include "child_process.hpp"
+
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -73,16 +75,7 @@ Result run(const std::vector<std::string>& args, const std::string& stdin_file =
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, stdin_file.c_str(), O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<std::string> text{HAPTICFIELD_TOOL_FEEL_SHAPE};
-  text.insert(text.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : text)
-    argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  REQUIRE(spawned == 0);
+  const pid_t pid = hapticfield::testing::spawn_tool(HAPTICFIELD_TOOL_FEEL_SHAPE, args, actions);
   int raw = 0;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   bool killed = false;

@@ -265,16 +265,7 @@ std::string run_on_terminal(const std::vector<std::string>& args) {
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_adddup2(&actions, pty.slave, STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, pty.slave, STDERR_FILENO);
-  std::vector<std::string> text{HAPTICFIELD_TOOL_TANGIBLE_VIDEO};
-  text.insert(text.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : text)
-    argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  REQUIRE(spawned == 0);
+  const pid_t pid = hapticfield::testing::spawn_tool(HAPTICFIELD_TOOL_TANGIBLE_VIDEO, args, actions);
   std::string out;
   const auto read_available = [&] {
     char buf[4096];
