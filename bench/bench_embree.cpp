@@ -33,6 +33,7 @@
 #include <time.h>
 
 #include "../tests/surface_meshes.hpp"
+#include "surface_path.hpp"
 
 // --- allocation counting: every malloc-family call while `counting` is set
 extern "C" {
@@ -118,27 +119,6 @@ class RecordingShape {
   hf::MeshShape shape_;
   std::vector<Query>* log_;
 };
-
-/// The path of bench_surface: a HIP sliding 2 mm deep with taps.
-std::vector<hf::Probe> script(long ticks, double half_extent) {
-  std::vector<hf::Probe> path;
-  std::mt19937 rng(17);
-  std::normal_distribution<double> g(0.0, 2e-5);
-  glm::dvec3 wobble{0.0};
-  for (long i = 0; i < ticks; ++i) {
-    const double t = static_cast<double>(i) * 1e-3;
-    wobble += glm::dvec3{g(rng), g(rng), g(rng)};
-    wobble = glm::clamp(wobble, glm::dvec3{-1e-3}, glm::dvec3{1e-3});
-    hf::Probe p;
-    p.position = glm::dvec3{0.6 * half_extent * std::sin(0.5 * t), 0.6 * half_extent * std::sin(0.31 * t),
-                            0.002 - 0.004 * (0.5 + 0.5 * std::sin(3.0 * t))} +
-                 wobble;
-    p.velocity = glm::dvec3{0.1, 0.05, 0.0};
-    p.time = t;
-    path.push_back(p);
-  }
-  return path;
-}
 
 /// Embree's scene over the mesh (float vertices), built on the device's
 /// one thread.
@@ -239,14 +219,6 @@ EmbreeAnswer embree_closest(RTCScene scene, const hf::TriangleMesh& mesh, const 
   return out;
 }
 
-hf::offline::TickBudgetConfig cpu_time() {
-  hf::offline::TickBudgetConfig c;
-  c.warmup = 0;
-  c.allocation_count = nullptr;
-  c.clock = hf::offline::TickClock::thread_cpu;
-  return c;
-}
-
 /// This thread's CPU time [s].
 double cpu_seconds() noexcept {
   timespec t{};
@@ -282,7 +254,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const double side = 0.1;  // [m]
-  const std::vector<hf::Probe> path = script(ticks, side / 2);
+  const std::vector<hf::Probe> path = hf::bench::sliding_path(ticks, side / 2);
   std::printf("## MeshBvh against Embree %d.%d.%d on the proxy's queries (%ld ticks of the bench_surface path)\n\n",
               RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, ticks);
   std::printf(
@@ -387,7 +359,7 @@ int main(int argc, char** argv) {
       counting = false;
       r.allocations = allocations;
       next = 0;
-      r.cost = hf::offline::measure_tick_cost(groups, tick, cpu_time());
+      r.cost = hf::offline::measure_tick_cost(groups, tick, hf::bench::thread_cpu_budget());
       r.sweep_ns = kind_mean(true, sweep_one);
       r.closest_ns = kind_mean(false, closest_one);
       return r;

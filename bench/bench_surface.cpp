@@ -22,6 +22,7 @@
 
 #include "../tests/surface_energy.hpp"
 #include "../tests/surface_meshes.hpp"
+#include "surface_path.hpp"
 #include "tick_cost.hpp"
 
 namespace hf = hapticfield;
@@ -106,40 +107,6 @@ class BruteShape {
   const hf::TriangleMesh& mesh_;
 };
 
-/// A HIP sliding over the surface 2 mm deep at up to 0.2 m/s, with taps.
-std::vector<hf::Probe> script(long ticks, double half_extent) {
-  std::vector<hf::Probe> path;
-  std::mt19937 rng(17);
-  std::normal_distribution<double> g(0.0, 2e-5);
-  glm::dvec3 wobble{0.0};
-  for (long i = 0; i < ticks; ++i) {
-    const double t = static_cast<double>(i) * 1e-3;
-    wobble += glm::dvec3{g(rng), g(rng), g(rng)};
-    wobble = glm::clamp(wobble, glm::dvec3{-1e-3}, glm::dvec3{1e-3});
-    hf::Probe p;
-    p.position = glm::dvec3{0.6 * half_extent * std::sin(0.5 * t), 0.6 * half_extent * std::sin(0.31 * t),
-                            0.002 - 0.004 * (0.5 + 0.5 * std::sin(3.0 * t))} +
-                 wobble;
-    p.velocity = glm::dvec3{0.1, 0.05, 0.0};
-    p.time = t;
-    path.push_back(p);
-  }
-  return path;
-}
-
-/// The tick-budget harness (offline/tick_budget.hpp) on this thread's CPU
-/// time (CLOCK_THREAD_CPUTIME_ID): time the scheduler gives to other
-/// processes is not counted, so a shared, loaded machine still measures the
-/// work of the tick. No warm-up: the path is timed as scripted, once
-/// untimed and once call by call.
-hf::offline::TickBudgetConfig cpu_time() {
-  hf::offline::TickBudgetConfig c;
-  c.warmup = 0;
-  c.allocation_count = nullptr;
-  c.clock = hf::offline::TickClock::thread_cpu;
-  return c;
-}
-
 template <class Proxy>
 hf::bench::Cost tick_cost(Proxy& proxy, const std::vector<hf::Probe>& path, double& mean_nodes,
                           std::uint32_t& worst_nodes) {
@@ -153,7 +120,7 @@ hf::bench::Cost tick_cost(Proxy& proxy, const std::vector<hf::Probe>& path, doub
     worst_nodes = std::max(worst_nodes, proxy.last_tick().nodes);
     return f;
   };
-  const hf::bench::Cost c = hf::offline::measure_tick_budget(tick, path, cpu_time());
+  const hf::bench::Cost c = hf::offline::measure_tick_budget(tick, path, hf::bench::thread_cpu_budget());
   mean_nodes = node_sum / (2.0 * static_cast<double>(path.size()));  // two passes
   if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
   return c;
@@ -195,7 +162,7 @@ int main(int argc, char** argv) {
     }
   }
   const double side = 0.1;  // [m]
-  const std::vector<hf::Probe> path = script(ticks, side / 2);
+  const std::vector<hf::Probe> path = hf::bench::sliding_path(ticks, side / 2);
 
   // --- baseline: the proxy on an analytic plane ---
   hf::ProxyConstraint plane(hf::PlaneShape(hf::PlaneShapeConfig{}), hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
@@ -269,7 +236,7 @@ int main(int argc, char** argv) {
     hf::HeightFieldShape field(grid);
     const double build_s = seconds_since(t0);
     hf::ProxyConstraint proxy(field, hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
-    std::vector<hf::Probe> over = script(ticks, w * spacing / 2);
+    std::vector<hf::Probe> over = hf::bench::sliding_path(ticks, w * spacing / 2);
     for (auto& p : over) {
       p.position.x += w * spacing / 2;
       p.position.y += h * spacing / 2;
@@ -280,7 +247,7 @@ int main(int argc, char** argv) {
     const hf::bench::Cost c = tick_cost(proxy, over, nodes, worst_nodes);
     const hf::TangibleImageField image(hf::TangibleImage(gray, hf::TangibleConfig{}),
                                        hf::PlaneMapping(6.4, glm::dvec2{w / 2.0, h / 2.0}), 1.0);
-    const hf::bench::Cost t = hf::offline::measure_tick_budget(image, over, cpu_time());
+    const hf::bench::Cost t = hf::offline::measure_tick_budget(image, over, hf::bench::thread_cpu_budget());
     std::printf("\n## Height field (%d x %d, build %.0f ms) against the tangible image of the same picture\n\n", w, h,
                 build_s * 1e3);
     std::printf(
