@@ -345,6 +345,22 @@ constexpr const char* window_title = "hapticfield_view";
 /// Runs the loop on its own thread and the view on this one.
 /// `picture` is the still picture, or for a video (`video` set) its first
 /// frame shown.
+/// How a run ended, on stdout: a disconnect, a signal, and the loop's
+/// figures. Returns whether the device disconnected.
+bool report_run(StopReason outcome, const cli::StopOnSignal& stop, const LoopSnapshot& s) {
+  const bool disconnected = outcome == StopReason::disconnected;
+  if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
+  if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
+  std::printf(
+      "%llu ticks at %.2f Hz, period p50 %.4f / p99 %.4f / max %.4f ms, late ticks %llu, missed deadlines "
+      "%llu, safety events %llu (ticks whose force the safety chain clamped, slowed, damped or zeroed), latches "
+      "%llu\n",
+      static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
+      static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines),
+      static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
+  return disconnected;
+}
+
 template <Device D, HapticField F>
 int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live, const cv::Mat& picture,
              VideoPlayer* video, Scene& scene, SceneConfig cfg, const PlaneMapping& mapping, SteadyClock& clock,
@@ -522,17 +538,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   servo.join();
   drain();
   if (window) cv::destroyAllWindows();
-  const bool disconnected = servo.outcome() == StopReason::disconnected;
-  if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
-  if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
-
-  const LoopSnapshot& s = status.loop;
-  std::printf(
-      "%llu ticks at %.2f Hz, period p50 %.4f / p99 %.4f / max %.4f ms, late ticks %llu, missed deadlines "
-      "%llu, safety events %llu, latches %llu\n",
-      static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
-      static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines),
-      static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
+  const bool disconnected = report_run(servo.outcome(), stop, status.loop);
   if (video) {
     if (video->playing()) (void)video->settle(std::chrono::milliseconds(1000));  // the last tick's frame
     drain();
@@ -747,17 +753,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   servo.join();
   drain();
   if (window) cv::destroyAllWindows();
-  const bool disconnected = servo.outcome() == StopReason::disconnected;
-  if (disconnected) std::printf("the device disconnected; zero force was commanded\n");
-  if (stop.caught()) std::printf("stopped by signal %d: zero force commanded, then the arm disarmed\n", stop.caught());
-  const LoopSnapshot& s = status.loop;
-  std::printf(
-      "%llu ticks at %.2f Hz, period p50 %.4f / p99 %.4f / max %.4f ms, late ticks %llu, missed deadlines "
-      "%llu, safety events %llu (ticks whose force the safety chain clamped, slowed, damped or zeroed), latches "
-      "%llu\n",
-      static_cast<unsigned long long>(s.ticks), s.rate, s.period_p50 * 1e3, s.period_p99 * 1e3, s.period_max * 1e3,
-      static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines),
-      static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
+  const bool disconnected = report_run(servo.outcome(), stop, status.loop);
   if (!o.screenshot.empty()) {
     draw_frame();  // once to time it, then with the time shown
     drain();
