@@ -258,55 +258,16 @@ AnyField make_field(const std::string& name, const cv::Mat& image, const PlaneMa
 
 // ---- trace and plots -------------------------------------------------------
 
-struct Row {
-  double t{0.0};
-  glm::dvec3 position{0.0};
-  glm::dvec3 force{0.0};  // commanded after the safety chain [N]
-  double period{0.0};
-  bool homed{false};  // the tick's device state: homed, armed (motors on)
-  bool armed{false};
-};
-
-// The device as the loop sees it while tracing: each tick's callback opens a
-// row (open()) and the loop's write that follows, the tick's command after the
-// safety chain, fills its force. The zero force of the stop after the last tick
-// opens no row, so every row holds what its own tick commanded.
-template <Device D>
-class TracedDevice {
- public:
-  TracedDevice(D& device, std::vector<Row>& rows) noexcept : device_(&device), rows_(&rows) {}
-  Status read(DeviceState& state) noexcept { return device_->read(state); }
-  Status write(const glm::dvec3& force) noexcept {
-    if (open_) rows_->back().force = force, open_ = false;
-    return device_->write(force);
-  }
-  Status set_armed(bool on) noexcept { return device_->set_armed(on); }
-  Status request_home() noexcept { return device_->request_home(); }
-  decltype(auto) info() const noexcept { return device_->info(); }
-  Status clear_fault() noexcept requires requires(D& d) { d.clear_fault(); }
-  { return device_->clear_fault(); }
-  void open(const TickInput& in, double period) noexcept {  // rows go only into reserved capacity
-    open_ = rows_->size() < rows_->capacity();
-    if (open_)
-      rows_->push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}, period, in.state.homed(), in.state.armed()});
-  }
-
- private:
-  D* device_;
-  std::vector<Row>* rows_;
-  bool open_{false};
-};
-
-void write_trace(const std::string& path, const std::vector<Row>& rows) {
+void write_trace(const std::string& path, const std::vector<TraceRow>& rows) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write " + path);
   f << "t_s,x_m,y_m,z_m,fx_N,fy_N,fz_N,period_s,homed,armed\n";
-  for (const Row& r : rows)
+  for (const TraceRow& r : rows)
     f << r.t << ',' << r.position.x << ',' << r.position.y << ',' << r.position.z << ',' << r.force.x << ','
       << r.force.y << ',' << r.force.z << ',' << r.period << ',' << int{r.homed} << ',' << int{r.armed} << '\n';
 }
 
-void plot_force(const std::string& path, const std::vector<Row>& rows, double limit) {
+void plot_force(const std::string& path, const std::vector<TraceRow>& rows, double limit) {
   const int w = 1000, h = 420, m = 50;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   const double t_end = rows.empty() ? 1.0 : std::max(rows.back().t, 1e-3);
@@ -620,7 +581,7 @@ int run_demo(const Arguments& o, D& device, Felt& felt, C& clock, bool hardware)
   // the demo re-arms through the soft start once states are fresh for 0.5 s.
   config.recover_after = 0.5;
   const auto ticks = static_cast<std::uint64_t>(std::llround(o.seconds * o.rate));
-  std::vector<Row> rows;
+  std::vector<TraceRow> rows;
   rows.reserve(ticks + 8);  // the tick path only fills reserved rows
   TracedDevice<D> traced(device, rows);
   ServoLoop<TracedDevice<D>, C> loop(traced, clock, config);

@@ -11,3 +11,4 @@
 #include "hapticfield/servo/pacer.hpp"
 #include "hapticfield/servo/safety.hpp"
 #include "hapticfield/servo/statistics.hpp"
+#include "hapticfield/servo/traced_device.hpp"

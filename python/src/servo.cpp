@@ -25,49 +25,6 @@ namespace hapticfield::python {
 
 namespace {
 
-struct TraceRow {
-  double t{0.0};
-  glm::dvec3 position{0.0};
-  glm::dvec3 force{0.0};  ///< commanded after the safety chain [N]
-  bool homed{false};      ///< the tick's state said homed
-  bool armed{false};      ///< the tick's state said armed (motors on)
-};
-
-/// A device that traces a run: each tick's callback opens a row (open()), and the loop's write that follows it,
-/// the tick's command after the safety chain, fills that row's force. The zero force a stopping run writes after
-/// its last tick opens no row, so every row holds what its own tick commanded. Rows go only into reserved
-/// capacity: no allocation in the tick.
-template <Device D>
-class TracedDevice {
- public:
-  TracedDevice(D& device, std::vector<TraceRow>& rows) noexcept : device_(&device), rows_(&rows) {}
-  Status read(DeviceState& state) noexcept { return device_->read(state); }
-  Status write(const glm::dvec3& force) noexcept {
-    if (open_) rows_->back().force = force, open_ = false;
-    last_written_ = force;
-    return device_->write(force);
-  }
-  /// The last force written to the device [N], the stop's own command included.
-  [[nodiscard]] const glm::dvec3& last_written() const noexcept { return last_written_; }
-  Status set_armed(bool on) noexcept { return device_->set_armed(on); }
-  Status request_home() noexcept { return device_->request_home(); }
-  decltype(auto) info() const noexcept { return device_->info(); }
-  Status clear_fault() noexcept requires requires(D& d) { d.clear_fault(); }
-  { return device_->clear_fault(); }
-  /// A row for this tick (from the loop's callback), while the reserved rows last.
-  void open(const TickInput& in) noexcept {
-    open_ = rows_->size() < rows_->capacity();
-    if (open_)
-      rows_->push_back({in.probe.time, in.probe.position, glm::dvec3{0.0}, in.state.homed(), in.state.armed()});
-  }
-
- private:
-  D* device_;
-  std::vector<TraceRow>* rows_;
-  bool open_{false};
-  glm::dvec3 last_written_{0.0};
-};
-
 HandPath hand_path(const std::string& kind, const V3& centre, double size, double speed) {
   const glm::dvec3 c = glm3(centre);
   if (kind == "raster") return HandPath::raster(c, size, size, 8, speed);
