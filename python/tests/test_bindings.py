@@ -367,8 +367,9 @@ def test_another_thread_stops_a_run_with_a_servo_stop_token():
     worker.join(timeout=10.0)
     assert not worker.is_alive() and not token.running
     r = done[0]
-    assert r["stop_reason"] == "requested" and r["statistics"]["ticks"] == len(r["trace"]["t"]) > 0
-    assert np.linalg.norm(r["trace"]["force"][-1]) == 0.0
+    # on a busy machine the request may come before the loop's first tick: zero ticks is a right answer too
+    assert r["stop_reason"] == "requested" and r["statistics"]["ticks"] == len(r["trace"]["t"])
+    assert not any(r["final_force"])  # the arm was left with zero force
     assert token.requested  # a token stays requested: it ends any run it is given until cleared
     again = hf.run_servo(hf.zero(), seconds=1.0, stop=token)
     assert again["stop_reason"] == "requested" and again["statistics"]["ticks"] == 0
