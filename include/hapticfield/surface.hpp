@@ -7,6 +7,7 @@
 #include "hapticfield/surface/mesh_bvh.hpp"
 #include "hapticfield/surface/mesh_shape.hpp"
 #include "hapticfield/surface/on_surface.hpp"
+#include "hapticfield/surface/posed_shape.hpp"
 #include "hapticfield/surface/proxy.hpp"
 #include "hapticfield/surface/shape.hpp"
 #include "hapticfield/surface/triangle_mesh.hpp"
