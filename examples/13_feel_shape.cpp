@@ -3,20 +3,28 @@
 // them.
 //
 //   feel_shape SHAPE --probes IN.csv [--forces OUT.csv] [--stiffness K]
-//              [--damping B] [--friction MU_S[,MU_K]] [--scale S] [--smooth]
+//              [--damping B] [--friction MU_S[,MU_K]] [--scale S] [--facets]
+//              [--rotate AX,AY,AZ,DEG] [--translate X,Y,Z]
 //              [--kind mesh|picture|depth] [--height-scale H] [--spacing S]
 //
 // SHAPE is a mesh (.stl, .obj, .gltf, .glb) or a height map: a picture
-// whose gray level is height, or a 16-bit / float depth map. IN.csv holds
-// t,x,y,z per line (seconds, metres, the shape's frame; a header line
-// allowed; '-' reads stdin), t strictly increasing; the HIP velocity is the
+// whose gray level is height, or a 16-bit / float depth map, placed by
+// --rotate (about the shape's own origin) and then --translate. IN.csv holds
+// t,x,y,z per line (seconds, metres, the world frame: the placed shape's;
+// a header line allowed; '-' reads stdin), t strictly increasing; the HIP velocity is the
 // backward difference of the path. OUT.csv ('-' or no --forces: stdout)
 // gets one line per probe:
 //   t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact
 // the proxy [m], the force on the HIP [N], the contact normal, the touched
 // point's uv, its triangle or grid cell (-1: none) and 1 while touching.
+// Before the forces, stderr tells the shape's box once placed [m], the
+// normals the proxy pushes along and each warning of the mesh reader.
+// Meshes are force-shaded by default (the file's vertex normals, else
+// normals from the faces: io/mesh_shading.hpp, the default of every tool
+// and of Python); --facets feels the bare triangles.
 // Bad input: one line on stderr and exit status 1 (2 for usage errors).
 #include <hapticfield/io.hpp>
+#include <hapticfield/io/mesh_shading.hpp>
 #include <hapticfield/surface.hpp>
 
 #include <array>
@@ -24,6 +32,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <utility>
@@ -45,7 +55,8 @@ constexpr const char* usage =
     "its forces are written tick by tick.\n"
     "  SHAPE                 a mesh (.stl, .obj, .gltf, .glb) or a height map: a picture\n"
     "                        (gray level = height) or a 16-bit / float depth map\n"
-    "  --probes IN.csv       t,x,y,z per line [s, m] in the shape's frame, t strictly\n"
+    "  --probes IN.csv       t,x,y,z per line [s, m] in the world frame (the shape placed by\n"
+    "                        --rotate and --translate), t strictly\n"
     "                        increasing (a header line allowed); '-' reads stdin (required)\n"
     "  --forces OUT.csv      where the forces go; '-' (default) is stdout. Columns:\n"
     "                        t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact\n"
@@ -55,7 +66,12 @@ constexpr const char* usage =
     "  --friction MU         static and dynamic friction [-], MU_S,MU_K or one value for both,\n"
     "                        0 <= MU_K <= MU_S <= 10 (default 0: frictionless)\n"
     "  --scale S             a mesh file's unit in metres, in (0, 1e6] (default 1; 0.001 for mm)\n"
-    "  --smooth              a mesh without vertex normals gets them from its faces (force shading)\n"
+    "  --facets              a mesh is felt by its face normals (flat facets); default: force\n"
+    "                        shading with the file's vertex normals, else normals from the faces\n"
+    "  --smooth              the default shading, named (kept for scripts)\n"
+    "  --rotate AX,AY,AZ,DEG turn the shape by DEG degrees about the axis (AX,AY,AZ) through its\n"
+    "                        own origin, right-handed (default: none)\n"
+    "  --translate X,Y,Z     then move it by (X,Y,Z) [m] (default 0,0,0)\n"
     "  --kind K              mesh, picture or depth (default: mesh by extension; a one-channel\n"
     "                        16-bit or float image is a depth map, any other picture a picture)\n"
     "  --height-scale H      picture: height of one gray level [mm] (default 0.01);\n"
@@ -64,6 +80,7 @@ constexpr const char* usage =
     "  -h, --help            this text\n"
     "Height maps: pixel (column c, row r) of a W x H map is at x = c S, y = (H - 1 - r) S,\n"
     "z = its height; the surface is solid below. Reads at most 1000000 probes.\n"
+    "stderr tells the placed shape's box [m], its normals and every mesh warning.\n"
     "Exit status: 0 done, 1 bad input (files, meshes, probes), 2 usage error.\n";
 
 enum class Kind { automatic, mesh, picture, depth };
@@ -76,11 +93,29 @@ struct Arguments {
   double scale = 1.0;
   bool scale_given = false;
   bool smooth = false;
+  bool facets = false;
+  hf::Pose pose{};
   Kind kind = Kind::automatic;
   std::optional<double> height_scale;
   double spacing = 1e-4;
   bool spacing_given = false;
 };
+
+/// N comma-separated finite numbers.
+template <std::size_t N>
+std::array<double, N> parse_reals(const std::string& text, const std::string& flag, const char* form) {
+  std::array<double, N> out{};
+  std::size_t begin = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    const std::size_t comma = text.find(',', begin);
+    if ((i + 1 < N) == (comma == std::string::npos))
+      throw hf::cli::UsageError(flag + " expects " + form + ", got '" + text + "'");
+    out[i] =
+        hf::cli::parse_real(text.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin), flag);
+    begin = comma + 1;
+  }
+  return out;
+}
 
 /// MU or MU_S,MU_K.
 std::pair<double, double> parse_friction(const std::string& text) {
@@ -122,6 +157,19 @@ Arguments parse(hf::cli::Parser& p) {
       a.scale_given = true;
     } else if (p.is("--smooth")) {
       a.smooth = true;
+    } else if (p.is("--facets")) {
+      a.facets = true;
+    } else if (p.is("--rotate")) {
+      const auto r = parse_reals<4>(p.value(), "--rotate", "AX,AY,AZ,DEG");
+      const glm::dvec3 axis{r[0], r[1], r[2]};
+      if (!(glm::length(axis) > 0.0) || !std::isfinite(glm::length(axis)) || !(std::fabs(r[3]) <= 3600.0))
+        throw hf::cli::UsageError("--rotate: the axis must not be zero and the angle within +-3600 degrees");
+      a.pose = hf::Pose::from_axis_angle(axis, r[3] * std::numbers::pi / 180.0, a.pose.translation);
+    } else if (p.is("--translate")) {
+      const auto t = parse_reals<3>(p.value(), "--translate", "X,Y,Z [m]");
+      for (const double x : t)
+        if (!(std::fabs(x) <= 1e6)) throw hf::cli::UsageError("--translate: each part must be within +-1e6 m");
+      a.pose.translation = {t[0], t[1], t[2]};
     } else if (p.is("--kind")) {
       a.kind = p.choice<Kind>("kind", {{"mesh", Kind::mesh}, {"picture", Kind::picture}, {"depth", Kind::depth}});
     } else if (p.is("--height-scale")) {
@@ -139,6 +187,7 @@ Arguments parse(hf::cli::Parser& p) {
   }
   if (a.shape.empty()) throw hf::cli::UsageError("no SHAPE given");
   if (!probes_given) throw hf::cli::UsageError("no --probes given");
+  if (a.smooth && a.facets) throw hf::cli::UsageError("--smooth and --facets: give one shading");
   p.finish();
   return a;
 }
@@ -207,34 +256,67 @@ void feel(S shape, const Arguments& args, const std::vector<std::array<double, 4
   }
 }
 
-/// The mesh or height map, ready for the proxy.
-std::variant<hf::MeshShape, hf::HeightFieldShape> load_shape(const Arguments& args, bool mesh) {
+/// The mesh or height map placed by the pose, ready for the proxy, and what to tell about it.
+struct Loaded {
+  std::variant<hf::Posed<hf::MeshShape>, hf::Posed<hf::HeightFieldShape>> shape;
+  std::vector<std::string> notes;  ///< for stderr, once the input is known good
+};
+
+std::string box_text(const hf::io::Bounds& b) {
+  char text[256];
+  std::snprintf(text, sizeof text, "x [%.6g, %.6g] y [%.6g, %.6g] z [%.6g, %.6g] m", b.lo.x, b.hi.x, b.lo.y, b.hi.y,
+                b.lo.z, b.hi.z);
+  return text;
+}
+
+Loaded load_shape(const Arguments& args, bool mesh) {
   if (mesh) {
     hf::io::MeshReadConfig read;
     read.scale = args.scale;
     hf::io::LoadedMesh loaded = hf::io::load_mesh(args.shape, read);
-    if (loaded.mesh.triangles.empty()) throw hf::FileError("cannot use '" + args.shape + "': it has no triangles");
-    const bool shade = args.smooth && !loaded.mesh.has_normals();
-    return hf::MeshShape(shade ? hf::with_vertex_normals(std::move(loaded.mesh)) : std::move(loaded.mesh));
+    hf::io::MeshShapeReport report;
+    hf::MeshShape shape = hf::io::mesh_shape_from(
+        loaded, args.shape, args.facets ? hf::io::MeshShading::faceted : hf::io::MeshShading::smooth,
+        hf::bvh_default_max_nodes, &report);
+    Loaded out{hf::Posed<hf::MeshShape>(shape, args.pose), {}};
+    std::string what = "mesh of " + std::to_string(report.triangles) + " triangles";
+    if (report.touchable < report.triangles) what += " (" + std::to_string(report.touchable) + " with an area)";
+    out.notes.push_back(what + ", " + box_text(hf::io::placed_bounds(shape.mesh(), args.pose)) +
+                        ", normals: " + report.normals);
+    for (const hf::io::MeshWarning& w : loaded.warnings)
+      out.notes.push_back("warning: " + w.message);
+    return out;
   }
   const cv::Mat image = hf::cli::quiet_stderr([&] { return hf::load_image(args.shape); });
   const bool depth =
       args.kind == Kind::depth || (args.kind == Kind::automatic && image.channels() == 1 &&
                                    (image.depth() == CV_16U || image.depth() == CV_32F || image.depth() == CV_64F));
+  hf::io::HeightGrid grid;
   if (depth) {
     hf::io::DepthMapConfig config;
     config.pixel_size = args.spacing;
     config.metres_per_unit = args.height_scale.value_or(1e-6);
-    return hf::HeightFieldShape(hf::io::height_grid_from_depth(image, args.shape, config));
+    grid = hf::io::height_grid_from_depth(image, args.shape, config);
+  } else {
+    hf::io::PictureHeightConfig config;
+    config.pixel_size = args.spacing;
+    config.mm_per_level = args.height_scale.value_or(0.01);
+    try {
+      grid = hf::io::height_grid_from_gray(hf::to_gray(image), config);
+    } catch (const std::invalid_argument& e) {
+      throw hf::ImageError("cannot use '" + args.shape + "': " + e.what());
+    }
   }
-  hf::io::PictureHeightConfig config;
-  config.pixel_size = args.spacing;
-  config.mm_per_level = args.height_scale.value_or(0.01);
-  try {
-    return hf::HeightFieldShape(hf::io::height_grid_from_gray(hf::to_gray(image), config));
-  } catch (const std::invalid_argument& e) {
-    throw hf::ImageError("cannot use '" + args.shape + "': " + e.what());
-  }
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const double h : grid.heights)
+    lo = std::fmin(lo, h), hi = std::fmax(hi, h);
+  const hf::io::Bounds box = hf::io::placed_bounds(
+      {0.0, 0.0, lo}, {(grid.width - 1) * grid.spacing_x, (grid.height - 1) * grid.spacing_y, hi}, args.pose);
+  Loaded out{hf::Posed<hf::HeightFieldShape>(hf::HeightFieldShape(grid), args.pose), {}};
+  out.notes.push_back(std::string(depth ? "depth map" : "height map") + " of " + std::to_string(grid.width) + " x " +
+                      std::to_string(grid.height) + " samples, " + box_text(box) +
+                      ", normals: blended corner normals (force shading)");
+  return out;
 }
 
 int run(const Arguments& args) {
@@ -243,15 +325,21 @@ int run(const Arguments& args) {
     throw hf::cli::UsageError("--height-scale and --spacing are for height maps, not meshes");
   if (!mesh && args.scale_given)
     throw hf::cli::UsageError("--scale is for meshes; a height map takes --spacing and --height-scale");
-  if (!mesh && args.smooth) throw hf::cli::UsageError("--smooth is for meshes (a height field is always shaded)");
+  if (!mesh && (args.smooth || args.facets))
+    throw hf::cli::UsageError(std::string(args.smooth ? "--smooth" : "--facets") +
+                              " is for meshes (a height field is always shaded)");
   // the shape first (a missing or hostile file is reported before stdin is read)
-  std::variant<hf::MeshShape, hf::HeightFieldShape> shape = load_shape(args, mesh);
+  Loaded loaded = load_shape(args, mesh);
   const auto probes = read_probes(args.probes);
   std::FILE* out = args.forces == "-" ? stdout : std::fopen(args.forces.c_str(), "w");
   if (!out) throw hf::FileError("cannot write forces file '" + args.forces + "'");
+  // the input is good: what the shape is, where it is, what the reader said
+  for (const std::string& note : loaded.notes)
+    std::fprintf(stderr, "feel_shape: %s: %s\n", args.shape.c_str(), note.c_str());
+  std::fflush(stderr);
   std::size_t touching = 0;
   double largest = 0.0;
-  std::visit([&](auto& s) { feel(std::move(s), args, probes, out, touching, largest); }, shape);
+  std::visit([&](auto& s) { feel(std::move(s), args, probes, out, touching, largest); }, loaded.shape);
   const bool failed = std::ferror(out) != 0;
   if (out != stdout ? std::fclose(out) != 0 || failed : std::fflush(out) != 0 || failed)
     throw hf::FileError("cannot write forces file '" + args.forces + "'");

@@ -267,6 +267,73 @@ TEST_CASE("feel_shape: each bad input is one line on stderr and a non-zero exit"
   check_error({plane}, 2, "no --probes");
   check_error({"--probes", good}, 2, "no SHAPE");
   check_error({plane, plane, "--probes", good}, 2, "more than one SHAPE");
+  check_error({plane, "--probes", good, "--smooth", "--facets"}, 2, "one shading");
+  check_error({picture, "--probes", good, "--facets"}, 2, "--facets is for meshes");
+  check_error({plane, "--probes", good, "--rotate", "0,0,1"}, 2, "--rotate expects AX,AY,AZ,DEG");
+  check_error({plane, "--probes", good, "--rotate", "0,0,0,90"}, 2, "axis must not be zero");
+  check_error({plane, "--probes", good, "--rotate", "0,0,1,nan"}, 2, "--rotate");
+  check_error({plane, "--probes", good, "--translate", "1,2"}, 2, "--translate expects X,Y,Z");
+  check_error({plane, "--probes", good, "--translate", "1,2,3,4"}, 2, "--translate expects X,Y,Z");
+  check_error({plane, "--probes", good, "--translate", "0,inf,0"}, 2, "--translate");
+  // a mesh with nothing to touch: every triangle without area
+  const std::string flat = write(in_tmp("degenerate.stl"),
+                                 "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 2 0 0\n"
+                                 "endloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\n"
+                                 "vertex 0 1 0\nendloop\nendfacet\nendsolid x\n");
+  check_error({flat, "--probes", good}, 1, "all 2 triangles have zero area");
+  check_error({write(in_tmp("empty.obj"), "# nothing\nv 0 0 0\n"), "--probes", good}, 1, "empty.obj");
+}
+
+TEST_CASE(
+    "feel_shape --rotate --translate: a placed plane pushes along its turned normal with k depth, its box "
+    "on stderr",
+    "[feel_shape]") {
+  const std::string plane = flat_plane_stl(0.2);
+  // the plane z = 0 (normal +z) turned 90 degrees about x: normal -y; then moved to y = 0.05
+  const glm::dvec3 n{0.0, -1.0, 0.0};
+  const glm::dvec3 on{0.01, 0.05, 0.02};
+  std::vector<glm::dvec3> path{on + 0.01 * n};
+  for (int i = 1; i <= 20; ++i)
+    path.push_back(on - (1e-4 * i) * n);
+  const std::string probes = write(in_tmp("turned.csv"), probe_csv(path));
+  const Result r =
+      run({plane, "--probes", probes, "--stiffness", "800", "--rotate", "1,0,0,90", "--translate", "0,0.05,0"});
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(r.err.find("x [-0.1, 0.1] y [0.05, 0.05] z [-0.1, 0.1] m") != std::string::npos);
+  const std::vector<Row> rows = parse_rows(r.out);
+  REQUIRE(rows.size() == path.size());
+  CHECK(rows[0].contact == 0);
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    INFO("probe " << i);
+    REQUIRE(rows[i].contact == 1);
+    const glm::dvec3 expected = 800.0 * (1e-4 * static_cast<double>(i)) * n;
+    CHECK(glm::length(rows[i].f - expected) < 1e-6);
+    CHECK(glm::length(rows[i].n - n) < 1e-9);
+    CHECK_THAT(rows[i].proxy.y, WithinAbs(0.05, 1e-6));
+  }
+}
+
+TEST_CASE("feel_shape prints every mesh warning on stderr, saying what the surface does", "[feel_shape]") {
+  // an OBJ without normals and with a triangle of zero area
+  const std::string obj = write(in_tmp("warned.obj"), "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0.2 0 0\nf 1 2 3\nf 1 2 4\n");
+  const std::string probes =
+      write(in_tmp("warned.csv"), probe_csv({{0.02, 0.02, 0.01}, {0.02, 0.02, -0.001}, {0.021, 0.02, -0.002}}));
+  for (const bool facets : {false, true}) {
+    std::vector<std::string> args{obj, "--probes", probes};
+    if (facets) args.push_back("--facets");
+    const Result r = run(args);
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    CHECK(r.err.find("mesh of 2 triangles (1 with an area)") != std::string::npos);
+    CHECK(r.err.find("warning: 1 of 2 triangles have zero area") != std::string::npos);
+    CHECK(r.err.find(facets ? "warning: no vertex normals in the file: the surface uses face normals"
+                            : "warning: no vertex normals in the file: computed from the faces") != std::string::npos);
+    CHECK(r.err.find(facets ? "normals: face normals" : "normals: vertex normals from the faces") != std::string::npos);
+    const std::vector<Row> rows = parse_rows(r.out);
+    REQUIRE(rows.size() == 3);
+    CHECK_THAT(rows[2].f.z, WithinAbs(1500.0 * 0.002, 1e-6));
+  }
 }
 
 TEST_CASE("feel_shape: probes pressing into a flat STL plane give F = k depth along +z, the proxy on the plane",
@@ -280,7 +347,10 @@ TEST_CASE("feel_shape: probes pressing into a flat STL plane give F = k depth al
   const Result r = run({plane, "--probes", probes, "--stiffness", "800"});
   INFO(r.err);
   REQUIRE(r.status == 0);
-  CHECK(r.err.empty());
+  // stderr tells the shape and its box in metres, one line (an STL has no normals to warn about)
+  CHECK(r.err == "feel_shape: " + plane +
+                     ": mesh of 2 triangles, x [-0.1, 0.1] y [-0.1, 0.1] z [0, 0] m, normals: vertex normals from "
+                     "the faces (force shading)\n");
   const std::vector<Row> rows = parse_rows(r.out);
   REQUIRE(rows.size() == path.size());
   CHECK(rows[0].contact == 0);
@@ -337,9 +407,9 @@ TEST_CASE("feel_shape: a probe path into an icosphere STL gives a force along th
   }
   const std::string probes = write(in_tmp("sphere.csv"), probe_csv(path));
   for (const bool smooth : {false, true}) {
-    INFO((smooth ? "--smooth" : "facets"));
+    INFO((smooth ? "force shading (the default)" : "--facets"));
     std::vector<std::string> args{sphere, "--probes", probes, "--stiffness", "1000"};
-    if (smooth) args.push_back("--smooth");
+    if (!smooth) args.push_back("--facets");
     const Result r = run(args);
     INFO(r.err);
     REQUIRE(r.status == 0);
