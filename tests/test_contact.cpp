@@ -348,7 +348,8 @@ TEST_CASE("non-finite probe data give zero force") {
   auto field = contact(PlaneConstraint(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, 1000.0, 0.0}),
                        TextureField(TemporalSource(GaussianNoise(1.0), 1), TextureConfig{}), coulomb(0.4));
   CHECK(field.force(probe_at({not_a_number, 0.0, -1e-3}, {0.1, 0.0, 0.0})) == glm::dvec3{0.0});
-  CHECK(field.force(probe_at({0.0, 0.0, -1e-3}, {infinity, 0.0, 0.0})) == glm::dvec3{0.0});
+  CHECK_FALSE(field.last_contact().touching);
+  CHECK(field.force(probe_at({0.0, 0.0, infinity}, {0.1, 0.0, 0.0})) == glm::dvec3{0.0});
   CHECK_FALSE(field.last_contact().touching);
   Probe odd = probe_at({0.0, 0.0, -1e-3}, {0.1, 0.0, 0.0}, not_a_number);  // garbage contact data coming in is replaced
   odd.surface_normal = glm::dvec3{not_a_number};
@@ -365,6 +366,50 @@ TEST_CASE("non-finite probe data give zero force") {
   const PlaneConstraint plane(PlaneConstraintConfig{});
   CHECK_FALSE(plane.contact(probe_at({0.0, 0.0, -infinity})).touching);
   CHECK(plane.force(probe_at({0.0, 0.0, not_a_number})) == glm::dvec3{0.0});
+}
+
+namespace {
+/// A part that remembers the velocity it was given and pushes nothing.
+struct VelocitySeen {
+  glm::dvec3* seen;
+  [[nodiscard]] glm::dvec3 force(const Probe& p) noexcept {
+    *seen = p.velocity;
+    return glm::dvec3{0.0};
+  }
+};
+}  // namespace
+
+TEST_CASE("a non-finite velocity keeps Fc from the position and drops only the damping") {
+  const double k = 1000.0, b = 5.0, depth = 2e-3;
+  const PlaneConstraint plane(PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0, 0, 1}, k, b});
+  const SphereConstraint ball(SphereConstraintConfig{glm::dvec3{0.0}, 0.02, k, b});
+  const glm::dvec3 in_plane{0.01, 0.0, -depth};
+  const glm::dvec3 in_ball{0.0, 0.02 - depth, 0.0};
+  for (const double bad : {not_a_number, infinity, -infinity}) {
+    CAPTURE(bad);
+    for (const glm::dvec3 v : {glm::dvec3{bad, 0.0, 0.0}, glm::dvec3{0.0, 0.0, bad}, glm::dvec3{bad}}) {
+      // the constraints alone: the spring term k depth n, no damping
+      const Contact p = plane.contact(probe_at(in_plane, v));
+      CHECK(p.touching);
+      CHECK_THAT(p.force.z, WithinAbs(k * depth, 1e-12));
+      CHECK(p.force.x == 0.0);
+      const Contact s = ball.contact(probe_at(in_ball, v));
+      CHECK(s.touching);
+      CHECK_THAT(s.force.y, WithinAbs(k * depth, 1e-12));
+      // the composition: Fc kept, the parts see a zero velocity
+      glm::dvec3 seen{-1.0};
+      auto field = contact(PlaneConstraint(plane.config()), VelocitySeen{&seen}, coulomb(0.4));
+      const glm::dvec3 f = field.force(probe_at(in_plane, v));
+      CHECK(field.last_contact().touching);
+      CHECK_THAT(f.z, WithinAbs(k * depth, 1e-12));
+      CHECK(is_finite(f));
+      CHECK(seen == glm::dvec3{0.0});
+      auto on_ball = contact(SphereConstraint(ball.config()), VelocitySeen{&seen});
+      CHECK_THAT(on_ball.force(probe_at(in_ball, v)).y, WithinAbs(k * depth, 1e-12));
+    }
+  }
+  // a finite velocity still damps: moving into the plane at 0.1 m/s adds b x 0.1
+  CHECK_THAT(plane.contact(probe_at(in_plane, {0.0, 0.0, -0.1})).force.z, WithinAbs(k * depth + b * 0.1, 1e-12));
 }
 
 TEST_CASE("a contact composition allocates nothing per tick") {

@@ -8,7 +8,8 @@
 ///
 /// The damping b acts on the normal velocity only, and only while
 /// penetrating; the max() keeps Fc from ever pulling the HIP into the
-/// surface (Fc . n >= 0), also when it leaves the surface fast.
+/// surface (Fc . n >= 0), also when it leaves the surface fast. A
+/// non-finite velocity drops the damping term, never the spring term.
 
 #include <cmath>
 #include <stdexcept>
@@ -32,10 +33,12 @@ inline void check_penalty(const char* who, double stiffness, double damping) {
     throw std::invalid_argument(std::string(who) + ": damping must be finite and >= 0 [N s/m]");
 }
 
-/// The contact at penetration `depth` > 0 along unit normal n.
+/// The contact at penetration `depth` > 0 along unit normal n. A
+/// non-finite velocity drops the damping term only: Fc = k depth n.
 [[nodiscard]] inline Contact penalty_contact(double depth, const glm::dvec3& n, const glm::dvec3& velocity,
                                              double stiffness, double damping) noexcept {
-  const double push = stiffness * depth - damping * glm::dot(velocity, n);  // [N]
+  const double damped = is_finite(velocity) ? damping * glm::dot(velocity, n) : 0.0;
+  const double push = stiffness * depth - damped;  // [N]
   return Contact{true, depth, n, (push > 0.0 ? push : 0.0) * n};
 }
 
@@ -62,7 +65,7 @@ class PlaneConstraint {
   }
 
   [[nodiscard]] Contact contact(const Probe& probe) const noexcept {
-    if (!is_finite(probe.position) || !is_finite(probe.velocity)) return Contact{};
+    if (!is_finite(probe.position)) return Contact{};
     const double height = glm::dot(probe.position - config_.point, config_.normal);  // [m], < 0 inside
     if (!(height < 0.0)) return Contact{};
     return detail::penalty_contact(-height, config_.normal, probe.velocity, config_.stiffness, config_.damping);
@@ -98,7 +101,7 @@ class SphereConstraint {
   }
 
   [[nodiscard]] Contact contact(const Probe& probe) const noexcept {
-    if (!is_finite(probe.position) || !is_finite(probe.velocity)) return Contact{};
+    if (!is_finite(probe.position)) return Contact{};
     const glm::dvec3 r = probe.position - config_.centre;
     const double distance = glm::length(r);  // [m]
     if (!(distance < config_.radius)) return Contact{};

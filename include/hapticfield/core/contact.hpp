@@ -68,15 +68,19 @@ class ContactField {
       : constraint_(std::move(constraint)), parts_(std::move(parts)...) {}
 
   /// F = Fc + sum of parts(probe with |Fc| and n of this tick) [N]; zero for
-  /// a non-finite probe or a non-finite result.
+  /// a non-finite position or a non-finite result. A non-finite velocity
+  /// (a glitch of the device's differentiation) drops only what depends on
+  /// it: the constraint and the parts see a zero velocity, so Fc keeps its
+  /// spring term and loses its damping.
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
-    if (!is_finite(probe.position) || !is_finite(probe.velocity)) {
+    if (!is_finite(probe.position)) {
       last_ = Contact{};
       return glm::dvec3{0.0};
     }
-    last_ = constraint_.contact(probe);
-    if (!last_.touching) return glm::dvec3{0.0};
     Probe on = probe;
+    if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
+    last_ = constraint_.contact(on);
+    if (!last_.touching) return glm::dvec3{0.0};
     on.normal_force = glm::length(last_.force);
     on.surface_normal = last_.normal;
     on.surface_uv = last_.surface_uv;
