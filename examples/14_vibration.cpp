@@ -44,13 +44,14 @@ namespace {
 const char* const usage_text =
     "usage: vibration --hatt FILE (--wav OUT.wav | --alsa DEVICE | --spectrum OUT.csv) [options]\n"
     "  a scripted stroke over a HaTT texture: tap -> ring -> renderer -> sink, on simulated time\n"
-    "  --hatt FILE        a HaTT modelSet (.xml), e.g. Models_Book.xml of the toolkit's 10 kHz models\n"
+    "  --hatt FILE        a HaTT modelSet (.xml), e.g. Models_Book.xml of the toolkit's 10 kHz models;\n"
+    "                     at most 16 MB, <SampleRate> in 100..100000 Hz\n"
     "  --model K          stroke at the speed and force of model K (default: the first with motion and force)\n"
     "  --wav OUT.wav      record what would have been played (32-bit float WAV)\n"
     "  --alsa DEVICE      play on an ALSA PCM (e.g. default, hw:0, plughw:0; null plays nowhere)\n"
     "  --spectrum OUT.csv the played PSD while sliding against the model's own (frequency_Hz, audio_dB, model_dB)\n"
     "  --seconds S        stroke length [s], in [0.5, 600] (default 3)\n"
-    "  --rate HZ          audio rate [Hz], in [8000, 192000] (default 48000)\n"
+    "  --rate HZ          audio rate [Hz], a whole number in [8000, 192000] (default 48000)\n"
     "  --block N          frames per audio block (the ALSA period), in 16..8192 (default 256)\n"
     "  --periods N        ALSA periods in the device buffer, in 2..16 (default 2)\n"
     "  --gain G           output per m/s^2 [s^2/m], in (0, 10] (default 0.02: 50 m/s^2 full scale)\n"
@@ -255,9 +256,11 @@ int main(int argc, char** argv) {
         a.spectrum = p.output_file();
       else if (p.is("--seconds"))
         a.seconds = p.real(cli::closed(0.5, 600.0));
-      else if (p.is("--rate"))
+      else if (p.is("--rate")) {
         a.rate = p.real(cli::closed(8000.0, 192000.0));
-      else if (p.is("--block"))
+        if (a.rate != std::floor(a.rate))  // a WAV header and ALSA hold a whole rate: no silent rounding
+          throw cli::UsageError("--rate must be a whole number of Hz, got '" + p.token() + "'");
+      } else if (p.is("--block"))
         a.block = p.integer(16, 8192);
       else if (p.is("--periods"))
         a.periods = p.integer(2, 16);
@@ -270,15 +273,13 @@ int main(int argc, char** argv) {
     if (!a.wav.empty() && !a.alsa.empty()) throw cli::UsageError("--wav and --alsa exclude each other");
     if (a.wav.empty() && a.alsa.empty() && a.spectrum.empty())
       throw cli::UsageError("choose an output: --wav OUT.wav, --alsa DEVICE or --spectrum OUT.csv");
-    if (!a.alsa.empty() && a.rate != std::floor(a.rate))
-      throw cli::UsageError("--rate must be a whole number of Hz for --alsa");
     const double delay = static_cast<double>(a.block) / a.rate + 0.002;
     const double sliding = a.seconds - approach_time - settle_time - lift_time - delay;  // [s] in the spectrum
     if (!a.spectrum.empty() && sliding * a.rate < 2.0 * static_cast<double>(psd_segment))
       throw cli::UsageError("--spectrum needs a longer stroke (--seconds) to average a PSD of " +
                             std::to_string(psd_segment) + "-frame segments");
     p.finish();
-    check_file(a.hatt, std::uintmax_t{64} << 20);
+    check_file(a.hatt, texture::max_hatt_file_bytes);
     return run_with_sink(a);
   });
 }

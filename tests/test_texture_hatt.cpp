@@ -344,6 +344,26 @@ TEST_CASE("toolkit files: capitalised <SampleRate>, <SpeedUnits>, <AccelUnits>, 
   CHECK(parse_hatt_model_set(no_rate).sample_rate == 10000.0);
 }
 
+TEST_CASE("a <SampleRate> outside 100 Hz..100 kHz is refused, naming the file and the range") {
+  const std::string text = read_text(data_dir / "Models_Toolkit 10kHz AR.xml");
+  for (const char* rate : {"1e7", "1e9", "1e12", "1e300", "100001", "99.9", "0", "-10000"}) {
+    CAPTURE(rate);
+    std::string bad = text;
+    replace_all(bad, "<SampleRate>10000</SampleRate>", std::string("<SampleRate>") + rate + "</SampleRate>");
+    REQUIRE(bad != text);
+    CHECK_THROWS_WITH(parse_hatt_model_set(bad, "fast.xml"), Catch::Contains("'fast.xml'") &&
+                                                                 Catch::Contains(std::string("<SampleRate> ") + rate) &&
+                                                                 Catch::Contains("outside 100..100000 Hz"));
+  }
+  for (const char* rate : {"100", "1000", "100000"}) {
+    std::string ok = text;
+    replace_all(ok, "<SampleRate>10000</SampleRate>", std::string("<SampleRate>") + rate + "</SampleRate>");
+    CHECK(parse_hatt_model_set(ok).sample_rate == std::stod(rate));
+  }
+  CHECK(min_hatt_sample_rate == 100.0);
+  CHECK(max_hatt_sample_rate == 100000.0);
+}
+
 TEST_CASE("toolkit <ARcoeff> lists (a_0 = 1 first) convert to the file's own LSFs") {
   const HattModelSet with_lsf = load_hatt_model_set(data_dir / "Models_Toolkit 10kHz AR.xml");
   std::string text = read_text(data_dir / "Models_Toolkit 10kHz AR.xml");

@@ -399,6 +399,29 @@ TEST_CASE("HaTT source: silent off contact and below the velocity threshold; ren
   if (test::allocations_counted) CHECK(allocations == 0);
 }
 
+TEST_CASE("HaTT source: a model far faster than the audio runs a bounded number of steps per frame") {
+  texture::HattModelSet set = texture::load_hatt_model_set(data_dir / "Models_Toolkit 10kHz AR.xml");
+  const ContactState sliding{0.1, 1.0, 0, true};
+  // a file's model at the audio rates used: every model step runs (10 kHz at 8 kHz: 1.25 a frame)
+  HattSource<64> own(set, {});
+  own.prepare(8000.0);
+  for (int i = 0; i < 8000; ++i)
+    (void)own.next(sliding);
+  CHECK(own.model_steps() == 10000);
+  // models built in code at rates no file may declare: at most max_hatt_steps_per_sample a frame
+  for (const double rate : {1e5 * 17.0 / 8.0, 1e7, 1e9, 1e12, 1e300}) {
+    CAPTURE(rate);
+    set.sample_rate = rate;
+    HattSource<64> fast(set, {});
+    fast.prepare(8000.0);
+    double sum = 0.0;
+    for (int i = 0; i < 8000; ++i)
+      sum += fast.next(sliding);
+    CHECK(fast.model_steps() == 8000u * static_cast<unsigned>(max_hatt_steps_per_sample));
+    CHECK(std::isfinite(sum));
+  }
+}
+
 TEST_CASE("the whole chain: tap(contact(plane, ...)) on the servo side, HaTT on the audio side") {
   const texture::HattModelSet set = texture::load_hatt_model_set(data_dir / "Models_Toolkit 10kHz AR.xml");
   ContactRing<> ring;

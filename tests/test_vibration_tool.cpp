@@ -6,6 +6,7 @@
 // or 2). Nothing here depends on the machine's speed.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -36,9 +37,10 @@ struct Run {
   std::string out, err;
 };
 
-Run run(const std::vector<std::string>& args, const std::string& name) {
+Run run(const std::vector<std::string>& args, const std::string& name,
+        std::chrono::seconds patience = std::chrono::seconds(60)) {
   Child child(tool, args, tmp, name, /*press_enter=*/false);  // the tool reads no stdin
-  REQUIRE(child.wait());
+  REQUIRE(child.wait(patience));
   REQUIRE(child.exited_normally());
   return {child.status(), child.out(), child.err()};
 }
@@ -147,6 +149,7 @@ TEST_CASE("vibration tool: --help, bad usage (exit 2) and bad input (exit 1), ea
   const Run help = run({"--help"}, "help");
   CHECK(help.status == 0);
   CHECK(help.out.find("usage: vibration") == 0);
+  CHECK(help.out.find("at most 16 MB, <SampleRate> in 100..100000 Hz") != std::string::npos);  // its limits
   CHECK(help.err.empty());
 
   const fs::path not_xml = tmp / "not_a_model.xml";
@@ -163,6 +166,10 @@ TEST_CASE("vibration tool: --help, bad usage (exit 2) and bad input (exit 1), ea
       {{"--hatt", model_file, "--wav", out, "--alsa", "null"}, 2, "exclude each other"},
       {{"--hatt", model_file, "--wav", out, "--rate", "44k"}, 2, "--rate expects a number"},
       {{"--hatt", model_file, "--wav", out, "--rate", "4000"}, 2, "--rate must be in [8000, 192000]"},
+      // the WAV header holds a whole rate: 8000.5 is refused, not written as 8001 and reported as 8000
+      {{"--hatt", model_file, "--wav", out, "--rate", "8000.5"},
+       2,
+       "--rate must be a whole number of Hz, got '8000.5'"},
       {{"--hatt", model_file, "--wav", out, "--block", "0"}, 2, "--block must be in 16..8192"},
       {{"--hatt", model_file, "--wav", out, "--seconds", "nan"}, 2, "--seconds must be a finite number"},
       {{"--hatt", model_file, "--wav", out, "--gain", "0"}, 2, "--gain must be in (0, 10]"},
@@ -188,5 +195,32 @@ TEST_CASE("vibration tool: --help, bad usage (exit 2) and bad input (exit 1), ea
     CHECK(r.err.rfind("vibration: ", 0) == 0);
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
     CHECK(r.out.empty());
+  }
+}
+
+TEST_CASE("vibration tool: a model file declaring a huge <SampleRate> is refused at once, in one line") {
+  // such a file used to run one model step per 1/SampleRate of the stroke: 1e9 Hz never finished
+  fs::create_directories(tmp);
+  const std::string text = slurp(model_file);
+  const std::string rate_tag = "<SampleRate>10000</SampleRate>";
+  REQUIRE(text.find(rate_tag) != std::string::npos);
+  for (const std::string rate : {"1e7", "1e9", "1e12", "1e300"}) {
+    CAPTURE(rate);
+    std::string fast = text;
+    fast.replace(fast.find(rate_tag), rate_tag.size(), "<SampleRate>" + rate + "</SampleRate>");
+    const fs::path file = tmp / ("rate_" + rate + ".xml");
+    std::ofstream(file, std::ios::binary) << fast;
+    const auto start = std::chrono::steady_clock::now();
+    const Run r = run({"--hatt", file.string(), "--wav", (tmp / "fast.wav").string(), "--seconds", "1"}, "rate_" + rate,
+                      std::chrono::seconds(20));
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    CAPTURE(r.err, seconds);
+    CHECK(r.status == 1);
+    CHECK(r.err.rfind("vibration: ", 0) == 0);
+    CHECK(r.err.find(file.string()) != std::string::npos);
+    CHECK(r.err.find("<SampleRate> " + rate + " Hz is outside 100..100000 Hz") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.out.empty());
+    CHECK(seconds < 10.0);  // a refusal, not a stroke (generous for a loaded machine)
   }
 }

@@ -47,6 +47,12 @@ inline constexpr std::size_t max_hatt_order = 256;
 /// Most models (<numMod>) and triangles (<numTri>) in one set.
 inline constexpr std::size_t max_hatt_models = 4096;
 inline constexpr std::size_t max_hatt_triangles = 2 * max_hatt_models;
+/// Range of <SampleRate> accepted [Hz]. The toolkit's models are 10 kHz and
+/// its resampled sets 1 kHz; a rate outside 100 Hz..100 kHz is no texture
+/// recording's, and a huge one would make the audio path run millions of
+/// model steps a second (vibration/hatt_source.hpp caps them as well).
+inline constexpr double min_hatt_sample_rate = 100.0;
+inline constexpr double max_hatt_sample_rate = 100000.0;
 /// Budget for converting <ARcoeff> to LSFs in one file: the sum over the
 /// converted models of (p + 1)^2 (about 2 us each, so at most ~0.2 s).
 inline constexpr std::size_t max_hatt_conversion_work = 100000;
@@ -193,13 +199,15 @@ inline std::string hatt_units(const pugi::xml_node& n) {
 /// Optional: <numMACoeff> (default 0), <maxSpeed>, <maxForce>, <htmlName> or
 /// <material>, <ARcoeff>, <MAcoeff> (p or p + 1 values, a_0 = 1 first), and,
 /// spelled as the toolkit writes them or in lower case:
-/// <SampleRate> [Hz] (default 10000; the toolkit's resampled sets say 1000),
+/// <SampleRate> [Hz] (default 10000; the toolkit's resampled sets say 1000;
+/// min_hatt_sample_rate..max_hatt_sample_rate, 100 Hz..100 kHz),
 /// <SpeedUnits> ("mm/s" default or "m/s"), <AccelUnits> ("m/s^2" default or
 /// "g"), <ForceUnits> ("N").
 /// @throws HattFileError (a FileError) naming the source and the field for
 ///         malformed XML, missing or non-numeric fields, counts that do not
 ///         match or exceed the caps, indices out of range, degenerate
 ///         triangles, LSFs not increasing in (0, pi), a negative variance,
+///         a <SampleRate> outside 100 Hz..100 kHz,
 ///         or too much <ARcoeff> conversion work.
 [[nodiscard]] inline HattModelSet parse_hatt_model_set(std::string_view text, std::string_view source = {}) {
   using namespace detail;
@@ -236,7 +244,11 @@ inline std::string hatt_units(const pugi::xml_node& n) {
   if (set.ar_order < 1) hatt_fail(source, "<numARCoeff> must be >= 1");
   if (const auto n = hatt_either(root, "SampleRate", "sampleRate", source)) {
     set.sample_rate = hatt_number(n, source, cat("<", n.name(), ">"));
-    if (set.sample_rate <= 0.0) hatt_fail(source, cat("<", n.name(), "> must be > 0 [Hz]"));
+    if (!(set.sample_rate >= min_hatt_sample_rate && set.sample_rate <= max_hatt_sample_rate))
+      hatt_fail(source, cat("<", n.name(), "> ", hatt_excerpt(hatt_trim(n.text().get())), " Hz is outside ",
+                            std::to_string(static_cast<long>(min_hatt_sample_rate)), "..",
+                            std::to_string(static_cast<long>(max_hatt_sample_rate)),
+                            " Hz, the rates a HaTT model is recorded at (the toolkit's: 1000 and 10000)"));
   }
   if (const auto n = hatt_either(root, "SpeedUnits", "speedUnits", source)) {
     const std::string u = hatt_units(n);

@@ -15,6 +15,11 @@
 /// Catmull-Rom interpolation (exact at equal rates: the model's own
 /// samples, two model steps late). Off contact, or below the velocity
 /// threshold, the noise stops and the filter rings down.
+/// At most max_hatt_steps_per_sample model steps run per audio frame, so an
+/// audio callback's work is bounded whatever the model's rate: a model
+/// faster than that many times the audio rate (never one read from a file,
+/// whose rate is at most 100 kHz, at an audio rate of 6.25 kHz or more)
+/// runs slower than its own time, its pitch lowered, instead of stalling.
 /// Output: gain x acceleration [m/s^2]. GLM only (model files are read by
 /// texture/hatt_model_file.hpp, which needs pugixml).
 
@@ -40,6 +45,9 @@ struct HattSourceConfig {
   int update_every{10};             ///< model steps between coefficient updates (10: 1 kHz at 10 kHz), >= 1
   std::uint32_t seed{1};            ///< noise seed
 };
+
+/// Most model steps HattSource::next() runs for one audio frame.
+inline constexpr int max_hatt_steps_per_sample = 16;
 
 template <std::size_t MaxOrder = 32>
 class HattSource {
@@ -82,6 +90,8 @@ class HattSource {
     const bool active =
         c.touching && c.speed >= config_.velocity_threshold && std::isfinite(c.speed) && std::isfinite(c.normal_force);
     position_ += advance_;
+    if (position_ >= static_cast<double>(max_hatt_steps_per_sample))  // bounded work: drop the model time beyond
+      position_ = static_cast<double>(max_hatt_steps_per_sample) + (position_ - std::floor(position_));
     while (position_ >= 1.0) {
       position_ -= 1.0;
       if (active && (!was_active_ || ++since_update_ >= config_.update_every)) {
@@ -132,6 +142,8 @@ class HattSource {
   [[nodiscard]] std::span<const double> ar_coefficients() const noexcept { return {ar_.data(), p_ + 1}; }
   [[nodiscard]] double variance() const noexcept { return variance_now_; }
   [[nodiscard]] double model_rate() const noexcept { return model_rate_; }
+  /// Model steps run so far (at most max_hatt_steps_per_sample per next()).
+  [[nodiscard]] std::uint64_t model_steps() const noexcept { return count_; }
 
  private:
   double step(bool active) noexcept {
