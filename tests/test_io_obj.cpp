@@ -207,7 +207,43 @@ TEST_CASE("OBJ: hostile files fail with one clear FileError", "[io][obj][hostile
   }
   SECTION("a relative index before the first vertex") {
     expect_file_error([&] { (void)parse_obj(tri + "f -1 -2 -9\n", "relative.obj"); }, "relative.obj",
-                      "uses vertex -5 of 3");
+                      "line 4: relative vertex index -9 reaches before the first vertex (3 above it)");
+    // relative indices count back from where the face is, not from the end of the file
+    expect_file_error([&] { (void)parse_obj("v 0 0 0\nf -1 -2 -3\nv 1 0 0\nv 0 1 0\n", "early.obj"); }, "early.obj",
+                      "line 2: relative vertex index -2 reaches before the first vertex (1 above it)");
+    const LoadedMesh m = parse_obj(tri + "vn 0 0 1\nf -3//-1 -2//-1 -1//-1\n", "back.obj");
+    CHECK(m.mesh.triangle_count() == 1);
+    CHECK(m.mesh.normals.size() == 3);
+  }
+  SECTION("indices that do not fit an int (tinyobjloader's atoi wraps 4294967299 to 3)") {
+    expect_file_error([&] { (void)parse_obj(tri + "f 1 2 4294967299\n", "wrap.obj"); }, "wrap.obj",
+                      "line 4: vertex index 4294967299 is out of range");
+    expect_file_error([&] { (void)parse_obj(tri + "f 1 2 -4294967293\n", "wrap_neg.obj"); }, "wrap_neg.obj",
+                      "line 4: vertex index -4294967293 is out of range");
+    expect_file_error([&] { (void)parse_obj(tri + "vt 0 0\nf 1/1 2/1 3/18446744073709551617\n", "wrap_vt.obj"); },
+                      "wrap_vt.obj", "line 5: texture coordinate index 18446744073709551617 is out of range");
+    expect_file_error([&] { (void)parse_obj(tri + "vn 0 0 1\nf 1//1 2//1 3//4294967297\n", "wrap_vn.obj"); },
+                      "wrap_vn.obj", "line 5: normal index 4294967297 is out of range");
+  }
+  SECTION("relative uv and normal indices before the first one (tinyobjloader takes them for none)") {
+    expect_file_error([&] { (void)parse_obj(tri + "vn 0 0 1\nf 1//-1 2//-1 3//-2\n", "neg_vn.obj"); }, "neg_vn.obj",
+                      "line 5: relative normal index -2 reaches before the first normal (1 above it)");
+    expect_file_error([&] { (void)parse_obj(tri + "vt 0 0\nf 1/-1 2/-1 3/-3\n", "neg_vt.obj"); }, "neg_vt.obj",
+                      "line 5: relative texture coordinate index -3 reaches before the first texture coordinate (1 "
+                      "above it)");
+    expect_file_error([&] { (void)parse_obj(tri + "f 1//-1 2//-1 3//-1\n", "no_vn.obj"); }, "no_vn.obj",
+                      "relative normal index -1 reaches before the first normal (0 above it)");
+  }
+  SECTION("corners that are not indices, and faces of fewer than 3 corners") {
+    expect_file_error([&] { (void)parse_obj(tri + "f 1 2 3x\n", "x.obj"); }, "x.obj",
+                      "line 4: face corner '3x' is not v, v/vt, v//vn or v/vt/vn indices");
+    expect_file_error([&] { (void)parse_obj(tri + "f 1/1/1/1 2 3\n", "four.obj"); }, "four.obj",
+                      "line 4: face corner '1/1/1/1' has more than three indices");
+    expect_file_error([&] { (void)parse_obj(tri + "f 1 2\n", "two.obj"); }, "two.obj",
+                      "line 4: a face needs 3 corners, this one has 2");
+    expect_file_error([&] { (void)parse_obj(tri + "f 1 2 0\n", "zero_line.obj"); }, "zero_line.obj",
+                      "line 4: vertex index 0: OBJ indices start at 1");
+    CHECK(parse_obj(tri + "f +1 +2 +3\r\n", "plus.obj").mesh.triangle_count() == 1);
   }
   SECTION("an out-of-range index in a polygon (tinyobjloader's triangulation would read past its array)") {
     expect_file_error([&] { (void)parse_obj(tri + "f 1 2 3 1 2 99999\n", "poly.obj"); }, "poly.obj",
@@ -230,7 +266,8 @@ TEST_CASE("OBJ: hostile files fail with one clear FileError", "[io][obj][hostile
       s += "v " + std::to_string(std::cos(angle)) + " " + std::to_string(std::sin(angle)) + " 0\n";
       f.append(1, ' ').append(std::to_string(i + 1));
     }
-    expect_file_error([&] { (void)parse_obj(s + f + "\n", "wide.obj"); }, "wide.obj", "more than 255 corners");
+    expect_file_error([&] { (void)parse_obj(s + f + "\n", "wide.obj"); }, "wide.obj",
+                      "line 301: a face of 300 corners: more than 255 corners");
   }
   SECTION("no faces") {
     expect_file_error([&] { (void)parse_obj(tri, "nofaces.obj"); }, "nofaces.obj", "no triangles");
@@ -246,6 +283,20 @@ TEST_CASE("OBJ: hostile files fail with one clear FileError", "[io][obj][hostile
     MeshReadConfig config;
     config.max_triangles = 11;
     expect_file_error([&] { (void)parse_obj(obj_cube_quads(1.0), "many.obj", config); }, "many.obj", "more than 11");
+  }
+  SECTION("the triangles of large polygons are counted from the text, before anything is read") {
+    // 255-corner faces make 253 triangles each: the limit is passed on the face that passes it, by its line
+    std::string s = tri;
+    std::string f = "f";
+    for (int i = 0; i < 255; ++i)
+      f.append(1, ' ').append(std::to_string(i % 3 + 1));
+    for (int k = 0; k < 4; ++k)
+      s += f + "\n";
+    MeshReadConfig config;
+    config.max_triangles = 3 * 253;
+    expect_file_error([&] { (void)parse_obj(s, "fans.obj", config); }, "fans.obj",
+                      "more than 759 triangles by line 7 (raise MeshReadConfig::max_triangles)");
+    CHECK(detail::scan_obj_faces(s, "fans.obj", 4 * 253) == 4 * 253);
   }
 }
 

@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <limits>
 #include <map>
 #include <new>
 #include <sstream>
@@ -203,6 +204,86 @@ inline void check_obj_numbers(std::string_view text, const std::string& name) {
   }
 }
 
+/// The faces of an OBJ text, checked and counted before tinyobjloader reads
+/// it (which reads indices with atoi, so 4294967299 wraps to 3, and takes a
+/// relative uv or normal index before the first one for "none"): every
+/// face index is an integer that fits, not 0, and a relative (negative)
+/// one names an element defined above it; every face has 3..255 corners.
+/// Returns the triangles the faces make (n - 2 for n corners), refusing as
+/// soon as they pass `limit`, before anything is allocated.
+[[nodiscard]] inline std::size_t scan_obj_faces(std::string_view text, const std::string& name, std::size_t limit) {
+  static constexpr std::string_view kinds[3] = {"vertex", "texture coordinate", "normal"};
+  std::size_t defined[3] = {0, 0, 0};  // v, vt, vn lines so far (relative indices count back from here)
+  std::size_t triangles = 0;
+  std::size_t line = 0;
+  std::size_t pos = 0;
+  const auto fail = [&](const std::string& what) {
+    throw mesh_error(name, "line " + std::to_string(line) + ": " + what);
+  };
+  while (pos < text.size()) {
+    ++line;  // lines end at \n, \r\n or \r, as tinyobjloader splits them
+    std::size_t end = text.find_first_of("\r\n", pos);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view l = text.substr(pos, end - pos);
+    pos = end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
+    const std::size_t i = l.find_first_not_of(" \t");
+    if (i == std::string_view::npos) continue;
+    const auto space_at = [&](std::size_t k) { return k < l.size() && (l[k] == ' ' || l[k] == '\t'); };
+    if (l[i] == 'v') {
+      if (space_at(i + 1))
+        ++defined[0];
+      else if (l.size() > i + 1 && l[i + 1] == 't' && space_at(i + 2))
+        ++defined[1];
+      else if (l.size() > i + 1 && l[i + 1] == 'n' && space_at(i + 2))
+        ++defined[2];
+      continue;
+    }
+    if (l[i] != 'f' || !space_at(i + 1)) continue;
+    std::size_t corners = 0;
+    std::size_t k = i + 1;
+    for (;;) {
+      k = l.find_first_not_of(" \t", k);
+      if (k == std::string_view::npos) break;
+      const std::size_t stop = std::min(l.find_first_of(" \t", k), l.size());
+      const std::string_view corner = l.substr(k, stop - k);
+      k = stop;
+      ++corners;
+      std::size_t field = 0;
+      std::size_t from = 0;
+      for (;;) {  // v, v/vt, v//vn, v/vt/vn
+        const std::size_t slash = std::min(corner.find('/', from), corner.size());
+        const std::string_view number = corner.substr(from, slash - from);
+        if (field > 2) fail("face corner '" + std::string(corner.substr(0, 40)) + "' has more than three indices");
+        if (!(number.empty() && field == 1 && slash < corner.size())) {  // only vt may be left out (v//vn)
+          const char* first = number.data() + (!number.empty() && number[0] == '+' ? 1 : 0);
+          long long value = 0;
+          const auto [ptr, ec] = std::from_chars(first, number.data() + number.size(), value);
+          if (number.empty() || ec == std::errc::invalid_argument || ptr != number.data() + number.size())
+            fail("face corner '" + std::string(corner.substr(0, 40)) + "' is not v, v/vt, v//vn or v/vt/vn indices");
+          const std::string what = std::string(kinds[field]) + " index " + std::string(number.substr(0, 40));
+          if (ec == std::errc::result_out_of_range || value > std::numeric_limits<int>::max() ||
+              value < -static_cast<long long>(std::numeric_limits<int>::max()))
+            fail(what + " is out of range");
+          if (value == 0) fail(what + ": OBJ indices start at 1");
+          if (value < 0 && static_cast<std::size_t>(-value) > defined[field])
+            fail("relative " + what + " reaches before the first " + std::string(kinds[field]) + " (" +
+                 std::to_string(defined[field]) + " above it)");
+        }
+        if (slash == corner.size()) break;
+        from = slash + 1;
+        ++field;
+      }
+    }
+    if (corners < 3) fail("a face needs 3 corners, this one has " + std::to_string(corners));
+    if (corners > 255) fail("a face of " + std::to_string(corners) + " corners: more than 255 corners");
+    triangles += corners - 2;
+    if (triangles > limit)
+      throw mesh_error(name, "more than " + std::to_string(limit) + " triangles by line " + std::to_string(line) +
+                                 " (raise MeshReadConfig::max_triangles)");
+  }
+  return triangles;
+}
+
 }  // namespace detail
 
 /// Reads OBJ text already in memory.
@@ -210,15 +291,19 @@ inline void check_obj_numbers(std::string_view text, const std::string& name) {
 /// @param material_dir  the folder mtllib files are read from (and never
 ///                      outside of); empty: material files are not read
 /// @throws FileError naming the file for a syntax error tinyobjloader
-///         reports, an index out of range, a face of more than 255 corners,
-///         non-finite values, no triangles, or more than
-///         config.max_triangles.
+///         reports, an index out of range (one that does not fit an int, or
+///         a relative one before the first element: with its line), a face
+///         of fewer than 3 or more than 255 corners, non-finite values, no
+///         triangles, or more than config.max_triangles (counted from the
+///         text before the file is parsed).
 /// @throws std::invalid_argument for bad settings.
 [[nodiscard]] inline LoadedMesh parse_obj(std::string_view text, const std::string& name,
                                           const MeshReadConfig& config = {}, const std::string& material_dir = {}) {
   using namespace detail;
   check_config(config);
   check_obj_numbers(text, name);
+  const std::size_t limit = triangle_limit(config);
+  const std::size_t triangles = scan_obj_faces(text, name, limit);  // counted and checked before any allocation
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
@@ -259,8 +344,8 @@ inline void check_obj_numbers(std::string_view text, const std::string& name) {
     if (!std::isfinite(static_cast<double>(attrib.normals[i])))
       throw mesh_error(name, "normal " + std::to_string(i / 3 + 1) + " is not finite");
 
-  const std::size_t limit = triangle_limit(config);
   TriangleMesh& mesh = out.mesh;
+  mesh.triangles.reserve(triangles);
   std::vector<ObjCorner> corners;  // the new vertices
   std::unordered_map<ObjCorner, std::uint32_t, ObjCornerHash> index;
   std::vector<int> face_material;
