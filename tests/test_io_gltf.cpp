@@ -330,7 +330,19 @@ TEST_CASE("glTF: hostile files fail with one clear FileError", "[io][gltf][hosti
     expect_file_error([&] { (void)load_gltf(p); }, p, "outside the file's folder");
     const auto q = io_test::write(dir / "in" / "abs.gltf",
                                   replace(json, embedded_uri, R"(, "uri": ")" + (dir / "cube.bin").string() + "\""));
-    expect_file_error([&] { (void)load_gltf(q); }, q, "outside the file's folder");
+    expect_file_error([&] { (void)load_gltf(q); }, q,
+                      "external buffer '" + (dir / "cube.bin").string() + "' is an absolute path: not read");
+    // an absolute path is refused, and said so, even to a file that exists inside the folder (not "File not found")
+    io_test::write(dir / "in" / "cube.bin", bin);
+    const std::string inside = (dir / "in" / "cube.bin").string();
+    const auto r =
+        io_test::write(dir / "in" / "abs_inside.gltf", replace(json, embedded_uri, R"(, "uri": ")" + inside + "\""));
+    expect_file_error([&] { (void)load_gltf(r); }, r,
+                      "external buffer '" + inside +
+                          "' is an absolute path: not read (a buffer's uri must be relative to the glTF file, inside "
+                          "its folder)");
+    CHECK(load_gltf(io_test::write(dir / "in" / "rel.gltf", replace(json, embedded_uri, R"(, "uri": "cube.bin")")))
+              .mesh.triangle_count() > 0);
     // from memory there is no folder: no external file at all
     expect_file_error([&] { (void)parse_gltf(replace(json, embedded_uri, R"(, "uri": "cube.bin")"), "mem.gltf"); },
                       "mem.gltf", "mem.gltf");

@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <new>
@@ -570,7 +571,9 @@ class GltfReader {
 /// @param name          the file's name for messages
 /// @param resource_dir  the folder external buffers are read from (never
 ///                      outside it); empty: only embedded data is allowed
-/// @throws FileError naming the file for anything tinygltf refuses, a
+/// @throws FileError naming the file for anything tinygltf refuses, an
+///         external buffer given by an absolute path (uris must be relative
+///         to the file, inside its folder), a
 ///         broken .glb layout, JSON nested too deeply, an accessor whose
 ///         count x stride overruns its buffer, indices out of range,
 ///         non-finite values, cycles in the node graph, required
@@ -611,6 +614,14 @@ class GltfReader {
   }
   if (!ok) {
     std::string why = first_line(err);
+    // tinygltf joins an absolute uri to the folder and then says "File not found" even when the file exists
+    static constexpr std::string_view not_found = "File not found : ";
+    const std::string missing = why.rfind(not_found, 0) == 0 ? why.substr(not_found.size()) : std::string();
+    const std::filesystem::path uri(missing);
+    if (!missing.empty() && (uri.is_absolute() || uri.has_root_name() || uri.has_root_directory()))
+      throw mesh_error(name, "external buffer '" + missing +
+                                 "' is an absolute path: not read (a buffer's uri must be relative to the glTF "
+                                 "file, inside its folder)");
     if (!files.refused.empty()) why += " (refused to read '" + files.refused.front() + "': outside the file's folder)";
     throw mesh_error(name, why);
   }
