@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -147,6 +148,17 @@ TEST_CASE("height maps: hostile files fail with one clear error", "[io][height][
     const auto p = io_test::write(dir / "zero.png", png_header(0, 0));
     expect_file_error([&] { (void)load_depth_map(p); }, p, "declares 0 x 0 px");
     expect_file_error([&] { (void)load_height_picture(p); }, p, "declares 0 x 0 px");
+  }
+  SECTION("fewer than 2 x 2 px: the error names the file") {
+    for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 5}, std::pair{7, 1}}) {
+      const std::string size = std::to_string(w) + " x " + std::to_string(h) + " px";
+      const std::string p = (dir / ("thin_" + std::to_string(w) + "x" + std::to_string(h) + ".png")).string();
+      REQUIRE(cv::imwrite(p, cv::Mat(h, w, CV_16UC1, cv::Scalar(5))));
+      expect_file_error([&] { (void)load_depth_map(p); }, p, size + "; a height map needs at least 2 x 2 px");
+      expect_file_error([&] { (void)load_height_picture(p); }, p, size + "; a height map needs at least 2 x 2 px");
+    }
+    CHECK_THROWS_WITH(height_grid_from_depth(cv::Mat(1, 1, CV_32FC1, cv::Scalar(0.5)), "one.tiff"),
+                      Contains("'one.tiff'") && Contains("1 x 1 px"));
   }
   SECTION("20000 x 20000 px (400 Mpx) declared in 33 bytes is refused from the header") {
     const auto p = io_test::write(dir / "huge.png", png_header(20000, 20000));

@@ -60,6 +60,11 @@ inline void blur_plane(cv::Mat& plane, double sigma) {
   if (sigma > 0.0) cv::GaussianBlur(plane, plane, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
 }
 
+/// "W x H px" for messages.
+[[nodiscard]] inline std::string size_text(int width, int height) {
+  return std::to_string(width) + " x " + std::to_string(height) + " px";
+}
+
 /// A one-channel double plane (picture rows, top first) into a grid with
 /// its bottom row first, each value times scale.
 [[nodiscard]] inline HeightGrid grid_from_plane(const cv::Mat& plane, double scale, double pixel_size) {
@@ -94,12 +99,17 @@ inline void refuse_exr(const std::string& path) {
 
 /// Heights from gray levels already in memory: level (0..255) x
 /// mm_per_level / 1000 [m], after the optional blur.
-/// @throws std::invalid_argument for an empty picture or bad settings.
+/// @throws std::invalid_argument for a picture smaller than 2 x 2 px or bad
+///         settings.
 [[nodiscard]] inline HeightGrid height_grid_from_gray(const GrayImage& gray, const PictureHeightConfig& config = {}) {
   detail::check_positive(config.pixel_size, "PictureHeightConfig::pixel_size");
   detail::check_positive(config.mm_per_level, "PictureHeightConfig::mm_per_level");
   detail::check_blur(config.blur_sigma);
   if (gray.empty()) throw std::invalid_argument("height_grid_from_gray: the picture is empty (0 x 0 px)");
+  if (gray.width() < 2 || gray.height() < 2)
+    throw std::invalid_argument("height_grid_from_gray: the picture is " +
+                                detail::size_text(gray.width(), gray.height()) +
+                                "; a height map needs at least 2 x 2 px");
   cv::Mat plane(gray.height(), gray.width(), CV_64F);
   for (int y = 0; y < gray.height(); ++y) {
     const double* src = gray.row(y);
@@ -117,14 +127,19 @@ inline void refuse_exr(const std::string& path) {
 /// gray or colour): its gray level (to_gray()) x mm_per_level.
 /// @throws ImageError (a FileError) naming the file when it is missing,
 ///         declares 0 x 0 or more than max_pixels (checked from the header
-///         before decoding), is OpenEXR or cannot be decoded.
+///         before decoding), is smaller than 2 x 2 px (a surface needs
+///         four heights), is OpenEXR or cannot be decoded.
 /// @throws std::invalid_argument for bad settings.
 [[nodiscard]] inline HeightGrid load_height_picture(const std::string& path, const PictureHeightConfig& config = {}) {
   detail::check_positive(config.pixel_size, "PictureHeightConfig::pixel_size");
   detail::check_positive(config.mm_per_level, "PictureHeightConfig::mm_per_level");
   detail::check_blur(config.blur_sigma);
   detail::refuse_exr(path);
-  return height_grid_from_gray(load_gray(path, config.weights, config.max_pixels), config);
+  const GrayImage gray = load_gray(path, config.weights, config.max_pixels);
+  if (gray.width() < 2 || gray.height() < 2)
+    throw ImageError("cannot use '" + path + "' as a height map: " + detail::size_text(gray.width(), gray.height()) +
+                     "; a height map needs at least 2 x 2 px");
+  return height_grid_from_gray(gray, config);
 }
 
 /// Heights from a one-channel depth image already in memory (16-bit
@@ -132,7 +147,8 @@ inline void refuse_exr(const std::string& path) {
 /// optional blur.
 /// @param name  the file's name for messages
 /// @throws FileError naming the file for another pixel type, more than one
-///         channel, an empty image or a non-finite value (with its pixel).
+///         channel, an image smaller than 2 x 2 px or a non-finite value
+///         (with its pixel).
 /// @throws std::invalid_argument for bad settings.
 [[nodiscard]] inline HeightGrid height_grid_from_depth(const cv::Mat& depth, const std::string& name,
                                                        const DepthMapConfig& config = {}) {
@@ -143,6 +159,8 @@ inline void refuse_exr(const std::string& path) {
     return ImageError("cannot use '" + name + "' as a depth map: " + what);
   };
   if (depth.empty() || depth.rows <= 0 || depth.cols <= 0) throw fail("0 x 0 px");
+  if (depth.rows < 2 || depth.cols < 2)
+    throw fail(detail::size_text(depth.cols, depth.rows) + "; a height map needs at least 2 x 2 px");
   if (depth.channels() != 1)
     throw fail(std::to_string(depth.channels()) +
                " channels; a depth map has one (use load_height_picture for a picture)");
@@ -171,9 +189,9 @@ inline void refuse_exr(const std::string& path) {
 /// TIFF, one channel: value x metres_per_unit.
 /// @throws ImageError (a FileError) naming the file when it is missing,
 ///         declares 0 x 0 or more than max_pixels (checked from the header
-///         before decoding), is OpenEXR, cannot be decoded, is not a
-///         one-channel 16-bit or float image, or holds a NaN or infinite
-///         value.
+///         before decoding), is smaller than 2 x 2 px, is OpenEXR, cannot
+///         be decoded, is not a one-channel 16-bit or float image, or holds
+///         a NaN or infinite value.
 /// @throws std::invalid_argument for bad settings.
 [[nodiscard]] inline HeightGrid load_depth_map(const std::string& path, const DepthMapConfig& config = {}) {
   detail::check_positive(config.pixel_size, "DepthMapConfig::pixel_size");
