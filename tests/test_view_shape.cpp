@@ -108,6 +108,11 @@ TEST_CASE("--shape files that are not shapes: one clear error", "[view3d]") {
   const std::string flat = tmp_file("point.obj");
   std::ofstream(flat) << "v 0 0 0\nv 0 0 0\nv 0 0 0\nf 1 2 3\n";
   CHECK_THROWS_WITH(load_shape_scene(flat), Catch::Contains("no extent"));
+  // an extent but nothing to touch: the mesh is named, not the hand's raster
+  const std::string degenerate = tmp_file("degenerate.obj");
+  std::ofstream(degenerate) << "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 4\n";
+  CHECK_THROWS_WITH(load_shape_scene(degenerate),
+                    Catch::Contains("cannot use '" + degenerate + "': all 2 triangles have zero area"));
   ShapeSceneConfig bad;
   bad.span_mm = 0.0;
   CHECK_THROWS_WITH(load_shape_scene(flat, bad), Catch::Contains("span"));

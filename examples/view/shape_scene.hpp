@@ -5,9 +5,14 @@
 /// the workspace's 80 mm (a height map: heights from gray levels, white the
 /// highest) and moved so that it is centred on x = y = 0 with its top 1 mm
 /// below the handle's start (z = 0, z toward the user). The file's own axes
-/// are kept. The proxy feels the full shape; the display mesh may be
-/// decimated (display_mesh.hpp). ShapeProxyField is the proxy on it as a
-/// field in the device frame. Needs hapticfield::io.
+/// are kept: unlike feel_shape and Python, which keep a file's units
+/// (scaled by --scale / scale) and place it only where told (--rotate,
+/// --translate / pose), the view fits any shape to the workspace. A mesh is
+/// force-shaded as everywhere else (io/mesh_shading.hpp: the file's vertex
+/// normals, else normals from the faces), so the same file pushes along the
+/// same normals here, only scaled. The proxy feels the full shape; the
+/// display mesh may be decimated (display_mesh.hpp). ShapeProxyField is the
+/// proxy on it as a field in the device frame. Needs hapticfield::io.
 
 #include <algorithm>
 #include <cmath>
@@ -26,6 +31,7 @@
 #include "hapticfield/core/probe.hpp"
 #include "hapticfield/io/height_map.hpp"
 #include "hapticfield/io/load_mesh.hpp"
+#include "hapticfield/io/mesh_shading.hpp"
 #include "hapticfield/surface/height_field.hpp"
 #include "hapticfield/surface/mesh_shape.hpp"
 #include "hapticfield/surface/proxy.hpp"
@@ -108,9 +114,11 @@ struct ShapeScene {
     lo *= scale;
     hi *= scale;
     scene.shift = glm::dvec3{-0.5 * (lo.x + hi.x), -0.5 * (lo.y + hi.y), config.top_mm * 1e-3 - hi.z};
-    scene.display = display_mesh(mesh, scene.shift, config.display_triangles);
-    std::snprintf(text, sizeof text, "%s: %zu triangles", name.c_str(), mesh.triangles.size());
-    scene.mesh.emplace(with_vertex_normals(std::move(mesh)));
+    // the shading of every tool and of Python (io/mesh_shading.hpp); refuses a mesh with nothing to touch
+    scene.mesh.emplace(io::mesh_shape_from(loaded, path));
+    const TriangleMesh& placed = scene.mesh->mesh();
+    scene.display = display_mesh(placed, scene.shift, config.display_triangles);
+    std::snprintf(text, sizeof text, "%s: %zu triangles", name.c_str(), placed.triangles.size());
   }
   scene.label = text;
   scene.centre = 0.5 * (lo + hi) + scene.shift;
