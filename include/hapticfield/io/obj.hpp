@@ -301,9 +301,9 @@ inline void check_obj_numbers(std::string_view text, const std::string& name) {
                                           const MeshReadConfig& config = {}, const std::string& material_dir = {}) {
   using namespace detail;
   check_config(config);
-  check_obj_numbers(text, name);
   const std::size_t limit = triangle_limit(config);
   const std::size_t triangles = scan_obj_faces(text, name, limit);  // counted and checked before any allocation
+  check_obj_numbers(text, name);
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
