@@ -9,6 +9,7 @@
 #if HAPTICFIELD_PYTHON_IO
 #include <hapticfield/io/load_mesh.hpp>
 #endif
+#include <hapticfield/io/mesh_shading.hpp>
 
 #include <pybind11/stl.h>
 
@@ -16,6 +17,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
 #include <variant>
@@ -25,44 +28,9 @@ namespace hapticfield::python {
 
 namespace {
 
-/// A shape moved by `origin` [m]: queries in the shape's own frame, hit points back in the device frame
-/// (a height field's footprint, or a mesh, placed where the hand reaches it).
-template <Shape S>
-class Placed {
- public:
-  static constexpr bool flat_primitives = requires { requires S::flat_primitives; };
-
-  Placed(S shape, const glm::dvec3& origin) : shape_(std::move(shape)), origin_(origin) {}
-
-  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats = nullptr) const noexcept {
-    if constexpr (requires { shape_.closest(p, max_distance, stats); })
-      return moved(shape_.closest(p - origin_, max_distance, stats));
-    else
-      return moved(shape_.closest(p - origin_, max_distance));
-  }
-  [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to,
-                              QueryStats* stats = nullptr) const noexcept {
-    if constexpr (requires { shape_.first_hit(from, to, stats); })
-      return moved(shape_.first_hit(from - origin_, to - origin_, stats));
-    else
-      return moved(shape_.first_hit(from - origin_, to - origin_));
-  }
-  [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p,
-                                 double max_distance) const noexcept requires requires(const S& s) {
-    s.on_primitive(primitive, p, max_distance);
-  }
-  { return moved(shape_.on_primitive(primitive, p - origin_, max_distance)); }
-
- private:
-  [[nodiscard]] Hit moved(Hit h) const noexcept {
-    h.point += origin_;
-    return h;
-  }
-  S shape_;
-  glm::dvec3 origin_;
-};
-
-using AnyShape = std::variant<Placed<HeightFieldShape>, Placed<MeshShape>, PlaneShape, SphereShape>;
+/// Every shape placed by a pose (surface/posed_shape.hpp): queries in the shape's own frame, hits back in the
+/// device frame.
+using AnyShape = std::variant<Posed<HeightFieldShape>, Posed<MeshShape>, Posed<PlaneShape>, Posed<SphereShape>>;
 
 /// A shape built in Python: never changes once built, so it needs no guard (each proxy made on it keeps its
 /// own state).
@@ -75,7 +43,74 @@ struct Surface {
   std::optional<std::array<long long, 2>> samples;  ///< height field: width x height
   std::optional<std::size_t> triangles;             ///< mesh
   std::vector<std::string> warnings;                ///< mesh: what the reader accepted but may surprise
+  std::string normals;                              ///< mesh: the normals the proxy pushes along, in words
+  Pose pose;                                        ///< where the shape's own frame is
 };
+
+/// A pose argument: a Pose, or None and an optional origin (the older form: a translation alone).
+Pose pose_of(const std::optional<Pose>& pose, const std::optional<V3>& origin) {
+  if (pose && origin) throw py::value_error("give pose or origin, not both (origin is a pose's translation)");
+  if (pose) return *pose;
+  Pose p;
+  if (origin) {
+    if (!is_finite(glm3(*origin))) throw py::value_error("origin: must be finite [m]");
+    p.translation = glm3(*origin);
+  }
+  return p;
+}
+
+/// A Pose from Python: rotation None, a 3 x 3 matrix or a unit quaternion (w, x, y, z); translation [m].
+Pose make_pose(const py::object& rotation, const V3& translation) {
+  if (!is_finite(glm3(translation))) throw py::value_error("Pose: translation must be finite [m]");
+  if (rotation.is_none()) {
+    Pose p;
+    p.translation = glm3(translation);
+    return p;
+  }
+  const py::array_t<double, py::array::c_style | py::array::forcecast> r =
+      py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(rotation);
+  if (!r) throw py::type_error("Pose: rotation must be numbers (a 3 x 3 matrix or a quaternion w, x, y, z)");
+  if (r.ndim() == 2 && r.shape(0) == 3 && r.shape(1) == 3) {
+    std::array<std::array<double, 3>, 3> rows{};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        rows[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] = r.at(i, j);
+    return Pose::from_rows(rows, glm3(translation));
+  }
+  if (r.ndim() == 1 && r.shape(0) == 4)
+    return Pose::from_quaternion(r.at(0), r.at(1), r.at(2), r.at(3), glm3(translation));
+  std::string shape = "(";
+  for (py::ssize_t i = 0; i < r.ndim(); ++i)
+    shape += (i ? ", " : "") + std::to_string(r.shape(i));
+  throw py::value_error("Pose: rotation must be a 3 x 3 matrix or a quaternion (w, x, y, z), got shape " + shape +
+                        (r.ndim() == 1 ? ",)" : ")"));
+}
+
+V3 v3(const glm::dvec3& v) {
+  return V3{v.x, v.y, v.z};
+}
+
+std::pair<V3, V3> pair_of(const io::Bounds& b) {
+  return {v3(b.lo), v3(b.hi)};
+}
+
+/// Refuses an array whose elements share memory (a broadcast, zero-stride array such as np.broadcast_to's, or an
+/// overlapping as_strided view): its size says nothing of the memory a copy would take. Checked before anything
+/// is allocated.
+void check_own_memory(const py::array& a, const char* what) {
+  py::ssize_t span = a.itemsize(), n = 1;
+  for (py::ssize_t k = 0; k < a.ndim(); ++k) {
+    if (a.shape(k) > 1 && a.strides(k) == 0)
+      throw py::value_error(std::string(what) + ": a broadcast array (stride 0 along axis " + std::to_string(k) +
+                            ") is refused: its " + std::to_string(a.size()) +
+                            " elements share memory; pass np.ascontiguousarray(...) of what you mean");
+    if (a.shape(k) > 0) span += (a.shape(k) - 1) * (a.strides(k) < 0 ? -a.strides(k) : a.strides(k));
+    n *= a.shape(k);
+  }
+  if (n > 1 && span < n * a.itemsize())
+    throw py::value_error(std::string(what) + ": its elements overlap in memory (a strided view over " +
+                          std::to_string(span) + " bytes); pass np.ascontiguousarray(...) of what you mean");
+}
 
 /// The state of every probe of a trajectory evaluated on a surface contact, as numpy arrays.
 struct ContactArrays {
@@ -144,31 +179,31 @@ HeightFieldConfig height_config(bool shade_normals, std::uint32_t max_nodes) {
 }
 
 /// A height field from a grid laid out as io::HeightGrid (row j = 0 at y = 0).
-Surface surface_from_grid(const io::HeightGrid& grid, const HeightFieldConfig& config, const V3& origin,
+Surface surface_from_grid(const io::HeightGrid& grid, const HeightFieldConfig& config, const Pose& pose,
                           const std::string& what) {
-  if (!is_finite(glm3(origin))) throw py::value_error("origin: must be finite [m]");
   Surface s;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (const double h : grid.heights)
     lo = std::fmin(lo, h), hi = std::fmax(hi, h);
   {
     py::gil_scoped_release release;
-    s.shape = std::make_shared<const AnyShape>(std::in_place_type<Placed<HeightFieldShape>>,
-                                               HeightFieldShape(grid, config), glm3(origin));
+    s.shape = std::make_shared<const AnyShape>(std::in_place_type<Posed<HeightFieldShape>>,
+                                               HeightFieldShape(grid, config), pose);
   }
   const double ex = (grid.width - 1) * grid.spacing_x, ey = (grid.height - 1) * grid.spacing_y;
   s.kind = "height_field";
   s.description = what + " " + std::to_string(grid.width) + " x " + std::to_string(grid.height) + " samples, " +
                   metres(ex) + " x " + metres(ey) + " m";
-  s.bounds =
-      std::pair<V3, V3>{V3{origin[0], origin[1], origin[2] + lo}, V3{origin[0] + ex, origin[1] + ey, origin[2] + hi}};
+  s.bounds = pair_of(io::placed_bounds({0.0, 0.0, lo}, {ex, ey, hi}, pose));
+  s.pose = pose;
   s.footprint = std::array<double, 2>{ex, ey};
   s.samples = std::array<long long, 2>{grid.width, grid.height};
   return s;
 }
 
-Surface height_field(const py::array& heights, const Spacing& spacing, const V3& origin, bool shade_normals,
-                     std::uint32_t max_nodes) {
+Surface height_field(const py::array& heights, const Spacing& spacing, const std::optional<V3>& origin,
+                     const std::optional<Pose>& pose, bool shade_normals, std::uint32_t max_nodes) {
+  const Pose placed = pose_of(pose, origin);
   const auto [sx, sy] = pair_of(spacing);
   if (!(std::isfinite(sx) && std::isfinite(sy) && sx > 0.0 && sy > 0.0))
     throw py::value_error("spacing: must be finite and > 0 [m]");
@@ -187,6 +222,7 @@ Surface height_field(const py::array& heights, const Spacing& spacing, const V3&
   if (dt.kind() != 'f' && dt.kind() != 'i' && dt.kind() != 'u')
     throw py::type_error("heights: expected float64 or float32 heights [m] (or integers), got dtype " +
                          dt.attr("name").cast<std::string>());
+  check_own_memory(heights, "heights");
   const Array a = Array::ensure(heights);
   if (!a) throw py::type_error("heights: cannot be read as float64");
   io::HeightGrid grid;
@@ -199,7 +235,7 @@ Surface height_field(const py::array& heights, const Spacing& spacing, const V3&
     if (!std::isfinite(grid.heights[k]))
       throw py::value_error("heights: the height at row " + std::to_string(k / std::size_t(cols)) + ", column " +
                             std::to_string(k % std::size_t(cols)) + " is not finite (NaN or infinite)");
-  return surface_from_grid(grid, height_config(shade_normals, max_nodes), origin, "height field");
+  return surface_from_grid(grid, height_config(shade_normals, max_nodes), placed, "height field");
 }
 
 bool is_path(const py::object& o) {
@@ -211,8 +247,9 @@ std::string path_of(const py::object& o) {
 
 Surface height_field_from_picture(const py::object& image, double pixel_size, double mm_per_level, double blur,
                                   bool dark_is_high, const std::string& gray, const std::string& channels,
-                                  std::optional<double> levels, const V3& origin, bool shade_normals,
-                                  std::uint32_t max_nodes) {
+                                  std::optional<double> levels, const std::optional<V3>& origin,
+                                  const std::optional<Pose>& pose, bool shade_normals, std::uint32_t max_nodes) {
+  const Pose placed = pose_of(pose, origin);
   io::PictureHeightConfig c;
   c.pixel_size = pixel_size;
   c.mm_per_level = mm_per_level;
@@ -222,35 +259,60 @@ Surface height_field_from_picture(const py::object& image, double pixel_size, do
   const HeightFieldConfig config = height_config(shade_normals, max_nodes);
   if (is_path(image)) {
     const std::string path = path_of(image);
-    return surface_from_grid(io::load_height_picture(path, c), config, origin,
+    return surface_from_grid(io::load_height_picture(path, c), config, placed,
                              "relief of " + std::filesystem::path(path).filename().string());
   }
-  return surface_from_grid(io::height_grid_from_gray(gray_from(image, c.weights, channels, levels), c), config, origin,
+  return surface_from_grid(io::height_grid_from_gray(gray_from(image, c.weights, channels, levels), c), config, placed,
                            "relief of a picture");
 }
 
-Surface depth_map(const py::object& path, double pixel_size, double metres_per_unit, double blur, const V3& origin,
-                  bool shade_normals, std::uint32_t max_nodes) {
+Surface depth_map(const py::object& path, double pixel_size, double metres_per_unit, double blur,
+                  const std::optional<V3>& origin, const std::optional<Pose>& pose, bool shade_normals,
+                  std::uint32_t max_nodes) {
+  const Pose placed = pose_of(pose, origin);
   if (!is_path(path)) throw py::type_error("depth_map: expected a path (16-bit PNG or TIFF, 32-bit float TIFF)");
   io::DepthMapConfig c;
   c.pixel_size = pixel_size;
   c.metres_per_unit = metres_per_unit;
   c.blur_sigma = blur;
   const std::string p = path_of(path);
-  return surface_from_grid(io::load_depth_map(p, c), height_config(shade_normals, max_nodes), origin,
+  return surface_from_grid(io::load_depth_map(p, c), height_config(shade_normals, max_nodes), placed,
                            "depth map " + std::filesystem::path(p).filename().string());
 }
 
-Surface mesh_surface(const py::object& path, double scale, const V3& origin, bool shade_normals,
-                     std::uint32_t max_nodes, std::size_t max_triangles) {
+/// A Surface from a mesh made as every tool makes it (io/mesh_shading.hpp: the same normals, the same refusal).
+Surface surface_from_mesh(io::LoadedMesh& loaded, const std::string& name, const std::string& what, const Pose& pose,
+                          bool shade_normals, std::uint32_t max_nodes) {
+  Surface s;
+  io::MeshShapeReport report;
+  std::optional<MeshShape> shape;
+  {
+    py::gil_scoped_release release;
+    shape.emplace(io::mesh_shape_from(loaded, name, shade_normals ? io::MeshShading::smooth : io::MeshShading::faceted,
+                                      max_nodes, &report));
+  }
+  s.bounds = pair_of(io::placed_bounds(shape->mesh(), pose));
+  s.shape = std::make_shared<const AnyShape>(std::in_place_type<Posed<MeshShape>>, std::move(*shape), pose);
+  s.triangles = report.triangles;
+  s.normals = report.normals;
+  for (const io::MeshWarning& w : loaded.warnings)
+    s.warnings.push_back(w.message);
+  s.kind = "mesh";
+  s.description = what + " (" + std::to_string(report.triangles) + " triangles)";
+  s.pose = pose;
+  return s;
+}
+
+Surface mesh_surface(const py::object& path, double scale, const std::optional<V3>& origin,
+                     const std::optional<Pose>& pose, bool shade_normals, std::uint32_t max_nodes,
+                     std::size_t max_triangles) {
   if (!is_path(path)) throw py::type_error("mesh_surface: expected a path (.stl, .obj, .gltf or .glb)");
   if (max_nodes == 0) throw py::value_error("max_nodes: must be > 0");
-  if (!is_finite(glm3(origin))) throw py::value_error("origin: must be finite [m]");
+  const Pose placed = pose_of(pose, origin);
   const std::string p = path_of(path);
   io::MeshReadConfig c;
   c.scale = scale;
   c.max_triangles = max_triangles;
-  Surface s;
   io::LoadedMesh loaded;
   {
     py::gil_scoped_release release;
@@ -266,23 +328,108 @@ Surface mesh_surface(const py::object& path, double scale, const V3& origin, boo
 #endif
   }
   if (loaded.mesh.triangles.empty()) throw FileError("cannot load '" + p + "': the mesh has no triangles");
-  glm::dvec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
-  for (const glm::dvec3& v : loaded.mesh.positions)
-    lo = glm::min(lo, v + glm3(origin)), hi = glm::max(hi, v + glm3(origin));
-  s.triangles = loaded.mesh.triangles.size();
-  for (const io::MeshWarning& w : loaded.warnings)
-    s.warnings.push_back(w.message);
-  {
-    py::gil_scoped_release release;
-    s.shape = std::make_shared<const AnyShape>(
-        std::in_place_type<Placed<MeshShape>>,
-        MeshShape(with_vertex_normals(loaded.mesh), MeshShapeConfig{shade_normals, max_nodes}), glm3(origin));
+  return surface_from_mesh(loaded, p, "mesh " + std::filesystem::path(p).filename().string(), placed, shade_normals,
+                           max_nodes);
+}
+
+/// An N x cols array of one kind ('f' real, 'i' integer) read as `T`, checked as described in
+/// mesh_surface_from_arrays's docstring; the rows it has.
+template <class T>
+py::array_t<T, py::array::c_style | py::array::forcecast> rows_array(const py::array& a, py::ssize_t cols,
+                                                                     const char* what, bool integer,
+                                                                     std::size_t max_rows) {
+  if (a.ndim() != 2 || a.shape(1) != cols) {
+    std::string shape = "(";
+    for (py::ssize_t i = 0; i < a.ndim(); ++i)
+      shape += (i ? ", " : "") + std::to_string(a.shape(i));
+    throw py::value_error(std::string(what) + ": expected an N x " + std::to_string(cols) + " array, got shape " +
+                          shape + (a.ndim() == 1 ? ",)" : ")"));
   }
-  s.kind = "mesh";
-  s.description =
-      "mesh " + std::filesystem::path(p).filename().string() + " (" + std::to_string(*s.triangles) + " triangles)";
-  s.bounds = std::pair<V3, V3>{V3{lo.x, lo.y, lo.z}, V3{hi.x, hi.y, hi.z}};
-  return s;
+  const char kind = a.dtype().kind();
+  if (integer ? (kind != 'i' && kind != 'u') : (kind != 'f' && kind != 'i' && kind != 'u'))
+    throw py::value_error(std::string(what) + ": expected " + (integer ? "integer indices" : "real numbers") +
+                          ", got dtype " + a.dtype().attr("name").cast<std::string>());
+  if (static_cast<std::size_t>(a.shape(0)) > max_rows)
+    throw py::value_error(std::string(what) + ": " + std::to_string(a.shape(0)) + " rows, more than the limit of " +
+                          std::to_string(max_rows));
+  check_own_memory(a, what);
+  return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(a);
+}
+
+Surface mesh_surface_from_arrays(const py::array& vertices, const py::array& faces, const std::optional<py::array>& uvs,
+                                 const std::optional<py::array>& normals, const std::optional<Pose>& pose,
+                                 const std::optional<V3>& origin, bool shade_normals, std::uint32_t max_nodes,
+                                 std::size_t max_triangles) {
+  if (max_nodes == 0) throw py::value_error("max_nodes: must be > 0");
+  if (max_triangles == 0 || max_triangles > io::default_max_mesh_triangles)
+    throw py::value_error("max_triangles: must be in 1..." + std::to_string(io::default_max_mesh_triangles));
+  const Pose placed = pose_of(pose, origin);
+  const std::size_t max_vertices = 3 * max_triangles;
+  const auto v = rows_array<double>(vertices, 3, "vertices", false, max_vertices);
+  const auto f = rows_array<std::int64_t>(faces, 3, "faces", true, max_triangles);
+  const py::ssize_t nv = v.shape(0), nf = f.shape(0);
+  if (nf == 0) throw py::value_error("faces: no triangles (an M x 3 array with M >= 1)");
+  std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>> t, n;
+  if (uvs) {
+    t = rows_array<double>(*uvs, 2, "uvs", false, max_vertices);
+    if (t->shape(0) != nv) throw py::value_error("uvs: need one row per vertex (" + std::to_string(nv) + ")");
+  }
+  if (normals) {
+    n = rows_array<double>(*normals, 3, "normals", false, max_vertices);
+    if (n->shape(0) != nv) throw py::value_error("normals: need one row per vertex (" + std::to_string(nv) + ")");
+  }
+  io::LoadedMesh loaded;
+  TriangleMesh& m = loaded.mesh;
+  m.positions.resize(static_cast<std::size_t>(nv));
+  const double* pv = v.data();
+  for (py::ssize_t i = 0; i < nv; ++i) {
+    m.positions[static_cast<std::size_t>(i)] = {pv[3 * i], pv[3 * i + 1], pv[3 * i + 2]};
+    if (!is_finite(m.positions[static_cast<std::size_t>(i)]))
+      throw py::value_error("vertices: row " + std::to_string(i) + " is not finite");
+  }
+  m.triangles.resize(static_cast<std::size_t>(nf));
+  const std::int64_t* pf = f.data();
+  for (py::ssize_t i = 0; i < nf; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t index = pf[3 * i + k];
+      if (index < 0 || index >= nv)
+        throw py::value_error("faces: row " + std::to_string(i) + " uses vertex " + std::to_string(index) + " of " +
+                              std::to_string(nv) + " (indices run from 0 to " + std::to_string(nv - 1) + ")");
+      m.triangles[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(index);
+    }
+  if (t) {
+    m.uvs.resize(static_cast<std::size_t>(nv));
+    const double* pt = t->data();
+    for (py::ssize_t i = 0; i < nv; ++i) {
+      m.uvs[static_cast<std::size_t>(i)] = {pt[2 * i], pt[2 * i + 1]};
+      if (!std::isfinite(pt[2 * i]) || !std::isfinite(pt[2 * i + 1]))
+        throw py::value_error("uvs: row " + std::to_string(i) + " is not finite");
+    }
+  }
+  if (n) {
+    m.normals.resize(static_cast<std::size_t>(nv));
+    const double* pn = n->data();
+    for (py::ssize_t i = 0; i < nv; ++i) {
+      const glm::dvec3 x{pn[3 * i], pn[3 * i + 1], pn[3 * i + 2]};
+      const double length = glm::length(x);
+      if (!(length > 0.0) || !std::isfinite(length))
+        throw py::value_error("normals: row " + std::to_string(i) + " is zero or not finite");
+      m.normals[static_cast<std::size_t>(i)] = x / length;
+    }
+  }
+  std::size_t degenerate = 0;
+  for (const TriangleIndices& tri : m.triangles)
+    if (io::detail::is_degenerate(m, tri)) ++degenerate;
+  if (degenerate > 0 && degenerate < m.triangles.size())
+    loaded.warnings.push_back({io::MeshWarningKind::degenerate_triangles,
+                               std::to_string(degenerate) + " of " + std::to_string(m.triangles.size()) +
+                                   " triangles have zero area (kept; the surface skips them)"});
+  try {
+    return surface_from_mesh(loaded, "the arrays", "mesh from arrays", placed, shade_normals, max_nodes);
+  } catch (const FileError& e) {  // nothing to touch: the arrays are the caller's values, not a file
+    throw py::value_error(
+        std::string(e.what()).replace(0, std::string("cannot use 'the arrays'").size(), "vertices, faces"));
+  }
 }
 
 SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& parts, double stiffness, double damping,
@@ -395,6 +542,44 @@ SurfaceField picture_relief_of(const py::object& image, double mm_per_level, dou
 }  // namespace
 
 void bind_surface(py::module_& m) {
+  py::class_<Pose>(m, "Pose",
+                   "Where a shape's own frame goes: world = rotation @ local + translation. Every shape constructor "
+                   "takes pose= (origin= is a pose without rotation).")
+      .def(py::init(&make_pose), py::arg("rotation") = py::none(), py::arg("translation") = V3{0.0, 0.0, 0.0},
+           "rotation: None (none), a 3 x 3 rotation matrix (its columns are the shape's x, y, z axes in the world; "
+           "orthonormal with det +1 within 1e-6, then made exactly so) or a unit quaternion (w, x, y, z), scalar "
+           "first (scipy's Rotation.as_quat() is scalar last: use as_matrix()); translation (x, y, z) [m]. "
+           "ValueError for a reflection, a scale, a non-unit quaternion or anything not finite.")
+      .def_static(
+          "about",
+          [](const V3& axis, double degrees, const V3& translation) {
+            return Pose::from_axis_angle(glm3(axis), degrees * std::numbers::pi / 180.0, glm3(translation));
+          },
+          py::arg("axis"), py::arg("degrees"), py::arg("translation") = V3{0.0, 0.0, 0.0},
+          "A turn of degrees about axis (right-handed, through the shape's own origin), then translation [m].")
+      .def_property_readonly(
+          "rotation",
+          [](const Pose& p) {
+            auto r = matrix(3, 3);
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j)
+                r.mutable_at(i, j) = p.rotation[j][i];
+            return r;
+          },
+          "The 3 x 3 rotation matrix (a new array).")
+      .def_property_readonly(
+          "translation", [](const Pose& p) { return v3(p.translation); }, "(x, y, z) [m].")
+      .def("__repr__", [](const Pose& p) {
+        char b[300];
+        std::snprintf(b, sizeof b,
+                      "Pose(rotation=[[%.6g, %.6g, %.6g], [%.6g, %.6g, %.6g], [%.6g, %.6g, %.6g]], "
+                      "translation=(%.6g, %.6g, %.6g))",
+                      p.rotation[0][0], p.rotation[1][0], p.rotation[2][0], p.rotation[0][1], p.rotation[1][1],
+                      p.rotation[2][1], p.rotation[0][2], p.rotation[1][2], p.rotation[2][2], p.translation.x,
+                      p.translation.y, p.translation.z);
+        return std::string(b);
+      });
+
   py::class_<Surface>(
       m, "Surface",
       "A shape to touch (a height field, a mesh, a plane or a sphere), built once. surface_contact() makes it a "
@@ -417,7 +602,14 @@ void bind_surface(py::module_& m) {
           "triangles", [](const Surface& s) { return s.triangles; }, "Mesh: its number of triangles. None otherwise.")
       .def_property_readonly(
           "warnings", [](const Surface& s) { return s.warnings; },
-          "Mesh: what the reader accepted but may surprise (no normals, degenerate triangles...).")
+          "Mesh: what the reader accepted but may surprise (no normals, degenerate triangles...), saying what the "
+          "surface does about it.")
+      .def_property_readonly(
+          "normals", [](const Surface& s) { return s.normals.empty() ? py::object(py::none()) : py::str(s.normals); },
+          "Mesh: the normals the proxy pushes along, in words (force shading from the file's vertex normals, "
+          "from the faces, or face normals). None otherwise.")
+      .def_property_readonly(
+          "pose", [](const Surface& s) { return s.pose; }, "Where the shape's own frame is (a Pose).")
       .def("__repr__", [](const Surface& s) { return "<hapticfield.Surface " + s.description + ">"; });
 
   py::class_<SurfaceField, Field>(
@@ -431,72 +623,92 @@ void bind_surface(py::module_& m) {
            "N x 3 (unit, toward the user; zero when not touching), uv N x 2, depth N [m], primitive N (triangle "
            "or grid cell j (width - 1) + i; -1: none) and touching N (bool). The GIL is released.");
 
-  m.def("height_field", &height_field, py::arg("heights"), py::arg("spacing") = 1e-4,
-        py::arg("origin") = V3{0.0, 0.0, 0.0}, py::arg("shade_normals") = true,
-        py::arg("max_nodes") = bvh_default_max_nodes,
+  m.def("height_field", &height_field, py::arg("heights"), py::arg("spacing") = 1e-4, py::arg("origin") = py::none(),
+        py::arg("pose") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
         "A height field z = h(x, y) [m] from a 2-D numpy array (float64 or float32 [m]): heights[j, i] is the "
         "height at x = i spacing_x, y = j spacing_y (np.meshgrid's 'xy' layout), spacing [m] one number or "
         "(spacing_x, spacing_y). Bilinear cells, solid below, felt from above (+z); covers [0, (W - 1) sx] x "
-        "[0, (H - 1) sy] moved by origin (x, y, z) [m], and nothing beyond. At least 2 x 2 and at most 100 M samples, "
-        "all finite (ValueError "
-        "otherwise). shade_normals: blend the corners' normals (force shading); max_nodes: the budget of one "
+        "[0, (H - 1) sy] placed by pose (a Pose) or moved by origin (x, y, z) [m], and nothing beyond. At least "
+        "2 x 2 and at most 100 M samples (800 MB as float64, and about as much again for its tree), all finite "
+        "(ValueError otherwise). A broadcast array (np.broadcast_to, zero strides) or one whose elements overlap "
+        "in memory is refused before anything is allocated (its size says nothing of the memory a copy takes). "
+        "shade_normals: blend the corners' normals (force shading); max_nodes: the budget of one "
         "query.");
   m.def(
       "height_field_from_picture", &height_field_from_picture, py::arg("image"), py::arg("pixel_size") = 1e-4,
       py::arg("mm_per_level") = 0.01, py::arg("blur") = 0.0, py::arg("dark_is_high") = false, py::arg("gray") = "paper",
-      py::arg("channels") = "rgb", py::arg("levels") = py::none(), py::arg("origin") = V3{0.0, 0.0, 0.0},
-      py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
+      py::arg("channels") = "rgb", py::arg("levels") = py::none(), py::arg("origin") = py::none(),
+      py::arg("pose") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
       (std::string(
            "A relief from a picture (see below): height = gray level x "
            "mm_per_level [mm] (dark_is_high: 255 - level), after a Gaussian blur of blur [px]; pixel_size [m] between "
-           "pixel centres; origin [m]: where its bottom-left corner (level 0) goes. The picture's top row is at the "
+           "pixel centres; origin [m]: where its bottom-left corner (level 0) goes (or pose: a Pose). The picture's "
+           "top row is at the "
            "largest y (x right, y up), so it reads as it is seen. "
            "A missing or undecodable file raises FileError (an OSError).\n\n") +
        picture_argument_doc)
           .c_str());
   m.def("depth_map", &depth_map, py::arg("path"), py::arg("pixel_size") = 1e-4, py::arg("metres_per_unit") = 1e-6,
-        py::arg("blur") = 0.0, py::arg("origin") = V3{0.0, 0.0, 0.0}, py::arg("shade_normals") = true,
-        py::arg("max_nodes") = bvh_default_max_nodes,
-        "A height field from a depth map: a one-channel 16-bit PNG or TIFF, or a 32-bit float TIFF; height = value "
-        "x metres_per_unit [m] (16-bit in um: 1e-6; float in m: 1.0); pixel_size [m]; blur [px]; origin [m] as for "
-        "height_field. OpenEXR, 8-bit "
-        "and colour files, NaN values and missing files raise FileError naming the file.");
-  m.def("mesh_surface", &mesh_surface, py::arg("path"), py::arg("scale") = 1.0, py::arg("origin") = V3{0.0, 0.0, 0.0},
+        py::arg("blur") = 0.0, py::arg("origin") = py::none(), py::arg("pose") = py::none(),
         py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
+        "A height field from a depth map: a one-channel 16-bit PNG or TIFF, or a 32-bit float TIFF; height = value "
+        "x metres_per_unit [m] (16-bit in um: 1e-6; float in m: 1.0); pixel_size [m]; blur [px]; origin [m] or pose "
+        "as for height_field. OpenEXR, 8-bit "
+        "and colour files, NaN values and missing files raise FileError naming the file.");
+  m.def("mesh_surface", &mesh_surface, py::arg("path"), py::arg("scale") = 1.0, py::arg("origin") = py::none(),
+        py::arg("pose") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
         py::arg("max_triangles") = io::default_max_mesh_triangles,
         "A triangle mesh from a file (.stl, .obj, .gltf, .glb by extension); scale: the file's unit in metres "
-        "(0.001 for millimetres; glTF is in metres), then moved by origin [m]. Vertex normals are computed where the "
-        "file has none (force "
-        "shading); each triangle is felt from the side its normal points to. A missing, malformed or oversized "
+        "(0.001 for millimetres; glTF is in metres), then placed by pose (a Pose) or moved by origin [m]. "
+        "shade_normals (default, as in feel_shape, servo_demo and the viewer): force shading with the file's vertex "
+        "normals, or normals computed from the faces where it has none; False: face normals (flat facets). Each "
+        "triangle is felt from the side its normal points to. A mesh with no triangle of any area raises FileError. A "
+        "missing, malformed or oversized "
         "file raises FileError naming it; Surface.warnings lists what was accepted but may surprise.");
+  m.def("mesh_surface_from_arrays", &mesh_surface_from_arrays, py::arg("vertices"), py::arg("faces"),
+        py::arg("uvs") = py::none(), py::arg("normals") = py::none(), py::arg("pose") = py::none(),
+        py::arg("origin") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
+        py::arg("max_triangles") = io::default_max_mesh_triangles,
+        "A triangle mesh from numpy arrays: vertices N x 3 [m] (real), faces M x 3 vertex indices from 0 (integer "
+        "dtype; each triangle felt from the side its counter-clockwise winding faces), optional uvs N x 2 and "
+        "normals N x 3 (per vertex; normalised). Placed by pose (a Pose) or origin [m]. shade_normals as "
+        "mesh_surface: the given normals, else normals from the faces; False: face normals. At most max_triangles "
+        "faces (default and limit 20 M) and 3 x max_triangles vertices. ValueError naming the array and row for a "
+        "wrong shape or dtype, an index out of range, a value not finite, a zero normal, no face, or faces that all "
+        "have zero area; a broadcast (zero-stride) or overlapping array is refused before anything is allocated.");
   m.def(
       "plane_surface",
-      [](const V3& point, const V3& normal, double size) {
+      [](const V3& point, const V3& normal, double size, const std::optional<Pose>& pose) {
         Surface s;
-        s.shape = std::make_shared<const AnyShape>(std::in_place_type<PlaneShape>,
-                                                   PlaneShapeConfig{glm3(point), glm3(normal), size});
+        s.pose = pose.value_or(Pose{});
+        s.shape =
+            std::make_shared<const AnyShape>(std::in_place_type<Posed<PlaneShape>>,
+                                             PlaneShape(PlaneShapeConfig{glm3(point), glm3(normal), size}), s.pose);
         s.kind = "plane";
         s.description = "plane";
         return s;
       },
       py::arg("point") = V3{0.0, 0.0, 0.0}, py::arg("normal") = V3{0.0, 0.0, 1.0}, py::arg("size") = 0.01,
-      "The solid half-space behind a plane through point [m] with unit normal (toward the user); uv are metres "
-      "along the plane; size [m]: the length its tolerances scale with.");
+      py::arg("pose") = py::none(),
+      "The solid half-space behind a plane through point [m] with unit normal (toward the user), both in the "
+      "frame that pose (a Pose; default none) places; uv are metres along the plane; size [m]: the length its "
+      "tolerances scale with.");
   m.def(
       "sphere_surface",
-      [](const V3& centre, double radius) {
+      [](const V3& centre, double radius, const std::optional<Pose>& pose) {
         Surface s;
-        s.shape =
-            std::make_shared<const AnyShape>(std::in_place_type<SphereShape>, SphereShapeConfig{glm3(centre), radius});
+        s.pose = pose.value_or(Pose{});
+        s.shape = std::make_shared<const AnyShape>(std::in_place_type<Posed<SphereShape>>,
+                                                   SphereShape(SphereShapeConfig{glm3(centre), radius}), s.pose);
         s.kind = "sphere";
         s.description = "sphere r " + metres(radius) + " m";
-        const V3 lo{centre[0] - radius, centre[1] - radius, centre[2] - radius};
-        const V3 hi{centre[0] + radius, centre[1] + radius, centre[2] + radius};
-        s.bounds = std::pair<V3, V3>{lo, hi};
+        const glm::dvec3 c = s.pose.point_to_world(glm3(centre));
+        s.bounds = std::pair<V3, V3>{v3(c - radius), v3(c + radius)};
         return s;
       },
-      py::arg("centre") = V3{0.0, 0.0, 0.0}, py::arg("radius") = 0.02,
-      "A solid ball: centre [m], radius [m]. uv: u = longitude / 2 pi + 1/2, v = latitude / pi + 1/2.");
+      py::arg("centre") = V3{0.0, 0.0, 0.0}, py::arg("radius") = 0.02, py::arg("pose") = py::none(),
+      "A solid ball: centre [m] (in the frame that pose places; default none), radius [m]. uv: u = longitude / "
+      "2 pi + 1/2, v = latitude / pi + 1/2, about the ball's own z axis (turned by pose).");
   m.def("surface_contact", &surface_contact, py::arg("surface"), py::arg("parts") = std::vector<Field>{},
         py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0, py::arg("static_friction") = 0.0,
         py::arg("dynamic_friction") = 0.0, py::arg("offset") = 1e-6,

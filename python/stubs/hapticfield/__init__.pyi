@@ -35,6 +35,20 @@ class FileError(Error, OSError):
     ...
 
 
+class Pose:
+    """Where a shape's own frame goes: world = rotation @ local + translation. Every shape constructor takes pose= (origin= is a pose without rotation)."""
+    def __init__(self, rotation: Optional[object] = None, translation: List[float] = ...) -> None:
+        """rotation: None (none), a 3 x 3 rotation matrix (its columns are the shape's x, y, z axes in the world; orthonormal with det +1 within 1e-6, then made exactly so) or a unit quaternion (w, x, y, z), scalar first (scipy's Rotation.as_quat() is scalar last: use as_matrix()); translation (x, y, z) [m]. ValueError for a reflection, a scale, a non-unit quaternion or anything not finite."""
+    def __repr__(self) -> str: ...
+    @staticmethod
+    def about(axis: List[float], degrees: float, translation: List[float] = ...) -> Pose:
+        """A turn of degrees about axis (right-handed, through the shape's own origin), then translation [m]."""
+    @property
+    def rotation(self) -> numpy.typing.NDArray[numpy.float64]: ...
+    @property
+    def translation(self) -> List[float]: ...
+
+
 class ServoStop:
     """A token that stops run_servo from another thread: pass it as run_servo(..., stop=token) and call token.request() from any thread; the loop stops within a few ms (zero force, slew, disarm) and run_servo returns what it recorded with stop_reason 'requested'. A requested token stays requested, so it also ends any later run it is given before its first tick, until clear()."""
     def __init__(self) -> None: ...
@@ -59,6 +73,10 @@ class Surface:
     def footprint(self) -> Optional[List[float]]: ...
     @property
     def kind(self) -> str: ...
+    @property
+    def normals(self) -> object: ...
+    @property
+    def pose(self) -> Pose: ...
     @property
     def samples(self) -> Optional[List[int]]: ...
     @property
@@ -112,8 +130,8 @@ def butterworth(signal: numpy.typing.NDArray[numpy.float64], order: int = 4, ban
 def clamp(field: Field, limit: float) -> Field:
     """|F| limited to limit [N] keeping the direction; a non-finite force becomes zero."""
 
-def depth_map(path: object, pixel_size: float = 0.0001, metres_per_unit: float = 1e-06, blur: float = 0.0, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
-    """A height field from a depth map: a one-channel 16-bit PNG or TIFF, or a 32-bit float TIFF; height = value x metres_per_unit [m] (16-bit in um: 1e-6; float in m: 1.0); pixel_size [m]; blur [px]; origin [m] as for height_field. OpenEXR, 8-bit and colour files, NaN values and missing files raise FileError naming the file."""
+def depth_map(path: object, pixel_size: float = 0.0001, metres_per_unit: float = 1e-06, blur: float = 0.0, origin: Optional[List[float]] = None, pose: Optional[Pose] = None, shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
+    """A height field from a depth map: a one-channel 16-bit PNG or TIFF, or a 32-bit float TIFF; height = value x metres_per_unit [m] (16-bit in um: 1e-6; float in m: 1.0); pixel_size [m]; blur [px]; origin [m] or pose as for height_field. OpenEXR, 8-bit and colour files, NaN values and missing files raise FileError naming the file."""
 
 def estimate_normal(corners: numpy.typing.NDArray[numpy.float64], K: numpy.typing.NDArray[numpy.float64], size: Optional[List[float]] = None, refine: bool = True) -> dict:
     """Normal of a rectangular face from its 4 image corners (4 x 2 [px], in order around the face) and the 3 x 3 camera matrix K [px] (Kim & Kwon 2013): the homography H = s K [r1 r2 t], the rotation R and n = R [0 0 1]^T (camera frame, toward the camera). size (W, H) [mm] if known, else the aspect is recovered. Returns a dict: normal, R, t, H, rms_reprojection_px, max_reprojection_px, width, height, aspect_recovered."""
@@ -136,11 +154,11 @@ def hatt_model(path: str) -> dict:
 def hatt_texture(path: str, effective_mass: float = 0.05, surface_normal: List[float] = ..., seed: int = 1, velocity_threshold: float = 0.001, friction: bool = True) -> Field:
     """A HaTT data-driven texture (a modelSet XML file of the Penn Haptic Texture Toolkit): AR/ARMA vibration models chosen by tangential speed and |Fc|, run at the model's own sample rate, acceleration [m/s^2] times effective_mass [kg] along surface_normal, plus mu |Fc| friction. Raises FileError for a bad file."""
 
-def height_field(heights: numpy.ndarray, spacing: Union[float, List[float]] = 0.0001, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
-    """A height field z = h(x, y) [m] from a 2-D numpy array (float64 or float32 [m]): heights[j, i] is the height at x = i spacing_x, y = j spacing_y (np.meshgrid's 'xy' layout), spacing [m] one number or (spacing_x, spacing_y). Bilinear cells, solid below, felt from above (+z); covers [0, (W - 1) sx] x [0, (H - 1) sy] moved by origin (x, y, z) [m], and nothing beyond. At least 2 x 2 and at most 100 M samples, all finite (ValueError otherwise). shade_normals: blend the corners' normals (force shading); max_nodes: the budget of one query."""
+def height_field(heights: numpy.ndarray, spacing: Union[float, List[float]] = 0.0001, origin: Optional[List[float]] = None, pose: Optional[Pose] = None, shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
+    """A height field z = h(x, y) [m] from a 2-D numpy array (float64 or float32 [m]): heights[j, i] is the height at x = i spacing_x, y = j spacing_y (np.meshgrid's 'xy' layout), spacing [m] one number or (spacing_x, spacing_y). Bilinear cells, solid below, felt from above (+z); covers [0, (W - 1) sx] x [0, (H - 1) sy] placed by pose (a Pose) or moved by origin (x, y, z) [m], and nothing beyond. At least 2 x 2 and at most 100 M samples (800 MB as float64, and about as much again for its tree), all finite (ValueError otherwise). A broadcast array (np.broadcast_to, zero strides) or one whose elements overlap in memory is refused before anything is allocated (its size says nothing of the memory a copy takes). shade_normals: blend the corners' normals (force shading); max_nodes: the budget of one query."""
 
-def height_field_from_picture(image: object, pixel_size: float = 0.0001, mm_per_level: float = 0.01, blur: float = 0.0, dark_is_high: bool = False, gray: str = 'paper', channels: str = 'rgb', levels: Optional[float] = None, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
-    """A relief from a picture (see below): height = gray level x mm_per_level [mm] (dark_is_high: 255 - level), after a Gaussian blur of blur [px]; pixel_size [m] between pixel centres; origin [m]: where its bottom-left corner (level 0) goes. The picture's top row is at the largest y (x right, y up), so it reads as it is seen. A missing or undecodable file raises FileError (an OSError).
+def height_field_from_picture(image: object, pixel_size: float = 0.0001, mm_per_level: float = 0.01, blur: float = 0.0, dark_is_high: bool = False, gray: str = 'paper', channels: str = 'rgb', levels: Optional[float] = None, origin: Optional[List[float]] = None, pose: Optional[Pose] = None, shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
+    """A relief from a picture (see below): height = gray level x mm_per_level [mm] (dark_is_high: 255 - level), after a Gaussian blur of blur [px]; pixel_size [m] between pixel centres; origin [m]: where its bottom-left corner (level 0) goes (or pose: a Pose). The picture's top row is at the largest y (x right, y up), so it reads as it is seen. A missing or undecodable file raises FileError (an OSError).
 
     image: a path (any format OpenCV reads; 16-bit files are scaled by 255/65535) or a numpy array, H x W gray or H x W x 3 / x 4 colour (alpha ignored). channels='rgb' (default: numpy, PIL, imageio order) or 'bgr' (cv2.imread order) names a colour array's channel order. White level: 255 for uint8 and other integer arrays, 65535 for uint16 (as 16-bit files); a float or bool array needs levels= (its white level: 1.0 for a picture in [0, 1], 255 for [0, 255]) and is refused without it; levels= overrides the white level of any array."""
 
@@ -150,8 +168,11 @@ def lattice_texture(noise: str = 'gaussian', sigma: float = 1.0, seed: int = 1, 
 def local_sphere_texture(noise: str = 'gaussian', sigma: float = 1.0, seed: int = 1, radius: float = 0.0005, surface_normal: List[float] = ..., gain: float = 1.0, velocity_threshold: float = 0.001, scale_with_normal_force: bool = False, axes: List[float] = ...) -> Field:
     """A texture that draws a new noise sample each time the HIP leaves a ball of radius [m] (the local circle on a surface of unit surface_normal). gain [N per texture unit] (or [N/N] with scale_with_normal_force: Ft proportional to |Fc|), velocity_threshold [m/s] (silent below it), axes: weights along (t1, t2, n) of the surface frame ((1, 1, 0): tangential only)."""
 
-def mesh_surface(path: object, scale: float = 1.0, origin: List[float] = ..., shade_normals: bool = True, max_nodes: int = 4096, max_triangles: int = 20000000) -> Surface:
-    """A triangle mesh from a file (.stl, .obj, .gltf, .glb by extension); scale: the file's unit in metres (0.001 for millimetres; glTF is in metres), then moved by origin [m]. Vertex normals are computed where the file has none (force shading); each triangle is felt from the side its normal points to. A missing, malformed or oversized file raises FileError naming it; Surface.warnings lists what was accepted but may surprise."""
+def mesh_surface(path: object, scale: float = 1.0, origin: Optional[List[float]] = None, pose: Optional[Pose] = None, shade_normals: bool = True, max_nodes: int = 4096, max_triangles: int = 20000000) -> Surface:
+    """A triangle mesh from a file (.stl, .obj, .gltf, .glb by extension); scale: the file's unit in metres (0.001 for millimetres; glTF is in metres), then placed by pose (a Pose) or moved by origin [m]. shade_normals (default, as in feel_shape, servo_demo and the viewer): force shading with the file's vertex normals, or normals computed from the faces where it has none; False: face normals (flat facets). Each triangle is felt from the side its normal points to. A mesh with no triangle of any area raises FileError. A missing, malformed or oversized file raises FileError naming it; Surface.warnings lists what was accepted but may surprise."""
+
+def mesh_surface_from_arrays(vertices: numpy.ndarray, faces: numpy.ndarray, uvs: Optional[numpy.ndarray] = None, normals: Optional[numpy.ndarray] = None, pose: Optional[Pose] = None, origin: Optional[List[float]] = None, shade_normals: bool = True, max_nodes: int = 4096, max_triangles: int = 20000000) -> Surface:
+    """A triangle mesh from numpy arrays: vertices N x 3 [m] (real), faces M x 3 vertex indices from 0 (integer dtype; each triangle felt from the side its counter-clockwise winding faces), optional uvs N x 2 and normals N x 3 (per vertex; normalised). Placed by pose (a Pose) or origin [m]. shade_normals as mesh_surface: the given normals, else normals from the faces; False: face normals. At most max_triangles faces (default and limit 20 M) and 3 x max_triangles vertices. ValueError naming the array and row for a wrong shape or dtype, an index out of range, a value not finite, a zero normal, no face, or faces that all have zero area; a broadcast (zero-stride) or overlapping array is refused before anything is allocated."""
 
 def noise(kind: str = 'gaussian', sigma: float = 1.0, seed: int = 1, n: int = 1000) -> numpy.typing.NDArray[numpy.float64]:
     """n x 3 samples of the library's repeatable noise (gaussian|laplacian|uniform, standard deviation sigma) at lattice points (i, 0, 0), i = 0..n-1: a pure function of (seed, point)."""
@@ -170,8 +191,8 @@ def picture_relief(image: object, mm_per_level: float = 0.01, width_m: float = 0
 def plane_contact(parts: List[Field] = ..., point: List[float] = ..., normal: List[float] = ..., stiffness: float = 1500.0, damping: float = 0.0) -> Field:
     """F = Fc + parts: a penalty plane through point [m] with unit normal (toward the user), stiffness [N/m] and damping [N s/m] gives Fc; while touching, the parts see |Fc| [N] and the plane's normal of the same tick."""
 
-def plane_surface(point: List[float] = ..., normal: List[float] = ..., size: float = 0.01) -> Surface:
-    """The solid half-space behind a plane through point [m] with unit normal (toward the user); uv are metres along the plane; size [m]: the length its tolerances scale with."""
+def plane_surface(point: List[float] = ..., normal: List[float] = ..., size: float = 0.01, pose: Optional[Pose] = None) -> Surface:
+    """The solid half-space behind a plane through point [m] with unit normal (toward the user), both in the frame that pose (a Pose; default none) places; uv are metres along the plane; size [m]: the length its tolerances scale with."""
 
 def run_servo(field: Field, seconds: float = 1.0, rate: float = 1000.0, device: str = 'sim', hand: str = 'raster', hand_centre: List[float] = ..., hand_size: float = 0.06, hand_speed: float = 0.06, realtime: str = 'off', confirm_hardware: bool = False, clock: Optional[str] = None, stop: Optional[ServoStop] = None) -> dict:
     """Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace (one row a tick: t [s], position N x 3 [m], force N x 3 [N] as that tick commanded after the safety chain, homed and armed N booleans: the tick's device state, False before homing / arming), period_histogram (counts per histogram_bin_s), stop_reason, final_force (the last force written to the arm [N], the stop's zero after a stop), and loop_allocations / loop_frees (malloc / free calls on this thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None otherwise). device sim: the simulated arm, held by a scripted hand (raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm (needs confirm_hardware=True). clock virtual (the default for sim): the loop runs on simulated time as fast as the CPU allows, with the same ticks, safety chain and trace as in real time, so a run renders the same forces on any machine (its timing statistics are nominal: every period exact, compute time 0); wall (the default for hid, the only choice there): real time, for timing studies and live interaction. realtime off|best_effort|enforce (SCHED_FIFO; wall clock only). The loop runs on a thread of its own, evaluating the field in C++, never taking the GIL; the calling thread waits with the GIL released. stop: a ServoStop token another thread can request() to end the run (stop_reason 'requested'). Ctrl-C (any exception a signal handler raises) stops the loop within a few ms with zero force and is then raised, the result attached as its `result` attribute (stop_reason 'interrupted'): `except KeyboardInterrupt as e: run = e.result`."""
@@ -182,8 +203,8 @@ def scale(field: Field, factor: float) -> Field:
 def sphere_contact(parts: List[Field] = ..., centre: List[float] = ..., radius: float = 0.02, stiffness: float = 1500.0, damping: float = 0.0) -> Field:
     """F = Fc + parts on a solid penalty sphere: centre [m], radius [m], stiffness [N/m], damping [N s/m]."""
 
-def sphere_surface(centre: List[float] = ..., radius: float = 0.02) -> Surface:
-    """A solid ball: centre [m], radius [m]. uv: u = longitude / 2 pi + 1/2, v = latitude / pi + 1/2."""
+def sphere_surface(centre: List[float] = ..., radius: float = 0.02, pose: Optional[Pose] = None) -> Surface:
+    """A solid ball: centre [m] (in the frame that pose places; default none), radius [m]. uv: u = longitude / 2 pi + 1/2, v = latitude / pi + 1/2, about the ball's own z axis (turned by pose)."""
 
 def sum(fields: List[Field]) -> Field:
     """F = sum of the fields' forces [N]. The parts are shared, not copied."""
