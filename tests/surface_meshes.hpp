@@ -2,6 +2,7 @@
 // Generated meshes for the surface tests and benches: tessellated grids,
 // boxes, icospheres and wavy sheets, each with closed-form geometry to
 // check against.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>

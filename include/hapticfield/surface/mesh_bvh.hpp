@@ -21,11 +21,28 @@
 /// first front-facing triangle a segment crosses (Moller & Trumbore, "Fast,
 /// minimum storage ray/triangle intersection", JGT 1997, with a barycentric
 /// tolerance of 1e-9, relative to the triangle, so a segment through a
-/// shared edge or vertex meets one of its triangles), and closest(p, r), the
+/// shared edge or vertex meets one of its triangles, and the tie rule below),
+/// and closest(p, r), the
 /// nearest point within r (the Voronoi-region closest point on a triangle,
 /// Ericson, "Real-Time Collision Detection", 2005, section 5.1.5). Each
 /// query visits at most `max_nodes` nodes (its budget); past that it stops
 /// and says so (BvhHit::complete = false).
+///
+/// Ties (a segment that meets a triangle on its boundary: within
+/// bvh_tie_band of an edge or a vertex, relative to the triangle). The solid
+/// is closed: its boundary is not inside it, so a segment that touches the
+/// surface at an edge or a vertex while running along (or away from) the
+/// face on the other side does not enter it. At a convex edge shared with
+/// one neighbour, and at a vertex whose closed fan of triangles has only
+/// convex edges, the solid is locally the intersection of the faces' half
+/// spaces, and the segment enters it only when it goes behind every one of
+/// them: a segment that moves away from one of them (by more than
+/// bvh_tie_angle) is no hit, and one that runs along one of them (within
+/// bvh_tie_angle) is reported as a hit on that face, the face it slides on.
+/// Concave edges, saddle vertices, open fans and non-manifold edges keep the
+/// plain rule (a hit on the triangle met). Triangles are neighbours when they
+/// share an edge of two welded vertices (equal positions) in opposite
+/// directions, and no third triangle uses that edge.
 
 #include <algorithm>
 #include <array>
@@ -107,6 +124,14 @@ inline constexpr std::size_t bvh_max_depth = 64;
 inline constexpr std::uint32_t bvh_max_leaf = 4;
 /// Default node budget of one query: a few microseconds at worst.
 inline constexpr std::uint32_t bvh_default_max_nodes = 4096;
+/// A hit within this barycentric distance of an edge (relative to the
+/// triangle) is on the edge: the tie rule decides it (see the file comment).
+inline constexpr double bvh_tie_band = 1e-7;
+/// A segment within this angle of a face's plane runs along it [rad].
+inline constexpr double bvh_tie_angle = 1e-9;
+/// Most triangles walked around a vertex by the tie rule; a larger fan
+/// keeps the plain rule.
+inline constexpr int bvh_max_fan = 64;
 
 /// One node (32 bytes): its box (float, rounded outward) and either its
 /// children (an inner node: a BvhNodePair) or its triangles (a leaf).
@@ -194,7 +219,7 @@ class MeshBvh {
       if (count > 0) {
         for (std::uint32_t i = index; i < index + count; ++i) {
           ++work.primitives;
-          intersect(triangles_[i], from, d, best_t, best);
+          intersect(i, from, d, best_t, best);
         }
       } else {
         const BvhNodePair& pair = pairs_[index];
@@ -417,10 +442,12 @@ class MeshBvh {
   }
 
   /// Moller-Trumbore against a front-facing triangle (d opposes e1 x e2),
-  /// keeping the nearest hit with t in [0, best_t).
-  static void intersect(const Triangle& tri, const glm::dvec3& from, const glm::dvec3& d, double& best_t,
-                        BvhHit& best) noexcept {
+  /// keeping the nearest hit with t in [0, best_t); a hit on the triangle's
+  /// boundary goes through the tie rule (tie()).
+  void intersect(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double& best_t,
+                 BvhHit& best) const noexcept {
     constexpr double tolerance = 1e-9;  // barycentric, relative to the triangle
+    const Triangle& tri = triangles_[slot];
     const glm::dvec3 pvec = glm::cross(d, tri.e2);
     const double det = glm::dot(tri.e1, pvec);  // = -d . (e1 x e2): > 0 for a front face
     if (!(det > 0.0)) return;
@@ -430,13 +457,127 @@ class MeshBvh {
     const glm::dvec3 qvec = glm::cross(tvec, tri.e1);
     const double v = glm::dot(d, qvec);
     if (v < -tolerance * det || u + v > (1.0 + tolerance) * det) return;
-    const double t = glm::dot(tri.e2, qvec) / det;
-    if (!(t >= 0.0) || !(t < best_t)) return;
+    double t = glm::dot(tri.e2, qvec) / det;
+    if (!(t >= 0.0)) {  // a start behind the plane by rounding only (on the face, or on the boundary) counts as on it
+      const double behind2 = t * t * glm::dot(d, d);  // [m^2]
+      const double band = bvh_tie_band * bvh_tie_band * std::fmax(glm::dot(tri.e1, tri.e1), glm::dot(tri.e2, tri.e2));
+      if (!(behind2 <= band)) return;
+      t = 0.0;
+    }
+    if (!(t < best_t)) return;
+    double b1 = u / det, b2 = v / det;
+    std::uint32_t hit = slot;
+    if (b1 < bvh_tie_band || b2 < bvh_tie_band || 1.0 - b1 - b2 < bvh_tie_band) {
+      hit = tie(slot, b1, b2, from, d);
+      if (hit == no_primitive) return;  // touches the boundary without entering
+      if (hit != slot) {                // runs along the face on the other side: the hit is on it
+        const Triangle& on = triangles_[hit];
+        (void)detail::closest_on_triangle(from + t * d, on.a, on.e1, on.e2, b1, b2);
+      }
+    }
     best_t = t;
-    best.triangle = tri.id;
+    best.triangle = triangles_[hit].id;
     best.t = t;
-    best.b1 = u / det;
-    best.b2 = v / det;
+    best.b1 = b1;
+    best.b2 = b2;
+  }
+
+  /// The tie rule (file comment) for a segment along d that meets the
+  /// triangle in `slot` at barycentric (1 - b1 - b2, b1, b2) within
+  /// bvh_tie_band of its boundary: the slot it hits (this one, or the face
+  /// it runs along), or no_primitive when it does not enter the solid.
+  [[nodiscard]] std::uint32_t tie(std::uint32_t slot, double b1, double b2, const glm::dvec3& from,
+                                  const glm::dvec3& d) const noexcept {
+    if (adjacency_.size() != triangles_.size()) return slot;
+    const std::array<double, 3> b{1.0 - b1 - b2, b1, b2};
+    int small = 0, large = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (b[static_cast<std::size_t>(k)] < bvh_tie_band)
+        ++small;
+      else
+        large = k;
+    }
+    const double length = glm::length(d);
+    if (!(length > 0.0)) return slot;
+    const glm::dvec3 along = d / length;
+    // the faces whose half spaces bound the solid here (convex only)
+    std::array<std::uint32_t, bvh_max_fan> faces{};
+    int count = 0;
+    if (small == 1) {
+      // edge j runs from vertex j to j + 1, opposite vertex j + 2
+      int edge = 0;
+      for (int k = 0; k < 3; ++k)
+        if (b[static_cast<std::size_t>(k)] < bvh_tie_band) edge = (k + 1) % 3;
+      const std::uint32_t other = adjacency_[slot].neighbour[static_cast<std::size_t>(edge)];
+      if (other == no_primitive || concave(slot, other)) return slot;
+      faces[0] = slot;
+      faces[1] = other;
+      count = 2;
+    } else if (small == 2) {
+      count = fan(slot, adjacency_[slot].vertex[static_cast<std::size_t>(large)], faces);
+      if (count == 0) return slot;
+    } else {
+      return slot;
+    }
+    // convex here: the segment enters only behind every face
+    double most = -std::numeric_limits<double>::infinity();
+    std::uint32_t along_face = slot;
+    bool ends_outside = false;  // the segment's end in front of a face it moves away from
+    for (int i = 0; i < count; ++i) {
+      const Triangle& f = triangles_[faces[static_cast<std::size_t>(i)]];
+      const glm::dvec3 n = glm::cross(f.e1, f.e2);
+      const double s = glm::dot(along, n) / glm::length(n);  // sine of the angle to the face's plane
+      // (within the tie band of its plane counts as on it)
+      const double band = bvh_tie_band * std::sqrt(std::fmax(glm::dot(f.e1, f.e1), glm::dot(f.e2, f.e2)));
+      if (s > bvh_tie_angle && glm::dot(from + d - f.a, n) / glm::length(n) >= -band) ends_outside = true;
+      if (s > most) {
+        most = s;
+        along_face = faces[static_cast<std::size_t>(i)];
+      }
+    }
+    if (most < -bvh_tie_angle) return slot;  // behind every face: enters
+    // moves away from a face and ends in front of it: the segment only
+    // touched the boundary (it never stops inside the solid)
+    if (most > bvh_tie_angle) return ends_outside ? no_primitive : slot;
+    return along_face;  // runs along it
+  }
+
+  /// True when the edge between two neighbours is concave: the far corner
+  /// of `other` lies in front of the plane of `slot` (by more than rounding:
+  /// a flat edge, 1e-9 of the triangle's size or less, is not).
+  [[nodiscard]] bool concave(std::uint32_t slot, std::uint32_t other) const noexcept {
+    const Triangle& a = triangles_[slot];
+    const Triangle& o = triangles_[other];
+    const glm::dvec3 n = glm::normalize(glm::cross(a.e1, a.e2));
+    const std::array<glm::dvec3, 3> corners{o.a, o.a + o.e1, o.a + o.e2};
+    double far = 0.0;  // the corner farthest from the plane either way [m]
+    for (const glm::dvec3& c : corners) {
+      const double h = glm::dot(c - a.a, n);
+      if (std::fabs(h) > std::fabs(far)) far = h;
+    }
+    const double size = std::sqrt(std::fmax(glm::dot(o.e1, o.e1), glm::dot(o.e2, o.e2)));
+    return far > 1e-9 * size;
+  }
+
+  /// The closed fan of triangles around welded vertex `vertex` of `slot`,
+  /// into faces; 0 when it is open, larger than bvh_max_fan, or has a
+  /// concave edge (the plain rule applies then).
+  int fan(std::uint32_t slot, std::uint32_t vertex, std::array<std::uint32_t, bvh_max_fan>& faces) const noexcept {
+    std::uint32_t current = slot;
+    int count = 0;
+    for (;;) {
+      if (count == bvh_max_fan) return 0;
+      faces[static_cast<std::size_t>(count++)] = current;
+      const Adjacency& at = adjacency_[current];
+      int k = 0;
+      while (k < 3 && at.vertex[static_cast<std::size_t>(k)] != vertex)
+        ++k;
+      if (k == 3) return 0;
+      const std::uint32_t next = at.neighbour[static_cast<std::size_t>(k)];  // across the edge from the vertex on
+      if (next == no_primitive || concave(current, next)) return 0;
+      if (next == slot) return count;
+      current = next;
+    }
   }
 
   /// Build-time state: per-triangle boxes and centroids, the order being
@@ -471,9 +612,64 @@ class MeshBvh {
         const glm::dvec3 a = mesh_.positions[t[0]];
         out_.triangles_.push_back(Triangle{a, mesh_.positions[t[1]] - a, mesh_.positions[t[2]] - a, i});
       }
+      connect();
     }
 
    private:
+    /// Welds the vertices by position and pairs the triangles across their
+    /// edges (MeshBvh::Adjacency, the tie rule's data).
+    void connect() {
+      const std::size_t n = out_.triangles_.size();
+      // welded ids: vertices sorted by position, equal positions one id
+      std::vector<std::uint32_t> by_position(mesh_.positions.size());
+      for (std::uint32_t i = 0; i < by_position.size(); ++i)
+        by_position[i] = i;
+      const auto key = [&](std::uint32_t i) {
+        const glm::dvec3& p = mesh_.positions[i];
+        return std::array<double, 3>{p.x + 0.0, p.y + 0.0, p.z + 0.0};  // + 0.0: -0 and +0 weld
+      };
+      std::sort(by_position.begin(), by_position.end(),
+                [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+      std::vector<std::uint32_t> weld(mesh_.positions.size());
+      std::uint32_t id = 0;
+      for (std::size_t i = 0; i < by_position.size(); ++i) {
+        if (i > 0 && key(by_position[i]) != key(by_position[i - 1])) ++id;
+        weld[by_position[i]] = id;
+      }
+      out_.adjacency_.assign(n, Adjacency{});
+      struct Edge {
+        std::uint64_t key;   ///< lower welded id << 32 | higher
+        std::uint32_t slot;  ///< triangle, tree order
+        std::uint8_t edge;   ///< 0..2
+        bool forward;        ///< runs from the lower id to the higher
+      };
+      std::vector<Edge> edges;
+      edges.reserve(3 * n);
+      for (std::uint32_t slot = 0; slot < n; ++slot) {
+        const auto& t = mesh_.triangles[out_.triangles_[slot].id];
+        for (std::size_t k = 0; k < 3; ++k)
+          out_.adjacency_[slot].vertex[k] = weld[t[k]];
+        for (std::uint8_t e = 0; e < 3; ++e) {
+          const std::uint32_t from = weld[t[e]], to = weld[t[(e + 1) % 3]];
+          if (from == to) continue;
+          const std::uint64_t lo = std::min(from, to), hi = std::max(from, to);
+          edges.push_back(Edge{lo << 32 | hi, slot, e, from < to});
+        }
+      }
+      std::sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) { return a.key < b.key; });
+      for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i;
+        while (j < edges.size() && edges[j].key == edges[i].key)
+          ++j;
+        // a manifold edge: two triangles, opposite directions
+        if (j - i == 2 && edges[i].forward != edges[i + 1].forward && edges[i].slot != edges[i + 1].slot) {
+          out_.adjacency_[edges[i].slot].neighbour[edges[i].edge] = edges[i + 1].slot;
+          out_.adjacency_[edges[i + 1].slot].neighbour[edges[i + 1].edge] = edges[i].slot;
+        }
+        i = j;
+      }
+    }
+
     struct Bounds {
       glm::dvec3 lo{std::numeric_limits<double>::max()};
       glm::dvec3 hi{-std::numeric_limits<double>::max()};
@@ -656,9 +852,17 @@ class MeshBvh {
     std::vector<glm::dvec3> lo_, hi_, centre_;
   };
 
+  /// Each triangle's neighbours (in tree order) across its edges (edge j
+  /// from vertex j to j + 1; no_primitive: none) and its welded vertices.
+  struct Adjacency {
+    std::array<std::uint32_t, 3> neighbour{no_primitive, no_primitive, no_primitive};
+    std::array<std::uint32_t, 3> vertex{};
+  };
+
   BvhNode root_{};
   std::vector<BvhNodePair> pairs_;
   std::vector<Triangle> triangles_;
+  std::vector<Adjacency> adjacency_;  ///< parallel to triangles_
   std::size_t depth_{0};
   MeshBvhConfig config_{};
 };
