@@ -79,6 +79,19 @@ inline constexpr int proxy_max_moves = 6;
 /// at most proxy_max_passes x proxy_max_moves swept queries, a closest()
 /// after each pass and one friction move.
 inline constexpr int proxy_max_passes = 4;
+/// Most points of the path the proxy takes in one tick (its start, the end
+/// of every swept move and the friction move): last_path().
+inline constexpr int proxy_max_path = proxy_max_passes * proxy_max_moves + 2;
+
+/// The proxy's path in one tick: points[0] is where it started, each next
+/// point the end of one straight piece, the last where it stays. Every
+/// piece was swept against the shape (or lies over one flat face), so it
+/// never enters the surface from the front (surface/proxy_check.hpp checks
+/// it against a brute-force scan).
+struct ProxyPath {
+  std::array<glm::dvec3, proxy_max_path> points{};  ///< [m]; only the first `count` are set
+  int count{0};
+};
 
 struct ProxyConfig {
   double stiffness{1500.0};      ///< k [N/m]
@@ -123,22 +136,27 @@ class ProxyConstraint {
       throw std::invalid_argument("ProxyConstraint: offset must be in (0, 0.01] (relative to a primitive's size)");
   }
 
-  /// The contact of this tick; moves the proxy. A non-finite probe gives no
-  /// contact and leaves the proxy where it is.
+  /// The contact of this tick; moves the proxy. A non-finite position gives
+  /// no contact and leaves the proxy where it is; a non-finite velocity
+  /// only drops the damping (Fc from the position stays).
   [[nodiscard]] Contact contact(const Probe& probe) noexcept {
     tick_ = ProxyTick{};
-    if (!is_finite(probe.position) || !is_finite(probe.velocity)) return Contact{};
+    path_.count = 0;
+    if (!is_finite(probe.position)) return Contact{};
+    const glm::dvec3 velocity = is_finite(probe.velocity) ? probe.velocity : glm::dvec3{0.0};
     const glm::dvec3 goal = probe.position;
     if (!started_ || !is_finite(proxy_)) {
       started_ = true;
       proxy_ = goal;
       touching_ = false;
+      visit(goal);
       return Contact{};
     }
     const glm::dvec3 start = proxy_;
+    visit(start);
     if (config_.stick_first) {  // 0: the friction cone first
       Contact held;
-      if (stick(probe, held)) return held;
+      if (stick(probe.position, velocity, held)) return held;
     }
 
     // 1-2: frictionless constrained motion toward the HIP; a second pass
@@ -148,6 +166,7 @@ class ProxyConstraint {
     Hit touched;
     glm::dvec3 x = start;
     glm::dvec3 anchor = start;  // where the proxy last stopped against a face: on the surface
+    int anchor_point = 0;       // its index in the path
     bool blocked = false;
     for (int pass = 0; pass < proxy_max_passes; ++pass) {
       for (int move = 0; move < proxy_max_moves; ++move) {
@@ -163,13 +182,16 @@ class ProxyConstraint {
         }
         if (!h.found()) {
           x = target;
+          visit(x);
           break;
         }
         const double eps = offset_for(h);
         const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
         const double back = facing > 1e-6 ? eps / facing : length;
         x += (std::fmax(0.0, h.t * length - back) / length) * d;
+        visit(x);
         anchor = x;
+        anchor_point = path_.count - 1;
         last_hit = h;
         if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + eps, eps)) break;
       }
@@ -178,7 +200,8 @@ class ProxyConstraint {
       touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance, last_hit);
       if (touched.found() || !touched.complete) break;
       if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
-        x = anchor;
+        x = anchor;                        // (back along the path it came: the pieces after it are undone)
+        path_.count = anchor_point + 1;
         touched = last_hit;
         break;
       }
@@ -208,8 +231,9 @@ class ProxyConstraint {
       }
       if (glm::length(candidate - frictionless) > planes.tolerance) {
         const double reach = 4.0 * planes.max_offset + planes.tolerance;
-        if (Hit same = on_same_face(candidate, reach, touched); same.found()) {
+        if (Hit same = on_same_face(candidate, reach, touched); planes.count == 1 && over_face(same, candidate)) {
           x = candidate;  // both ends over one flat face: nothing can lie between them
+          visit(x);
           touched = same;
         } else {
           const Hit h = sweep(frictionless, candidate);
@@ -220,6 +244,7 @@ class ProxyConstraint {
             const Hit there = nearest(candidate, reach, touched);
             if (there.found()) {
               x = candidate;
+              visit(x);
               touched = there;
             }
           }
@@ -240,7 +265,7 @@ class ProxyConstraint {
     }
     if (!touching) return Contact{};
 
-    return respond(probe, planes, x, frictionless, on_surface, depth, touched.found() ? touched : last_hit);
+    return respond(goal, velocity, planes, x, frictionless, on_surface, depth, touched.found() ? touched : last_hit);
   }
 
   /// Fc alone [N].
@@ -260,6 +285,8 @@ class ProxyConstraint {
   [[nodiscard]] const glm::dvec3& proxy() const noexcept { return proxy_; }
   [[nodiscard]] bool touching() const noexcept { return touching_; }
   [[nodiscard]] const ProxyTick& last_tick() const noexcept { return tick_; }
+  /// The path the proxy took in the last tick (ProxyPath).
+  [[nodiscard]] const ProxyPath& last_path() const noexcept { return path_; }
   [[nodiscard]] const S& shape() const noexcept { return shape_; }
   [[nodiscard]] const ProxyConfig& config() const noexcept { return config_; }
 
@@ -381,20 +408,19 @@ class ProxyConstraint {
 
   /// 4: the force and what the parts see, for the proxy at x on `planes`
   /// (the HIP's surface point on_surface, depth [m], the touched face).
-  [[nodiscard]] Contact respond(const Probe& probe, const Planes& planes, const glm::dvec3& x,
-                                const glm::dvec3& frictionless, const glm::dvec3& on_surface, double depth,
-                                const Hit& touched) noexcept {
-    const glm::dvec3 goal = probe.position;
+  [[nodiscard]] Contact respond(const glm::dvec3& goal, const glm::dvec3& velocity, const Planes& planes,
+                                const glm::dvec3& x, const glm::dvec3& frictionless, const glm::dvec3& on_surface,
+                                double depth, const Hit& touched) noexcept {
     glm::dvec3 n = planes.count == 1 ? planes.normal[0] : (depth > 0.0 ? (on_surface - goal) / depth : glm::dvec3{0.0});
     if (glm::length(n) == 0.0 && touched.found()) n = touched.face_normal;
     // force shading: the touched point's interpolated normal (the touched
     // face may be the next one past a convex edge, within a few offsets)
     if (planes.count == 1 && touched.found() && glm::dot(touched.normal, n) > 0.5) n = touched.normal;
     if (!is_finite(n) || glm::length(n) == 0.0) n = glm::dvec3{0.0, 0.0, 1.0};
-    const double push = config_.stiffness * depth - config_.damping * glm::dot(probe.velocity, n);  // [N]
+    const double push = config_.stiffness * depth - config_.damping * glm::dot(velocity, n);  // [N]
     const glm::dvec3 force = (push > 0.0 ? push : 0.0) * n + config_.stiffness * (x - frictionless);
-    if (!is_finite(force)) {
-      proxy_ = goal;
+    if (!is_finite(force)) {  // never with finite inputs; the proxy starts again at the HIP next tick
+      started_ = false;
       touching_ = false;
       return Contact{};
     }
@@ -420,15 +446,15 @@ class ProxyConstraint {
   /// when it ends over the face it touched, nothing lies between (one flat,
   /// convex face) and no sweep is needed. Anything else (false) takes the
   /// full tick.
-  [[nodiscard]] bool stick(const Probe& probe, Contact& out) noexcept {
+  [[nodiscard]] bool stick(const glm::dvec3& goal, const glm::dvec3& velocity, Contact& out) noexcept {
     if (!config_.stick_first || !touching_ || !(config_.static_friction > 0.0) || held_planes_.count == 0 ||
         !held_face_.found())
       return false;
     Planes planes = held_planes_;
-    const glm::dvec3 frictionless = planes.project(probe.position);
+    const glm::dvec3 frictionless = planes.project(goal);
     if (planes.count != held_planes_.count) return false;  // the HIP has left a plane
-    const glm::dvec3 on_surface = planes.project_equal(probe.position, false);
-    const double depth = glm::length(on_surface - probe.position);
+    const glm::dvec3 on_surface = planes.project_equal(goal, false);
+    const double depth = glm::length(on_surface - goal);
     if (!(depth > 0.0)) return false;
     const glm::dvec3 held = planes.project_equal(proxy_);
     const glm::dvec3 slide = held - frictionless;
@@ -436,14 +462,20 @@ class ProxyConstraint {
     const bool sliding = s > (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth;
     const glm::dvec3 x = sliding ? frictionless + (config_.dynamic_friction * depth / s) * slide : held;
     const Hit touched = on_same_face(x, 4.0 * planes.max_offset + planes.tolerance, held_face_);
-    if (!touched.found() || !is_finite(x)) return false;
+    if (planes.count != 1 || !over_face(touched, x) || !is_finite(x)) return false;
     tick_.planes = planes.count;
     sliding_ = sliding;
     tick_.sliding = sliding;
     proxy_ = x;
+    visit(x);
     held_face_ = touched;
-    out = respond(probe, planes, x, frictionless, on_surface, depth, touched);
+    out = respond(goal, velocity, planes, x, frictionless, on_surface, depth, touched);
     return true;
+  }
+
+  /// Appends a point to the tick's path.
+  void visit(const glm::dvec3& p) noexcept {
+    if (path_.count < proxy_max_path) path_.points[static_cast<std::size_t>(path_.count++)] = p;
   }
 
   /// shape_.first_hit, counting the nodes it visits when the shape can.
@@ -470,6 +502,17 @@ class ProxyConstraint {
       if (face.found()) return shape_.on_primitive(face.primitive, p, max_distance);
     }
     return Hit{};
+  }
+
+  /// True when p lies in front of the face of `on` (its closest point on
+  /// the face, found) at half the proxy's offset or more, straight over the
+  /// face's inside (not past an edge): a move over one flat, convex face
+  /// between two such points stays in front of it. Behind the face, or off
+  /// its edge where a neighbour may rise, a move is swept instead.
+  [[nodiscard]] bool over_face(const Hit& on, const glm::dvec3& p) const noexcept {
+    if (!on.found()) return false;
+    const double height = glm::dot(p - on.point, on.face_normal);  // [m]
+    return height >= 0.5 * offset_for(on) && height >= on.distance * (1.0 - 1e-9);
   }
 
   /// shape_.closest, counting as sweep() does; first the primitive of
@@ -507,6 +550,7 @@ class ProxyConstraint {
   Planes held_planes_{};  ///< the constraint planes of the last tick that touched
   Hit held_face_{};       ///< the face the proxy last touched
   ProxyTick tick_{};
+  ProxyPath path_{};
 };
 
 }  // namespace hapticfield
