@@ -11,7 +11,11 @@
 ///   velocity  (v . t, v . b, v . n)       [m/s]
 ///   normal    +z, normal_force |Fc| (as the ContactField gave it)
 ///
-/// and its force (fx, fy, fz) comes back as fx t + fy b + fz n: a tangible
+/// and its force (fx, fy, fz) comes back as fx t + fy b + fz n. The frame
+/// is made orthonormal about the contact normal n first (t and b turned
+/// into the plane normal to n): at a crease n points at the crease line,
+/// up to a degree from the shaded normal t x b, and a tangential field must
+/// stay normal to Fc. So a tangible
 /// image, a lattice or fBm texture, a HaTT texture, friction or a normals
 /// field pushes along the curved surface, in its tangent plane (F = Fc +
 /// Ft + Ff on any shape), scaled by |Fc| where the field asks for it.
@@ -56,15 +60,24 @@ class OnSurface {
     if (!is_finite(t) || !is_finite(b) || !is_finite(n) || !is_finite(probe.surface_uv) || !is_finite(probe.velocity))
       return glm::dvec3{0.0};
     if (glm::dot(t, t) == 0.0 || glm::dot(b, b) == 0.0 || glm::dot(n, n) == 0.0) return glm::dvec3{0.0};
+    // the orthonormal frame (tangent, bitangent, normal) about the contact normal
+    const glm::dvec3 normal = glm::normalize(n);
+    glm::dvec3 tangent = t - glm::dot(t, normal) * normal;
+    const double length = glm::length(tangent);
+    if (!(length > 1e-6)) return glm::dvec3{0.0};  // t along n: no tangent plane to speak of
+    tangent /= length;
+    glm::dvec3 bitangent = glm::cross(normal, tangent);
+    if (glm::dot(bitangent, b) < 0.0) bitangent = -bitangent;  // mirrored uvs keep their v direction
     Probe flat = probe;
     const glm::dvec2 at = mapping_.offset + mapping_.scale * probe.surface_uv;
     flat.position = glm::dvec3{at.x, at.y, 0.0};
-    flat.velocity = glm::dvec3{glm::dot(probe.velocity, t), glm::dot(probe.velocity, b), glm::dot(probe.velocity, n)};
+    flat.velocity = glm::dvec3{glm::dot(probe.velocity, tangent), glm::dot(probe.velocity, bitangent),
+                               glm::dot(probe.velocity, normal)};
     flat.surface_normal = glm::dvec3{0.0, 0.0, 1.0};
     flat.surface_tangent = glm::dvec3{1.0, 0.0, 0.0};
     flat.surface_bitangent = glm::dvec3{0.0, 1.0, 0.0};
     const glm::dvec3 f = field_.force(flat);
-    const glm::dvec3 out = f.x * t + f.y * b + f.z * n;
+    const glm::dvec3 out = f.x * tangent + f.y * bitangent + f.z * normal;
     return is_finite(out) ? out : glm::dvec3{0.0};
   }
 
