@@ -755,6 +755,8 @@ TEST_CASE("--shape: bad shapes exit 1, bad shape options exit 2, before any wind
   write(mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   const std::string no_triangles = in_tmp("points.obj");
   write(no_triangles, "v 0 0 0\nv 1 0 0\n");
+  const std::string degenerate = in_tmp("degenerate.obj");  // two triangles, neither with an area
+  write(degenerate, "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 4\n");
   const std::string unknown = in_tmp("shape.xyz");
   write(unknown, "0 0 0\n");
   const std::string shot = in_tmp("shape_view.png");
@@ -768,6 +770,8 @@ TEST_CASE("--shape: bad shapes exit 1, bad shape options exit 2, before any wind
       {"servo_demo", {"--shape", b.missing}, bad_input, b.missing},
       {"servo_demo", {"--shape", unknown}, bad_input, "unknown mesh format"},
       {"servo_demo", {"--shape", no_triangles}, bad_input, no_triangles},
+      {"servo_demo", {"--shape", degenerate}, bad_input,
+       "cannot use '" + degenerate + "': all 2 triangles have zero area"},
       {"servo_demo", {"--shape", b.truncated_png}, bad_input, b.truncated_png},
   };
 #ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
