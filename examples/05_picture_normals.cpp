@@ -39,6 +39,7 @@
 
 #include "common/cli.hpp"
 #include "common/csv.hpp"
+#include "common/picture.hpp"
 #include "hapticfield/normals.hpp"
 
 using namespace hapticfield;
@@ -58,13 +59,14 @@ struct Args {
   std::string forces;
   bool gradient = false;
   double shading = 0.0;
+  std::uint64_t max_pixels = default_max_pixels;
   bool verbose = false;
 };
 
 constexpr const char* usage =
     "usage: picture_normals IMAGE --face \"x1,y1 x2,y2 x3,y3 x4,y4\" [--face ...] [options]\n"
     "Estimates the normals of planar faces marked in a picture (Kim & Kwon 2013).\n"
-    "  IMAGE                 picture file (any format OpenCV reads)\n"
+    "  IMAGE                 picture file (any format OpenCV reads), at most --max-mpx\n"
     "  --face CORNERS        4 corners [px] going around the face, each coordinate in\n"
     "                        [-1e6, 1e6]; repeat for more faces\n"
     "  --size W,H            face size [mm], each in (0, 1e6]; one for all faces or one per face\n"
@@ -80,6 +82,8 @@ constexpr const char* usage =
     "  --force-map OUT.png   the force felt moving right at 100 mm/s: red resists, green assists\n"
     "  --gradient            force from the slope itself instead of along the motion\n"
     "  --shading CELL        force shading on a grid of CELL [px], in [1, 1e4]\n"
+    "  --max-mpx N           largest picture accepted [megapixels], in (0, 1e6] (default 100),\n"
+    "                        read from the header before decoding\n"
     "  --verbose             per-face diagnostics on stderr (faces numbered from 1, in --face order)\n"
     "  -h, --help            this text\n"
     "Exit status: 0 done, 1 bad input (files, degenerate faces), 2 usage error.\n";
@@ -119,6 +123,8 @@ Args parse(cli::Parser& p) {
       a.sizes.push_back({w, h});
     } else if (p.is("--intrinsics")) {
       a.intrinsics = p.value();
+    } else if (p.is("--max-mpx")) {
+      a.max_pixels = static_cast<std::uint64_t>(p.real(cli::open_closed(0.0, 1e6)) * 1e6);
     } else if (p.is("--focal")) {
       a.focal = p.real(cli::closed(1.0, 1e6));
     } else if (p.is("--center") || p.is("--centre")) {
@@ -286,9 +292,12 @@ void evaluate_probes(const Args& a, NormalField& field) {
 }
 
 int run(const Args& a) {
-  check_file(a.image, std::uintmax_t{1} << 34);
-  const cv::Mat image = cli::quiet_stderr([&] { return cv::imread(a.image, cv::IMREAD_COLOR); });
-  if (image.empty()) throw FileError("cannot decode '" + a.image + "': not a picture OpenCV can read, or corrupt");
+  cv::Mat image;
+  try {  // the pixel limit is checked from the header, before decoding
+    image = cli::to_bgr8(cli::quiet_stderr([&] { return load_image(a.image, a.max_pixels); }));
+  } catch (const ImageError& e) {
+    throw ImageError(cli::name_limit_flag(e.what(), "--max-mpx"));  // the user's flag, not the library's
+  }
   std::ostringstream notes;
   const Camera camera = make_camera(a, image.cols, image.rows, notes);
   std::vector<FacePose> poses;

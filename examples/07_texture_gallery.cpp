@@ -201,7 +201,8 @@ constexpr const char* usage =
     "Strokes every texture kind at 50 mm/s, 1 N, 1 kHz for 2 s and writes each force\n"
     "trace and its power spectrum (PNG and CSV) and gallery.png.\n"
     "  --out DIR    output folder, created if needed (default out/texture_gallery)\n"
-    "  --hatt DIR   also every HaTT modelSet XML file in DIR (the toolkit's XML/ folder)\n"
+    "  --hatt DIR   also every HaTT modelSet XML file in DIR (the toolkit's XML/ folder);\n"
+    "               each at most 16 MB, <SampleRate> in 100..100000 Hz\n"
     "  -h, --help   this text\n"
     "Exit status: 0 done, 1 bad input (HaTT files, output folder), 2 usage error.\n";
 

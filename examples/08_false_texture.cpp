@@ -42,19 +42,26 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* usage =
-    "usage: false_texture IMAGE [--out DIR] [--levels N]\n"
+    "usage: false_texture IMAGE [--out DIR] [--levels N] [--max-mpx N]\n"
     "False texturing and data visualisation: a texture per gray band of the picture and\n"
     "friction modulated by brightness, stroked along three lines at 50 mm/s.\n"
     "  IMAGE        picture file (any format OpenCV reads), fitted into 100 x 100 mm\n"
     "  --out DIR    output folder for false_texture.png, strokes.csv, regions.csv and (with\n"
     "               matplotlib) strokes.png, created if needed (default out/false_texture)\n"
     "  --levels N   gray bands, each with its own texture, 2..8 (default 4)\n"
+    "  --max-mpx N  largest picture accepted [megapixels], in (0, 1e6] (default 100), read from\n"
+    "               the header before decoding\n"
     "  -h, --help   this text\n"
     "Exit status: 0 done, 1 bad input (picture, output folder), 2 usage error.\n";
 
-int run(const std::string& image_path, const fs::path& out, int levels) {
+int run(const std::string& image_path, const fs::path& out, int levels, std::uint64_t max_pixels) {
   {
-    const cv::Mat image = cli::load_bgr8(image_path);  // the library's loader: ImageError naming the file
+    cv::Mat image;
+    try {  // the library's loader: ImageError naming the file; the pixel limit read from the header
+      image = cli::to_bgr8(cli::quiet_stderr([&] { return load_image(image_path, max_pixels); }));
+    } catch (const ImageError& e) {
+      throw ImageError(cli::name_limit_flag(e.what(), "--max-mpx"));  // the user's flag, not the library's
+    }
     const PlaneMapping mapping = PlaneMapping::fit(image.cols, image.rows, 100.0);
     const LabelMap labels = label_map_from_gray_levels(image, levels, mapping);
 
@@ -217,11 +224,14 @@ int main(int argc, char** argv) {
     std::string out = "out/false_texture";
     bool out_given = false;
     int levels = 4;
+    std::uint64_t max_pixels = default_max_pixels;
     while (p.next()) {
       if (p.is("--out"))
         out = p.output_dir(), out_given = true;
       else if (p.is("--levels"))
         levels = static_cast<int>(p.integer(2, 8));  // 8 colours in the legend
+      else if (p.is("--max-mpx"))
+        max_pixels = static_cast<std::uint64_t>(p.real(cli::open_closed(0.0, 1e6)) * 1e6);
       else if (p.positional() && image.empty())
         image = p.token();
       else
@@ -230,6 +240,6 @@ int main(int argc, char** argv) {
     if (image.empty()) throw cli::UsageError("no IMAGE given");
     if (!out_given) p.default_output_dir("--out", out);
     p.finish();
-    return run(image, out, levels);
+    return run(image, out, levels, max_pixels);
   });
 }

@@ -48,6 +48,7 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/device/device_error.hpp"
 #include "hapticfield/image.hpp"
+#include "hapticfield/io/mesh_read.hpp"
 #include "hapticfield/servo.hpp"
 #include "hapticfield/transport.hpp"
 #include "hapticfield/video.hpp"
@@ -92,8 +93,8 @@ constexpr const char* usage_text =
     "  --from S             start at video time S [s], in [0, the video's length] (default 0)\n"
     "  --loop               start again at 0 after the end (default: hold the last frame)\n"
     "  --fade-ms MS         fade out and in across a scene cut [ms], in [0, 10000] (default 100)\n"
-    "  --max-mpx N          largest picture or video frame accepted [megapixels], in (0, 1e6]\n"
-    "                       (default 100), checked before decoding\n"
+    "  --max-mpx N          largest picture, video frame or height map accepted [megapixels],\n"
+    "                       in (0, 1e6] (default 100), checked before decoding\n"
     "normals from a picture (Kim & Kwon):\n"
     "  --face CORNERS       \"x1,y1 x2,y2 x3,y3 x4,y4\" [px] around a planar face; repeat per face\n"
     "  --focal F            focal length [px] in [1, 1e6] (default: a 60 degree field of view)\n"
@@ -103,6 +104,9 @@ constexpr const char* usage_text =
     "a shape in 3D (instead of SOURCE; felt through a proxy, k = 1500 N/m):\n"
     "  --shape FILE         a mesh (.stl, .obj, .gltf, .glb) or a height map picture (white high),\n"
     "                       scaled so its footprint spans 80 mm, its top 1 mm below the start\n"
+    "                       (a mesh file of at most 512 MB, a height map of at least 2 x 2 px)\n"
+    "  --max-triangles N    most triangles a mesh may make, counted before it is read, in\n"
+    "                       1..20000000 (default 20000000); a height map: --max-mpx\n"
     "  --height-mm H        a height map's height of white over black [mm], in (0, 100] (default 4)\n"
     "  --view YAW,PITCH     the camera's orbit [degrees]: yaw in [-180, 180] about y (up), pitch in\n"
     "                       [-89, 89] (default 25,30; 0,0 looks from +z, the user's side)\n"
@@ -143,6 +147,8 @@ struct Arguments {
   std::string shots{"."};
   // a shape in 3D
   std::string shape;
+  std::size_t max_triangles{io::default_max_mesh_triangles};  ///< a mesh's most triangles
+  std::vector<std::string> shape_only;                        ///< the shape-only options given
   double height_mm{4.0};
   glm::dvec2 view_deg{25.0, 30.0};  ///< yaw, pitch [degrees]
   std::optional<double> distance_mm;
@@ -276,6 +282,9 @@ Arguments parse(cli::Parser& p) {
       o.shots = p.output_dir();
     } else if (p.is("--shape")) {
       o.shape = p.value();
+    } else if (p.is("--max-triangles")) {
+      o.max_triangles = static_cast<std::size_t>(p.integer(1, static_cast<long long>(io::default_max_mesh_triangles)));
+      o.shape_only.push_back("--max-triangles");
     } else if (p.is("--height-mm")) {
       o.height_mm = p.real(cli::open_closed(0.0, 100.0));
     } else if (p.is("--view")) {
@@ -298,6 +307,7 @@ Arguments parse(cli::Parser& p) {
     if (!o.video_only.empty()) usage(o.video_only.front() + " is for a video, not --shape");
   }
   if (o.source.empty() && o.shape.empty()) usage("missing SOURCE (a picture or a video file) or --shape FILE");
+  if (o.shape.empty() && !o.shape_only.empty()) usage(o.shape_only.front() + " is for --shape FILE (a mesh)");
   if (!o.screenshot.empty() && !o.seconds) usage("--screenshot needs --seconds (how long the loop runs first)");
   if (o.seconds && std::llround(*o.seconds * o.rate) < 1) {
     char text[160];
@@ -814,7 +824,18 @@ int run_shape(const Arguments& o) {
   ShapeSceneConfig config;
   config.height_mm = o.height_mm;
   config.max_pixels = o.max_pixels;
-  ShapeScene scene = cli::quiet_stderr([&] { return load_shape_scene(o.shape, config); });
+  config.max_triangles = o.max_triangles;
+  ShapeScene scene = cli::quiet_stderr([&] {
+    try {
+      return load_shape_scene(o.shape, config);
+    } catch (const FileError& e) {  // the user's flags, not the library's settings
+      std::string message = cli::name_limit_flag(e.what(), "--max-mpx");
+      const std::string hint = "(raise MeshReadConfig::max_triangles)";
+      if (const auto at = message.find(hint); at != std::string::npos)
+        message.replace(at, hint.size(), "(raise --max-triangles to allow it)");
+      throw FileError(message);
+    }
+  });
   const glm::dvec3 above = scene.top + glm::dvec3{0.0, 0.0, 0.005};  // where the proxy starts
   if (scene.mesh) {
     ShapeProxyField<MeshShape> field(std::move(*scene.mesh), scene.shift, above);

@@ -43,7 +43,8 @@ int usage(const char* why) {
   std::fprintf(why ? stderr : stdout,
                "usage: tick_budget [--field wall|friction|hatt|allocating] [--hatt FILE] [--ticks N] [--speed M/S]\n"
                "  --field   the field to measure (default friction: plane + Coulomb and viscous friction)\n"
-               "  --hatt    a HaTT modelSet file for --field hatt\n"
+               "  --hatt    a HaTT modelSet file for --field hatt (at most 16 MB, <SampleRate> in\n"
+               "            100..100000 Hz)\n"
                "  --ticks   timed ticks (default 20000)\n"
                "  --speed   speed along the scripted circle [m/s] (default 0.1)\n");
   return why ? 2 : 0;

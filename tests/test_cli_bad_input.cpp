@@ -297,6 +297,8 @@ TEST_CASE("every numeric flag: NaN, Inf, huge, zero, negative, garbage: exit 2 n
   add_numeric(cases, "box_demo", {}, "--trials");
   add_numeric(cases, "box_demo", {}, "--seed", {"0"});
   add_numeric(cases, "false_texture", {picture}, "--levels");
+  add_numeric(cases, "false_texture", {picture}, "--max-mpx");
+  add_numeric(cases, "picture_normals", {picture, "--face", face}, "--max-mpx");
   add_numeric(cases, "two_arms", {}, "--seconds");
   add_numeric(cases, "two_arms", {}, "--stiffness");
   // values just outside the documented ranges
@@ -333,6 +335,14 @@ TEST_CASE("bad files: missing, empty, folder, truncated, mislabelled: exit 1") {
   // a picture above --max-mpx: the message names the flag that raises the limit
   cases.push_back({"tangible_image",
                    {picture, "--max-mpx", "0.001"},
+                   bad_input,
+                   "60 x 40 px (2400 px) is larger than the limit of 1000 px (raise --max-mpx to allow it)"});
+  cases.push_back({"picture_normals",
+                   {picture, "--face", face, "--max-mpx", "0.001"},
+                   bad_input,
+                   "60 x 40 px (2400 px) is larger than the limit of 1000 px (raise --max-mpx to allow it)"});
+  cases.push_back({"false_texture",
+                   {picture, "--out", in_tmp("false_texture"), "--max-mpx", "0.001"},
                    bad_input,
                    "60 x 40 px (2400 px) is larger than the limit of 1000 px (raise --max-mpx to allow it)"});
   for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_csv, b.garbage_csv, b.text_png}) {
@@ -770,7 +780,9 @@ TEST_CASE("--shape: bad shapes exit 1, bad shape options exit 2, before any wind
       {"servo_demo", {"--shape", b.missing}, bad_input, b.missing},
       {"servo_demo", {"--shape", unknown}, bad_input, "unknown mesh format"},
       {"servo_demo", {"--shape", no_triangles}, bad_input, no_triangles},
-      {"servo_demo", {"--shape", degenerate}, bad_input,
+      {"servo_demo",
+       {"--shape", degenerate},
+       bad_input,
        "cannot use '" + degenerate + "': all 2 triangles have zero area"},
       {"servo_demo", {"--shape", b.truncated_png}, bad_input, b.truncated_png},
   };
@@ -785,6 +797,15 @@ TEST_CASE("--shape: bad shapes exit 1, bad shape options exit 2, before any wind
   cases.push_back({"hapticfield_view", view({"--shape", mesh, "--loop"}), usage, "--loop"});
   cases.push_back({"hapticfield_view", view({"--shape", mesh, "--view", "10,90"}), usage, "[-89, 89]"});
   add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--height-mm", {}, "", "", offscreen);
+  add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--max-triangles", {}, "", "", offscreen);
+  cases.push_back(
+      {"hapticfield_view", view({picture, "--max-triangles", "5"}), usage, "--max-triangles is for --shape"});
+  {  // two quads make four triangles: above a limit of 3, counted before the file is read, named by the tool's flag
+    const std::string quads = in_tmp("quads.obj");
+    write(quads, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nf 1 2 3 4\nf 2 5 6 3\n");
+    cases.push_back({"hapticfield_view", view({"--shape", quads, "--max-triangles", "3"}), bad_input,
+                     "more than 3 triangles by line 8 (raise --max-triangles to allow it)"});
+  }
   add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--distance", {}, "", "", offscreen);
   add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--view", {"0", "-1", " 3"}, "", ",10", offscreen);
   for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_png, unknown, no_triangles})

@@ -40,11 +40,12 @@
 namespace hapticfield::view {
 
 struct ShapeSceneConfig {
-  double span_mm{80.0};                                      ///< the larger of the footprint's x and y extents [mm]
-  double height_mm{4.0};                                     ///< a height map: the height of white over black [mm]
-  double top_mm{-1.0};                                       ///< where the shape's top goes on z [mm]
-  std::size_t display_triangles{default_display_triangles};  ///< display budget
-  std::uint64_t max_pixels{100'000'000};                     ///< a height map's largest picture [px]
+  double span_mm{80.0};                                       ///< the larger of the footprint's x and y extents [mm]
+  double height_mm{4.0};                                      ///< a height map: the height of white over black [mm]
+  double top_mm{-1.0};                                        ///< where the shape's top goes on z [mm]
+  std::size_t display_triangles{default_display_triangles};   ///< display budget
+  std::uint64_t max_pixels{100'000'000};                      ///< a height map's largest picture [px]
+  std::size_t max_triangles{io::default_max_mesh_triangles};  ///< a mesh's most triangles, refused before reading
 };
 
 /// The shape (one of the two), where it sits, and what the view draws.
@@ -96,7 +97,9 @@ struct ShapeScene {
     std::snprintf(text, sizeof text, "%s: %d x %d heights, %.1f mm", name.c_str(), grid.width, grid.height,
                   config.height_mm);
   } else {
-    io::LoadedMesh loaded = io::load_mesh(path);
+    io::MeshReadConfig read;
+    read.max_triangles = config.max_triangles;
+    io::LoadedMesh loaded = io::load_mesh(path, read);
     TriangleMesh& mesh = loaded.mesh;
     if (mesh.triangles.empty()) throw std::invalid_argument("'" + path + "' has no triangles");
     lo = glm::dvec3{std::numeric_limits<double>::max()};
