@@ -168,7 +168,8 @@ struct BvhHit {
   double b2{0.0};                                            ///< barycentric weight of vertex 2
   double t{1.0};                                             ///< first_hit: fraction of the segment [0, 1]
   double distance{std::numeric_limits<double>::infinity()};  ///< closest: distance to the query point [m]
-  bool complete{true};                                       ///< false: the node budget ran out
+  glm::dvec3 contact_point{0.0};  ///< sweep_sphere: the touched point of the mesh [m] (point: the centre)
+  bool complete{true};            ///< false: the node budget ran out
   [[nodiscard]] bool found() const noexcept { return triangle != no_primitive; }
 };
 
@@ -197,65 +198,25 @@ class MeshBvh {
   /// work done.
   [[nodiscard]] BvhHit first_hit(const glm::dvec3& from, const glm::dvec3& to,
                                  QueryStats* stats = nullptr) const noexcept {
-    BvhHit best;
-    QueryStats work;
-    if (stats) *stats = work;
-    const glm::dvec3 d = to - from;
-    if (triangles_.empty() || !is_finite(from) || !is_finite(d)) return best;
-    const Slabs slabs(from, d);
-    std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
-    std::size_t top = 0;
-    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
-    double best_t = 1.0;
-    double entry = 0.0;
-    if (!slabs.cross(root_, best_t, entry)) return best;
-    for (;;) {
-      if (++work.nodes > config_.max_nodes) {
-        best = BvhHit{};
-        best.t = 0.0;
-        best.complete = false;
-        break;
-      }
-      if (count > 0) {
-        for (std::uint32_t i = index; i < index + count; ++i) {
-          ++work.primitives;
-          intersect(i, from, d, best_t, best);
-        }
-      } else {
-        const BvhNodePair& pair = pairs_[index];
-        std::array<double, 2> t{};
-        const std::array<bool, 2> hit = slabs.cross(pair, best_t, t);
-        if (hit[0] && hit[1]) {
-          const std::size_t near = t[1] < t[0] ? 1 : 0, far = 1 - near;
-          stack[top++] = Pending{pair.index[far], pair.count[far], t[far]};
-          index = pair.index[near];
-          count = pair.count[near];
-          continue;
-        }
-        if (hit[0] || hit[1]) {
-          const std::size_t side = hit[0] ? 0 : 1;
-          index = pair.index[side];
-          count = pair.count[side];
-          continue;
-        }
-      }
-      // pop, skipping boxes the best hit so far has made too far (the box
-      // test again: its entry no longer before the segment's end)
-      bool next = false;
-      while (top > 0) {
-        const Pending& candidate = stack[--top];
-        if (Slabs::within(candidate.key, best_t)) {
-          index = candidate.index;
-          count = candidate.count;
-          next = true;
-          break;
-        }
-      }
-      if (!next) break;
-    }
-    if (best.found()) best.point = from + best.t * d;
-    if (stats) *stats = work;
-    return best;
+    return traverse<false>(from, to, 0.0, stats,
+                           [this](std::uint32_t i, const glm::dvec3& a, const glm::dvec3& d, double& best_t,
+                                  BvhHit& best) noexcept { intersect(i, a, d, best_t, best); });
+  }
+
+  /// The first contact of a ball of `radius` [m] whose centre moves from
+  /// `from` to `to` with the mesh (a swept sphere against the triangles'
+  /// Minkowski sum: the face, offset by the radius on its front, the edges'
+  /// cylinders and the corners' balls). BvhHit::point is the centre at
+  /// contact; contact_point and normal (unit, from the touched point to the
+  /// centre) say where it touches. A ball that already overlaps a feature
+  /// and moves toward it touches at t = 0. A face is met from its front
+  /// only; an edge or a corner from any side. radius > 0 and finite.
+  [[nodiscard]] BvhHit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
+                                    QueryStats* stats = nullptr) const noexcept {
+    if (!(radius > 0.0) || !std::isfinite(radius)) return BvhHit{};
+    return traverse<true>(from, to, radius, stats,
+                          [this, radius](std::uint32_t i, const glm::dvec3& a, const glm::dvec3& d, double& best_t,
+                                         BvhHit& best) noexcept { touch(i, a, d, radius, best_t, best); });
   }
 
   /// The point of the mesh nearest to p if one is within max_distance [m]
@@ -333,6 +294,73 @@ class MeshBvh {
   [[nodiscard]] const std::vector<BvhNodePair>& pairs() const noexcept { return pairs_; }
 
  private:
+  /// The segment queries' traversal: boxes grown by `grow` [m] (Grown), each
+  /// leaf's triangles handed to leaf(slot, from, d, best_t, best), which
+  /// keeps the nearest hit with t in [0, best_t).
+  template <bool Grown, class Leaf>
+  [[nodiscard]] BvhHit traverse(const glm::dvec3& from, const glm::dvec3& to, double grow, QueryStats* stats,
+                                Leaf&& leaf) const noexcept {
+    BvhHit best;
+    QueryStats work;
+    if (stats) *stats = work;
+    const glm::dvec3 d = to - from;
+    if (triangles_.empty() || !is_finite(from) || !is_finite(d)) return best;
+    const Slabs<Grown> slabs(from, d, grow);
+    std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
+    std::size_t top = 0;
+    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
+    double best_t = 1.0;
+    double entry = 0.0;
+    if (!slabs.cross(root_, best_t, entry)) return best;
+    for (;;) {
+      if (++work.nodes > config_.max_nodes) {
+        best = BvhHit{};
+        best.t = 0.0;
+        best.complete = false;
+        break;
+      }
+      if (count > 0) {
+        for (std::uint32_t i = index; i < index + count; ++i) {
+          ++work.primitives;
+          leaf(i, from, d, best_t, best);
+        }
+      } else {
+        const BvhNodePair& pair = pairs_[index];
+        std::array<double, 2> t{};
+        const std::array<bool, 2> hit = slabs.cross(pair, best_t, t);
+        if (hit[0] && hit[1]) {
+          const std::size_t near = t[1] < t[0] ? 1 : 0, far = 1 - near;
+          stack[top++] = Pending{pair.index[far], pair.count[far], t[far]};
+          index = pair.index[near];
+          count = pair.count[near];
+          continue;
+        }
+        if (hit[0] || hit[1]) {
+          const std::size_t side = hit[0] ? 0 : 1;
+          index = pair.index[side];
+          count = pair.count[side];
+          continue;
+        }
+      }
+      // pop, skipping boxes the best hit so far has made too far (the box
+      // test again: its entry no longer before the segment's end)
+      bool next = false;
+      while (top > 0) {
+        const Pending& candidate = stack[--top];
+        if (Slabs<Grown>::within(candidate.key, best_t)) {
+          index = candidate.index;
+          count = candidate.count;
+          next = true;
+          break;
+        }
+      }
+      if (!next) break;
+    }
+    if (best.found()) best.point = from + best.t * d;
+    if (stats) *stats = work;
+    return best;
+  }
+
   /// A triangle as the queries want it: corner a, edges e1 = b - a,
   /// e2 = c - a, and its index in the mesh.
   struct Triangle {
@@ -353,9 +381,10 @@ class MeshBvh {
   /// the segment does not move limits nothing when `from` lies within the
   /// box's extent on it and rejects the box otherwise (no 0 * inf = NaN
   /// slab); that test's branch goes the same way for the whole query.
+  template <bool Grown>
   class Slabs {
    public:
-    Slabs(const glm::dvec3& from, const glm::dvec3& d) noexcept : from_(from) {
+    Slabs(const glm::dvec3& from, const glm::dvec3& d, double grow) noexcept : from_(from), grow_(grow) {
       for (int k = 0; k < 3; ++k) {
         inv_[k] = 1.0 / d[k];
         still_[static_cast<std::size_t>(k)] = !std::isfinite(inv_[k]);
@@ -367,8 +396,12 @@ class MeshBvh {
     bool cross(const BvhNode& n, double t_max, double& entry) const noexcept {
       double t0 = 0.0, t1 = t_max;
       for (int k = 0; k < 3; ++k) {
-        const auto lo = static_cast<double>(n.lo[static_cast<std::size_t>(k)]);
-        const auto hi = static_cast<double>(n.hi[static_cast<std::size_t>(k)]);
+        auto lo = static_cast<double>(n.lo[static_cast<std::size_t>(k)]);
+        auto hi = static_cast<double>(n.hi[static_cast<std::size_t>(k)]);
+        if constexpr (Grown) {
+          lo -= grow_;
+          hi += grow_;
+        }
         if (still_[static_cast<std::size_t>(k)]) {
           if (from_[k] < lo || from_[k] > hi) return false;
           continue;
@@ -390,8 +423,12 @@ class MeshBvh {
       std::array<bool, 2> outside{false, false};
       for (std::size_t k = 0; k < 3; ++k) {
         for (std::size_t c = 0; c < 2; ++c) {
-          const auto lo = static_cast<double>(pair.lo[k][c]);
-          const auto hi = static_cast<double>(pair.hi[k][c]);
+          auto lo = static_cast<double>(pair.lo[k][c]);
+          auto hi = static_cast<double>(pair.hi[k][c]);
+          if constexpr (Grown) {
+            lo -= grow_;
+            hi += grow_;
+          }
           if (still_[k]) {
             outside[c] = outside[c] || from_[static_cast<int>(k)] < lo || from_[static_cast<int>(k)] > hi;
             continue;
@@ -413,6 +450,7 @@ class MeshBvh {
 
    private:
     glm::dvec3 from_;
+    double grow_;  ///< [m] added to every box on each side (Grown)
     glm::dvec3 inv_{0.0};
     std::array<bool, 3> still_{};
   };
@@ -480,6 +518,105 @@ class MeshBvh {
     best.t = t;
     best.b1 = b1;
     best.b2 = b2;
+  }
+
+  /// The swept ball (centre from + t d, radius r) against one triangle:
+  /// the earliest contact with its face (front only), its edges or its
+  /// corners, kept when t < best_t (sweep_sphere()).
+  void touch(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double r, double& best_t,
+             BvhHit& best) const noexcept {
+    const Triangle& tri = triangles_[slot];
+    const glm::dvec3 cross = glm::cross(tri.e1, tri.e2);
+    const double area2 = glm::length(cross);
+    const glm::dvec3 n = cross / area2;
+    double t_best = best_t;
+    glm::dvec3 contact{0.0};
+    bool found = false;
+    // the face, offset by r on its front
+    const double h0 = glm::dot(from - tri.a, n);  // [m] height of the start
+    const double dn = glm::dot(d, n);             // [m] per unit t
+    if (dn < 0.0 && h0 >= -r) {
+      const double t = h0 > r ? (h0 - r) / -dn : 0.0;
+      if (t < t_best) {
+        const glm::dvec3 q = from + t * d - (t > 0.0 ? r : h0) * n;  // the touched point on the plane
+        double b1 = 0.0, b2 = 0.0;
+        const glm::dvec3 on = detail::closest_on_triangle(q, tri.a, tri.e1, tri.e2, b1, b2);
+        if (glm::dot(on - q, on - q) <= 1e-24 * area2 && (t > 0.0 || h0 >= 0.0)) {
+          t_best = t;
+          contact = q;
+          found = true;
+        }
+      }
+    }
+    // the corners' balls and the edges' cylinders
+    const std::array<glm::dvec3, 3> corner{tri.a, tri.a + tri.e1, tri.a + tri.e2};
+    for (std::size_t k = 0; k < 3; ++k) {
+      double t = 0.0;
+      if (ball(from - corner[k], d, r, t) && t < t_best) {
+        t_best = t;
+        contact = corner[k];
+        found = true;
+      }
+      const glm::dvec3 p = corner[k], e = corner[(k + 1) % 3] - p;
+      double s = 0.0;
+      if (cylinder(from - p, d, e, r, t, s) && t < t_best) {
+        t_best = t;
+        contact = p + s * e;
+        found = true;
+      }
+    }
+    if (!found) return;
+    best_t = t_best;
+    best.triangle = tri.id;
+    best.t = t_best;
+    // barycentric weights of the touched point
+    double b1 = 0.0, b2 = 0.0;
+    (void)detail::closest_on_triangle(contact, tri.a, tri.e1, tri.e2, b1, b2);
+    best.b1 = b1;
+    best.b2 = b2;
+    best.contact_point = contact;
+  }
+
+  /// The entering time t in [0, 1] of a point f + t d into the ball of
+  /// radius r about the origin; t = 0 when it starts inside and moves
+  /// inward.
+  static bool ball(const glm::dvec3& f, const glm::dvec3& d, double r, double& t) noexcept {
+    const double c = glm::dot(f, f) - r * r;
+    const double b = glm::dot(f, d);
+    if (!(b < 0.0)) return false;  // not approaching
+    if (c <= 0.0) {
+      t = 0.0;
+      return true;
+    }
+    const double a = glm::dot(d, d);
+    const double disc = b * b - a * c;
+    if (!(disc >= 0.0)) return false;
+    t = c / (-b + std::sqrt(disc));  // the smaller root, without cancellation
+    return t <= 1.0;
+  }
+
+  /// The entering time t in [0, 1] of a point f + t d into the cylinder of
+  /// radius r about the segment s e, s in [0, 1] (s receives where); t = 0
+  /// when it starts inside and moves inward.
+  static bool cylinder(const glm::dvec3& f, const glm::dvec3& d, const glm::dvec3& e, double r, double& t,
+                       double& s) noexcept {
+    const double ee = glm::dot(e, e);
+    if (!(ee > 0.0)) return false;
+    // components normal to the axis
+    const glm::dvec3 fp = f - (glm::dot(f, e) / ee) * e;
+    const glm::dvec3 dp = d - (glm::dot(d, e) / ee) * e;
+    const double a = glm::dot(dp, dp), b = glm::dot(fp, dp), c = glm::dot(fp, fp) - r * r;
+    if (!(b < 0.0)) return false;  // not approaching the axis
+    if (c <= 0.0) {
+      t = 0.0;
+    } else {
+      const double disc = b * b - a * c;
+      if (!(disc >= 0.0)) return false;
+      t = c / (-b + std::sqrt(disc));
+      if (!(t <= 1.0)) return false;
+    }
+    s = glm::dot(f + t * d, e) / ee;
+    return s >= 0.0 && s <= 1.0;
   }
 
   /// The tie rule (file comment) for a segment along d that meets the

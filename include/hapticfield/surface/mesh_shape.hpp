@@ -75,6 +75,28 @@ class MeshShape {
     return out;
   }
 
+  /// The first contact of a ball of `radius` [m] whose centre moves from
+  /// `from` to `to` (MeshBvh::sweep_sphere): Hit::point is the touched
+  /// point of the mesh, face_normal the contact normal (unit, from it to the
+  /// centre at contact), normal the shaded normal where the ball touches a
+  /// face's inside, else the contact normal; t the fraction of the move.
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
+                                 QueryStats* stats = nullptr) const noexcept {
+    const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats);
+    Hit out = describe(h);
+    out.t = h.t;
+    if (!h.found()) return out;
+    const glm::dvec3 centre = from + h.t * (to - from);
+    const glm::dvec3 towards = centre - h.contact_point;
+    const double length = glm::length(towards);
+    const glm::dvec3 n = length > 0.0 ? towards / length : out.face_normal;
+    if (!(glm::dot(n, out.face_normal) > 1.0 - 1e-12)) out.normal = n;  // an edge or a corner
+    out.face_normal = n;
+    out.point = h.contact_point;
+    out.distance = h.t * glm::length(to - from);
+    return out;
+  }
+
   /// The point of one triangle nearest to p, if within max_distance [m]
   /// (no tree traversal: the proxy's check that it is still on a face).
   [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p, double max_distance) const noexcept {

@@ -164,6 +164,17 @@ class Posed {
 
   /// The point of one primitive nearest to p, where the inner shape answers
   /// for one primitive.
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius) const noexcept requires
+      requires(const S& s) {
+    s.sweep_sphere(from, to, radius);
+  }
+  { return world(shape_.sweep_sphere(local(from), local(to), radius)); }
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
+                                 QueryStats* stats) const noexcept requires requires(const S& s) {
+    s.sweep_sphere(from, to, radius, stats);
+  }
+  { return world(shape_.sweep_sphere(local(from), local(to), radius, stats)); }
+
   [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p,
                                  double max_distance) const noexcept requires requires(const S& s) {
     s.on_primitive(primitive, p, max_distance);

@@ -105,7 +105,16 @@ struct ProxyConfig {
   /// found by sweeping over the surface; on a flat face the two agree, on a
   /// curved mesh they differ a little (stick or slide near the cone's edge).
   bool stick_first{false};
+  /// The tool's radius [m], 0..proxy_max_radius: 0, a point (the god-object
+  /// proper); > 0, a ball centred on the HIP whose moves are swept spheres
+  /// against the shape (its Minkowski sum: faces, edge cylinders, corner
+  /// balls), so it rests r above a plane and never enters a crack narrower
+  /// than 2 r. The shape must answer sweep_sphere() for a radius > 0.
+  double radius{0.0};
 };
+
+/// Largest tool radius a proxy takes [m].
+inline constexpr double proxy_max_radius = 0.05;
 
 /// What the last tick did (for tests and benches).
 struct ProxyTick {
@@ -134,6 +143,10 @@ class ProxyConstraint {
       throw std::invalid_argument("ProxyConstraint: need 0 <= dynamic_friction <= static_friction [-]");
     if (!std::isfinite(config.offset) || config.offset <= 0.0 || config.offset > 0.01)
       throw std::invalid_argument("ProxyConstraint: offset must be in (0, 0.01] (relative to a primitive's size)");
+    if (!std::isfinite(config.radius) || config.radius < 0.0 || config.radius > proxy_max_radius)
+      throw std::invalid_argument("ProxyConstraint: radius must be in [0, 0.05] [m]");
+    if (config.radius > 0.0 && !sweeps_spheres)
+      throw std::invalid_argument("ProxyConstraint: this shape has no sweep_sphere(), so the tool's radius must be 0");
   }
 
   /// The contact of this tick; moves the proxy. A non-finite position gives
@@ -193,11 +206,11 @@ class ProxyConstraint {
         anchor = x;
         anchor_point = path_.count - 1;
         last_hit = h;
-        if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + eps, eps)) break;
+        if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + eps, eps)) break;
       }
       planes.project(goal);  // the final active set (releases planes the HIP has left)
       if (blocked || planes.count == 0) break;
-      touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance, last_hit);
+      touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance + config_.radius, last_hit);
       if (touched.found() || !touched.complete) break;
       if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
         x = anchor;                        // (back along the path it came: the pieces after it are undone)
@@ -230,7 +243,7 @@ class ProxyConstraint {
         sliding_ = false;
       }
       if (glm::length(candidate - frictionless) > planes.tolerance) {
-        const double reach = 4.0 * planes.max_offset + planes.tolerance;
+        const double reach = 4.0 * planes.max_offset + planes.tolerance + config_.radius;
         if (Hit same = on_same_face(candidate, reach, touched); planes.count == 1 && over_face(same, candidate)) {
           x = candidate;  // both ends over one flat face: nothing can lie between them
           visit(x);
@@ -461,7 +474,7 @@ class ProxyConstraint {
     const double s = glm::length(slide);
     const bool sliding = s > (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth;
     const glm::dvec3 x = sliding ? frictionless + (config_.dynamic_friction * depth / s) * slide : held;
-    const Hit touched = on_same_face(x, 4.0 * planes.max_offset + planes.tolerance, held_face_);
+    const Hit touched = on_same_face(x, 4.0 * planes.max_offset + planes.tolerance + config_.radius, held_face_);
     if (planes.count != 1 || !over_face(touched, x) || !is_finite(x)) return false;
     tick_.planes = planes.count;
     sliding_ = sliding;
@@ -478,8 +491,24 @@ class ProxyConstraint {
     if (path_.count < proxy_max_path) path_.points[static_cast<std::size_t>(path_.count++)] = p;
   }
 
-  /// shape_.first_hit, counting the nodes it visits when the shape can.
+  /// The shape can sweep a ball (sweep_sphere), for a radius > 0.
+  static constexpr bool sweeps_spheres = requires(const S& s, const glm::dvec3& p) { s.sweep_sphere(p, p, 1.0); };
+
+  /// shape_.first_hit (a point) or shape_.sweep_sphere (a ball of the
+  /// tool's radius), counting the nodes it visits when the shape can.
   [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to) noexcept {
+    if constexpr (sweeps_spheres) {
+      if (config_.radius > 0.0) {
+        if constexpr (requires(QueryStats * q) { shape_.sweep_sphere(from, to, 1.0, q); }) {
+          QueryStats q;
+          const Hit h = shape_.sweep_sphere(from, to, config_.radius, &q);
+          tick_.nodes += q.nodes;
+          return h;
+        } else {
+          return shape_.sweep_sphere(from, to, config_.radius);
+        }
+      }
+    }
     if constexpr (requires(QueryStats * q) { shape_.first_hit(from, to, q); }) {
       QueryStats q;
       const Hit h = shape_.first_hit(from, to, &q);
@@ -512,7 +541,7 @@ class ProxyConstraint {
   [[nodiscard]] bool over_face(const Hit& on, const glm::dvec3& p) const noexcept {
     if (!on.found()) return false;
     const double height = glm::dot(p - on.point, on.face_normal);  // [m]
-    return height >= 0.5 * offset_for(on) && height >= on.distance * (1.0 - 1e-9);
+    return height >= config_.radius + 0.5 * offset_for(on) && height >= on.distance * (1.0 - 1e-9);
   }
 
   /// shape_.closest, counting as sweep() does; first the primitive of

@@ -145,6 +145,27 @@ class MeshChecker {
     return PathCrossing{};
   }
 
+  /// The distance from p to the nearest triangle within `within` [m]
+  /// (infinity when none is): the oracle for a ball-shaped tool, whose
+  /// centre must stay its radius away from the mesh.
+  [[nodiscard]] double distance(const glm::dvec3& p, double within) const noexcept {
+    double best = std::numeric_limits<double>::infinity();
+    if (triangles_.empty() || !is_finite(p)) return best;
+    const auto [lo, hi] = range(p - glm::dvec3{within}, p + glm::dvec3{within});
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const std::size_t at = index(x, y, z);
+          for (std::uint32_t i = start_[at]; i < start_[at + 1]; ++i) {
+            const Face& f = triangles_[items_[i]];
+            double b1 = 0.0, b2 = 0.0;
+            const glm::dvec3 q = detail::closest_on_triangle(p, f.a, f.b - f.a, f.c - f.a, b1, b2);
+            best = std::fmin(best, glm::length(q - p));
+          }
+        }
+    return best <= within ? best : std::numeric_limits<double>::infinity();
+  }
+
   [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles_.size(); }
 
  private:

@@ -147,6 +147,18 @@ class PlaneShape {
     return hit_at(point, t * glm::length(to - from), t);
   }
 
+  /// A ball of `radius` [m] whose centre moves from `from` to `to`: the
+  /// plane lifted by the radius, met from its front (Hit::point the touched
+  /// point of the plane).
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius) const noexcept {
+    const double h0 = glm::dot(from - config_.point, config_.normal) - radius;
+    const double h1 = glm::dot(to - config_.point, config_.normal) - radius;
+    if (!(h0 >= -radius) || !(h1 < h0) || !(h1 < 0.0)) return Hit{};  // must move into the lifted plane from its front
+    const double t = h0 > 0.0 ? h0 / (h0 - h1) : 0.0;
+    const glm::dvec3 centre = from + t * (to - from);
+    return hit_at(centre - (t > 0.0 ? radius : h0 + radius) * config_.normal, t * glm::length(to - from), t);
+  }
+
   [[nodiscard]] const PlaneShapeConfig& config() const noexcept { return config_; }
 
  private:
@@ -208,6 +220,31 @@ class SphereShape {
     if (!(disc >= 0.0)) return Hit{};
     const double t = c0 / (-b + std::sqrt(disc));  // = (-b - sqrt(disc)) / a without cancellation
     if (!(t <= 1.0)) return Hit{};
+    const glm::dvec3 r = f + t * d;
+    const double length = glm::length(r);
+    return hit_at(length > 0.0 ? r / length : glm::dvec3{0.0, 0.0, 1.0}, t * std::sqrt(a), t);
+  }
+
+  /// A ball of `radius` [m] whose centre moves from `from` to `to`: the
+  /// sphere grown by the radius (Hit::point the touched point of the
+  /// sphere); a ball already overlapping it and moving in touches at t = 0.
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius) const noexcept {
+    const glm::dvec3 d = to - from;
+    const glm::dvec3 f = from - config_.centre;
+    const double grown = config_.radius + radius;
+    const double a = glm::dot(d, d);
+    const double b = glm::dot(f, d);
+    const double c0 = glm::dot(f, f) - grown * grown;
+    if (!(a > 0.0) || !(b < 0.0)) return Hit{};  // no motion, or moving away
+    double t = 0.0;
+    if (c0 > 0.0) {
+      const double disc = b * b - a * c0;
+      if (!(disc >= 0.0)) return Hit{};
+      t = c0 / (-b + std::sqrt(disc));
+      if (!(t <= 1.0)) return Hit{};
+    } else if (!(glm::length(f) >= config_.radius)) {
+      return Hit{};  // the centre inside the ball itself: from inside the solid
+    }
     const glm::dvec3 r = f + t * d;
     const double length = glm::length(r);
     return hit_at(length > 0.0 ? r / length : glm::dvec3{0.0, 0.0, 1.0}, t * std::sqrt(a), t);
