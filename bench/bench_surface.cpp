@@ -9,6 +9,7 @@
 #include <hapticfield/surface.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -179,8 +180,10 @@ int main(int argc, char** argv) {
   std::printf(
       "| triangles | build [ms] | build [s per M] | depth | mean [ns] | p99 [ns] | worst [ns] | "
       "mean / plane | p99 / plane | nodes mean | nodes worst | brute mean / tree mean | stick_first mean [ns] | "
-      "stick_first p99 [ns] | stick_first worst [ns] |\n");
-  std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+      "stick_first p99 [ns] | stick_first worst [ns] | ball 0.5 mm mean [ns] | ball 0.5 mm p99 [ns] | "
+      "ball 0.5 mm worst [ns] | ball 2 mm mean [ns] | ball 2 mm p99 [ns] | ball 2 mm worst [ns] |\n");
+  std::printf(
+      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const std::size_t target : {1'000ul, 16'000ul, 250'000ul, 1'000'000ul, 4'000'000ul}) {
     if (target > max_triangles) break;
     const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0)));
@@ -208,12 +211,25 @@ int main(int argc, char** argv) {
     double quick_nodes = 0.0;
     std::uint32_t quick_worst_nodes = 0;
     const hf::bench::Cost q = tick_cost(quick, path, quick_nodes, quick_worst_nodes);
+    // a ball-shaped tool (ProxyConfig::radius) of 0.5 and 2 mm on the same path
+    std::array<hf::bench::Cost, 2> ball{};
+    for (std::size_t b = 0; b < 2; ++b) {
+      hf::ProxyConfig round{1500.0, 1.0, 0.5, 0.4};
+      round.radius = b == 0 ? 0.0005 : 0.002;
+      hf::ProxyConstraint tool(shape, round);
+      double ball_nodes = 0.0;
+      std::uint32_t ball_worst_nodes = 0;
+      ball[b] = tick_cost(tool, path, ball_nodes, ball_worst_nodes);
+    }
     const double mtri = static_cast<double>(mesh.triangles.size()) / 1e6;
     std::printf(
-        "| %zu | %.1f | %.2f | %zu | %.0f | %.0f | %.0f | %.1f | %.1f | %.1f | %u | %s | %.0f | %.0f | %.0f |\n",
+        "| %zu | %.1f | %.2f | %zu | %.0f | %.0f | %.0f | %.1f | %.1f | %.1f | %u | %s | %.0f | %.0f | %.0f | %.0f | "
+        "%.0f "
+        "| %.0f | %.0f | %.0f | %.0f |\n",
         mesh.triangles.size(), build_s * 1e3, build_s / mtri, shape.bvh().depth(), c.mean_ns, c.p99_ns, c.worst_ns,
         c.mean_ns / base.mean_ns, c.p99_ns / base.p99_ns, nodes, worst_nodes, brute.c_str(), q.mean_ns, q.p99_ns,
-        q.worst_ns);
+        q.worst_ns, ball[0].mean_ns, ball[0].p99_ns, ball[0].worst_ns, ball[1].mean_ns, ball[1].p99_ns,
+        ball[1].worst_ns);
   }
 
   // --- height field vs tangible image, on a picture-sized grid ---

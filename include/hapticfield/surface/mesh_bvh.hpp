@@ -527,6 +527,11 @@ class MeshBvh {
              BvhHit& best) const noexcept {
     const Triangle& tri = triangles_[slot];
     const glm::dvec3 cross = glm::cross(tri.e1, tri.e2);
+    // the ball stays r or more on one side of the triangle's plane along the
+    // whole move (heights are linear in t): it meets nothing of it
+    const double lift = r * std::sqrt(glm::dot(cross, cross));  // r |cross| [m^3]
+    const double g0 = glm::dot(from - tri.a, cross), g1 = glm::dot(from + best_t * d - tri.a, cross);
+    if ((g0 >= lift && g1 >= lift) || (g0 <= -lift && g1 <= -lift)) return;
     const double area2 = glm::length(cross);
     const glm::dvec3 n = cross / area2;
     double t_best = best_t;
@@ -539,18 +544,31 @@ class MeshBvh {
       const double t = h0 > r ? (h0 - r) / -dn : 0.0;
       if (t < t_best) {
         const glm::dvec3 q = from + t * d - (t > 0.0 ? r : h0) * n;  // the touched point on the plane
-        double b1 = 0.0, b2 = 0.0;
-        const glm::dvec3 on = detail::closest_on_triangle(q, tri.a, tri.e1, tri.e2, b1, b2);
-        if (glm::dot(on - q, on - q) <= 1e-24 * area2 && (t > 0.0 || h0 >= 0.0)) {
+        // inside the triangle: the three edge functions' signs (relative tolerance)
+        const glm::dvec3 w = q - tri.a;
+        const double u = glm::dot(glm::cross(w, tri.e2), cross), v = glm::dot(glm::cross(tri.e1, w), cross);
+        const double whole = area2 * area2, slack = 1e-12 * whole;
+        if (u >= -slack && v >= -slack && u + v <= whole + slack && (t > 0.0 || h0 >= 0.0)) {
           t_best = t;
           contact = q;
           found = true;
         }
       }
     }
-    // the corners' balls and the edges' cylinders
+    // the corners' balls and the edges' cylinders: none is met before a
+    // contact inside the face (they lie in its plane), nor when the moving
+    // centre never comes within r of the triangle's bounding ball
     const std::array<glm::dvec3, 3> corner{tri.a, tri.a + tri.e1, tri.a + tri.e2};
-    for (std::size_t k = 0; k < 3; ++k) {
+    const glm::dvec3 middle = (corner[0] + corner[1] + corner[2]) / 3.0;
+    double reach2 = 0.0;  // the bounding ball's radius, squared [m^2]
+    for (const glm::dvec3& c : corner)
+      reach2 = std::fmax(reach2, glm::dot(c - middle, c - middle));
+    const glm::dvec3 to_middle = middle - from;
+    const double along = std::clamp(glm::dot(to_middle, d) / std::fmax(glm::dot(d, d), 1e-300), 0.0, t_best);
+    const glm::dvec3 gap = to_middle - along * d;
+    const double bound = r + std::sqrt(reach2);
+    const bool features = !found && glm::dot(gap, gap) <= bound * bound;
+    for (std::size_t k = 0; features && k < 3; ++k) {
       double t = 0.0;
       if (ball(from - corner[k], d, r, t) && t < t_best) {
         t_best = t;
