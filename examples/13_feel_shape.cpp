@@ -3,7 +3,7 @@
 // them.
 //
 //   feel_shape SHAPE --probes IN.csv [--forces OUT.csv] [--stiffness K]
-//              [--damping B] [--friction MU_S[,MU_K]] [--scale S] [--facets]
+//              [--damping B] [--friction MU_S[,MU_K]] [--radius R] [--scale S] [--facets]
 //              [--rotate AX,AY,AZ,DEG] [--translate X,Y,Z]
 //              [--kind mesh|picture|depth] [--height-scale H] [--spacing S]
 //
@@ -17,6 +17,9 @@
 //   t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact
 // the proxy [m], the force on the HIP [N], the contact normal, the touched
 // point's uv, its triangle or grid cell (-1: none) and 1 while touching.
+// --radius R [m] makes the tool a ball of radius R centred on the HIP (the
+// proxy is its centre, resting R above a face); a mesh only: a height map
+// takes a point tool, and --radius > 0 with one is a usage error.
 // Before the forces, stderr tells the shape's box once placed [m], the
 // normals the proxy pushes along and each warning of the mesh reader.
 // Meshes are force-shaded by default (the file's vertex normals, else
@@ -65,6 +68,9 @@ constexpr const char* usage =
     "  --damping B           on the normal velocity while touching [N s/m], in [0, 1e4] (default 0)\n"
     "  --friction MU         static and dynamic friction [-], MU_S,MU_K or one value for both,\n"
     "                        0 <= MU_K <= MU_S <= 10 (default 0: frictionless)\n"
+    "  --radius R            the tool's radius [m], in [0, 0.05] (default 0: a point); > 0 a ball\n"
+    "                        centred on the HIP: the proxy columns are its centre, R above a face.\n"
+    "                        A mesh only: a height map (picture, depth map) takes a point tool\n"
     "  --scale S             a mesh file's unit in metres, in (0, 1e6] (default 1; 0.001 for mm)\n"
     "  --facets              a mesh is felt by its face normals (flat facets); default: force\n"
     "                        shading with the file's vertex normals, else normals from the faces\n"
@@ -80,7 +86,7 @@ constexpr const char* usage =
     "  -h, --help            this text\n"
     "Height maps: pixel (column c, row r) of a W x H map is at x = c S, y = (H - 1 - r) S,\n"
     "z = its height; the surface is solid below. Reads at most 1000000 probes.\n"
-    "stderr tells the placed shape's box [m], its normals and every mesh warning.\n"
+    "stderr tells the placed shape's box [m], its normals, the tool ball and every mesh warning.\n"
     "Exit status: 0 done, 1 bad input (files, meshes, probes), 2 usage error.\n";
 
 enum class Kind { automatic, mesh, picture, depth };
@@ -152,6 +158,8 @@ Arguments parse(hf::cli::Parser& p) {
       a.proxy.damping = p.real(hf::cli::closed(0.0, 1e4));
     } else if (p.is("--friction")) {
       std::tie(a.proxy.static_friction, a.proxy.dynamic_friction) = parse_friction(p.value());
+    } else if (p.is("--radius")) {
+      a.proxy.radius = p.real(hf::cli::closed(0.0, hf::proxy_max_radius));
     } else if (p.is("--scale")) {
       a.scale = p.real(hf::cli::open_closed(0.0, 1e6));
       a.scale_given = true;
@@ -325,11 +333,19 @@ int run(const Arguments& args) {
     throw hf::cli::UsageError("--height-scale and --spacing are for height maps, not meshes");
   if (!mesh && args.scale_given)
     throw hf::cli::UsageError("--scale is for meshes; a height map takes --spacing and --height-scale");
+  if (!mesh && args.proxy.radius > 0.0)
+    throw hf::cli::UsageError("--radius is for meshes: a height map (picture or depth map) takes a point tool only");
   if (!mesh && (args.smooth || args.facets))
     throw hf::cli::UsageError(std::string(args.smooth ? "--smooth" : "--facets") +
                               " is for meshes (a height field is always shaded)");
   // the shape first (a missing or hostile file is reported before stdin is read)
   Loaded loaded = load_shape(args, mesh);
+  if (args.proxy.radius > 0.0) {
+    char text[120];
+    std::snprintf(text, sizeof text, "tool: a ball of radius %.6g m (the proxy columns are its centre)",
+                  args.proxy.radius);
+    loaded.notes.emplace_back(text);
+  }
   const auto probes = read_probes(args.probes);
   std::FILE* out = args.forces == "-" ? stdout : std::fopen(args.forces.c_str(), "w");
   if (!out) throw hf::FileError("cannot write forces file '" + args.forces + "'");

@@ -4,7 +4,8 @@
 // one stderr line and a non-zero exit; closed forms: a flat STL plane gives
 // F = k depth along +z with the proxy on the plane, an icosphere gives a
 // force along the radius of size k depth, flat pictures and depth maps give
-// F = k (height - z); the real meshes of the shared data run end to end.
+// F = k (height - z); with --radius R a ball on the flat STL rests R above
+// it with F = k (R - z); the real meshes of the shared data run end to end.
 #include <catch2/catch.hpp>
 
 #include "child_process.hpp"
@@ -203,6 +204,7 @@ TEST_CASE("feel_shape --help prints the usage on stdout and exits 0", "[feel_sha
     CHECK(r.out.rfind("usage: feel_shape", 0) == 0);
     CHECK(r.out.find("--stiffness") != std::string::npos);
     CHECK(r.out.find("default 1500") != std::string::npos);
+    CHECK(r.out.find("--radius R            the tool's radius [m], in [0, 0.05]") != std::string::npos);
     CHECK(r.err.empty());
   }
 }
@@ -275,6 +277,19 @@ TEST_CASE("feel_shape: each bad input is one line on stderr and a non-zero exit"
   check_error({plane, "--probes", good, "--translate", "1,2"}, 2, "--translate expects X,Y,Z");
   check_error({plane, "--probes", good, "--translate", "1,2,3,4"}, 2, "--translate expects X,Y,Z");
   check_error({plane, "--probes", good, "--translate", "0,inf,0"}, 2, "--translate");
+  // the tool's radius: metres in [0, 0.05]; a height map takes a point tool only
+  check_error({plane, "--probes", good, "--radius", "-0.001"}, 2, "--radius must be in [0, 0.05]");
+  check_error({plane, "--probes", good, "--radius", "0.051"}, 2, "--radius must be in [0, 0.05]");
+  check_error({plane, "--probes", good, "--radius", "2"}, 2, "--radius must be in [0, 0.05]");
+  check_error({plane, "--probes", good, "--radius", "nan"}, 2, "--radius");
+  check_error({plane, "--probes", good, "--radius", "2mm"}, 2, "--radius");
+  check_error({plane, "--probes", good, "--radius"}, 2, "--radius needs a value");
+  check_error({picture, "--probes", good, "--radius", "0.001"}, 2, "--radius is for meshes");
+  cv::Mat depth16(20, 20, CV_16U, cv::Scalar(1000));
+  const std::string depth_map = in_tmp("depth16.png");
+  REQUIRE(cv::imwrite(depth_map, depth16));
+  check_error({depth_map, "--probes", good, "--radius", "0.001"}, 2, "--radius is for meshes");
+  check_error({depth_map, "--kind", "picture", "--probes", good, "--radius", "0.05"}, 2, "--radius is for meshes");
   // a mesh with nothing to touch: every triangle without area
   const std::string flat = write(in_tmp("degenerate.stl"),
                                  "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 2 0 0\n"
@@ -388,6 +403,57 @@ TEST_CASE("feel_shape: probes pressing into a flat STL plane give F = k depth al
     sliding += ft > 0.39 * row.f.z;
   }
   CHECK(sliding > 10);
+}
+
+TEST_CASE("feel_shape --radius: a ball pressed into a flat STL rests R above it, F = k (R - the HIP's height)",
+          "[feel_shape][radius]") {
+  const std::string plane = flat_plane_stl(0.2);
+  const double k = 800.0;
+  for (const double radius : {0.0005, 0.002, 0.005}) {
+    INFO("--radius " << radius);
+    // free from 10 mm, then from 0.5 mm above the ball's touch down to 2 mm below the plane, sliding
+    std::vector<glm::dvec3> path{{0.01, -0.02, 0.01}};
+    for (int i = 1; i <= 40; ++i)
+      path.push_back({0.01 + 2e-4 * i, -0.02 + 1e-4 * i, radius + 5e-4 - (radius + 2.5e-3) * i / 40.0});
+    const std::string probes = write(in_tmp("ball.csv"), probe_csv(path));
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", radius);
+    const Result r = run({plane, "--probes", probes, "--stiffness", "800", "--radius", text});
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    CHECK(r.err.find("tool: a ball of radius " + std::string(text) + " m") != std::string::npos);
+    const std::vector<Row> rows = parse_rows(r.out);
+    REQUIRE(rows.size() == path.size());
+    int touching = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      INFO("probe " << i << " at z = " << path[i].z);
+      const Row& row = rows[i];
+      if (path[i].z > radius + 1e-6) {  // the ball's lowest point above the plane: free, the proxy at the HIP
+        CHECK(row.contact == 0);
+        CHECK(row.f == glm::dvec3{0.0});
+        CHECK(glm::length(row.proxy - path[i]) < 1e-12);
+        continue;
+      }
+      if (path[i].z > radius - 1e-6) continue;  // within the proxy's lift of the touch
+      ++touching;
+      CHECK(row.contact == 1);
+      CHECK_THAT(row.f.z, WithinAbs(k * (radius - path[i].z), 1e-6));
+      CHECK_THAT(row.f.x, WithinAbs(0.0, 1e-9));
+      CHECK_THAT(row.f.y, WithinAbs(0.0, 1e-9));
+      CHECK_THAT(row.proxy.z, WithinAbs(radius, 1e-6));  // the ball's centre, R above the plane
+      CHECK_THAT(row.proxy.x, WithinAbs(path[i].x, 1e-9));
+      CHECK_THAT(row.proxy.y, WithinAbs(path[i].y, 1e-9));
+      CHECK(row.n == glm::dvec3{0.0, 0.0, 1.0});
+    }
+    CHECK(touching > 30);
+  }
+  // --radius 0 is the point proxy: the same output as without it
+  const std::string probes = write(in_tmp("ball0.csv"), probe_csv({{0.0, 0.0, 0.01}, {0.001, 0.0, -0.001}}));
+  const Result point = run({plane, "--probes", probes});
+  const Result zero = run({plane, "--probes", probes, "--radius", "0"});
+  REQUIRE(point.status == 0);
+  CHECK(zero.out == point.out);
+  CHECK(zero.err == point.err);
 }
 
 TEST_CASE("feel_shape: a probe path into an icosphere STL gives a force along the radius, k depth", "[feel_shape]") {
