@@ -16,6 +16,7 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/surface.hpp"
 #include "hapticfield/surface/posed_shape.hpp"
+#include "run_seed.hpp"
 #include "surface_meshes.hpp"
 
 using namespace hapticfield;
@@ -26,8 +27,7 @@ namespace {
 /// Catch's --rng-seed when given, else a new seed; printed either way.
 unsigned run_seed() {
   static const unsigned seed = [] {
-    unsigned s = Catch::getCurrentContext().getConfig()->rngSeed();
-    if (s == 0) s = std::random_device{}();
+    const unsigned s = test::run_seed();
     std::printf("test_posed_shape: random seed %u (repeat with --rng-seed %u)\n", s, s);
     return s;
   }();

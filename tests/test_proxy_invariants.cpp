@@ -27,6 +27,7 @@
 #include "hapticfield/surface/mesh_shape.hpp"
 #include "hapticfield/surface/proxy.hpp"
 #include "hapticfield/surface/proxy_check.hpp"
+#include "run_seed.hpp"
 #include "surface_meshes.hpp"
 #if HAPTICFIELD_TEST_HAS_IO
 #include "hapticfield/io/load_mesh.hpp"
@@ -34,16 +35,11 @@
 
 using namespace hapticfield;
 using test::probe_at;
+using test::run_seed;
 
 namespace {
 
 constexpr double k = 1500.0;  // [N/m]
-
-/// A new seed each run unless --rng-seed gives one.
-std::uint32_t run_seed() {
-  const unsigned s = Catch::getCurrentContext().getConfig()->rngSeed();
-  return s != 0 ? s : std::random_device{}();
-}
 
 /// Scales the case counts: HAPTICFIELD_PROPERTY_SCALE (default 1).
 double scale() {
@@ -316,22 +312,6 @@ TEST_CASE("(a) presses: every press through a front-facing triangle of a constru
   }
 }
 
-TEST_CASE("(a) presses: every triangle of the small real models, thousands of the large ones", "[invariant][real]") {
-  if (real_data_absent()) {
-    WARN("skipped: ../shared/data is absent");
-    return;
-  }
-  const std::uint32_t seed = run_seed();
-  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
-  std::mt19937 rng(seed);
-  for (const Model& m : real_models()) {
-    const auto [pressed, missed] = press_all(m.mesh, rng, m.small ? 0 : static_cast<int>(2000 * scale()), m.name);
-    INFO(m.name << ": " << missed << " missed of " << pressed);
-    CHECK(pressed > 0);
-    CHECK(missed == 0);
-  }
-}
-
 TEST_CASE("(b) slides at 26 mm/s and 2 m/s never cross the surface: constructed and random closed meshes",
           "[invariant]") {
   const std::uint32_t seed = run_seed();
@@ -355,7 +335,10 @@ TEST_CASE("(b) slides at 26 mm/s and 2 m/s never cross the surface: constructed 
       }
 }
 
-TEST_CASE("(b) slides on every real model never cross the surface", "[invariant][real]") {
+TEST_CASE(
+    "(a) and (b) on every real model: each small model's triangles and thousands of the large ones pressed, "
+    "hundreds of slides at 26 mm/s and 2 m/s",
+    "[invariant][real]") {
   if (real_data_absent()) {
     WARN("skipped: ../shared/data is absent");
     return;
@@ -363,13 +346,23 @@ TEST_CASE("(b) slides on every real model never cross the surface", "[invariant]
   const std::uint32_t seed = run_seed();
   INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
   std::mt19937 rng(seed);
-  for (const Model& m : real_models())
-    for (const double speed : {0.026, 2.0}) {
-      const auto [slides, crossed] =
-          slide_all(m.mesh, rng, static_cast<int>(200 * scale()), speed, speed < 1.0 ? 200 : 50, m.name);
-      INFO(m.name << " at " << speed << " m/s: " << crossed << " crossings in " << slides << " slides");
-      CHECK(crossed == 0);
+  SECTION("presses are caught") {
+    for (const Model& m : real_models()) {
+      const auto [pressed, missed] = press_all(m.mesh, rng, m.small ? 0 : static_cast<int>(2000 * scale()), m.name);
+      INFO(m.name << ": " << missed << " missed of " << pressed);
+      CHECK(pressed > 0);
+      CHECK(missed == 0);
     }
+  }
+  SECTION("slides never cross the surface") {
+    for (const Model& m : real_models())
+      for (const double speed : {0.026, 2.0}) {
+        const auto [slides, crossed] =
+            slide_all(m.mesh, rng, static_cast<int>(200 * scale()), speed, speed < 1.0 ? 200 : 50, m.name);
+        INFO(m.name << " at " << speed << " m/s: " << crossed << " crossings in " << slides << " slides");
+        CHECK(crossed == 0);
+      }
+  }
 }
 
 TEST_CASE("(c) a probe moving on the boundary of a convex solid is not inside: no force beyond k x tolerance",
@@ -556,7 +549,7 @@ TEST_CASE("a non-finite velocity keeps Fc and drops only the damping", "[invaria
   CHECK(d.force.z == Approx(k * 0.002).epsilon(1e-6));
 }
 
-TEST_CASE("the constructed solids are closed and outward: positive volume, every edge shared twice", "[invariant]") {
+TEST_CASE("the constructed solids are outward: a positive volume by the divergence theorem", "[invariant]") {
   std::mt19937 rng(7);
   for (const TriangleMesh& m : {wedge(0.02, 0.01, 0.03), wedge(1e-4, 0.02, 0.03), tetrahedron(0.01), octahedron(0.012),
                                 random_closed_mesh(rng, 0.04, 0.15)}) {

@@ -17,19 +17,16 @@
 #include "hapticfield/surface/mesh_shape.hpp"
 #include "hapticfield/surface/proxy.hpp"
 #include "hapticfield/surface/proxy_check.hpp"
+#include "run_seed.hpp"
 #include "surface_meshes.hpp"
 
 using namespace hapticfield;
 using test::probe_at;
+using test::run_seed;
 
 namespace {
 
 constexpr double k = 1500.0;  // [N/m]
-
-std::uint32_t run_seed() {
-  const unsigned s = Catch::getCurrentContext().getConfig()->rngSeed();
-  return s != 0 ? s : std::random_device{}();
-}
 
 /// Presses the ball toward `goal` from `start` over `ticks` ticks and holds
 /// it there for as many more; returns the last contact.

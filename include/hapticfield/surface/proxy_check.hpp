@@ -111,23 +111,16 @@ class MeshChecker {
   [[nodiscard]] PathCrossing crossing(const glm::dvec3& a, const glm::dvec3& b) const noexcept {
     PathCrossing out;
     if (triangles_.empty() || !is_finite(a) || !is_finite(b)) return out;
-    const auto [lo, hi] = range(glm::min(a, b), glm::max(a, b));
     double best = std::numeric_limits<double>::infinity();
-    for (int z = lo[2]; z <= hi[2]; ++z)
-      for (int y = lo[1]; y <= hi[1]; ++y)
-        for (int x = lo[0]; x <= hi[0]; ++x) {
-          const std::size_t at = index(x, y, z);
-          for (std::uint32_t i = start_[at]; i < start_[at + 1]; ++i) {
-            const Face& f = triangles_[items_[i]];
-            const double t = crosses(f, a, b);
-            if (t < best) {
-              best = t;
-              out.triangle = f.id;
-              out.t = t;
-              out.piece = 0;
-            }
-          }
-        }
+    near(glm::min(a, b), glm::max(a, b), [&](const Face& f) {
+      const double t = crosses(f, a, b);
+      if (t < best) {
+        best = t;
+        out.triangle = f.id;
+        out.t = t;
+        out.piece = 0;
+      }
+    });
     out.from = a;
     out.to = b;
     return out;
@@ -151,18 +144,11 @@ class MeshChecker {
   [[nodiscard]] double distance(const glm::dvec3& p, double within) const noexcept {
     double best = std::numeric_limits<double>::infinity();
     if (triangles_.empty() || !is_finite(p)) return best;
-    const auto [lo, hi] = range(p - glm::dvec3{within}, p + glm::dvec3{within});
-    for (int z = lo[2]; z <= hi[2]; ++z)
-      for (int y = lo[1]; y <= hi[1]; ++y)
-        for (int x = lo[0]; x <= hi[0]; ++x) {
-          const std::size_t at = index(x, y, z);
-          for (std::uint32_t i = start_[at]; i < start_[at + 1]; ++i) {
-            const Face& f = triangles_[items_[i]];
-            double b1 = 0.0, b2 = 0.0;
-            const glm::dvec3 q = detail::closest_on_triangle(p, f.a, f.b - f.a, f.c - f.a, b1, b2);
-            best = std::fmin(best, glm::length(q - p));
-          }
-        }
+    near(p - glm::dvec3{within}, p + glm::dvec3{within}, [&](const Face& f) {
+      double b1 = 0.0, b2 = 0.0;
+      const glm::dvec3 q = detail::closest_on_triangle(p, f.a, f.b - f.a, f.c - f.a, b1, b2);
+      best = std::fmin(best, glm::length(q - p));
+    });
     return best <= within ? best : std::numeric_limits<double>::infinity();
   }
 
@@ -192,6 +178,20 @@ class MeshChecker {
     const double w0 = 1.0 - w1 - w2;
     const double in = config_.interior;
     return w0 > in && w1 > in && w2 > in ? t : std::numeric_limits<double>::infinity();
+  }
+
+  /// Calls visit(face) for every triangle in a cell the box [lo, hi] meets
+  /// (a triangle in several cells more than once).
+  template <class Visit>
+  void near(const glm::dvec3& lo, const glm::dvec3& hi, Visit&& visit) const noexcept {
+    const auto [from, to] = range(lo, hi);
+    for (int z = from[2]; z <= to[2]; ++z)
+      for (int y = from[1]; y <= to[1]; ++y)
+        for (int x = from[0]; x <= to[0]; ++x) {
+          const std::size_t at = index(x, y, z);
+          for (std::uint32_t i = start_[at]; i < start_[at + 1]; ++i)
+            visit(triangles_[items_[i]]);
+        }
   }
 
   [[nodiscard]] std::pair<std::array<int, 3>, std::array<int, 3>> range(const glm::dvec3& lo,
