@@ -14,7 +14,8 @@
 //
 //   hapticfield_view SOURCE [--field tangible|video|normals|texture] [field options]
 //       [--device mouse|sim|hid[:VID:PID]] [--screenshot OUT.png --seconds S]
-//   hapticfield_view --shape FILE [--height-mm H] [--view YAW,PITCH] [--distance MM] [same probe options]
+//   hapticfield_view --shape FILE [--height-mm H] [--radius MM] [--view YAW,PITCH] [--distance MM]
+//       [same probe options]
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -108,6 +109,10 @@ constexpr const char* usage_text =
     "  --max-triangles N    most triangles a mesh may make, counted before it is read, in\n"
     "                       1..20000000 (default 20000000); a height map: --max-mpx\n"
     "  --height-mm H        a height map's height of white over black [mm], in (0, 100] (default 4)\n"
+    "  --radius MM          the tool's radius [mm], in [0, 50] (default 0: a point, drawn as a dot);\n"
+    "                       > 0 a ball centred on the HIP, felt against the mesh and drawn as a\n"
+    "                       shaded ball of that radius at the proxy. A mesh only: a height map\n"
+    "                       takes a point tool\n"
     "  --view YAW,PITCH     the camera's orbit [degrees]: yaw in [-180, 180] about y (up), pitch in\n"
     "                       [-89, 89] (default 25,30; 0,0 looks from +z, the user's side)\n"
     "  --distance MM        the camera's distance from the shape's centre [mm], in [1, 1e5]\n"
@@ -150,6 +155,7 @@ struct Arguments {
   std::size_t max_triangles{io::default_max_mesh_triangles};  ///< a mesh's most triangles
   std::vector<std::string> shape_only;                        ///< the shape-only options given
   double height_mm{4.0};
+  double radius_mm{0.0};            ///< the tool's radius [mm]
   glm::dvec2 view_deg{25.0, 30.0};  ///< yaw, pitch [degrees]
   std::optional<double> distance_mm;
 };
@@ -285,6 +291,9 @@ Arguments parse(cli::Parser& p) {
     } else if (p.is("--max-triangles")) {
       o.max_triangles = static_cast<std::size_t>(p.integer(1, static_cast<long long>(io::default_max_mesh_triangles)));
       o.shape_only.push_back("--max-triangles");
+    } else if (p.is("--radius")) {
+      o.radius_mm = p.real(cli::closed(0.0, proxy_max_radius * 1e3));
+      o.shape_only.push_back("--radius");
     } else if (p.is("--height-mm")) {
       o.height_mm = p.real(cli::open_closed(0.0, 100.0));
     } else if (p.is("--view")) {
@@ -308,6 +317,10 @@ Arguments parse(cli::Parser& p) {
   }
   if (o.source.empty() && o.shape.empty()) usage("missing SOURCE (a picture or a video file) or --shape FILE");
   if (o.shape.empty() && !o.shape_only.empty()) usage(o.shape_only.front() + " is for --shape FILE (a mesh)");
+#if HAPTICFIELD_EXAMPLE_SHAPES
+  if (o.radius_mm > 0.0 && is_height_picture(o.shape))
+    usage("--radius is for a mesh: a height map ('" + o.shape + "') takes a point tool only");
+#endif
   if (!o.screenshot.empty() && !o.seconds) usage("--screenshot needs --seconds (how long the loop runs first)");
   if (o.seconds && std::llround(*o.seconds * o.rate) < 1) {
     char text[160];
@@ -670,7 +683,12 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   ViewStatus status;
   status.source = scene.label;
   status.device = device_label(o.device, device.info().name);
-  status.field = "proxy (god-object), k 1500 N/m";
+  char field_text[80];
+  if (o.radius_mm > 0.0)
+    std::snprintf(field_text, sizeof field_text, "proxy (god-object), k 1500 N/m, ball r %.3g mm", o.radius_mm);
+  else
+    std::snprintf(field_text, sizeof field_text, "proxy (god-object), k 1500 N/m");
+  status.field = field_text;
   status.keys = {"mouse: HIP in the view plane; wheel or [ ]:", "push it in / out 1 mm; right-drag or j l i k:",
                  "orbit; + - zoom, r reset, s shot, q quit"};
   const bool window = o.screenshot.empty();
@@ -695,10 +713,12 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   cv::Mat canvas;
   ViewDrawConfig draw;
   draw.probe_marks = false;
+  Scene3dConfig look;
+  look.tip_radius = o.radius_mm * 1e-3;
   Scene3dMarks marks;
   const auto draw_frame = [&] {
     const auto t0 = std::chrono::steady_clock::now();
-    marks = draw_scene3d(target, scene.display, camera, now);
+    marks = draw_scene3d(target, scene.display, camera, now, look);
     frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     draw_view(canvas, layout, target.image, scope, ViewSample{now.t, glm::dvec2{0.0}, now.force}, status, draw);
   };
@@ -774,6 +794,9 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
         "screenshot: %s, proxy at %d,%d and HIP at %d,%d (on the screenshot), %s; %zu triangles drawn in %.1f ms\n",
         o.screenshot.c_str(), marks.proxy.x + off.x, marks.proxy.y + off.y, marks.hip.x + off.x, marks.hip.y + off.y,
         now.touching ? "touching" : "not touching", marks.stats.drawn, frame_ms);
+    if (o.radius_mm > 0.0)
+      std::printf("screenshot: the tool's ball (r %.6g mm) centred %.3f mm from the eye, covering %zu px\n",
+                  o.radius_mm, glm::dot(now.proxy - camera.eye(), camera.forward()) * 1e3, marks.ball_pixels);
   }
   if (disconnected) throw DeviceError("the device disconnected during the run; zero force was commanded");
   return stop.caught() ? stop.exit_status() : 0;
@@ -784,7 +807,8 @@ template <class Field>
 int run_shape_with(const Arguments& o, const ShapeScene& scene, Field& field) {
   SteadyClock clock;
   const auto now = [&clock] { return clock.now(); };
-  const glm::dvec3 start = scene.top + glm::dvec3{0.0, 0.0, 0.005};  // the mouse: 5 mm above the top
+  // the mouse: 5 mm above the top (the tool's ball: its lowest point)
+  const glm::dvec3 start = scene.top + glm::dvec3{0.0, 0.0, 0.005 + o.radius_mm * 1e-3};
   if (o.device == "mouse") {
     MouseDevice<SteadyClock> mouse(PlaneMapping::fit(800, 600, 80.0), clock);
     mouse.set_position(start);
@@ -836,9 +860,12 @@ int run_shape(const Arguments& o) {
       throw FileError(message);
     }
   });
-  const glm::dvec3 above = scene.top + glm::dvec3{0.0, 0.0, 0.005};  // where the proxy starts
+  // where the proxy starts: clear of the shape's box, its ball too
+  const glm::dvec3 above = scene.top + glm::dvec3{0.0, 0.0, 0.005 + o.radius_mm * 1e-3};
   if (scene.mesh) {
-    ShapeProxyField<MeshShape> field(std::move(*scene.mesh), scene.shift, above);
+    ProxyConfig tool;
+    tool.radius = o.radius_mm * 1e-3;
+    ShapeProxyField<MeshShape> field(std::move(*scene.mesh), scene.shift, above, tool);
     return run_shape_with(o, scene, field);
   }
   ShapeProxyField<HeightFieldShape> field(std::move(*scene.height_field), scene.shift, above);

@@ -3,10 +3,13 @@
 // pinhole projection of known points, the pixels a known triangle covers,
 // the z-buffer keeping the nearer of two triangles, back faces culled, a
 // sphere's silhouette radius f r / sqrt(d^2 - r^2), and decimation for
-// display within its budget, and the mouse's 3D handle position.
+// display within its budget, the tool's ball at the proxy at the size of its
+// silhouette, and the mouse's 3D handle position.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 
 #include "hapticfield/core/plane_mapping.hpp"
@@ -245,6 +248,88 @@ TEST_CASE("the 3D frame marks the proxy and the HIP where they project", "[view3
   CHECK(t.image.at<cv::Vec3b>(marks.proxy) == cv::Vec3b(255, 0, 255));
   CHECK(marks.hip.x == static_cast<int>(std::lround(h.pixel.x - 0.5)));
   CHECK(t.image.at<cv::Vec3b>(marks.hip + cv::Point(hip_radius_px, 0)) == cv::Vec3b(0, 255, 0));
+}
+
+namespace {
+/// Pixels of the tool ball's colour: magenta shaded (B = R > 0, G = 0), and
+/// their bounding box.
+struct Tip {
+  std::size_t pixels{0};
+  int left{1 << 20}, right{-1}, top{1 << 20}, bottom{-1};
+};
+Tip tip_pixels(const cv::Mat& image) {
+  Tip t;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      const cv::Vec3b c = image.at<cv::Vec3b>(y, x);
+      if (c[1] != 0 || c[0] != c[2] || c[0] == 0) continue;
+      ++t.pixels;
+      t.left = std::min(t.left, x), t.right = std::max(t.right, x);
+      t.top = std::min(t.top, y), t.bottom = std::max(t.bottom, y);
+    }
+  return t;
+}
+}  // namespace
+
+TEST_CASE("a tool of radius r is drawn as a ball at the proxy: the sphere's silhouette f r / sqrt(d^2 - r^2)",
+          "[view3d][radius]") {
+  OrbitCamera c;  // 800 x 600, 40 degrees: f = 824 px
+  c.distance = 0.2;
+  for (const double r : {0.002, 0.005, 0.02}) {
+    INFO("r " << r);
+    Sample3d now;
+    now.proxy = {0.0, 0.0, 0.0};   // on the optical axis, 0.2 m from the eye
+    now.hip = {0.0, -0.001, 0.0};  // inside the ball: its ring stays visible over it
+    Scene3dConfig config;
+    config.tip_radius = r;
+    RenderTarget t;
+    const Scene3dMarks marks = draw_scene3d(t, DisplayMesh{}, c, now, config);
+    const double rho = c.focal() * r / std::sqrt(c.distance * c.distance - r * r);
+    const Tip tip = tip_pixels(t.image);
+    // the ball's own count: a disc of radius rho within half a pixel; what is left of it in the tip's colour
+    // under the HIP's ring (radius 8 px, 2 to 3 px wide) and the line to it
+    CHECK(std::abs(std::sqrt(static_cast<double>(marks.ball_pixels) / std::numbers::pi) - rho) < 0.5);
+    CHECK(tip.pixels <= marks.ball_pixels);
+    CHECK(tip.pixels + 250 >= marks.ball_pixels);
+    CHECK(std::abs((tip.right - tip.left + 1) / 2.0 - rho) < 1.0);
+    CHECK(std::abs((tip.bottom - tip.top + 1) / 2.0 - rho) < 1.0);
+    CHECK(std::abs((tip.left + tip.right + 1) / 2.0 - 400.0) < 1.0);
+    CHECK(std::abs((tip.top + tip.bottom + 1) / 2.0 - 300.0) < 1.0);
+    // shaded: lit on the light's side (above and to the left), darker below and to the right
+    const int d = static_cast<int>(std::lround(0.6 * rho));  // clear of the HIP's ring
+    const cv::Vec3b upper_left = t.image.at<cv::Vec3b>(300 - d, 400 - d);
+    const cv::Vec3b lower_right = t.image.at<cv::Vec3b>(300 + d, 400 + d);
+    CHECK(upper_left[1] == 0);
+    CHECK(lower_right[1] == 0);
+    CHECK(upper_left[0] > lower_right[0]);
+    CHECK(t.image.at<cv::Vec3b>(marks.hip + cv::Point(hip_radius_px, 0)) == cv::Vec3b(0, 255, 0));
+  }
+  // twice as far, half the size
+  Sample3d far;
+  far.hip = far.proxy = {0.0, 0.0, -0.2};
+  Scene3dConfig config;
+  config.tip_radius = 0.01;
+  RenderTarget t;
+  const Scene3dMarks marks = draw_scene3d(t, DisplayMesh{}, c, far, config);
+  const double rho = c.focal() * 0.01 / std::sqrt(0.4 * 0.4 - 0.01 * 0.01);
+  CHECK(std::abs(std::sqrt(static_cast<double>(marks.ball_pixels) / std::numbers::pi) - rho) < 0.5);
+  // r = 0 is the dot alone; a ball smaller than the dot is drawn with the dot over it
+  std::size_t dot = 0;
+  for (const double r : {0.0, 1e-4}) {
+    Sample3d now;
+    now.hip = {0.01, 0.0, 0.0};
+    config.tip_radius = r;
+    const Scene3dMarks small = draw_scene3d(t, DisplayMesh{}, c, now, config);
+    CHECK(t.image.at<cv::Vec3b>(small.proxy) == cv::Vec3b(255, 0, 255));
+    if (r == 0.0) {
+      dot = tip_pixels(t.image).pixels;
+      CHECK(small.ball_pixels == 0);
+      CHECK(std::abs(static_cast<double>(dot) - std::numbers::pi * proxy_radius_px * proxy_radius_px) < 10.0);
+    } else {
+      CHECK(tip_pixels(t.image).pixels == dot);
+      CHECK(small.ball_pixels < 10);
+    }
+  }
 }
 
 TEST_CASE("MouseDevice in the 3D view: the handle where set_position put it, to 0.25 um", "[view3d]") {

@@ -12,10 +12,19 @@
 // it. Exit 0 when all hold, 1 otherwise, with one line saying what was
 // found. Independent of where the view is in the picture.
 //
+// shape_check --ball SHOT.png R_MM D_MM
+// Checks the tool's ball (hapticfield_view --radius R_MM) seen on the
+// optical axis at depth D_MM: the pixels of its colour (magenta shaded:
+// blue = red > 0, green 0; nothing else in the view has it) span a disc of
+// the radius the pinhole projection gives, within 2 px, and cover 90 % to
+// 102 % of its area (the HIP's ring, over the ball, takes up to 5 %).
+//
 // shape_check --make-sphere OUT.obj
 // Writes a UV sphere of radius 1 (128 x 64, 16 128 triangles) as OBJ.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <numbers>
 #include <string>
@@ -25,14 +34,49 @@
 
 #include "uv_sphere.hpp"
 
+namespace {
+
+double focal_px() {
+  return 300.0 / std::tan(20.0 * std::numbers::pi / 180.0);
+}
+
+int check_ball(const char* path, const char* r_mm, const char* d_mm) {
+  const cv::Mat shot = cv::imread(path, cv::IMREAD_COLOR);
+  const double radius = std::atof(r_mm), distance = std::atof(d_mm);
+  if (shot.empty() || !(radius > 0.0) || !(distance > radius)) {
+    std::fprintf(stderr, "shape_check: cannot read %s, or bad R '%s' or D '%s'\n", path, r_mm, d_mm);
+    return 1;
+  }
+  const double rho = focal_px() * radius / std::sqrt(distance * distance - radius * radius);
+  int count = 0, left = shot.cols, right = -1, top = shot.rows, bottom = -1;
+  for (int y = 0; y < shot.rows; ++y)
+    for (int x = 0; x < shot.cols; ++x) {
+      const cv::Vec3b c = shot.at<cv::Vec3b>(y, x);
+      if (c[1] != 0 || c[0] != c[2] || c[0] == 0) continue;
+      ++count;
+      left = std::min(left, x), right = std::max(right, x), top = std::min(top, y), bottom = std::max(bottom, y);
+    }
+  const double fill = count / (std::numbers::pi * rho * rho);
+  const double width = right - left + 1, height = bottom - top + 1;
+  const bool ok = count > 0 && std::abs(width / 2.0 - rho) <= 2.0 && std::abs(height / 2.0 - rho) <= 2.0 &&
+                  fill >= 0.90 && fill <= 1.02;
+  std::printf(
+      "shape_check: %s: the tool's ball %gx%g px at %d,%d (expected diameter %.1f px), %d px: %.3f of pi rho^2\n",
+      ok ? "ok" : "FAIL", width, height, left, top, 2.0 * rho, count, fill);
+  return ok ? 0 : 1;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   if (argc == 3 && std::string(argv[1]) == "--make-sphere") {
     std::ofstream out(argv[2]);
     out << hapticfield::test::to_obj(hapticfield::test::uv_sphere(1.0, 128, 64));
     return out ? 0 : 1;
   }
+  if (argc == 5 && std::string(argv[1]) == "--ball") return check_ball(argv[2], argv[3], argv[4]);
   if (argc != 4) {
-    std::fprintf(stderr, "usage: shape_check SHOT.png R_MM D_MM | --make-sphere OUT.obj\n");
+    std::fprintf(stderr, "usage: shape_check SHOT.png R_MM D_MM | --ball SHOT.png R_MM D_MM | --make-sphere OUT.obj\n");
     return 2;
   }
   const cv::Mat shot = cv::imread(argv[1], cv::IMREAD_COLOR);
@@ -41,7 +85,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "shape_check: cannot read %s, or bad R '%s' or D '%s'\n", argv[1], argv[2], argv[3]);
     return 1;
   }
-  const double focal = 300.0 / std::tan(20.0 * std::numbers::pi / 180.0);
+  const double focal = focal_px();
   const double rho = focal * radius / std::sqrt(distance * distance - radius * radius);
   cv::Mat surface(shot.size(), CV_8U, cv::Scalar(0));
   for (int y = 0; y < shot.rows; ++y)
