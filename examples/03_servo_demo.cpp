@@ -32,6 +32,7 @@
 #include "common/hid_device.hpp"
 #include "common/loop_thread.hpp"
 #include "common/plots.hpp"
+#include "common/share.hpp"
 #include "common/stop_signal.hpp"
 
 #include "hapticfield/arms.hpp"
@@ -54,7 +55,7 @@ using namespace hapticfield;
 namespace {
 
 struct Arguments {
-  std::string image{std::string(HAPTICFIELD_EXAMPLE_DATA) + "/coffee.png"};
+  std::string image;  ///< empty: the installed example picture (share/hapticfield/data/coffee.png)
   std::string field{"tangible"};
   double seconds{5.0};
   double rate{1000.0};
@@ -76,7 +77,8 @@ constexpr const char* usage_text =
     "usage: servo_demo [IMAGE] [options]\n"
     "Runs a field in the servo loop on the simulated arm (or a real HID arm) while a\n"
     "scripted hand raster-scans the picture; shows the loop's rate and jitter live.\n"
-    "  IMAGE                 picture felt by --field tangible (default examples/data/coffee.png)\n"
+    "  IMAGE                 picture felt by --field tangible (default: the example picture coffee.png,\n"
+    "                        installed in share/hapticfield/data/)\n"
     "  --field F             tangible (default), wall, spring or none\n"
     "  --seconds S           run time [s], in (0, 3600] and at least one tick (default 5)\n"
     "  --rate HZ             servo rate [Hz], in [1, 10000] (default 1000)\n"
@@ -223,6 +225,12 @@ Arguments parse(cli::Parser& p) {
     usage(text);
   }
   p.finish();  // the trace and plot paths, before the run
+  if (o.shape.empty() && o.image.empty()) {
+    o.image = share::example_picture();
+    if (o.image.empty())
+      throw FileError("the example picture coffee.png is not installed (share/hapticfield/data/ beside " +
+                      share::executable_dir().string() + "); give IMAGE");
+  }
   // the picture, before the run (decoders' own complaints muted: one line)
   if (o.shape.empty()) (void)cli::quiet_stderr([&] { return load_image(o.image); });
   return o;

@@ -6,7 +6,10 @@
 ///
 /// The interpreter: $HAPTICFIELD_PYTHON, else python3 on the PATH, else
 /// /usr/bin/python3, the first that imports matplotlib. The script:
-/// $HAPTICFIELD_PLOT_SCRIPT, else the copy in the source tree.
+/// $HAPTICFIELD_PLOT_SCRIPT, else the installed copy
+/// (<prefix>/share/hapticfield/hapticfield_plots.py, found from the
+/// executable's place), else, for a run from the build tree, the source
+/// tree's (common/share.hpp).
 
 #include <cerrno>
 #include <cstdio>
@@ -17,6 +20,8 @@
 
 #include <spawn.h>
 #include <sys/wait.h>
+
+#include "share.hpp"
 
 extern char** environ;
 
@@ -48,11 +53,7 @@ inline int run(const std::vector<std::string>& args) {
 
 inline std::string script_path() {
   if (const char* s = std::getenv("HAPTICFIELD_PLOT_SCRIPT"); s && *s) return s;
-#ifdef HAPTICFIELD_PLOT_SCRIPT
-  return HAPTICFIELD_PLOT_SCRIPT;
-#else
-  return {};
-#endif
+  return share::plot_script();
 }
 
 }  // namespace detail
@@ -64,7 +65,8 @@ inline bool matplotlib(const std::vector<std::string>& args, std::string& why) {
   const std::string script = detail::script_path();
   std::error_code ec;
   if (script.empty() || !std::filesystem::is_regular_file(script, ec)) {
-    why = "the plot script (scripts/hapticfield_plots.py) was not found";
+    why = script.empty() ? "the plot script (share/hapticfield/hapticfield_plots.py) was not found"
+                         : "the plot script " + script + " was not found";
     return false;
   }
   std::vector<std::string> pythons;
