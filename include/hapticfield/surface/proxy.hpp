@@ -535,11 +535,14 @@ class ProxyConstraint {
 
   /// True when p lies in front of the face of `on` (its closest point on
   /// the face, found) at half the proxy's offset or more, straight over the
-  /// face's inside (not past an edge): a move over one flat, convex face
-  /// between two such points stays in front of it. Behind the face, or off
-  /// its edge where a neighbour may rise, a move is swept instead.
+  /// face's inside (not past an edge): a move of a point proxy over one
+  /// flat, convex face between two such points stays in front of it. Behind
+  /// the face, off its edge where a neighbour may rise, or for a ball, a
+  /// move is swept instead.
   [[nodiscard]] bool over_face(const Hit& on, const glm::dvec3& p) const noexcept {
-    if (!on.found()) return false;
+    // a ball reaches r around its centre: another face may come within r of
+    // the move however high both ends are over this one, so it always sweeps
+    if (!on.found() || config_.radius > 0.0) return false;
     const double height = glm::dot(p - on.point, on.face_normal);  // [m]
     return height >= config_.radius + 0.5 * offset_for(on) && height >= on.distance * (1.0 - 1e-9);
   }

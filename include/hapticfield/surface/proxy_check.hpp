@@ -140,16 +140,40 @@ class MeshChecker {
 
   /// The distance from p to the nearest triangle within `within` [m]
   /// (infinity when none is): the oracle for a ball-shaped tool, whose
-  /// centre must stay its radius away from the mesh.
+  /// centre must stay its radius away from the mesh. Faces are one-sided
+  /// (as for the proxy): a point behind a face's plane, over its inside,
+  /// is not near that face (its edges and corners still count).
   [[nodiscard]] double distance(const glm::dvec3& p, double within) const noexcept {
     double best = std::numeric_limits<double>::infinity();
     if (triangles_.empty() || !is_finite(p)) return best;
-    near(p - glm::dvec3{within}, p + glm::dvec3{within}, [&](const Face& f) {
-      double b1 = 0.0, b2 = 0.0;
-      const glm::dvec3 q = detail::closest_on_triangle(p, f.a, f.b - f.a, f.c - f.a, b1, b2);
-      best = std::fmin(best, glm::length(q - p));
-    });
+    near(p - glm::dvec3{within}, p + glm::dvec3{within},
+         [&](const Face& f) { best = std::fmin(best, one_sided(f, p)); });
     return best <= within ? best : std::numeric_limits<double>::infinity();
+  }
+
+  /// For a ball of radius r whose centre moves from a to b: the smallest
+  /// distance [m], over points every r / 8 along the move, to a triangle
+  /// whose reach (r) the ball entered from outside and from the front, or
+  /// infinity when it entered none. Faces are one-sided: a ball that starts
+  /// within r of a triangle, or first comes within r of it behind its plane
+  /// over its inside (from inside the solid, or behind an open or
+  /// overlapping part), is not held to it.
+  [[nodiscard]] double entered(const glm::dvec3& a, const glm::dvec3& b, double r) const noexcept {
+    double best = std::numeric_limits<double>::infinity();
+    if (triangles_.empty() || !is_finite(a) || !is_finite(b)) return best;
+    const double clear = r * (1.0 - 1e-6);
+    const int samples = 1 + static_cast<int>(glm::length(b - a) / (r / 8));
+    near(glm::min(a, b) - glm::dvec3{r}, glm::max(a, b) + glm::dvec3{r}, [&](const Face& f) {
+      if (!(two_sided(f, a) >= clear)) return;
+      for (int w = 1; w <= samples; ++w) {
+        const glm::dvec3 x = a + (static_cast<double>(w) / samples) * (b - a);
+        const double d = two_sided(f, x);
+        if (!(d < clear)) continue;
+        if (std::isfinite(one_sided(f, x))) best = std::fmin(best, d);  // from the front (or at an edge)
+        return;
+      }
+    });
+    return best;
   }
 
   [[nodiscard]] std::size_t triangle_count() const noexcept { return triangles_.size(); }
@@ -160,6 +184,21 @@ class MeshChecker {
     double size;
     std::uint32_t id;
   };
+
+  /// The distance from p to the face [m], one-sided: infinity behind its
+  /// plane over its inside (its edges and corners count from any side).
+  [[nodiscard]] static double two_sided(const Face& f, const glm::dvec3& p) noexcept {
+    double b1 = 0.0, b2 = 0.0;
+    return glm::length(detail::closest_on_triangle(p, f.a, f.b - f.a, f.c - f.a, b1, b2) - p);
+  }
+
+  [[nodiscard]] static double one_sided(const Face& f, const glm::dvec3& p) noexcept {
+    double b1 = 0.0, b2 = 0.0;
+    const glm::dvec3 q = detail::closest_on_triangle(p, f.a, f.b - f.a, f.c - f.a, b1, b2);
+    const bool inside = b1 > 0.0 && b2 > 0.0 && b1 + b2 < 1.0;
+    if (inside && glm::dot(p - f.a, f.n) < 0.0) return std::numeric_limits<double>::infinity();
+    return glm::length(q - p);
+  }
 
   /// The parameter in [0, 1] where a -> b crosses the face from its front
   /// (see the file comment), or infinity.
