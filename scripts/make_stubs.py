@@ -6,9 +6,10 @@
     python3 scripts/make_stubs.py --out DIR                         # write DIR/hapticfield/__init__.pyi instead
 
 pybind11 puts each function's signature on the first line of its docstring ("name(a: int = 1) -> float"),
-one per overload; this script turns those into Python stub syntax (numpy arrays as numpy.typing.NDArray,
-fixed-size lists as lists, defaults that are not plain literals as `...`) and checks every line it writes
-with Python's own parser. The output depends only on the module's bindings: names are sorted.
+one per overload; this script turns those into Python stub syntax (defaults that are not plain literals as
+`...`) and checks every line it writes with Python's own parser. The output depends only on the module's
+bindings: names are sorted. An argument is typed as what pybind11 converts at run time, a result as what it
+returns (see ARGUMENTS); bare dict, list, tuple and ndarray get their parameters (mypy --strict asks for them).
 """
 import argparse
 import ast
@@ -28,14 +29,28 @@ HEADER = f'''# Type stubs of the {MODULE} module, generated from its bindings by
 '''
 IMPORTS = """import os
 import typing
-from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Set, Tuple, Union, overload
+from typing import (Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Set, SupportsFloat, Tuple,
+                    Union, overload)
 
 import numpy
 import numpy.typing
+
+# A vector argument of 2 or 3 numbers: pybind11 converts any sequence of that length whose items have
+# __float__ (a list, a tuple, numpy scalars) or a 1-D numpy array of floats or integers; another length
+# raises TypeError. Results are lists.
+_Vec2 = Union[Sequence[SupportsFloat], numpy.typing.NDArray[Union[numpy.floating[Any], numpy.integer[Any]]]]
+_Vec3 = Union[Sequence[SupportsFloat], numpy.typing.NDArray[Union[numpy.floating[Any], numpy.integer[Any]]]]
 """
 # pybind11 type names that are not Python's.
 NAMES = {"buffer": "Any", "capsule": "Any", "handle": "Any", "iterator": "Iterator[Any]", "function": "Callable[..., Any]",
-         "iterable": "Iterable[Any]", "sequence": "Sequence[Any]", "none": "None", "json": "Any"}
+         "iterable": "Iterable[Any]", "sequence": "Sequence[Any]", "none": "None", "json": "Any",
+         "dict": "Dict[str, Any]", "list": "List[Any]", "tuple": "Tuple[Any, ...]"}
+# How pybind11 converts an argument, by the type its signature names (pybind11/stl.h, numpy.h): a std::array of N
+# from any sequence of N numbers, a std::vector from any sequence but str and bytes (List[T] -> Sequence[T]), a
+# py::array_t from anything numpy.asarray takes. A plain py::array takes a numpy array only.
+ARGUMENTS = [(r"List\[float\[2\]\]", "_Vec2"), (r"List\[float\[3\]\]", "_Vec3"),
+             (r"numpy\.ndarray\[[A-Za-z0-9_.]+(\[[^\]]*\])?\]", "numpy.typing.ArrayLike"),
+             (r"\bList\[", "Sequence[")]
 LITERAL = re.compile(r"^(None|True|False|-?\d+(\.\d*)?([eE][-+]?\d+)?|-?inf|nan|'[^'\\]*'|\"[^\"\\]*\")$")
 
 
@@ -59,9 +74,14 @@ def split_top(text, sep=","):
     return [p.strip() for p in parts if p.strip()]
 
 
-def clean_type(t):
+def clean_type(t, argument=False):
+    """A pybind11 type name in stub syntax: as an argument (what pybind11 converts) or as a result."""
     t = t.replace(f"{MODULE}.", "")
+    if argument:
+        for pattern, replacement in ARGUMENTS:
+            t = re.sub(pattern, replacement, t)
     t = re.sub(r"numpy\.ndarray\[([A-Za-z0-9_.]+)(\[[^\]]*\])?\]", r"numpy.typing.NDArray[\1]", t)
+    t = re.sub(r"numpy\.ndarray\b(?!\[)", "numpy.typing.NDArray[Any]", t)
     while re.search(r"\[\d+\]", t):
         t = re.sub(r"\[\d+\]", "", t)
     t = re.sub(r"\b[A-Za-z_][A-Za-z0-9_]*\b", lambda m: NAMES.get(m.group(0), m.group(0)), t)
@@ -71,13 +91,13 @@ def clean_type(t):
 def clean_parameter(p, first):
     if p in ("*", "/") or p.startswith("*"):
         name, _, annotation = p.partition(":")
-        return f"{name.strip()}: {clean_type(annotation.strip())}" if annotation else p
+        return f"{name.strip()}: {clean_type(annotation.strip(), argument=True)}" if annotation else p
     head, eq, default = p.partition("=")
     name, colon, annotation = head.partition(":")
     name = name.strip()
     if first and name == "self":
         return "self"
-    annotation = clean_type(annotation.strip()) if colon else ""
+    annotation = clean_type(annotation.strip(), argument=True) if colon else ""
     default = default.strip()
     if eq and default == "None" and annotation and not annotation.startswith(("Optional[", "None", "Any")):
         annotation = f"Optional[{annotation}]"  # pybind11 allows None where the C++ side takes a holder or pointer
