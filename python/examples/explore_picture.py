@@ -23,7 +23,7 @@ import hapticfield as hf
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
-def main():
+def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="?", default=str(ROOT / "examples" / "data" / "coffee.png"))
     parser.add_argument("--out", default="out/python")

@@ -18,6 +18,7 @@ import argparse
 import pathlib
 import threading
 import time
+from typing import Any, Dict, List
 
 import numpy as np
 
@@ -26,7 +27,7 @@ import hapticfield as hf
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
-def main():
+def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="?", default=str(ROOT / "examples" / "data" / "coffee.png"))
     parser.add_argument("--seconds", type=float, default=1.0, help="length of runs 1 and 2 [s]")
@@ -35,13 +36,13 @@ def main():
                               hf.friction(coulomb=0.4, viscous=0.5, scale_with_normal_force=True)],
                              stiffness=1500.0)
 
-    def summary(name, run, wall):
+    def summary(name: str, run: Dict[str, Any], wall: float) -> None:
         s = run["statistics"]
         print(f"{name:8s}: {s['ticks']} ticks in {wall * 1e3:.1f} ms wall, stop {run['stop_reason']}, "
               f"peak {s['peak_force_n']:.3f} N, missed deadlines {s['missed_deadlines']}, "
               f"period p99 {s['period_p99_s'] * 1e3:.3f} ms")
 
-    runs = {}
+    runs: Dict[str, Dict[str, Any]] = {}
     for name, clock in (("virtual", "virtual"), ("again", "virtual"), ("wall", "wall")):
         start = time.perf_counter()
         runs[name] = hf.run_servo(scene, seconds=a.seconds, clock=clock)
@@ -51,7 +52,7 @@ def main():
     print(f"virtual runs equal bit for bit: {same}; largest difference from the wall-clock run: {differ:.3f} N")
 
     stop = hf.ServoStop()
-    result = []
+    result: List[Dict[str, Any]] = []
     loop = threading.Thread(target=lambda: result.append(hf.run_servo(scene, seconds=3600.0, clock="wall",
                                                                         stop=stop)))
     start = time.perf_counter()

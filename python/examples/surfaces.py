@@ -19,7 +19,7 @@ import hapticfield as hf
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
-def main():
+def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--picture", default=str(ROOT / "examples" / "data" / "coffee.png"))
     a = parser.parse_args()
@@ -31,9 +31,11 @@ def main():
     bump = hf.height_field(0.002 * np.exp(-(X ** 2 + Y ** 2) / 0.01 ** 2), spacing=5e-4, origin=(-0.03, -0.03, z0))
 
     # felt through the proxy (k = 1500 N/m, b = 1 N s/m), with a lattice texture laid on it by uv
-    # (1 uv unit = the 6 cm footprint) and friction
+    # (1 uv unit = the 6 cm footprint: a height field has one, other surfaces None) and friction
+    footprint = bump.footprint
+    assert footprint is not None
     texture = hf.lattice_texture(sigma=0.5, gain=0.3, scale_with_normal_force=True, axes=(1, 1, 0))
-    field = hf.surface_contact(bump, [hf.on_surface(texture, scale=bump.footprint),
+    field = hf.surface_contact(bump, [hf.on_surface(texture, scale=footprint),
                                       hf.friction(coulomb=0.3, scale_with_normal_force=True)],
                                stiffness=1500.0, damping=1.0)
 

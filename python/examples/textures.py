@@ -11,11 +11,13 @@ Also DIR/filters.png: the library's Butterworth filters on white noise.
 import argparse
 import os
 import pathlib
+from typing import Tuple
 
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+import numpy.typing as npt
 
 import hapticfield as hf
 
@@ -23,9 +25,10 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 RATE = 1000.0   # [Hz]
 SPEED = 0.05    # [m/s]
 K = 1000.0      # plane stiffness [N/m]
+Array = npt.NDArray[np.float64]
 
 
-def welch(x, fs, seg=256):
+def welch(x: Array, fs: float, seg: int = 256) -> Tuple[Array, Array]:
     """Welch PSD [N^2/Hz], Hann window, 50 % overlap."""
     w = np.hanning(seg)
     x = x - np.mean(x)
@@ -35,7 +38,7 @@ def welch(x, fs, seg=256):
     return np.fft.rfftfreq(seg, 1 / fs), p
 
 
-def main():
+def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", default="out/python")
     parser.add_argument("--hatt", default=str(ROOT / "tests" / "data" / "hatt" / "Models_Toolkit 1kHz ARMA.xml"))
@@ -46,15 +49,16 @@ def main():
     t = np.arange(n) / RATE
     positions = np.column_stack([-0.05 + SPEED * t, np.full(n, 0.002), np.full(n, -1.0 / K)])
     velocities = np.tile([SPEED, 0.0, 0.0], (n, 1))
-    lateral = dict(axes=(1, 1, 0), gain=0.5)
+    lateral, gain = (1, 1, 0), 0.5  # tangential only, 0.5 N per texture unit
     textures = {
-        "Gaussian lattice, 1 mm, linear": hf.lattice_texture("gaussian", 0.5, seed=2, **lateral),
-        "Gaussian lattice, 1 mm, cubic": hf.lattice_texture("gaussian", 0.5, seed=2, interpolation="cubic", **lateral),
+        "Gaussian lattice, 1 mm, linear": hf.lattice_texture("gaussian", 0.5, seed=2, axes=lateral, gain=gain),
+        "Gaussian lattice, 1 mm, cubic": hf.lattice_texture("gaussian", 0.5, seed=2, interpolation="cubic",
+                                                            axes=lateral, gain=gain),
         "fBm h = 0.5, 6 octaves from 4 mm": hf.lattice_texture("gaussian", 0.5, seed=7, grain=(4e-3,) * 3, octaves=6,
-                                                               h=0.5, **lateral),
-        "local circle, 0.5 mm": hf.local_sphere_texture("gaussian", 0.5, seed=6, radius=5e-4, **lateral),
+                                                               h=0.5, axes=lateral, gain=gain),
+        "local circle, 0.5 mm": hf.local_sphere_texture("gaussian", 0.5, seed=6, radius=5e-4, axes=lateral, gain=gain),
         "temporal, Butterworth 30-120 Hz": hf.temporal_texture("gaussian", 1.0, seed=10, order=4, band="band_pass",
-                                                               f1=30, f2=120, **lateral),
+                                                               f1=30, f2=120, axes=lateral, gain=gain),
         "friction mu 0.3 + viscous 2 N s/m": hf.friction(coulomb=0.3, viscous=2.0, scale_with_normal_force=True),
     }
     if os.path.exists(a.hatt):
