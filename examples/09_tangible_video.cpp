@@ -9,7 +9,7 @@
 // With --probes it renders offline, as fast as it can: t,x,y per line (t in
 // seconds of video time, frame k at k / fps; x, y in pixels as
 // tangible_image) to t,x,y,fx,fy (normalised, 1 = a black/white edge, fy
-// down), blends and fades included. Without --probes it plays the video to
+// down), blends and fades included (the first frame fades in from zero). Without --probes it plays the video to
 // the simulated arm (a scripted hand raster-scans it) or a HID arm in the
 // 1 kHz servo loop, with a live status line; --clock virtual runs the
 // simulated arm on simulated time, in lockstep with the video's worker, so
@@ -69,7 +69,8 @@ constexpr const char* usage =
     "                        sobel odd 3..31 (default 3), scharr 3, roberts 2\n"
     "  --border B            suspend (default), clamp, reflect or fade\n"
     "  --denoise D           none, temporal (default), spatial or both (compression noise)\n"
-    "  --fade-ms MS          fade out and in across a scene cut [ms], in [0, 10000] (default 100)\n"
+    "  --fade-ms MS          fade out and in across a scene cut [ms], in [0, 10000] (default 100);\n"
+    "                        the video's first frame fades in from zero force the same way\n"
     "  --cuts OUT.csv        write frame,time [s] for each detected cut (frame = first of the new scene)\n"
     "  --probes IN.csv       t,x,y per line: t [s of video time, frame k at k / fps], x, y [px]\n"
     "                        (x right, y down, integer = pixel centre; a header line allowed); needs --forces\n"
