@@ -1,7 +1,7 @@
 // hapticfield_view: a live window showing what the arm feels. The picture
 // (or the field's own underlay: normals faces, a texture patch) with the
 // probe as a cursor and the force as an arrow, the loop's rate, jitter,
-// missed deadlines and safety events, and a rolling scope of Fx, Fy, |F|.
+// missed deadlines and safety events, and a rolling scope of Fx, Fy, Fz, |F|.
 // The probe follows the mouse (forces shown, not felt), the simulated arm's
 // scripted hand, or a real arm. The servo loop runs on its own thread and
 // never waits for drawing: ticks hand samples to the window through a
@@ -61,6 +61,7 @@
 #include "view/scope.hpp"
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
+#include "view/window.hpp"
 #if HAPTICFIELD_EXAMPLE_HID
 #include "hapticfield/transport/hid_transport.hpp"
 #endif
@@ -76,7 +77,7 @@ namespace {
 constexpr const char* usage_text =
     "usage: hapticfield_view SOURCE [options]\n"
     "A live window showing what the arm feels: the picture under the probe, the probe as a\n"
-    "cursor, the force as an arrow, a rolling scope of Fx, Fy, |F| and the loop's timing and\n"
+    "cursor, the force as an arrow, a rolling scope of Fx, Fy, Fz, |F| and the loop's timing and\n"
     "safety events. The servo loop runs on its own thread and never waits for drawing.\n"
     "  SOURCE               a picture file (any format OpenCV reads), or a video file or an\n"
     "                       image sequence (a printf pattern such as frames/%04d.png)\n"
@@ -131,7 +132,8 @@ constexpr const char* usage_text =
     "Keys: f field, m mask, + / - size (texture: grain), b border, d denoise, space pause and\n"
     "resume, [ ] seek -5 s / +5 s (the video field), s screenshot, q or Esc quit.\n"
     "A shape: the mouse moves the HIP in the view plane, the wheel or [ ] push it in and out\n"
-    "(1 mm), right-drag or j l i k orbit, + - zoom, r resets the view, s screenshot, q or Esc quit.\n"
+    "(1 mm a notch; the wheel moves the probe only, it does not zoom the window), right-drag\n"
+    "or j l i k orbit, + - zoom, r resets the view, s screenshot, q or Esc quit.\n"
     "Ctrl-C or SIGTERM stops the loop through its stop (zero force, then disarm).\n"
     "Exit status: 0 done, 1 bad input or failure, 2 usage error, 128 + N stopped by signal N.\n";
 
@@ -476,10 +478,8 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     note_until = now.t + 3.0;
   };
 
-  if (window) {
-    cv::namedWindow(window_title, cv::WINDOW_AUTOSIZE);
-    cv::setMouseCallback(window_title, on_mouse, &pointer);
-  }
+  std::optional<ViewWindow> shown;  // the wheel does nothing here (a picture has no depth)
+  if (window) shown.emplace(window_title, on_mouse, &pointer);
   while (!servo.done()) {
     drain();
     if (!window) {
@@ -488,7 +488,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
     }
     if (now.t > note_until) status.note.clear();
     draw_view(canvas, layout, scene.underlay, scope, now, status);
-    cv::imshow(window_title, canvas);
+    shown->show(canvas);
     const int key = cv::waitKey(15) & 0xff;
     if (cv::getWindowProperty(window_title, cv::WND_PROP_VISIBLE) < 1.0) break;  // closed by the user
     SceneConfig next = cfg;
@@ -623,8 +623,8 @@ void on_shape_mouse(int event, int x, int y, int flags, void* user) {
         std::clamp(p->drag_pitch + (y - p->drag.y) * 0.5 * degree, -OrbitCamera::max_pitch, OrbitCamera::max_pitch);
     return;
   }
-  if (event == cv::EVENT_MOUSEWHEEL || event == cv::EVENT_MOUSEHWHEEL) {
-    push_hip(*p, cv::getMouseWheelDelta(flags) > 0 ? 1.0 : -1.0);
+  if (event == cv::EVENT_MOUSEWHEEL) {  // the probe's depth, and nothing else (see view/window.hpp)
+    push_hip(*p, wheel_notches(event, flags));
     return;
   }
   if (event != cv::EVENT_MOUSEMOVE || !p->mouse) return;
@@ -724,10 +724,8 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   };
   ShapePointer pointer{&layout, &camera, mouse, start};
   int shot = 0;
-  if (window) {
-    cv::namedWindow(window_title, cv::WINDOW_AUTOSIZE);
-    cv::setMouseCallback(window_title, on_shape_mouse, &pointer);
-  }
+  std::optional<ViewWindow> shown;
+  if (window) shown.emplace(window_title, on_shape_mouse, &pointer);
   while (!servo.done()) {
     drain();
     if (!window) {
@@ -736,7 +734,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
     }
     if (now.t > note_until) status.note.clear();
     draw_frame();
-    cv::imshow(window_title, canvas);
+    shown->show(canvas);
     const int key = cv::waitKey(10) & 0xff;
     if (cv::getWindowProperty(window_title, cv::WND_PROP_VISIBLE) < 1.0) break;
     switch (key) {

@@ -26,6 +26,7 @@
 #include "view/scope.hpp"
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
+#include "view/window.hpp"
 
 using namespace hapticfield;
 using namespace hapticfield::view;
@@ -200,6 +201,71 @@ TEST_CASE("build_scene: normals need faces, and a face tints the picture by its 
   cv::Scalar mean, dev;
   cv::meanStdDev(t.underlay, mean, dev);
   CHECK(dev[0] > 5.0);  // a patch, not a flat colour
+}
+
+TEST_CASE("the scope draws Fz: a push along z is its own red trace, below zero when it points down") {
+  Scope scope({.window = 2.0, .min_range = 0.1});
+  for (int i = 0; i <= 200; ++i)  // Fz = -0.6 N for 2 s, nothing along x or y: |F| = 0.6 N above zero
+    scope.add({i * 0.01, {0, 0}, {0.0, 0.0, -0.6}});
+  REQUIRE(scope.range() == Catch::Detail::Approx(1.0));
+  cv::Mat canvas(230, 500, CV_8UC3, cv::Scalar(0, 0, 0));
+  const cv::Rect area(0, 0, 500, 230);
+  scope.draw(canvas, area);
+  // the plot's box as Scope::draw lays it out: the force axis from +r at its top to -r at its bottom
+  const int top = 26, bottom = 230 - 40, left = 62, right = 500 - 12;
+  const auto y_of = [&](double f) { return top + static_cast<int>(std::lround((1.0 - f) / 2.0 * (bottom - top))); };
+  const auto has = [&](int y, const cv::Scalar& colour) {
+    for (int x = left + 20; x < right - 20; x += 10)
+      for (int dy = -1; dy <= 1; ++dy)
+        if (cv::norm(cv::Vec3d(canvas.at<cv::Vec3b>(y + dy, x)) - cv::Vec3d(colour[0], colour[1], colour[2])) < 40.0)
+          return true;
+    return false;
+  };
+  CHECK(std::string(scope_names[2]) == "Fz");
+  CHECK(has(y_of(-0.6), scope_colours[2]));        // Fz, below zero
+  CHECK_FALSE(has(y_of(0.6), scope_colours[2]));   // not where |F| is
+  CHECK(has(y_of(0.6), scope_colours[3]));         // |F|
+  CHECK_FALSE(has(y_of(-0.6), scope_colours[0]));  // Fx and Fy stay at zero
+  CHECK(scope_value({0.1, 0.2, -0.3}, 2) == -0.3);
+  CHECK(scope_value({0.0, 3.0, 4.0}, 3) == Catch::Detail::Approx(5.0));
+}
+
+TEST_CASE("the wheel: notches of the vertical wheel only, fractions from fine wheels") {
+  const auto flags = [](int delta) { return static_cast<int>(static_cast<unsigned>(delta & 0xffff) << 16); };
+  CHECK(wheel_notches(cv::EVENT_MOUSEWHEEL, flags(120)) == 1.0);                             // forward: in
+  CHECK(wheel_notches(cv::EVENT_MOUSEWHEEL, flags(-120)) == -1.0);                           // back: out
+  CHECK(wheel_notches(cv::EVENT_MOUSEWHEEL, flags(-240) | cv::EVENT_FLAG_CTRLKEY) == -2.0);  // modifiers ignored
+  CHECK(wheel_notches(cv::EVENT_MOUSEWHEEL, flags(15)) == Catch::Detail::Approx(0.125));     // a touchpad's step
+  CHECK(wheel_notches(cv::EVENT_MOUSEHWHEEL, flags(120)) == 0.0);                            // sideways: nothing
+  CHECK(wheel_notches(cv::EVENT_MOUSEMOVE, flags(120)) == 0.0);
+  CHECK(wheel_notches(cv::EVENT_LBUTTONDOWN, 0) == 0.0);
+  // 35 notches in, then 35 out: back where it started, by exactly 35 mm each way at 1 mm a notch
+  double depth = 0.0;
+  for (int i = 0; i < 35; ++i)
+    depth += wheel_notches(cv::EVENT_MOUSEWHEEL, flags(120));
+  CHECK(depth == 35.0);
+  for (int i = 0; i < 35; ++i)
+    depth += wheel_notches(cv::EVENT_MOUSEWHEEL, flags(-120));
+  CHECK(depth == 0.0);
+}
+
+TEST_CASE("the window's flags: fixed size, no toolbar, an OpenGL view under Qt with OpenGL (its wheel does not zoom)") {
+  const int plain = cv::WINDOW_AUTOSIZE | cv::WINDOW_GUI_NORMAL;
+  const std::string qt_gl =
+      "  GUI:                           QT5\n    QT:                          YES (ver 5.15.8 )\n"
+      "      QT OpenGL support:         YES (Qt5::OpenGL 5.15.8)\n    OpenGL support:              YES\n";
+  const std::string qt_no_gl =
+      "  GUI:                           QT5\n    QT:                          YES (ver 5.15.8 )\n"
+      "      QT OpenGL support:         NO\n";
+  const std::string gtk =
+      "  GUI:                           GTK3\n    GTK+:                        YES (ver 3.24.37)\n"
+      "    OpenGL support:              NO\n";
+  CHECK(window_flags(qt_gl) == (plain | cv::WINDOW_OPENGL));
+  CHECK(window_flags(qt_no_gl) == plain);
+  CHECK(window_flags(gtk) == plain);
+  CHECK(window_flags("") == plain);
+  CHECK(qt_with_opengl(qt_gl));
+  CHECK_FALSE(qt_with_opengl(gtk));
 }
 
 TEST_CASE("ViewLayout and draw_view: the cursor at the probe, the arrow along the force") {

@@ -1,8 +1,8 @@
 #pragma once
 /// @file scope.hpp
-/// The viewer's rolling scope: the last few seconds of Fx, Fy and |F| with
-/// labelled axes, ticks and a legend, drawn with OpenCV. Viewer thread only
-/// (allocates, draws); never on the servo path.
+/// The viewer's rolling scope: the last few seconds of Fx, Fy, Fz and |F|
+/// with labelled axes, ticks and a legend, drawn with OpenCV. Viewer thread
+/// only (allocates, draws); never on the servo path.
 
 #include <algorithm>
 #include <cmath>
@@ -51,6 +51,17 @@ struct ScopeConfig {
   double min_range{0.1};  ///< smallest half-height of the force axis [N]
 };
 
+/// The scope's traces, in drawing order (|F| last, on top): their names
+/// and colours (BGR).
+inline constexpr int scope_traces = 4;
+inline constexpr const char* scope_names[scope_traces] = {"Fx", "Fy", "Fz", "|F|"};
+inline const cv::Scalar scope_colours[scope_traces] = {{200, 90, 0}, {0, 150, 0}, {0, 0, 210}, {20, 20, 20}};
+
+/// Trace `c` of the scope (0 Fx, 1 Fy, 2 Fz, 3 |F|) of a force [N].
+[[nodiscard]] inline double scope_value(const glm::dvec3& f, int c) noexcept {
+  return c < 3 ? f[c] : glm::length(f);
+}
+
 /// History of samples for the scope, and its drawing.
 class Scope {
  public:
@@ -79,7 +90,7 @@ class Scope {
   }
 
   /// Draws the scope into `area` of `canvas` (BGR): axes, ticks, units,
-  /// legend and the three traces.
+  /// legend and the four traces.
   void draw(cv::Mat& canvas, cv::Rect area) const {
     const cv::Scalar ink(30, 30, 30), grid(225, 225, 225);
     cv::rectangle(canvas, area, cv::Scalar(255, 255, 255), cv::FILLED);
@@ -125,22 +136,19 @@ class Scope {
     cv::rectangle(canvas, cv::Point(left, top), cv::Point(right, bottom), ink);
     text("time before now [s]", {(left + right) / 2 - 60, area.y + area.height - 6});
     text("force [N]", {area.x + 4, area.y + 16});
-    // traces: Fx blue, Fy green, |F| black
-    const cv::Scalar colours[3] = {{200, 90, 0}, {0, 150, 0}, {20, 20, 20}};
-    const char* names[3] = {"Fx", "Fy", "|F|"};
+    // traces: Fx blue, Fy green, Fz red (the push along the depth the wheel moves in 3D), |F| black
     std::vector<cv::Point> line;
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < scope_traces; ++c) {
       line.clear();
       const std::size_t step = std::max<std::size_t>(1, samples_.size() / static_cast<std::size_t>(2 * (right - left)));
       for (std::size_t i = 0; i < samples_.size(); i += step) {
         const ViewSample& s = samples_[i];
-        const double f = c == 0 ? s.force.x : c == 1 ? s.force.y : glm::length(s.force);
-        line.emplace_back(x_of(s.t), y_of(std::clamp(f, -r, r)));
+        line.emplace_back(x_of(s.t), y_of(std::clamp(scope_value(s.force, c), -r, r)));
       }
-      if (line.size() > 1) cv::polylines(canvas, line, false, colours[c], 1, cv::LINE_AA);
-      const int lx = right - 170 + 58 * c;
-      cv::line(canvas, {lx, area.y + 12}, {lx + 18, area.y + 12}, colours[c], 2);
-      text(names[c], {lx + 22, area.y + 16});
+      if (line.size() > 1) cv::polylines(canvas, line, false, scope_colours[c], 1, cv::LINE_AA);
+      const int lx = right - 228 + 58 * c;
+      cv::line(canvas, {lx, area.y + 12}, {lx + 18, area.y + 12}, scope_colours[c], 2);
+      text(scope_names[c], {lx + 22, area.y + 16});
     }
   }
 
