@@ -129,13 +129,18 @@ TEST_CASE("picture relief: the texture is the flat tangible-image force turned i
     // the touched point's pixel, y down the picture
     const double px = c.surface_uv.x * 159.0, py = (1.0 - c.surface_uv.y) * 119.0;
     const glm::dvec2 image = flat.at(px, py);
-    const glm::dvec3 expected = gain * (image.x * c.surface_tangent - image.y * c.surface_bitangent);
+    // on_surface's frame: the touched point's t and b turned into the plane
+    // normal to the contact normal (the proxy's n)
+    const glm::dvec3 t = glm::normalize(c.surface_tangent - glm::dot(c.surface_tangent, c.normal) * c.normal);
+    glm::dvec3 b = glm::cross(c.normal, t);
+    if (glm::dot(b, c.surface_bitangent) < 0.0) b = -b;
+    const glm::dvec3 expected = gain * (image.x * t - image.y * b);
     INFO("HIP " << x << ", " << y << "; pixel " << px << ", " << py);
     CHECK(glm::length(texture - expected) < 1e-9 * (1.0 + glm::length(expected)));
-    // in the tangent plane of the touched point (its shaded normal t x b);
-    // the proxy's n (HIP to the nearest surface point) is within 3 degrees of it on these slopes
+    // normal to the proxy's n (HIP to the nearest surface point), which is
+    // within 3 degrees of the touched point's shaded normal t x b on these slopes
     const glm::dvec3 n = glm::normalize(glm::cross(c.surface_tangent, c.surface_bitangent));
-    CHECK_THAT(glm::dot(texture, n), WithinAbs(0.0, 1e-9));
+    CHECK_THAT(glm::dot(texture, c.normal), WithinAbs(0.0, 1e-9));
     CHECK(glm::dot(n, c.normal) > std::cos(3.0 * M_PI / 180.0));
     CHECK(c.surface_tangent.x > 0.5);    // u runs along +x ...
     CHECK(c.surface_bitangent.y > 0.5);  // ... and v along +y (up the picture)
