@@ -59,9 +59,13 @@ inline std::string find(const std::string& installed, const std::string& in_sour
 }
 
 /// The example picture (examples/data/coffee.png; share/hapticfield/data/coffee.png).
-inline std::string example_picture() { return find("data/coffee.png", "examples/data/coffee.png"); }
+inline std::string example_picture() {
+  return find("data/coffee.png", "examples/data/coffee.png");
+}
 
 /// The plot script (scripts/hapticfield_plots.py; share/hapticfield/hapticfield_plots.py).
-inline std::string plot_script() { return find("hapticfield_plots.py", "scripts/hapticfield_plots.py"); }
+inline std::string plot_script() {
+  return find("hapticfield_plots.py", "scripts/hapticfield_plots.py");
+}
 
 }  // namespace hapticfield::share
