@@ -209,30 +209,49 @@ std::array<int, 2> press_all(const TriangleMesh& mesh, std::mt19937& rng, int co
   return {pressed, missed};
 }
 
+/// Where a slide starts: a random triangle, a random point of it and a
+/// random direction in its plane (found false: a triangle with no area).
+struct SlideStart {
+  std::size_t index{0};
+  Triangle t{};
+  glm::dvec3 point{0.0}, dir{0.0};
+  bool found{false};
+};
+
+SlideStart slide_start(const TriangleMesh& mesh, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g;
+  SlideStart out;
+  out.index = rng() % mesh.triangles.size();
+  out.t = triangle(mesh, out.index);
+  if (out.t.n == glm::dvec3{0.0}) return out;
+  double w1 = u(rng), w2 = u(rng);
+  if (w1 + w2 > 1.0) w1 = 1.0 - w1, w2 = 1.0 - w2;
+  out.point = out.t.a + w1 * (out.t.b - out.t.a) + w2 * (out.t.c - out.t.a);
+  const glm::dvec3 dir{g(rng), g(rng), g(rng)};
+  out.dir = glm::normalize(dir - glm::dot(dir, out.t.n) * out.t.n);
+  out.found = true;
+  return out;
+}
+
 /// Slides: pressed 1 mm deep at a random interior point, then along a
 /// random tangent direction at `speed` [m/s] for `ticks` ticks at 1 kHz.
 /// Returns {slides, ticks whose path crossed the surface}.
 std::array<long, 2> slide_all(const TriangleMesh& mesh, std::mt19937& rng, int count, double speed, int ticks,
                               const std::string& name, double friction = 0.0) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::normal_distribution<double> g;
   ProxyConfig config{k};
   config.static_friction = friction;
   config.dynamic_friction = 0.75 * friction;
   CheckedProxy checked(ProxyConstraint(MeshShape(mesh), config), mesh);
   long slides = 0;
   for (int s = 0; s < count; ++s) {
-    const std::size_t i = rng() % mesh.triangles.size();
-    const Triangle t = triangle(mesh, i);
-    if (t.n == glm::dvec3{0.0}) continue;
-    double w1 = u(rng), w2 = u(rng);
-    if (w1 + w2 > 1.0) w1 = 1.0 - w1, w2 = 1.0 - w2;
-    const glm::dvec3 point = t.a + w1 * (t.b - t.a) + w2 * (t.c - t.a);
-    glm::dvec3 dir{g(rng), g(rng), g(rng)};
-    dir = glm::normalize(dir - glm::dot(dir, t.n) * t.n);
+    const SlideStart start = slide_start(mesh, rng);
+    if (!start.found) continue;
+    const std::size_t i = start.index;
+    const Triangle& t = start.t;
+    const glm::dvec3 point = start.point, dir = start.dir;
     checked.reset();
     ++slides;
-    const double depth = 0.001;
     for (int j = 0; j < 10 + ticks; ++j) {
       const double press = std::fmin(1.0, j / 10.0);  // 2 mm out to 1 mm in over 10 ticks
       const glm::dvec3 hip = point + (0.002 - 0.003 * press) * t.n + std::fmax(0, j - 10) * 1e-3 * speed * dir;
@@ -244,7 +263,6 @@ std::array<long, 2> slide_all(const TriangleMesh& mesh, std::mt19937& rng, int c
       UNSCOPED_INFO(name << ": slide " << s << " from triangle " << i << " crossed triangle " << c.triangle
                          << " on piece " << c.piece << " from (" << c.from.x << ", " << c.from.y << ", " << c.from.z
                          << ") to (" << c.to.x << ", " << c.to.y << ", " << c.to.z << ")");
-      (void)depth;
       const ProxyPath& path = checked.proxy().last_path();
       for (int q = 0; q < path.count; ++q)
         UNSCOPED_INFO("  path " << q << ": (" << path.points[q].x << ", " << path.points[q].y << ", "
@@ -371,20 +389,15 @@ TEST_CASE(
 /// triangles, every r / 8). Returns {ticks touching, the nearest such
 /// distance / r (infinity: none)}.
 std::array<double, 2> ball_slides(const TriangleMesh& mesh, std::mt19937& rng, int count, double r) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::normal_distribution<double> g;
   const MeshChecker checker(mesh);
   ProxyConstraint proxy(MeshShape(mesh), ProxyConfig{.stiffness = k, .radius = r});
   double nearest = std::numeric_limits<double>::infinity();
   double touching = 0.0;
   for (int s = 0; s < count; ++s) {
-    const Triangle t = triangle(mesh, rng() % mesh.triangles.size());
-    if (t.n == glm::dvec3{0.0}) continue;
-    double w1 = u(rng), w2 = u(rng);
-    if (w1 + w2 > 1.0) w1 = 1.0 - w1, w2 = 1.0 - w2;
-    const glm::dvec3 point = t.a + w1 * (t.b - t.a) + w2 * (t.c - t.a);
-    glm::dvec3 dir{g(rng), g(rng), g(rng)};
-    dir = glm::normalize(dir - glm::dot(dir, t.n) * t.n);
+    const SlideStart start = slide_start(mesh, rng);
+    if (!start.found) continue;
+    const Triangle& t = start.t;
+    const glm::dvec3 point = start.point, dir = start.dir;
     const double speed = s % 2 ? 2.0 : 0.026;
     proxy.reset();
     for (int j = 0; j < 110; ++j) {  // from r + 2 mm out to 1 mm deep over 10 ticks, then along
