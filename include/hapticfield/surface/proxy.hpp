@@ -210,7 +210,7 @@ class ProxyConstraint {
       }
       planes.project(goal);  // the final active set (releases planes the HIP has left)
       if (blocked || planes.count == 0) break;
-      touched = nearest(x, 4.0 * planes.max_offset + planes.tolerance + config_.radius, last_hit);
+      touched = nearest(x, reach(planes), last_hit);
       if (touched.found() || !touched.complete) break;
       if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
         x = anchor;                        // (back along the path it came: the pieces after it are undone)
@@ -243,8 +243,8 @@ class ProxyConstraint {
         sliding_ = false;
       }
       if (glm::length(candidate - frictionless) > planes.tolerance) {
-        const double reach = 4.0 * planes.max_offset + planes.tolerance + config_.radius;
-        if (Hit same = on_same_face(candidate, reach, touched); planes.count == 1 && over_face(same, candidate)) {
+        const double within = reach(planes);  // [m]
+        if (Hit same = on_same_face(candidate, within, touched); planes.count == 1 && over_face(same, candidate)) {
           x = candidate;  // both ends over one flat face: nothing can lie between them
           visit(x);
           touched = same;
@@ -254,7 +254,7 @@ class ProxyConstraint {
           if (h.complete && !h.found()) {
             // held only where it is still on the surface (a plane's extension
             // past the end of its face is not): else frictionless this tick
-            const Hit there = nearest(candidate, reach, touched);
+            const Hit there = nearest(candidate, within, touched);
             if (there.found()) {
               x = candidate;
               visit(x);
@@ -474,7 +474,7 @@ class ProxyConstraint {
     const double s = glm::length(slide);
     const bool sliding = s > (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth;
     const glm::dvec3 x = sliding ? frictionless + (config_.dynamic_friction * depth / s) * slide : held;
-    const Hit touched = on_same_face(x, 4.0 * planes.max_offset + planes.tolerance + config_.radius, held_face_);
+    const Hit touched = on_same_face(x, reach(planes), held_face_);
     if (planes.count != 1 || !over_face(touched, x) || !is_finite(x)) return false;
     tick_.planes = planes.count;
     sliding_ = sliding;
@@ -489,6 +489,12 @@ class ProxyConstraint {
   /// Appends a point to the tick's path.
   void visit(const glm::dvec3& p) noexcept {
     if (path_.count < proxy_max_path) path_.points[static_cast<std::size_t>(path_.count++)] = p;
+  }
+
+  /// How far from the surface the proxy still touches it [m]: a few of its
+  /// offsets above the tick's planes, plus the tool's radius.
+  [[nodiscard]] double reach(const Planes& planes) const noexcept {
+    return 4.0 * planes.max_offset + planes.tolerance + config_.radius;
   }
 
   /// The shape can sweep a ball (sweep_sphere), for a radius > 0.
