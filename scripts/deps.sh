@@ -5,7 +5,8 @@ set -euo pipefail
 
 packages=(g++ clang libclang-rt-14-dev cmake make pkg-config libglm-dev libopencv-dev libhidapi-dev libpugixml-dev catch2
           libasound2-dev libsndfile1-dev libtinygltf-dev libtinyobjloader-dev
-          pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-mypy python3-venv)
+          pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-mypy python3-venv
+          libusb-1.0-0-dev libmujoco-dev nlohmann-json3-dev python3-distributed)
 
 missing=()
 for p in "${packages[@]}"; do
