@@ -281,6 +281,80 @@ class MeshBvh {
     return best;
   }
 
+  /// Refits the tree to `mesh` after its vertices moved: every triangle's
+  /// corner and edges, then every node's box, bottom up (a node's box
+  /// bounds its children's; the pairs are stored depth first, so children
+  /// come after their parent and one backward pass suffices), rounded
+  /// outward as at build. The topology is the tree's: `mesh` is the mesh it
+  /// was built from (same triangles, same vertex count), its positions moved
+  /// (the refitting of Wald, Boulos & Shirley, "Ray tracing deformable
+  /// scenes using dynamic bounding volume hierarchies", ACM TOG 26(1),
+  /// 2007). No allocation; time linear in the triangles. The queries answer
+  /// as on a tree built over the moved mesh, while the motion keeps every
+  /// triangle's area (a triangle left out at build stays out, one that loses
+  /// its area keeps its slot) and moves vertices of equal positions alike
+  /// (the tie rule's welds stay). Boxes overlap more after large motions:
+  /// queries visit more nodes than on a rebuilt tree.
+  /// @throws std::invalid_argument for a mesh without the tree's triangles
+  ///         (too few, an index out of range) or with a non-finite position;
+  ///         the tree is unchanged then.
+  void refit(const TriangleMesh& mesh) {
+    for (const Triangle& tri : triangles_) {
+      if (tri.id >= mesh.triangles.size())
+        throw std::invalid_argument("MeshBvh::refit: the mesh has fewer triangles than the tree");
+      for (const std::uint32_t k : mesh.triangles[tri.id])
+        if (k >= mesh.positions.size() || !is_finite(mesh.positions[k]))
+          throw std::invalid_argument("MeshBvh::refit: triangle " + std::to_string(tri.id) +
+                                      " has a vertex out of range or not finite");
+    }
+    for (Triangle& tri : triangles_) {
+      const TriangleIndices& t = mesh.triangles[tri.id];
+      const glm::dvec3 a = mesh.positions[t[0]];
+      tri.a = a;
+      tri.e1 = mesh.positions[t[1]] - a;
+      tri.e2 = mesh.positions[t[2]] - a;
+    }
+    // a node's box: its triangles' corners (a leaf) or its children's boxes
+    const auto box = [&](std::uint32_t index, std::uint32_t count, std::array<float, 3>& lo,
+                         std::array<float, 3>& hi) noexcept {
+      if (count == 0) {
+        const BvhNodePair& children = pairs_[index];
+        for (std::size_t k = 0; k < 3; ++k) {
+          lo[k] = std::min(children.lo[k][0], children.lo[k][1]);
+          hi[k] = std::max(children.hi[k][0], children.hi[k][1]);
+        }
+        return;
+      }
+      glm::dvec3 low{std::numeric_limits<double>::max()}, high{-std::numeric_limits<double>::max()};
+      for (std::uint32_t i = index; i < index + count; ++i)
+        for (const std::uint32_t k : mesh.triangles[triangles_[i].id]) {
+          low = glm::min(low, mesh.positions[k]);
+          high = glm::max(high, mesh.positions[k]);
+        }
+      for (int k = 0; k < 3; ++k) {  // float, rounded outward
+        const auto axis = static_cast<std::size_t>(k);
+        lo[axis] = static_cast<float>(low[k]);
+        hi[axis] = static_cast<float>(high[k]);
+        if (static_cast<double>(lo[axis]) > low[k])
+          lo[axis] = std::nextafter(lo[axis], -std::numeric_limits<float>::infinity());
+        if (static_cast<double>(hi[axis]) < high[k])
+          hi[axis] = std::nextafter(hi[axis], std::numeric_limits<float>::infinity());
+      }
+    };
+    for (std::size_t p = pairs_.size(); p-- > 0;) {
+      BvhNodePair& pair = pairs_[p];
+      for (std::size_t side = 0; side < 2; ++side) {
+        std::array<float, 3> lo{}, hi{};
+        box(pair.index[side], pair.count[side], lo, hi);
+        for (std::size_t k = 0; k < 3; ++k) {
+          pair.lo[k][side] = lo[k];
+          pair.hi[k][side] = hi[k];
+        }
+      }
+    }
+    if (!triangles_.empty()) box(root_.index, root_.count, root_.lo, root_.hi);
+  }
+
   /// Nodes in the tree (the root and the pairs below it; 0: empty).
   [[nodiscard]] std::size_t node_count() const noexcept { return triangles_.empty() ? 0 : 1 + 2 * pairs_.size(); }
   /// Triangles in the tree (the mesh's, less those with no area).
