@@ -33,6 +33,10 @@ if(HAPTICFIELD_HAS_OBJ)
   install(TARGETS hapticfield_obj EXPORT hapticfieldObjTargets)
   install(EXPORT hapticfieldObjTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
 endif()
+if(HAPTICFIELD_HAS_HJIF)
+  install(TARGETS hapticfield_hjif EXPORT hapticfieldHjifTargets)
+  install(EXPORT hapticfieldHjifTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
+endif()
 if(HAPTICFIELD_HAS_IO)
   install(TARGETS hapticfield_io EXPORT hapticfieldIoTargets)
   install(EXPORT hapticfieldIoTargets NAMESPACE hapticfield:: DESTINATION "${HAPTICFIELD_CMAKE_DIR}")
@@ -72,7 +76,7 @@ else()
 endif()
 # pkg-config: hapticfield.pc is what <hapticfield/hapticfield.hpp> needs (the core, HaTT files, the
 # image part: GLM, pugixml, OpenCV core, imgproc, imgcodecs, calib3d), hapticfield-<part>.pc each other
-# part (video, hid, vibration-alsa, vibration-wav, gltf, obj, io) with only its own libraries. The
+# part (video, hid, vibration-alsa, vibration-wav, gltf, obj, hjif, io) with only its own libraries. The
 # dependencies' headers come with -isystem (their warnings are theirs, not the user's) and only the
 # libraries a part uses are linked (not all of opencv4.pc's).
 set(HAPTICFIELD_PC_FILES "")
@@ -146,6 +150,9 @@ if(PkgConfig_FOUND)
   endif()
   if(HAPTICFIELD_HAS_OBJ)
     list(APPEND pc_parts "obj|tinyobjloader: OBJ meshes|tinyobjloader_double|")
+  endif()
+  if(HAPTICFIELD_HAS_HJIF)
+    list(APPEND pc_parts "hjif|nlohmann-json: .hjif haptic media|nlohmann_json|")
   endif()
   foreach(part IN LISTS pc_parts)
     string(REPLACE "|" ";" part "${part}")
