@@ -4,7 +4,8 @@
 //
 //   servo_demo [IMAGE] [--field tangible|wall|spring|none] [--seconds S] [--rate HZ]
 //              [--realtime off|best_effort|enforce] [--clock wall|virtual] [--trace OUT.csv] [--plots DIR]
-//              [--device sim|hid[:VID:PID]|serial:PATH|woody:p1|p2|p4[:PRESET][:sim|:PATH]|inverse3:PATH]
+//              [--device sim|hid[:VID:PID]|serial:PATH|woody:p1|p2|p4[:PRESET][:sim|:PATH]|inverse3:PATH|sim]
+//              [--list-devices]
 //              [--shape FILE [--height-mm H] [--snapshot OUT.png] [--view YAW,PITCH] [--distance MM]]
 #include <algorithm>
 #include <atomic>
@@ -29,22 +30,17 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
-#include "common/hid_device.hpp"
+#include "common/device_option.hpp"
 #include "common/loop_thread.hpp"
 #include "common/plots.hpp"
 #include "common/share.hpp"
 #include "common/stop_signal.hpp"
 
 #include "hapticfield/arms.hpp"
-#include "hapticfield/arms/inverse3/inverse3.hpp"
 #include "hapticfield/core.hpp"
+#include "hapticfield/devices/open_device.hpp"
 #include "hapticfield/kernels.hpp"
 #include "hapticfield/servo.hpp"
-#include "hapticfield/transport.hpp"
-#include "hapticfield/transport/serial_transport.hpp"
-#if HAPTICFIELD_EXAMPLE_HID
-#include "hapticfield/transport/hid_transport.hpp"
-#endif
 #if HAPTICFIELD_EXAMPLE_SHAPES
 #include "view/scene3d.hpp"
 #include "view/shape_scene.hpp"
@@ -62,7 +58,8 @@ struct Arguments {
   RealTime realtime{RealTime::best_effort};
   std::string trace;
   std::string plots;
-  std::string device{"sim"};
+  DeviceSpec device{parse_device_spec("sim")};
+  bool list_devices{false};   ///< --list-devices: say which arms are present, then exit
   bool virtual_clock{false};  ///< --clock virtual: simulated time, as fast as the CPU allows
   bool field_given{false};
   // a shape felt through a proxy (--shape)
@@ -84,9 +81,9 @@ constexpr const char* usage_text =
     "  --rate HZ             servo rate [Hz], in [1, 10000] (default 1000)\n"
     "  --realtime R          off, best_effort (default: ask for SCHED_FIFO, warn if refused)\n"
     "                        or enforce (refuse to start without real-time scheduling)\n"
-    "  --clock C             wall (default) or virtual: simulated time for a simulated arm (sim or\n"
-    "                        woody:GEN[:PRESET]:sim), as fast as the CPU allows, the same ticks, safety\n"
-    "                        chain and trace whatever the machine's load\n"
+    "  --clock C             wall (default) or virtual: simulated time for a simulated arm (sim,\n"
+    "                        woody:GEN[:PRESET]:sim or inverse3:sim), as fast as the CPU allows, the same\n"
+    "                        ticks, safety chain and trace whatever the machine's load\n"
     "  --trace OUT.csv       write t, position [m], force [N], period [s] and the device's\n"
     "                        homed,armed (0/1) per tick\n"
     "  --plots DIR           write force.png and periods.png into DIR (created if needed), drawn with\n"
@@ -96,7 +93,9 @@ constexpr const char* usage_text =
     "                        a WoodenHaptics arm, GEN p1 or p2 (USB HID) or p4 (serial text, on the\n"
     "                        tty PATH), PRESET woody_v2015 (default), woodenhaptics_v2019,\n"
     "                        aluhaptics_v2 or vintage; :sim simulates it; inverse3:PATH: a Haply\n"
-    "                        Inverse3 on the tty PATH (never run on a real one: check its frame)\n"
+    "                        Inverse3 on the tty PATH (never run on a real one: check its frame),\n"
+    "                        inverse3:sim its simulated twin\n"
+    "  --list-devices        one line per arm family: present, or why not; then exit\n"
     "  --shape FILE          feel a mesh (.stl, .obj, .gltf, .glb) or a height map picture (white\n"
     "                        high) through a proxy (k = 1500 N/m) instead of --field: scaled so its\n"
     "                        footprint spans 80 mm, its top 1 mm below the start; the hand scans 70 %\n"
@@ -114,49 +113,6 @@ constexpr const char* usage_text =
 /// A usage error found while setting up (an unknown field or device).
 [[noreturn]] void usage(const std::string& error) {
   throw cli::UsageError(error);
-}
-
-/// A WoodenHaptics device string: woody:p1|p2|p4[:preset][:sim].
-struct WoodySpec {
-  woody::Generation generation{woody::Generation::p4_text};
-  std::string preset{"woody_v2015"};
-  bool simulated{false};
-  std::string port;  ///< tty of a P4 arm
-};
-bool parse_woody(const std::string& d, WoodySpec& spec) {
-  if (d.rfind("woody:", 0) != 0) return false;
-  std::string rest = d.substr(6);
-  if (rest.size() >= 4 && rest.compare(rest.size() - 4, 4, ":sim") == 0) {
-    spec.simulated = true;
-    rest.resize(rest.size() - 4);
-  } else if (const auto slash = rest.find(":/"); slash != std::string::npos) {
-    spec.port = rest.substr(slash + 1);
-    rest.resize(slash);
-  }
-  const std::string gen = rest.substr(0, rest.find(':'));
-  if (rest.find(':') != std::string::npos) spec.preset = rest.substr(rest.find(':') + 1);
-  if (gen == "p1")
-    spec.generation = woody::Generation::p1_hid8;
-  else if (gen == "p2")
-    spec.generation = woody::Generation::p2_hid14;
-  else if (gen == "p4")
-    spec.generation = woody::Generation::p4_text;
-  else
-    return false;
-  if (!spec.port.empty() && spec.generation != woody::Generation::p4_text) return false;  // P1/P2 are HID
-  for (const char* known : {"woody_v2015", "woodenhaptics_v2019", "aluhaptics_v2", "vintage"})
-    if (spec.preset == known) return true;
-  return false;
-}
-
-/// "sim", "hid" or "hid:VID:PID" with 1 to 4 hexadecimal digits per id, or
-/// a WoodenHaptics device string.
-bool valid_device(const std::string& d) {
-  WoodySpec woody_spec;
-  if (d == "sim" || d == "hid" || parse_woody(d, woody_spec)) return true;
-  if (d.rfind("serial:", 0) == 0) return d.size() > 7;
-  if (d.rfind("inverse3:", 0) == 0) return d.size() > 9;
-  return cli::hid_device(d).has_value();
 }
 
 Arguments parse(cli::Parser& p) {
@@ -195,12 +151,9 @@ Arguments parse(cli::Parser& p) {
     } else if (p.is("--plots")) {
       o.plots = p.output_dir();
     } else if (p.is("--device")) {
-      o.device = p.value();
-      if (!valid_device(o.device))
-        usage(
-            "--device must be sim, hid, hid:VID:PID with hexadecimal ids (e.g. hid:1209:0001), serial:PATH, "
-            "woody:p1|p2|p4[:PRESET][:sim|:PATH] or inverse3:PATH, got '" +
-            o.device + "'");
+      o.device = cli::device_option(p.value());
+    } else if (p.is("--list-devices")) {
+      o.list_devices = true;
     } else if (p.positional() && !image_given) {
       o.image = p.token();
       image_given = true;
@@ -208,15 +161,17 @@ Arguments parse(cli::Parser& p) {
       p.unknown();
     }
   }
+  if (o.list_devices) {
+    p.finish();
+    return o;
+  }
   if (!o.shape.empty() && (o.field_given || image_given))
     usage("--shape is felt through its proxy: give no IMAGE or --field with it");
   if (!o.snapshot.empty() && o.shape.empty()) usage("--snapshot draws the 3D view of --shape FILE: give --shape");
-  WoodySpec woody_spec;
-  const bool simulated = o.device == "sim" || (parse_woody(o.device, woody_spec) && woody_spec.simulated);
-  if (o.virtual_clock && !simulated)
+  if (o.virtual_clock && !o.device.simulated)
     usage(
-        "--clock virtual needs a simulated arm (--device sim or woody:GEN[:PRESET]:sim); a real arm runs on the "
-        "wall clock");
+        "--clock virtual needs a simulated arm (--device sim, woody:GEN[:PRESET]:sim or inverse3:sim); a real arm "
+        "runs on the wall clock");
   // 0 ticks would mean "no limit" to the loop: insist on at least one.
   if (std::llround(o.seconds * o.rate) < 1) {
     char text[160];
@@ -361,28 +316,6 @@ void print_status(const LoopSnapshot& s, std::uint32_t latched, double t, bool t
   std::fflush(stdout);
 }
 
-/// Prints the link counters of the device, whichever protocol it speaks.
-void print_link(const ForceArm& device) {
-  const LinkCounters& link = device.counters();
-  std::printf("link: %llu reports, %llu dropped, %llu corrupt, %llu resyncs, %llu commands\n",
-              static_cast<unsigned long long>(link.reports), static_cast<unsigned long long>(link.dropped),
-              static_cast<unsigned long long>(link.corrupt), static_cast<unsigned long long>(link.resyncs),
-              static_cast<unsigned long long>(link.commands));
-}
-void print_link(const Inverse3& device) {
-  const Inverse3Counters& c = device.counters();
-  std::printf("link: %llu replies, %llu implausible, %llu resyncs, %llu bytes dropped, %llu lost, %llu commands\n",
-              static_cast<unsigned long long>(c.replies), static_cast<unsigned long long>(c.implausible),
-              static_cast<unsigned long long>(c.resyncs), static_cast<unsigned long long>(c.dropped_bytes),
-              static_cast<unsigned long long>(c.lost_replies), static_cast<unsigned long long>(c.commands));
-}
-void print_link(const WoodyArm& device) {
-  const WoodyCounters& c = device.counters();
-  std::printf("link: %llu replies, %llu with firmware error bits, %llu malformed, %llu commands\n",
-              static_cast<unsigned long long>(c.reports), static_cast<unsigned long long>(c.error_replies),
-              static_cast<unsigned long long>(c.malformed), static_cast<unsigned long long>(c.commands));
-}
-
 /// The clocks a run may use: the wall clock, or simulated time (--clock virtual).
 struct Clocks {
   SteadyClock wall;
@@ -479,6 +412,7 @@ std::unique_ptr<ShapeRun> load_shape(const Arguments& o, Felt& felt) {
 #endif
 
 int run(const Arguments& o) {
+  if (o.list_devices) return cli::print_device_list();
   Felt felt;
   double width = 0.0, height = 0.0;  // the area scanned [m]
   glm::dvec3 surface{0.0};           // the scan's centre on the surface (its top) [m]
@@ -518,65 +452,12 @@ int run(const Arguments& o) {
     return HandPath::raster(centre + surface + glm::dvec3{0.0, 0.0, -0.008}, width * cover, height * cover, 8, 0.06);
   };
 
-  if (o.device.rfind("inverse3:", 0) == 0) {
-    SerialTransport port(o.device.substr(9), SerialConfig{.framing = Framing::fixed});
-    Inverse3 device(port);  // throws hapticfield::Error naming the port when it stays silent
-    return run_on_clock(o, device, felt, clocks, true);
-  }
-
-  WoodySpec woody_spec;
-  if (parse_woody(o.device, woody_spec)) {
-    const WoodyArmConfig wc =
-        WoodyArmConfig::defaults(woody_spec.generation, woody_presets::by_name(woody_spec.preset));
-    std::unique_ptr<SimulatedWoody> woody_arm;
-    std::unique_ptr<Transport> woody_link;
-    if (woody_spec.simulated) {
-      SimulatedWoodyConfig sc;
-      sc.generation = wc.generation;
-      sc.kinematics = wc.kinematics;
-      sc.encoder_sign = wc.encoder_sign;
-      sc.hand.path = scan(glm::dvec3{0.0});  // the hand pulls the handle from its rest pose onto the picture
-      woody_arm = std::make_unique<SimulatedWoody>(sc);
-      woody_link = std::make_unique<SimulatedWoodyTransport>(*woody_arm, now);
-    } else if (wc.generation != woody::Generation::p4_text) {
-#if HAPTICFIELD_EXAMPLE_HID
-      woody_link = std::make_unique<HidTransport>(0x1234, 0x0006);  // the mbed ids of WoodenHaptics 1.5
-#else
-      throw std::runtime_error("this build has no hidapi: --device woody:p1|p2 is unavailable");
-#endif
-    } else {
-      if (woody_spec.port.empty()) usage("--device woody:p4 needs the arm's tty, e.g. woody:p4:/dev/ttyACM0, or :sim");
-      woody_link = std::make_unique<SerialTransport>(woody_spec.port, SerialConfig{.framing = Framing::lines});
-    }
-    WoodyArm device(*woody_link, wc);
-    return run_on_clock(o, device, felt, clocks, !woody_spec.simulated);
-  }
-
-  std::unique_ptr<SimulatedArm> arm;
-  std::unique_ptr<Transport> transport;
-  bool hardware = false;
-  if (o.device == "sim") {
-    SimulatedArmConfig c;
-    c.hand.path = scan(glm::dvec3{0.0});
-    arm = std::make_unique<SimulatedArm>(c);
-    transport = std::make_unique<SimulatedTransport>(*arm, now);
-  } else if (o.device.rfind("serial:", 0) == 0) {
-    transport = std::make_unique<SerialTransport>(o.device.substr(7));
-    hardware = true;
-  } else if (o.device.rfind("hid", 0) == 0) {
-#if HAPTICFIELD_EXAMPLE_HID
-    const cli::HidIds ids = *cli::hid_device(o.device);  // checked by parse()
-    transport = std::make_unique<HidTransport>(ids.vendor, ids.product);
-    hardware = true;
-#else
-    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
-#endif
-  } else {
-    usage("--device must be sim or hid[:VID:PID]");
-  }
-
-  ForceArm device(*transport);
-  return run_on_clock(o, device, felt, clocks, hardware);
+  // The hand pulls a simulated arm's handle from its rest pose onto the picture.
+  DeviceOptions options;
+  options.now = now;
+  options.hand.path = scan(glm::dvec3{0.0});
+  AnyDevice device = open_device(o.device, options);  // throws naming the device when it is not there
+  return run_on_clock(o, device, felt, clocks, !o.device.simulated);
 }
 
 template <Device D, ServoClock C>
@@ -670,7 +551,7 @@ int run_demo(const Arguments& o, D& device, Felt& felt, C& clock, bool hardware)
                 static_cast<unsigned long long>(s.recoveries),
                 loop.safety().latched() ? "; still latched at the end" : "");
   }
-  print_link(device);
+  cli::print_link(device);
   if (felt.at_end) felt.at_end(rows.empty() ? glm::dvec3{0.0} : rows.back().position, loop.last_command());
   if (!o.trace.empty()) {
     write_trace(o.trace, rows);
