@@ -5,5 +5,6 @@
 /// umbrella beside it, and one line here.
 
 #include "hapticfield/arms/force_arm.hpp"
+#include "hapticfield/arms/falcon.hpp"
 #include "hapticfield/arms/inverse3.hpp"
 #include "hapticfield/arms/woody.hpp"
