@@ -1,12 +1,15 @@
 // A finite tool radius: the proxy as a ball (ProxyConfig::radius) swept
-// against meshes (faces, edge cylinders, corner balls) and the analytic
-// shapes, checked against closed forms, and its centre's path checked
-// against a brute-force distance to every nearby triangle.
+// against meshes (faces, edge cylinders, corner balls), height fields (two
+// triangles a cell) and the analytic shapes, checked against closed forms,
+// and its centre's path checked against a brute-force distance to every
+// nearby triangle.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include <catch2/catch.hpp>
 #include <glm/geometric.hpp>
@@ -209,7 +212,156 @@ TEST_CASE("a ball's tick allocates nothing; radius 0 is the point proxy; bad rad
   CHECK_THROWS_AS(ProxyConstraint(PlaneShape(PlaneShapeConfig{}), ProxyConfig{.radius = 0.06}), std::invalid_argument);
   CHECK_THROWS_AS(ProxyConstraint(PlaneShape(PlaneShapeConfig{}), ProxyConfig{.radius = std::nan("")}),
                   std::invalid_argument);
-  // height fields have no swept ball yet: a radius is refused there, saying so
+  // a height field takes a ball too
   const HeightFieldShape field(3, 3, 0.01, 0.01, std::vector<double>(9, 0.0));
-  CHECK_THROWS_WITH(ProxyConstraint(field, ProxyConfig{.radius = 0.001}), Catch::Contains("sweep_sphere"));
+  CHECK_NOTHROW(ProxyConstraint(field, ProxyConfig{.radius = 0.001}));
+}
+
+namespace {
+
+/// Heights h(x, y) sampled on an n x n grid of `spacing` [m].
+template <class F>
+HeightFieldShape sampled(int n, double spacing, F h) {
+  std::vector<double> heights(static_cast<std::size_t>(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      heights[static_cast<std::size_t>(j) * n + i] = h(i * spacing, j * spacing);
+  return HeightFieldShape(n, n, spacing, spacing, heights);
+}
+
+/// The two triangles per cell a ball sees on `field` (the diagonal from
+/// (i, j) to (i + 1, j + 1)), as a mesh: the oracle's surface.
+TriangleMesh triangulated(const HeightFieldShape& field) {
+  TriangleMesh m;
+  const std::uint32_t w = field.width(), h = field.height();
+  for (std::uint32_t j = 0; j < h; ++j)
+    for (std::uint32_t i = 0; i < w; ++i) {
+      const double x = i * field.spacing().x, y = j * field.spacing().y;
+      // the sample itself: the bilinear height at a sample is the sample
+      m.positions.push_back({x, y, field.height_at(std::fmin(x, (w - 1) * field.spacing().x),
+                                                   std::fmin(y, (h - 1) * field.spacing().y))});
+    }
+  for (std::uint32_t j = 0; j + 1 < h; ++j)
+    for (std::uint32_t i = 0; i + 1 < w; ++i) {
+      const std::uint32_t a = j * w + i, b = a + 1, c = a + w, d = c + 1;
+      m.triangles.push_back({a, b, d});
+      m.triangles.push_back({a, d, c});
+    }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("a ball on a height field: r above a flat field and a ramp, r / cos(slope) over a groove, a narrow trench "
+          "not entered",
+          "[radius][height]") {
+  const double r = 0.002;
+  SECTION("flat and ramp: the centre r from the plane, Fc = k (r - the HIP's distance)") {
+    for (const double slope : {0.0, 0.3, 0.7}) {
+      ProxyConstraint proxy(sampled(41, 0.001, [&](double x, double) { return std::tan(slope) * (x - 0.02); }),
+                            ProxyConfig{.stiffness = k, .radius = r});
+      const glm::dvec3 n{-std::sin(slope), 0.0, std::cos(slope)};  // the ramp's normal
+      const glm::dvec3 on{0.02, 0.021, 0.0};                        // a point of the ramp
+      const Contact c = press(proxy, on + 0.02 * n, on - 0.001 * n);
+      INFO("slope " << slope);
+      REQUIRE(c.touching);
+      CHECK(glm::dot(proxy.proxy() - on, n) == Approx(r).epsilon(1e-4));
+      CHECK(glm::length(c.force) == Approx(k * (r + 0.001)).epsilon(1e-3));
+      CHECK(glm::dot(c.force, n) == Approx(glm::length(c.force)).epsilon(1e-6));
+    }
+  }
+  SECTION("a V groove along y at x = 20 mm: the centre r / cos(slope) above its line") {
+    for (const double slope : {0.3, 0.6, 1.0}) {
+      ProxyConstraint proxy(sampled(41, 0.001, [&](double x, double) { return std::tan(slope) * std::fabs(x - 0.02); }),
+                            ProxyConfig{.stiffness = k, .radius = r});
+      const Contact c = press(proxy, {0.02, 0.02, 0.02}, {0.02, 0.0205, -0.003});
+      INFO("slope " << slope);
+      REQUIRE(c.touching);
+      CHECK(proxy.proxy().x == Approx(0.02).margin(1e-6));
+      CHECK(proxy.proxy().z == Approx(r / std::cos(slope)).epsilon(1e-4));
+    }
+  }
+  SECTION("a trench one sample wide (rims 2 mm apart, 10 mm deep): a 2 mm ball rests on both rims, a 0.5 mm one "
+          "falls to where both walls touch it") {
+    const double s = 0.001, depth = 0.01;
+    const auto trench = [&](double x, double) { return std::fabs(x - 0.02) < 0.5 * s ? -depth : 0.0; };
+    ProxyConstraint wide(sampled(41, s, trench), ProxyConfig{.stiffness = k, .radius = r});
+    (void)press(wide, {0.02, 0.02, 0.01}, {0.02, 0.02, -0.02});
+    CHECK(wide.touching());
+    CHECK(wide.proxy().z == Approx(std::sqrt(r * r - s * s)).epsilon(1e-3));
+    const double small = 0.0005, wall = std::atan(depth / s);  // the walls' angle from the horizontal
+    ProxyConstraint narrow(sampled(41, s, trench), ProxyConfig{.stiffness = k, .radius = small});
+    (void)press(narrow, {0.02, 0.02, 0.01}, {0.02, 0.02, -0.02});
+    CHECK(narrow.touching());
+    CHECK(narrow.proxy().z == Approx(-depth + small / std::cos(wall)).epsilon(1e-3));
+  }
+}
+
+TEST_CASE("a ball on a height field meets what a brute-force sweep over its triangles meets; its centre never comes "
+          "nearer than r to them while sliding",
+          "[radius][height][invariant]") {
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g;
+  // a rough field: 1 mm cells, bumps of +-0.6 mm and a few 3 mm cliffs
+  const int n = 33;
+  const double spacing = 0.001;
+  std::vector<double> heights(static_cast<std::size_t>(n) * n);
+  for (double& h : heights)
+    h = 0.0006 * (2.0 * u(rng) - 1.0) + (u(rng) < 0.03 ? 0.003 : 0.0);
+  const HeightFieldShape field(n, n, spacing, spacing, heights);
+  const TriangleMesh mesh = triangulated(field);
+  const MeshShape oracle(mesh);
+  const double extent = (n - 1) * spacing;
+  for (const double r : {0.0005, 0.002}) {
+    INFO("r " << r);
+    // the query against the brute force: random segments above and through the field
+    int met = 0;
+    for (int q = 0; q < 3000; ++q) {
+      const glm::dvec3 from{extent * u(rng), extent * u(rng), 0.006 + 0.01 * u(rng)};  // above every bump and cliff
+      const glm::dvec3 to = from + 0.01 * glm::dvec3{g(rng), g(rng), g(rng) - 1.0};
+      const Hit a = field.sweep_sphere(from, to, r), b = oracle.sweep_sphere(from, to, r);
+      INFO("query " << q);
+      REQUIRE(a.found() == b.found());
+      if (!a.found()) continue;
+      ++met;
+      CHECK(a.t == Approx(b.t).margin(1e-9));
+      CHECK(glm::length(a.point - b.point) <= 1e-9 + 1e-6 * r);
+    }
+    CHECK(met > 1000);
+    // slides: the centre's path, every piece, against the distance to the triangles
+    const MeshChecker checker(mesh);
+    ProxyConstraint proxy(field, ProxyConfig{.stiffness = k, .radius = r});
+    double nearest = std::numeric_limits<double>::infinity();
+    long touching = 0;
+    for (int sl = 0; sl < 100; ++sl) {
+      const double speed = sl % 2 ? 2.0 : 0.026;
+      const double angle = 2.0 * std::numbers::pi * u(rng);
+      const glm::dvec3 side{std::cos(angle), std::sin(angle), 0.0};
+      const glm::dvec3 start{0.008 + 0.016 * u(rng), 0.008 + 0.016 * u(rng), 0.012};
+      proxy.reset();
+      for (int j = 0; j < 150; ++j) {
+        const double in = std::fmin(1.0, j / 30.0);  // down to 1 mm under the mean level, then sideways
+        const glm::dvec3 hip = start - glm::dvec3{0.0, 0.0, 0.013 * in} + std::fmax(0, j - 30) * 1e-3 * speed * side;
+        const Contact c = proxy.contact(probe_at(hip, speed * side));
+        touching += c.touching;
+        const ProxyPath& path = proxy.last_path();
+        for (int q = 0; q + 1 < path.count; ++q) {
+          const glm::dvec3 a = path.points[static_cast<std::size_t>(q)],
+                           b = path.points[static_cast<std::size_t>(q + 1)];
+          const int samples = 1 + static_cast<int>(glm::length(b - a) / (r / 8));
+          for (int w = 0; w <= samples; ++w) {
+            const glm::dvec3 p = a + (static_cast<double>(w) / samples) * (b - a);
+            if (p.x < 0.0 || p.y < 0.0 || p.x > extent || p.y > extent) continue;  // off the field: nothing there
+            nearest = std::fmin(nearest, checker.distance(p, 2 * r));
+          }
+        }
+      }
+    }
+    INFO("nearest " << nearest << " m over " << touching << " touching ticks");
+    CHECK(touching > 2000);
+    CHECK(nearest >= r * (1.0 - 1e-6));
+  }
 }

@@ -28,6 +28,13 @@
 /// the border) bilinearly (force shading, Morgenbesser & Srinivasan 1996),
 /// so a sampled smooth function feels smooth. uv runs 0..1 over the
 /// footprint (u along x, v along y); primitive is the cell, j (width - 1) + i.
+///
+/// A tool with a radius (sweep_sphere): the ball sees each cell as two flat
+/// triangles split along its diagonal from (i, j) to (i + 1, j + 1), and
+/// meets their faces, edges and corners as on a mesh (ball_sweep.hpp). They
+/// share the samples with the bilinear patch and differ from it inside a
+/// cell by at most a quarter of the cell's twist |h00 - h10 - h01 + h11|
+/// (0 on a plane or a ramp); a ball rests r above the triangles.
 
 #include <algorithm>
 #include <array>
@@ -48,6 +55,7 @@
 #include <glm/vec3.hpp>
 
 #include "hapticfield/core/vector_math.hpp"
+#include "hapticfield/surface/ball_sweep.hpp"
 #include "hapticfield/surface/mesh_bvh.hpp"
 #include "hapticfield/surface/shape.hpp"
 
@@ -166,6 +174,92 @@ class HeightFieldShape {
     }
     if (best_cell == no_primitive) return best;
     best = describe(best_cell, best_st);
+    best.t = best_t;
+    best.distance = best_t * glm::length(d);
+    return best;
+  }
+
+  /// The first contact of a ball of `radius` [m] whose centre moves from
+  /// `from` to `to` (the tool's radius; see the file comment: cells are two
+  /// flat triangles for a ball). Hit::point is the touched point of the
+  /// field, face_normal the contact normal (unit, from it to the centre at
+  /// contact), normal the shaded normal where the ball touches a cell's
+  /// inside, else the contact normal; t the fraction of the move. A centre
+  /// that starts below the field (inside the solid) meets nothing, as a point
+  /// does. radius > 0 and finite.
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
+                                 QueryStats* stats = nullptr) const noexcept {
+    QueryStats work;
+    if (stats) *stats = work;
+    Hit best;
+    const glm::dvec3 d = to - from;
+    if (!(radius > 0.0) || !std::isfinite(radius) || !is_finite(from) || !is_finite(d)) return best;
+    const Data& g = *data_;
+    if (below_triangles(g, from)) return best;
+    const glm::dvec3 inv{1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
+    const glm::dvec3 grow{radius};
+    double best_t = 1.0;
+    std::uint32_t best_cell = no_primitive;
+    glm::dvec3 best_contact{0.0};
+    std::array<NodeRef, stack_size> stack{};
+    std::size_t top = 0;
+    stack[top++] = smallest_node(g, glm::min(from, to) - grow, glm::max(from, to) + grow);
+    bool complete = true;
+    const auto grown = [&](const NodeRef& node) {
+      Box b = box_of(g, node);
+      b.lo -= grow;
+      b.hi += grow;
+      return b;
+    };
+    while (top > 0) {
+      const NodeRef node = stack[--top];
+      double entry = 0.0, exit = 0.0;
+      if (!segment_box(grown(node), from, inv, best_t, entry, exit)) continue;
+      if (++work.nodes > config_.max_nodes) {
+        complete = false;
+        break;
+      }
+      if (node.level == 0) {
+        ++work.primitives;
+        for (int half = 0; half < 2; ++half) {
+          const Triangle tri = cell_triangle(g, node.i, node.j, half);
+          if (detail::sweep_ball_triangle(tri.a, tri.e1, tri.e2, from, d, radius, best_t, best_contact))
+            best_cell = node.j * (g.width - 1) + node.i;
+        }
+        continue;
+      }
+      Kids kids{};
+      int count = 0;
+      for (std::uint32_t dj = 0; dj < 2; ++dj)
+        for (std::uint32_t di = 0; di < 2; ++di) {
+          const NodeRef child{node.level - 1, 2 * node.i + di, 2 * node.j + dj};
+          if (!exists(g, child)) continue;
+          double t0 = 0.0, t1 = 0.0;
+          if (!segment_box(grown(child), from, inv, best_t, t0, t1)) continue;
+          kids[static_cast<std::size_t>(count++)] = {t0, child};
+        }
+      push_nearest_last(kids, count, stack, top);
+    }
+    if (stats) *stats = work;
+    if (!complete) {
+      best.complete = false;
+      best.t = 0.0;
+      return best;
+    }
+    if (best_cell == no_primitive) return best;
+    const std::uint32_t i = best_cell % (g.width - 1), j = best_cell / (g.width - 1);
+    const glm::dvec2 st{std::clamp(best_contact.x / g.spacing.x - i, 0.0, 1.0),
+                        std::clamp(best_contact.y / g.spacing.y - j, 0.0, 1.0)};
+    best = describe(best_cell, st);
+    const glm::dvec3 centre = from + best_t * d;
+    const glm::dvec3 towards = centre - best_contact;
+    const double length = glm::length(towards);
+    const Triangle tri = cell_triangle(g, i, j, st.x >= st.y ? 0 : 1);
+    const glm::dvec3 flat = glm::normalize(glm::cross(tri.e1, tri.e2));  // the touched half's normal
+    const glm::dvec3 n = length > 0.0 ? towards / length : flat;
+    if (!(glm::dot(n, flat) > 1.0 - 1e-12)) best.normal = n;  // an edge or a corner: no shading
+    best.face_normal = n;
+    best.point = best_contact;
     best.t = best_t;
     best.distance = best_t * glm::length(d);
     return best;
@@ -391,6 +485,34 @@ class HeightFieldShape {
       b.hi.z = r[1];
     }
     return b;
+  }
+
+  /// One flat half of cell (i, j) as a ball sees it: half 0 is (i, j),
+  /// (i + 1, j), (i + 1, j + 1) (s >= t), half 1 is (i, j), (i + 1, j + 1),
+  /// (i, j + 1); both face up (+z).
+  struct Triangle {
+    glm::dvec3 a{0.0}, e1{0.0}, e2{0.0};
+  };
+  static Triangle cell_triangle(const Data& g, std::uint32_t i, std::uint32_t j, int half) noexcept {
+    const glm::dvec3 p00{i * g.spacing.x, j * g.spacing.y, at(g, i, j)};
+    const glm::dvec3 p11{(i + 1) * g.spacing.x, (j + 1) * g.spacing.y, at(g, i + 1, j + 1)};
+    const glm::dvec3 other = half == 0 ? glm::dvec3{(i + 1) * g.spacing.x, j * g.spacing.y, at(g, i + 1, j)}
+                                       : glm::dvec3{i * g.spacing.x, (j + 1) * g.spacing.y, at(g, i, j + 1)};
+    return half == 0 ? Triangle{p00, other - p00, p11 - p00} : Triangle{p00, p11 - p00, other - p00};
+  }
+
+  /// True when p lies under the two-triangle surface a ball sees (inside the
+  /// footprint only: beyond it there is no solid).
+  static bool below_triangles(const Data& g, const glm::dvec3& p) noexcept {
+    const double fx = p.x / g.spacing.x, fy = p.y / g.spacing.y;
+    if (!(fx >= 0.0 && fy >= 0.0 && fx <= g.width - 1.0 && fy <= g.height - 1.0)) return false;
+    const auto i = std::min(static_cast<std::uint32_t>(fx), g.width - 2);
+    const auto j = std::min(static_cast<std::uint32_t>(fy), g.height - 2);
+    const double s = fx - i, t = fy - j;
+    const double h00 = at(g, i, j), h11 = at(g, i + 1, j + 1);
+    const double h = s >= t ? h00 + (at(g, i + 1, j) - h00) * s + (h11 - at(g, i + 1, j)) * t
+                            : h00 + (h11 - at(g, i, j + 1)) * s + (at(g, i, j + 1) - h00) * t;
+    return p.z < h;
   }
 
   /// Slabs, as MeshBvh's (an axis without motion: inside or rejected);

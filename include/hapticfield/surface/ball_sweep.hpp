@@ -1,0 +1,130 @@
+#pragma once
+/// @file ball_sweep.hpp
+/// A ball swept along a segment against one triangle: the earliest contact
+/// of its centre with the triangle's Minkowski sum with the ball (the face
+/// offset by the radius on its front, the edges' cylinders and the corners'
+/// balls; Ericson, Real-Time Collision Detection, 2005, 5.5.6). The one
+/// primitive test behind MeshBvh::sweep_sphere and
+/// HeightFieldShape::sweep_sphere. GLM only, allocation-free.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+namespace hapticfield::detail {
+
+/// The entering time t in [0, 1] of a point f + t d into the ball of radius
+/// r about the origin; t = 0 when it starts inside and moves inward.
+[[nodiscard]] inline bool ball_entry(const glm::dvec3& f, const glm::dvec3& d, double r, double& t) noexcept {
+  const double c = glm::dot(f, f) - r * r;
+  const double b = glm::dot(f, d);
+  if (!(b < 0.0)) return false;  // not approaching
+  if (c <= 0.0) {
+    t = 0.0;
+    return true;
+  }
+  const double a = glm::dot(d, d);
+  const double disc = b * b - a * c;
+  if (!(disc >= 0.0)) return false;
+  t = c / (-b + std::sqrt(disc));  // the smaller root, without cancellation
+  return t <= 1.0;
+}
+
+/// The entering time t in [0, 1] of a point f + t d into the cylinder of
+/// radius r about the segment s e, s in [0, 1] (s receives where); t = 0
+/// when it starts inside and moves inward.
+[[nodiscard]] inline bool cylinder_entry(const glm::dvec3& f, const glm::dvec3& d, const glm::dvec3& e, double r,
+                                         double& t, double& s) noexcept {
+  const double ee = glm::dot(e, e);
+  if (!(ee > 0.0)) return false;
+  // components normal to the axis
+  const glm::dvec3 fp = f - (glm::dot(f, e) / ee) * e;
+  const glm::dvec3 dp = d - (glm::dot(d, e) / ee) * e;
+  const double a = glm::dot(dp, dp), b = glm::dot(fp, dp), c = glm::dot(fp, fp) - r * r;
+  if (!(b < 0.0)) return false;  // not approaching the axis
+  if (c <= 0.0) {
+    t = 0.0;
+  } else {
+    const double disc = b * b - a * c;
+    if (!(disc >= 0.0)) return false;
+    t = c / (-b + std::sqrt(disc));
+    if (!(t <= 1.0)) return false;
+  }
+  s = glm::dot(f + t * d, e) / ee;
+  return s >= 0.0 && s <= 1.0;
+}
+
+/// The ball of radius r whose centre moves from + t d (t in [0, t_best))
+/// against the triangle a, a + e1, a + e2: its face is met from its front
+/// only (the side cross(e1, e2) points to), its edges and corners from any
+/// side; a ball that already overlaps a feature and moves toward it meets it
+/// at t = 0. True when it touches before t_best, which then receives the
+/// time, and contact the touched point of the triangle.
+[[nodiscard]] inline bool sweep_ball_triangle(const glm::dvec3& a, const glm::dvec3& e1, const glm::dvec3& e2,
+                                              const glm::dvec3& from, const glm::dvec3& d, double r, double& t_best,
+                                              glm::dvec3& contact) noexcept {
+  const glm::dvec3 cross = glm::cross(e1, e2);
+  // the ball stays r or more on one side of the triangle's plane along the
+  // whole move (heights are linear in t): it meets nothing of it
+  const double lift = r * std::sqrt(glm::dot(cross, cross));  // r |cross| [m^3]
+  const double g0 = glm::dot(from - a, cross), g1 = glm::dot(from + t_best * d - a, cross);
+  if ((g0 >= lift && g1 >= lift) || (g0 <= -lift && g1 <= -lift)) return false;
+  const double area2 = glm::length(cross);
+  if (!(area2 > 0.0)) return false;
+  const glm::dvec3 n = cross / area2;
+  bool found = false;
+  // the face, offset by r on its front
+  const double h0 = glm::dot(from - a, n);  // [m] height of the start
+  const double dn = glm::dot(d, n);         // [m] per unit t
+  if (dn < 0.0 && h0 >= -r) {
+    const double t = h0 > r ? (h0 - r) / -dn : 0.0;
+    if (t < t_best) {
+      const glm::dvec3 q = from + t * d - (t > 0.0 ? r : h0) * n;  // the touched point on the plane
+      // inside the triangle: the three edge functions' signs (relative tolerance)
+      const glm::dvec3 w = q - a;
+      const double u = glm::dot(glm::cross(w, e2), cross), v = glm::dot(glm::cross(e1, w), cross);
+      const double whole = area2 * area2, slack = 1e-12 * whole;
+      if (u >= -slack && v >= -slack && u + v <= whole + slack && (t > 0.0 || h0 >= 0.0)) {
+        t_best = t;
+        contact = q;
+        found = true;
+      }
+    }
+  }
+  // the corners' balls and the edges' cylinders: none is met before a
+  // contact inside the face (they lie in its plane), nor when the moving
+  // centre never comes within r of the triangle's bounding ball
+  if (found) return true;
+  const std::array<glm::dvec3, 3> corner{a, a + e1, a + e2};
+  const glm::dvec3 middle = (corner[0] + corner[1] + corner[2]) / 3.0;
+  double reach2 = 0.0;  // the bounding ball's radius, squared [m^2]
+  for (const glm::dvec3& c : corner)
+    reach2 = std::fmax(reach2, glm::dot(c - middle, c - middle));
+  const glm::dvec3 to_middle = middle - from;
+  const double along = std::clamp(glm::dot(to_middle, d) / std::fmax(glm::dot(d, d), 1e-300), 0.0, t_best);
+  const glm::dvec3 gap = to_middle - along * d;
+  const double bound = r + std::sqrt(reach2);
+  if (glm::dot(gap, gap) > bound * bound) return false;
+  for (std::size_t k = 0; k < 3; ++k) {
+    double t = 0.0;
+    if (ball_entry(from - corner[k], d, r, t) && t < t_best) {
+      t_best = t;
+      contact = corner[k];
+      found = true;
+    }
+    const glm::dvec3 p = corner[k], e = corner[(k + 1) % 3] - p;
+    double s = 0.0;
+    if (cylinder_entry(from - p, d, e, r, t, s) && t < t_best) {
+      t_best = t;
+      contact = p + s * e;
+      found = true;
+    }
+  }
+  return found;
+}
+
+}  // namespace hapticfield::detail
