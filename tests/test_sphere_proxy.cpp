@@ -238,8 +238,9 @@ TriangleMesh triangulated(const HeightFieldShape& field) {
     for (std::uint32_t i = 0; i < w; ++i) {
       const double x = i * field.spacing().x, y = j * field.spacing().y;
       // the sample itself: the bilinear height at a sample is the sample
-      m.positions.push_back({x, y, field.height_at(std::fmin(x, (w - 1) * field.spacing().x),
-                                                   std::fmin(y, (h - 1) * field.spacing().y))});
+      m.positions.push_back(
+          {x, y,
+           field.height_at(std::fmin(x, (w - 1) * field.spacing().x), std::fmin(y, (h - 1) * field.spacing().y))});
     }
   for (std::uint32_t j = 0; j + 1 < h; ++j)
     for (std::uint32_t i = 0; i + 1 < w; ++i) {
@@ -252,16 +253,17 @@ TriangleMesh triangulated(const HeightFieldShape& field) {
 
 }  // namespace
 
-TEST_CASE("a ball on a height field: r above a flat field and a ramp, r / cos(slope) over a groove, a narrow trench "
-          "not entered",
-          "[radius][height]") {
+TEST_CASE(
+    "a ball on a height field: r above a flat field and a ramp, r / cos(slope) over a groove, a narrow trench "
+    "not entered",
+    "[radius][height]") {
   const double r = 0.002;
   SECTION("flat and ramp: the centre r from the plane, Fc = k (r - the HIP's distance)") {
     for (const double slope : {0.0, 0.3, 0.7}) {
       ProxyConstraint proxy(sampled(41, 0.001, [&](double x, double) { return std::tan(slope) * (x - 0.02); }),
                             ProxyConfig{.stiffness = k, .radius = r});
       const glm::dvec3 n{-std::sin(slope), 0.0, std::cos(slope)};  // the ramp's normal
-      const glm::dvec3 on{0.02, 0.021, 0.0};                        // a point of the ramp
+      const glm::dvec3 on{0.02, 0.021, 0.0};                       // a point of the ramp
       const Contact c = press(proxy, on + 0.02 * n, on - 0.001 * n);
       INFO("slope " << slope);
       REQUIRE(c.touching);
@@ -281,8 +283,9 @@ TEST_CASE("a ball on a height field: r above a flat field and a ramp, r / cos(sl
       CHECK(proxy.proxy().z == Approx(r / std::cos(slope)).epsilon(1e-4));
     }
   }
-  SECTION("a trench one sample wide (rims 2 mm apart, 10 mm deep): a 2 mm ball rests on both rims, a 0.5 mm one "
-          "falls to where both walls touch it") {
+  SECTION(
+      "a trench one sample wide (rims 2 mm apart, 10 mm deep): a 2 mm ball rests on both rims, a 0.5 mm one "
+      "falls to where both walls touch it") {
     const double s = 0.001, depth = 0.01;
     const auto trench = [&](double x, double) { return std::fabs(x - 0.02) < 0.5 * s ? -depth : 0.0; };
     ProxyConstraint wide(sampled(41, s, trench), ProxyConfig{.stiffness = k, .radius = r});
@@ -297,9 +300,10 @@ TEST_CASE("a ball on a height field: r above a flat field and a ramp, r / cos(sl
   }
 }
 
-TEST_CASE("a ball on a height field meets what a brute-force sweep over its triangles meets; its centre never comes "
-          "nearer than r to them while sliding",
-          "[radius][height][invariant]") {
+TEST_CASE(
+    "a ball on a height field meets what a brute-force sweep over its triangles meets; its centre never comes "
+    "nearer than r to them while sliding",
+    "[radius][height][invariant]") {
   const std::uint32_t seed = run_seed();
   INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
   std::mt19937 rng(seed);
