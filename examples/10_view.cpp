@@ -13,7 +13,7 @@
 // renderer, view/mesh_render.hpp) with the proxy, the HIP and the force.
 //
 //   hapticfield_view SOURCE [--field tangible|video|normals|texture] [field options]
-//       [--device mouse|sim|hid[:VID:PID]] [--screenshot OUT.png --seconds S]
+//       [--device mouse|sim|hid[:VID:PID]|...] [--list-devices] [--screenshot OUT.png --seconds S]
 //   hapticfield_view --shape FILE [--height-mm H] [--radius MM] [--view YAW,PITCH] [--distance MM]
 //       [same probe options]
 #include <algorithm>
@@ -41,7 +41,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/cli.hpp"
-#include "common/hid_device.hpp"
+#include "common/device_option.hpp"
 #include "common/loop_thread.hpp"
 #include "common/picture.hpp"
 #include "common/stop_signal.hpp"
@@ -62,9 +62,6 @@
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
 #include "view/window.hpp"
-#if HAPTICFIELD_EXAMPLE_HID
-#include "hapticfield/transport/hid_transport.hpp"
-#endif
 #if HAPTICFIELD_EXAMPLE_SHAPES
 #include "view/shape_scene.hpp"
 #endif
@@ -112,15 +109,18 @@ constexpr const char* usage_text =
     "  --height-mm H        a height map's height of white over black [mm], in (0, 100] (default 4)\n"
     "  --radius MM          the tool's radius [mm], in [0, 50] (default 0: a point, drawn as a dot);\n"
     "                       > 0 a ball centred on the HIP, felt against the mesh and drawn as a\n"
-    "                       shaded ball of that radius at the proxy. A mesh only: a height map\n"
-    "                       takes a point tool\n"
+    "                       shaded ball of that radius at the proxy (on a height map, each cell\n"
+    "                       is two flat triangles for the ball)\n"
     "  --view YAW,PITCH     the camera's orbit [degrees]: yaw in [-180, 180] about y (up), pitch in\n"
     "                       [-89, 89] (default 25,30; 0,0 looks from +z, the user's side)\n"
     "  --distance MM        the camera's distance from the shape's centre [mm], in [1, 1e5]\n"
     "                       (default: the shape fills about 70 % of the view's height)\n"
     "probe and loop:\n"
     "  --device D           mouse (default: forces shown, not felt), sim (the simulated arm's\n"
-    "                       scripted hand raster-scans the picture) or hid[:VID:PID] (a real arm)\n"
+    "                       scripted hand raster-scans the picture), hid[:VID:PID] (a real arm), or any\n"
+    "                       arm servo_demo opens: serial:PATH, woody:GEN[:PRESET][:sim|:PATH],\n"
+    "                       inverse3:PATH|sim (see servo_demo --help)\n"
+    "  --list-devices       one line per arm family: present, or why not; then exit\n"
     "  --start X,Y          the mouse probe's position before the pointer moves [px]\n"
     "                       (default: the picture's centre); a shape's HIP starts 5 mm above its top\n"
     "  --rate HZ            servo rate [Hz], in [1, 10000] (default 1000)\n"
@@ -146,6 +146,8 @@ struct Arguments {
   std::vector<std::string> video_only;           ///< the video-only options given
   std::uint64_t max_pixels{default_max_pixels};  ///< largest picture or frame decoded [px]
   std::string device{"mouse"};
+  std::optional<DeviceSpec> arm;  ///< the arm --device names (none: the mouse)
+  bool list_devices{false};       ///< --list-devices: say which arms are present, then exit
   std::optional<glm::dvec2> start;
   double rate{1000.0};
   RealTime realtime{RealTime::best_effort};
@@ -189,12 +191,8 @@ bool is_still_picture(const std::string& path) {
 }
 
 /// The status panel's name of the device: the simulated arm says so.
-std::string device_label(const std::string& option, const std::string& name) {
-  return option == "sim" ? "simulated arm (no real device)" : name;
-}
-
-bool valid_device(const std::string& d) {
-  return d == "mouse" || d == "sim" || cli::hid_device(d).has_value();
+std::string device_label(const Arguments& o, const std::string& name) {
+  return o.arm && o.arm->simulated ? "simulated arm (no real device)" : name;
 }
 
 /// "x1,y1 x2,y2 x3,y3 x4,y4": four finite corners.
@@ -271,8 +269,10 @@ Arguments parse(cli::Parser& p) {
       o.scene.texture_gain = p.real(cli::closed(0.0, 5.0));
     } else if (p.is("--device")) {
       o.device = p.value();
-      if (!valid_device(o.device))
-        usage("--device must be mouse, sim, hid or hid:VID:PID with hexadecimal ids, got '" + o.device + "'");
+      o.arm.reset();
+      if (o.device != "mouse") o.arm = cli::device_option(o.device);
+    } else if (p.is("--list-devices")) {
+      o.list_devices = true;
     } else if (p.is("--start")) {
       const auto [x, y] = p.pair(cli::closed(-1e6, 1e6));
       o.start = glm::dvec2{x, y};
@@ -311,6 +311,10 @@ Arguments parse(cli::Parser& p) {
       p.unknown();
     }
   }
+  if (o.list_devices) {
+    p.finish();
+    return o;
+  }
   if (!o.shape.empty()) {
     if (!o.source.empty()) usage("give SOURCE or --shape, not both ('" + o.source + "' and --shape " + o.shape + ")");
     if (o.kind_given) usage("--field is for a picture or a video; --shape is felt through its proxy");
@@ -319,10 +323,6 @@ Arguments parse(cli::Parser& p) {
   }
   if (o.source.empty() && o.shape.empty()) usage("missing SOURCE (a picture or a video file) or --shape FILE");
   if (o.shape.empty() && !o.shape_only.empty()) usage(o.shape_only.front() + " is for --shape FILE (a mesh)");
-#if HAPTICFIELD_EXAMPLE_SHAPES
-  if (o.radius_mm > 0.0 && is_height_picture(o.shape))
-    usage("--radius is for a mesh: a height map ('" + o.shape + "') takes a point tool only");
-#endif
   if (!o.screenshot.empty() && !o.seconds) usage("--screenshot needs --seconds (how long the loop runs first)");
   if (o.seconds && std::llround(*o.seconds * o.rate) < 1) {
     char text[160];
@@ -417,7 +417,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   now.pixel = o.start ? *o.start : glm::dvec2{picture.cols / 2.0, picture.rows / 2.0};
   ViewStatus status;
   status.source = std::filesystem::path(o.source).filename().string();
-  status.device = device_label(o.device, device.info().name);
+  status.device = device_label(o, device.info().name);
   status.field = scene.label;
   const bool window = o.screenshot.empty();
   double note_until = 0.0;  // [s of loop time]
@@ -650,7 +650,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   if (hardware) cli::wait_for_operator();
   if (stop.caught()) return stop.exit_status();
   std::printf("%s on %s (Ctrl-C stops; so do q and Esc in the window)\n", o.shape.c_str(),
-              device_label(o.device, device.info().name).c_str());
+              device_label(o, device.info().name).c_str());
   std::fflush(stdout);
 
   auto tick = [&](const TickInput& in) noexcept {
@@ -682,7 +682,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   now.hip = now.proxy = start;
   ViewStatus status;
   status.source = scene.label;
-  status.device = device_label(o.device, device.info().name);
+  status.device = device_label(o, device.info().name);
   char field_text[80];
   if (o.radius_mm > 0.0)
     std::snprintf(field_text, sizeof field_text, "proxy (god-object), k 1500 N/m, ball r %.3g mm", o.radius_mm);
@@ -812,30 +812,16 @@ int run_shape_with(const Arguments& o, const ShapeScene& scene, Field& field) {
     mouse.set_position(start);
     return run_shape_view(o, mouse, field, scene, clock, false, &mouse, start);
   }
-  std::unique_ptr<SimulatedArm> arm;
-  std::unique_ptr<Transport> transport;
-  bool hardware = false;
-  if (o.device == "sim") {
-    // the hand aims 8 mm below the shape's top and raster-scans 70 % of its
-    // footprint (the handle overshoots the first corner as the hand catches
-    // it; past a height map's edge below its top it would be under the sheet)
-    SimulatedArmConfig c;
-    const glm::vec3 extent = scene.display.hi - scene.display.lo;
-    c.hand.path = HandPath::raster(glm::dvec3{scene.centre.x, scene.centre.y, scene.top.z - 0.008}, extent.x * 0.7,
-                                   extent.y * 0.7, 8, 0.06);
-    arm = std::make_unique<SimulatedArm>(c);
-    transport = std::make_unique<SimulatedTransport>(*arm, now);
-  } else {
-#if HAPTICFIELD_EXAMPLE_HID
-    const cli::HidIds ids = *cli::hid_device(o.device);
-    transport = std::make_unique<HidTransport>(ids.vendor, ids.product);
-    hardware = true;
-#else
-    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
-#endif
-  }
-  ForceArm device(*transport);
-  return run_shape_view(o, device, field, scene, clock, hardware, nullptr, start);
+  // a simulated arm's hand aims 8 mm below the shape's top and raster-scans
+  // 70 % of its footprint (the handle overshoots the first corner as the hand
+  // catches it; past a height map's edge below its top it would be under the sheet)
+  DeviceOptions options;
+  options.now = now;
+  const glm::vec3 extent = scene.display.hi - scene.display.lo;
+  options.hand.path = HandPath::raster(glm::dvec3{scene.centre.x, scene.centre.y, scene.top.z - 0.008}, extent.x * 0.7,
+                                       extent.y * 0.7, 8, 0.06);
+  AnyDevice device = open_device(*o.arm, options);
+  return run_shape_view(o, device, field, scene, clock, !o.arm->simulated, nullptr, start);
 }
 
 int run_shape(const Arguments& o) {
@@ -860,13 +846,13 @@ int run_shape(const Arguments& o) {
   });
   // where the proxy starts: clear of the shape's box, its ball too
   const glm::dvec3 above = scene.top + glm::dvec3{0.0, 0.0, 0.005 + o.radius_mm * 1e-3};
+  ProxyConfig tool;
+  tool.radius = o.radius_mm * 1e-3;
   if (scene.mesh) {
-    ProxyConfig tool;
-    tool.radius = o.radius_mm * 1e-3;
     ShapeProxyField<MeshShape> field(std::move(*scene.mesh), scene.shift, above, tool);
     return run_shape_with(o, scene, field);
   }
-  ShapeProxyField<HeightFieldShape> field(std::move(*scene.height_field), scene.shift, above);
+  ShapeProxyField<HeightFieldShape> field(std::move(*scene.height_field), scene.shift, above, tool);
   return run_shape_with(o, scene, field);
 }
 
@@ -879,6 +865,7 @@ int run_shape(const Arguments&) {
 #endif
 
 int run(const Arguments& o) {
+  if (o.list_devices) return cli::print_device_list();
   if (!o.shape.empty()) return run_shape(o);
   SceneConfig first = o.scene;
   const bool still = is_still_picture(o.source);
@@ -932,27 +919,13 @@ int run(const Arguments& o) {
   const PlaneConstraint wall(
       PlaneConstraintConfig{glm::dvec3{0.0}, glm::dvec3{0.0, 0.0, 1.0}, 1500.0, 0.0});  // [m], [N/m]
   auto felt = contact(wall, live_ref);
-  std::unique_ptr<SimulatedArm> arm;
-  std::unique_ptr<Transport> transport;
-  bool hardware = false;
-  if (o.device == "sim") {
-    // The hand aims 8 mm behind the plane and raster-scans 90 % of the picture.
-    const double width = picture.cols / mapping.px_per_mm() * 1e-3, height = picture.rows / mapping.px_per_mm() * 1e-3;
-    SimulatedArmConfig c;
-    c.hand.path = HandPath::raster(glm::dvec3{0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
-    arm = std::make_unique<SimulatedArm>(c);
-    transport = std::make_unique<SimulatedTransport>(*arm, now);
-  } else {
-#if HAPTICFIELD_EXAMPLE_HID
-    const cli::HidIds ids = *cli::hid_device(o.device);  // checked by parse()
-    transport = std::make_unique<HidTransport>(ids.vendor, ids.product);
-    hardware = true;
-#else
-    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
-#endif
-  }
-  ForceArm device(*transport);
-  return run_view(o, device, felt, live, picture, player, scene, first, mapping, clock, hardware, {});
+  // A simulated arm's hand aims 8 mm behind the plane and raster-scans 90 % of the picture.
+  const double width = picture.cols / mapping.px_per_mm() * 1e-3, height = picture.rows / mapping.px_per_mm() * 1e-3;
+  DeviceOptions options;
+  options.now = now;
+  options.hand.path = HandPath::raster(glm::dvec3{0.0, 0.0, -0.008}, width * 0.9, height * 0.9, 8, 0.06);
+  AnyDevice device = open_device(*o.arm, options);
+  return run_view(o, device, felt, live, picture, player, scene, first, mapping, clock, !o.arm->simulated, {});
 }
 
 }  // namespace
