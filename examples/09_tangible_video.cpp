@@ -3,7 +3,7 @@
 //   tangible_video VIDEO [--mask prewitt|sobel|scharr|roberts|gauss|emboss] [--size M]
 //                  [--border suspend|clamp|reflect|fade] [--denoise none|temporal|spatial|both]
 //                  [--fade-ms MS] [--cuts OUT.csv] [--probes IN.csv --forces OUT.csv]
-//                  [--seconds S] [--device sim|hid[:VID:PID]] [--clock wall|virtual]
+//                  [--seconds S] [--device sim|hid[:VID:PID]|...] [--clock wall|virtual]
 //                  [--trace OUT.csv] [--plots DIR] [--max-mpx N] [--verbose]
 //
 // With --probes it renders offline, as fast as it can: t,x,y per line (t in
@@ -41,7 +41,7 @@
 
 #include "common/cli.hpp"
 #include "common/csv.hpp"
-#include "common/hid_device.hpp"
+#include "common/device_option.hpp"
 #include "common/loop_thread.hpp"
 #include "common/plots.hpp"
 #include "common/simple_plot.hpp"
@@ -49,11 +49,9 @@
 
 #include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
+#include "hapticfield/devices/open_device.hpp"
 #include "hapticfield/servo.hpp"
 #include "hapticfield/transport.hpp"
-#if HAPTICFIELD_EXAMPLE_HID
-#include "hapticfield/transport/hid_transport.hpp"
-#endif
 
 namespace hf = hapticfield;
 
@@ -76,8 +74,9 @@ constexpr const char* usage =
     "                        (x right, y down, integer = pixel centre; a header line allowed); needs --forces\n"
     "  --forces OUT.csv      t,x,y,fx,fy per probe: the normalised force (1 = black/white edge), fy down\n"
     "  --seconds S           play time [s], in (0, 3600] (default: the video's length, at most 60)\n"
-    "  --device D            sim (default: the simulated arm, a scripted hand) or hid, hid:VID:PID\n"
-    "  --clock C             wall (default: real time) or virtual (the simulated arm only: simulated\n"
+    "  --device D            sim (default: the simulated arm, a scripted hand), hid, hid:VID:PID, or any\n"
+    "                        arm servo_demo opens (servo_demo --list-devices says which are present)\n"
+    "  --clock C             wall (default: real time) or virtual (simulated arms only: simulated\n"
     "                        time, each tick waits for its frame, none dropped: the same trace on any\n"
     "                        machine)\n"
     "  --trace OUT.csv       write t, position [m], force [N] per tick (play mode)\n"
@@ -100,15 +99,11 @@ struct Arguments {
   double fade_s = hf::default_cut_fade;
   std::optional<std::string> cuts, probes, forces, trace, plots;
   std::optional<double> seconds;
-  std::string device{"sim"};
+  hf::DeviceSpec device{hf::parse_device_spec("sim")};
   std::optional<std::string> clock;                   ///< "wall" or "virtual"; given or not
   std::uint64_t max_pixels = hf::default_max_pixels;  ///< largest frame decoded [px]
   bool verbose = false;
 };
-
-bool valid_device(const std::string& d) {
-  return d == "sim" || hf::cli::hid_device(d).has_value();
-}
 
 Arguments parse(hf::cli::Parser& p) {
   Arguments a;
@@ -136,10 +131,7 @@ Arguments parse(hf::cli::Parser& p) {
     } else if (p.is("--seconds")) {
       a.seconds = p.real(hf::cli::open_closed(0.0, 3600.0));
     } else if (p.is("--device")) {
-      a.device = p.value();
-      if (!valid_device(a.device))
-        throw hf::cli::UsageError("--device must be sim, hid or hid:VID:PID with hexadecimal ids, got '" + a.device +
-                                  "'");
+      a.device = hf::cli::device_option(p.value());
     } else if (p.is("--clock")) {
       a.clock = p.choice<std::string>("clock", {{"wall", "wall"}, {"virtual", "virtual"}});
     } else if (p.is("--trace")) {
@@ -162,9 +154,10 @@ Arguments parse(hf::cli::Parser& p) {
   if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
   if (a.probes && (a.trace || a.seconds || a.clock))
     throw hf::cli::UsageError("--trace, --seconds and --clock are for play mode, not --probes");
-  if (a.clock == "virtual" && a.device != "sim")
+  if (a.clock == "virtual" && !a.device.simulated)
     throw hf::cli::UsageError(
-        "--clock virtual is for the simulated arm (--device sim): a real arm runs on the wall clock");
+        "--clock virtual is for the simulated arms (--device sim, woody:GEN[:PRESET]:sim or inverse3:sim): a real arm "
+        "runs on the wall clock");
   if (!a.size_given) a.options.size = hf::default_mask_size(a.options.mask);
   try {
     hf::validate_mask_size(a.options.mask, a.options.size);
@@ -364,27 +357,14 @@ int run_play(const Arguments& a) {
   constexpr bool simulated_time = std::is_same_v<Clock, hf::VirtualClock>;
   if (simulated_time) video_ptr->set_lockstep(true);  // each tick waits for its frame
   const double w_m = width / mapping.px_per_mm() * 1e-3, h_m = height / mapping.px_per_mm() * 1e-3;
-  std::unique_ptr<hf::SimulatedArm> arm;
-  std::unique_ptr<hf::Transport> transport;
-  bool hardware = false;
-  if (a.device == "sim") {
-    hf::SimulatedArmConfig c;
-    c.hand.path = hf::HandPath::raster(glm::dvec3{0.0, 0.0, -0.008}, w_m * 0.9, h_m * 0.9, 8, 0.06);
-    arm = std::make_unique<hf::SimulatedArm>(c);
-    transport = std::make_unique<hf::SimulatedTransport>(*arm, now);
-  } else {
-#if HAPTICFIELD_EXAMPLE_HID
-    const hf::cli::HidIds ids = *hf::cli::hid_device(a.device);  // checked by parse()
-    transport = std::make_unique<hf::HidTransport>(ids.vendor, ids.product);
-    hardware = true;
-#else
-    throw std::runtime_error("this build has no hidapi: --device hid is unavailable");
-#endif
-  }
-  hf::ForceArm device(*transport);
+  hf::DeviceOptions device_options;
+  device_options.now = now;
+  device_options.hand.path = hf::HandPath::raster(glm::dvec3{0.0, 0.0, -0.008}, w_m * 0.9, h_m * 0.9, 8, 0.06);
+  hf::AnyDevice device = hf::open_device(a.device, device_options);
+  const bool hardware = !a.device.simulated;
   hf::LoopConfig loop_config;
   loop_config.recover_after = 0.5;
-  hf::ServoLoop<hf::ForceArm, Clock> loop(device, clock, loop_config);
+  hf::ServoLoop<hf::AnyDevice, Clock> loop(device, clock, loop_config);
   hf::cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm through the loop's stop
   if (hardware) hf::cli::wait_for_operator();
   if (stop.caught()) {

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "common/cli.hpp"
+#include "cli.hpp"
 #include "hapticfield/devices/open_device.hpp"
 
 namespace hapticfield::cli {
