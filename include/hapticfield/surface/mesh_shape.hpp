@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -50,6 +51,22 @@ class MeshShape {
   explicit MeshShape(TriangleMesh mesh, const MeshShapeConfig& config = {}) : config_(config) {
     auto data = std::make_shared<Data>();
     data->bvh = MeshBvh::build(mesh, MeshBvhConfig{config.max_nodes});
+    data->mesh = std::move(mesh);
+    data_ = std::move(data);
+  }
+
+  /// Takes the mesh and a tree over it, built (MeshBvh::build) or refit
+  /// (MeshBvh::refit) to this mesh: no build here (a deforming mesh's
+  /// frames, surface/deforming_mesh.hpp). The node budget is the tree's.
+  /// @throws std::invalid_argument for an invalid mesh or a tree with more
+  ///         triangles than the mesh.
+  MeshShape(TriangleMesh mesh, MeshBvh bvh, bool shade_normals = true)
+      : config_{shade_normals, bvh.config().max_nodes} {
+    mesh.validate();
+    if (bvh.triangle_count() > mesh.triangles.size())
+      throw std::invalid_argument("MeshShape: the tree has more triangles than the mesh");
+    auto data = std::make_shared<Data>();
+    data->bvh = std::move(bvh);
     data->mesh = std::move(mesh);
     data_ = std::move(data);
   }

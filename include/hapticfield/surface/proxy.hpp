@@ -52,10 +52,20 @@
 /// a HIP that starts inside a solid is not touching until it has left it
 /// (surfaces are one-sided). A query that runs out of its node budget
 /// leaves the proxy where it is for that tick (ProxyTick::blocked).
+///
+/// Shapes that change between ticks (surface/moving_shape.hpp): a shape
+/// with advance(time) is advanced at the start of every tick (a changed
+/// shape drops the planes held for ProxyConfig::stick_first); one that also
+/// has carry(p) and surface_velocity(p) moves rigidly: the proxy is first
+/// carried with it (it keeps its place in the shape's frame, so the move
+/// toward the HIP runs, in effect, in the shape's frame, where the shape is
+/// still), and the damping acts on the HIP's velocity relative to the
+/// surface's at the proxy. Static shapes take none of these steps.
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
@@ -155,8 +165,18 @@ class ProxyConstraint {
   [[nodiscard]] Contact contact(const Probe& probe) noexcept {
     tick_ = ProxyTick{};
     path_.count = 0;
+    if constexpr (advances) {
+      if (shape_.advance(probe.time)) {
+        held_planes_ = Planes{};
+        if constexpr (!carries)
+          if (started_ && touching_) lift(face_);
+      }
+      if constexpr (carries)
+        if (started_) proxy_ = shape_.carry(proxy_);
+    }
     if (!is_finite(probe.position)) return Contact{};
-    const glm::dvec3 velocity = is_finite(probe.velocity) ? probe.velocity : glm::dvec3{0.0};
+    // a moving shape keeps a non-finite velocity for relative() to drop
+    const glm::dvec3 velocity = is_finite(probe.velocity) || carries ? probe.velocity : glm::dvec3{0.0};
     const glm::dvec3 goal = probe.position;
     if (!started_ || !is_finite(proxy_)) {
       started_ = true;
@@ -276,9 +296,11 @@ class ProxyConstraint {
       held_planes_ = touching && !blocked ? planes : Planes{};
       held_face_ = touched.found() ? touched : last_hit;
     }
+    if constexpr (advances && !carries) face_ = touched.found() ? touched : last_hit;
     if (!touching) return Contact{};
 
-    return respond(goal, velocity, planes, x, frictionless, on_surface, depth, touched.found() ? touched : last_hit);
+    return respond(goal, relative(velocity, x), planes, x, frictionless, on_surface, depth,
+                   touched.found() ? touched : last_hit);
   }
 
   /// Fc alone [N].
@@ -482,7 +504,8 @@ class ProxyConstraint {
     proxy_ = x;
     visit(x);
     held_face_ = touched;
-    out = respond(goal, velocity, planes, x, frictionless, on_surface, depth, touched);
+    if constexpr (advances && !carries) face_ = touched;
+    out = respond(goal, relative(velocity, x), planes, x, frictionless, on_surface, depth, touched);
     return true;
   }
 
@@ -495,6 +518,41 @@ class ProxyConstraint {
   /// offsets above the tick's planes, plus the tool's radius.
   [[nodiscard]] double reach(const Planes& planes) const noexcept {
     return 4.0 * planes.max_offset + planes.tolerance + config_.radius;
+  }
+
+  /// The shape changes between ticks: advance(time) at the start of each.
+  static constexpr bool advances = requires(S & s) {
+    { s.advance(0.0) } -> std::same_as<bool>;
+  };
+  /// The shape moves rigidly: carry(p) and surface_velocity(p).
+  static constexpr bool carries = requires(const S& s, const glm::dvec3& p) {
+    { s.carry(p) } -> std::same_as<glm::dvec3>;
+    { s.surface_velocity(p) } -> std::same_as<glm::dvec3>;
+  };
+
+  /// The HIP's velocity the damping acts on: relative to the surface at the
+  /// proxy `at` on a moving shape (zero for a non-finite HIP velocity).
+  [[nodiscard]] glm::dvec3 relative(const glm::dvec3& velocity, const glm::dvec3& at) const noexcept {
+    if constexpr (carries) {
+      if (!is_finite(velocity)) return glm::dvec3{0.0};
+      return velocity - shape_.surface_velocity(at);
+    } else {
+      return velocity;
+    }
+  }
+
+  /// A deforming shape (advances, does not carry) changed under a touching
+  /// proxy: back in front of the face it touched, at its lift over the face
+  /// as it is now, when the face has come up to it or past it (a surface
+  /// pressing on the proxy pushes it out).
+  void lift(const Hit& face) noexcept {
+    if constexpr (requires { shape_.on_primitive(face.primitive, proxy_, 1.0); }) {
+      if (!face.found()) return;
+      const Hit now = shape_.on_primitive(face.primitive, proxy_, std::numeric_limits<double>::infinity());
+      if (!now.found()) return;
+      const double above = config_.radius + offset_for(now);  // [m]
+      if (glm::dot(proxy_ - now.point, now.face_normal) < above) proxy_ = now.point + above * now.face_normal;
+    }
   }
 
   /// The shape can sweep a ball (sweep_sphere), for a radius > 0.
@@ -587,6 +645,7 @@ class ProxyConstraint {
   bool sliding_{false};
   Planes held_planes_{};  ///< the constraint planes of the last tick that touched
   Hit held_face_{};       ///< the face the proxy last touched
+  Hit face_{};            ///< a deforming shape's face the proxy touched last tick
   ProxyTick tick_{};
   ProxyPath path_{};
 };
