@@ -254,7 +254,7 @@ class CurvePlan {
   std::vector<double> knots_;
 };
 
-/// Adds f(t) for the samples i with t = i / rate - t0 in [begin, end] [s].
+/// Adds f(t) for the samples i with t = i / rate - t0 in [begin, end] [s] (t rounded into the span).
 template <class F>
 void add_span(std::vector<double>& out, double rate, double t0, double begin, double end, F&& f) {
   if (!(end >= begin) || out.empty()) return;
@@ -262,7 +262,7 @@ void add_span(std::vector<double>& out, double rate, double t0, double begin, do
   if (last < 0.0 || first >= static_cast<double>(out.size())) return;
   const auto i0 = static_cast<std::size_t>(std::max(first, 0.0));
   const auto i1 = static_cast<std::size_t>(std::min(last, static_cast<double>(out.size() - 1)));
-  for (std::size_t i = i0; i <= i1; ++i) out[i] += f(static_cast<double>(i) / rate - t0);
+  for (std::size_t i = i0; i <= i1; ++i) out[i] += f(std::clamp(static_cast<double>(i) / rate - t0, begin, end));
 }
 
 }  // namespace detail
