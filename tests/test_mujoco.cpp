@@ -443,3 +443,59 @@ TEST_CASE("bad scenes and settings: one clear error each", "[mujoco]") {
   c.tool_body = "ball";  // a free body without a sphere? the ball has one: fine
   CHECK_NOTHROW(MujocoBridge(ball, c));
 }
+
+#ifdef HAPTICFIELD_TOOL_FEEL_MUJOCO
+#include "child_process.hpp"
+
+namespace {
+struct ToolRun {
+  int status;
+  std::string out, err;
+};
+ToolRun feel_mujoco(const std::vector<std::string>& args, const std::string& name) {
+  testing::Child child(HAPTICFIELD_TOOL_FEEL_MUJOCO, args, std::string(HAPTICFIELD_TEST_TMP) + "/feel_mujoco", name);
+  REQUIRE(child.wait());
+  REQUIRE(child.exited_normally());
+  return {child.status(), child.out(), child.err()};
+}
+std::size_t lines(const std::string& text) {
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+}  // namespace
+
+TEST_CASE("feel_mujoco: the table scene felt as a user runs it", "[mujoco][tool]") {
+  const std::string dir = std::string(HAPTICFIELD_TEST_TMP) + "/feel_mujoco";
+  std::filesystem::create_directories(dir);
+  const ToolRun help = feel_mujoco({"--help"}, "help");
+  CHECK(help.status == 0);
+  CHECK(help.out.find("usage: feel_mujoco") == 0);
+  const ToolRun run = feel_mujoco({scene_file("mujoco_table.xml"), "--seconds", "2", "--rate", "100", "--trace",
+                                   dir + "/trace.csv", "--snapshot", dir + "/table.png"},
+                                  "table");
+  CAPTURE(run.out, run.err);
+  CHECK(run.status == 0);
+  CHECK(run.out.find("100 Hz") != std::string::npos);
+  CHECK(run.out.find("0 non-finite, 0 MuJoCo errors") != std::string::npos);
+  CHECK(run.out.find("touching 0 ticks") == std::string::npos);  // the hand meets the ball
+  CHECK(lines(testing::slurp(dir + "/trace.csv")) == 2001);
+  CHECK(std::filesystem::file_size(dir + "/table.png") > 5000);
+}
+
+TEST_CASE("feel_mujoco: bad input is one line on stderr", "[mujoco][tool]") {
+  const ToolRun missing = feel_mujoco({"no_such_scene.xml"}, "missing");
+  CHECK(missing.status == 1);
+  CHECK(lines(missing.err) == 1);
+  CHECK(missing.err.find("no_such_scene.xml") != std::string::npos);
+  const ToolRun no_tool = feel_mujoco({write_temp("toolless.xml", "<mujoco><worldbody/></mujoco>")}, "toolless");
+  CHECK(no_tool.status == 1);
+  CHECK(no_tool.err.find("no tool body") != std::string::npos);
+  const ToolRun too_soft = feel_mujoco({scene_file("mujoco_ball.xml"), "--rate", "100", "--damping", "1"}, "soft");
+  CHECK(too_soft.status == 2);
+  CHECK(too_soft.err.find("T K / 2") != std::string::npos);
+  const ToolRun bad_to = feel_mujoco({scene_file("mujoco_ball.xml"), "--to", "1,0,0"}, "far");
+  CHECK(bad_to.status == 2);
+  CHECK(lines(bad_to.err) == 1);
+  const ToolRun unknown = feel_mujoco({scene_file("mujoco_ball.xml"), "--frobnicate"}, "unknown");
+  CHECK(unknown.status == 2);
+}
+#endif

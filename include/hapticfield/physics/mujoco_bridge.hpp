@@ -112,7 +112,7 @@ struct MujocoBridgeConfig {
       throw std::invalid_argument("MujocoBridgeConfig: plane_damping must be finite and >= 0 [N s/m]");
     // a plane moves with its body, which the simulator updates every T: the
     // same sampled spring as the coupling's, under the same bound
-    if (plane_damping < plane_stiffness / rate / 2.0)
+    if (plane_damping < plane_stiffness / rate / 2.0 * (1.0 - 1e-12))
       throw std::invalid_argument(
           "MujocoBridgeConfig: plane_damping must be >= T plane_stiffness / 2 at the simulator period T = 1 / rate");
     if (mode == CouplingMode::virtual_coupling) coupling.validate(1.0 / rate);
@@ -311,13 +311,13 @@ class MujocoBridge {
     if (thread_.joinable()) return;
     stop_requested_.store(false, std::memory_order_release);
     thread_ = std::thread([this] {
-      using clock = std::chrono::steady_clock;
+      using Clock = std::chrono::steady_clock;
       const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(period_ * 1e9));
-      auto next = clock::now();
+      auto next = Clock::now();
       while (!stop_requested_.load(std::memory_order_acquire)) {
         (void)step_once();
         next += period;
-        const auto late = clock::now();
+        const auto late = Clock::now();
         if (late > next + period) next = late;  // skip the missed steps
         std::this_thread::sleep_until(next);
       }

@@ -30,7 +30,7 @@ struct VirtualCoupling {
       throw std::invalid_argument("VirtualCoupling: stiffness must be finite and > 0 [N/m]");
     if (!std::isfinite(damping) || damping < 0.0)
       throw std::invalid_argument("VirtualCoupling: damping must be finite and >= 0 [N s/m]");
-    if (damping < period * stiffness / 2.0)
+    if (damping < period * stiffness / 2.0 * (1.0 - 1e-12))  // (rounding of T K / 2 aside)
       throw std::invalid_argument(
           "VirtualCoupling: damping must be >= T K / 2 at the simulator period T (Adams & Hannaford 1999)");
   }
