@@ -18,7 +18,7 @@ trap 'rm -rf "$work"' EXIT
   echo 'int main() { return 0; }'
 } > "$work/all_headers.cpp"
 clang-tidy --quiet --config-file=.clang-tidy "$work/all_headers.cpp" -- -std=c++20 -I"$PWD/include" \
-  $(pkg-config --cflags opencv4 hidapi-hidraw 2>/dev/null) >"$work/out.txt" 2>&1 || {
+  $(pkg-config --cflags opencv4 hidapi-hidraw 2>/dev/null) $(pkg-config --cflags libusb-1.0 2>/dev/null) >"$work/out.txt" 2>&1 || {
   grep -E "error:|warning:" "$work/out.txt" | sort -u >&2 || cat "$work/out.txt" >&2
   echo "check-names.sh: naming does not follow .clang-tidy (above)" >&2
   exit 1

@@ -1,7 +1,8 @@
 #pragma once
 /// @file open_device.hpp
 /// The device front door: open_device("sim" | "hid[:VID:PID]" |
-/// "serial:PATH" | "woody:GEN[:PRESET][:sim|:PATH]" | "inverse3:PATH|sim")
+/// "serial:PATH" | "woody:GEN[:PRESET][:sim|:PATH]" | "inverse3:PATH|sim" |
+/// "falcon[:INDEX[:FIRMWARE]]|falcon:sim")
 /// returns an AnyDevice; list_devices() says, one line a family, which
 /// arms are present and why the others are not. Every tool and the Python
 /// module open their arms here.
@@ -14,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hapticfield/arms/falcon/falcon_door.hpp"
 #include "hapticfield/arms/force_arm/force_arm_door.hpp"
 #include "hapticfield/arms/inverse3/inverse3_door.hpp"
 #include "hapticfield/arms/woody/woody_door.hpp"
@@ -29,11 +31,12 @@ inline constexpr std::array device_families{
     serial_family,    //
     woody_family,     //
     inverse3_family,  //
+    falcon_family,    //
 };
 
 /// Families whose support is not in this version: their names give a clear
 /// error instead of "unknown". A family that gets its line leaves this list.
-inline constexpr std::array<std::string_view, 3> planned_device_families{"openhaptics", "dhd", "falcon"};
+inline constexpr std::array<std::string_view, 2> planned_device_families{"openhaptics", "dhd"};
 
 /// The syntax of every family, "sim, hid[:VID:PID], ...", for messages and --help.
 [[nodiscard]] inline std::string device_syntaxes() {

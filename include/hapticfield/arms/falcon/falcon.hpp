@@ -38,6 +38,12 @@
 
 namespace hapticfield {
 
+/// A box the published geometry reaches everywhere (test_falcon checks a
+/// grid over it), device frame [m]: 7 x 7 x 8 cm, deeper behind the
+/// workspace centre than in front of it. Novint's own figure is a 4 in cube.
+inline constexpr glm::dvec3 falcon_workspace_min{-0.035, -0.035, -0.065};
+inline constexpr glm::dvec3 falcon_workspace_max{0.035, 0.035, 0.015};
+
 /// Largest firmware file accepted (Novint's are about 8 KiB) [bytes].
 inline constexpr std::uintmax_t falcon_max_firmware_bytes = 1u << 20;
 
@@ -121,8 +127,8 @@ class Falcon {
     info_.name = "Novint Falcon";
     info_.max_force = config_.max_force;
     info_.continuous_force = config_.max_force;  // no continuous figure is published
-    info_.workspace_min = glm::dvec3{-0.05};     // about Novint's 4 in cube (not measured)
-    info_.workspace_max = glm::dvec3{0.05};
+    info_.workspace_min = falcon_workspace_min;
+    info_.workspace_max = falcon_workspace_max;
     info_.validate();
     start();
   }
@@ -163,7 +169,7 @@ class Falcon {
         ++counters_.malformed;
         continue;
       }
-      glm::dvec3 p;
+      glm::dvec3 p{0.0};
       if (!solve(r, p)) {
         impossible = true;
         continue;

@@ -206,13 +206,13 @@ class FalconKinematics {
         out.converged = true;
         return out;
       }
-      glm::dmat3 j;
+      glm::dmat3 j{0.0};
       if (!angle_jacobian(p, j)) break;
       if (!(std::fabs(glm::determinant(j)) > 1e-9)) break;
       glm::dvec3 step = glm::inverse(j) * err;
       bool moved = false;
       for (int h = 0; h < 8 && !moved; ++h, step *= 0.5) {
-        glm::dvec3 tn;
+        glm::dvec3 tn{0.0};
         if (inverse(p + step, tn)) {
           p += step;
           t = tn;
@@ -232,7 +232,7 @@ class FalconKinematics {
   /// J = dp/dtheta = (dtheta/dp)^-1 [N m]. false at an unreachable or
   /// singular pose.
   bool torques(const glm::dvec3& p, const glm::dvec3& force, glm::dvec3& tau) const noexcept {
-    glm::dmat3 j;
+    glm::dmat3 j{0.0};
     if (!angle_jacobian(p, j) || !(std::fabs(glm::determinant(j)) > 1e-9)) return false;
     tau = glm::inverse(glm::transpose(j)) * force;
     return true;

@@ -16,8 +16,8 @@
 ///
 /// The arm is ours, not Novint's: the handle is a point mass with viscous
 /// damping, driven by F = (d theta/d p)^T tau from the commanded counts
-/// (the inverse of the host's mapping) plus a hand force, held inside a box
-/// by stiff walls. Homing: each encoder reports homed once homing mode has
+/// (the inverse of the host's mapping), the scripted hand (when it holds)
+/// and a constant push, held inside a box by stiff walls. Homing: each encoder reports homed once homing mode has
 /// been on for homing_packets commands (standing in for the user's move
 /// out and in); until then the counts carry a power-on offset.
 
@@ -35,37 +35,46 @@
 #include "hapticfield/arms/falcon/falcon_codec.hpp"
 #include "hapticfield/arms/falcon/falcon_kinematics.hpp"
 #include "hapticfield/arms/falcon/falcon_usb.hpp"
+#include "hapticfield/simulation/scripted_hand.hpp"
 
 namespace hapticfield {
 
 struct SimulatedFalconConfig {
   FalconGeometry geometry{};
-  double mass{0.15};                                            ///< handle and legs, lumped [kg]
-  double damping{1.0};                                          ///< viscous [N s/m]
-  double period{1e-3};                                          ///< time per command [s]
-  double counts_per_newton_metre{10000.0};                      ///< must match the host's
-  double box{0.05};                                             ///< walls at |component| = box [m]
-  double wall_stiffness{5000.0};                                ///< [N/m]
-  glm::dvec3 initial_position{0.0, 0.0, 0.0};                   ///< device frame [m]
+  double mass{0.15};                           ///< handle and legs, lumped [kg]
+  double damping{1.0};                         ///< viscous [N s/m]
+  double period{1e-3};                         ///< time per command [s]
+  double counts_per_newton_metre{10000.0};     ///< must match the host's
+  glm::dvec3 box_min{-0.03, -0.03, -0.06};     ///< walls, device frame [m] (inside falcon_workspace_min)
+  glm::dvec3 box_max{0.03, 0.03, 0.01};        ///< [m] (inside falcon_workspace_max)
+  double wall_stiffness{5000.0};               ///< [N/m]
+  glm::dvec3 initial_position{0.0, 0.0, 0.0};  ///< device frame [m]
   std::array<std::int16_t, 3> power_on_offset{-250, 130, 400};  ///< counts added until homed
   int homing_packets{50};                                       ///< commands in homing mode until homed
   bool firmware_running{false};                                 ///< true: as if a firmware were already loaded
   bool leading_zero_in_check_reply{false};                      ///< as some hosts see the reply
   int flaky_loads{0};                                           ///< uploads whose echo gets one byte wrong
   std::size_t expected_firmware_size{0};                        ///< 0: any non-empty file [bytes]
+  Hand hand{.holding = false};  ///< the scripted hand on the handle (its time: commands x period)
 
   /// @throws std::invalid_argument naming the first setting that makes no sense.
   void validate() const {
     geometry.validate();
     const auto pos = [](double v) { return std::isfinite(v) && v > 0.0; };
-    if (!pos(mass) || !pos(period) || !pos(counts_per_newton_metre) || !pos(box) || !pos(wall_stiffness))
+    if (!pos(mass) || !pos(period) || !pos(counts_per_newton_metre) || !pos(wall_stiffness))
       throw std::invalid_argument(
-          "SimulatedFalconConfig: mass, period, counts_per_newton_metre, box and wall_stiffness must be > 0");
+          "SimulatedFalconConfig: mass, period, counts_per_newton_metre and wall_stiffness must be > 0");
     if (!std::isfinite(damping) || damping < 0.0)
       throw std::invalid_argument("SimulatedFalconConfig: damping must be finite and >= 0");
     for (int i = 0; i < 3; ++i)
-      if (!(std::fabs(initial_position[i]) <= box))
+      if (!std::isfinite(box_min[i]) || !std::isfinite(box_max[i]) || !(box_min[i] < box_max[i]))
+        throw std::invalid_argument("SimulatedFalconConfig: box_min must be finite and < box_max [m]");
+    for (int i = 0; i < 3; ++i)
+      if (!(initial_position[i] >= box_min[i] && initial_position[i] <= box_max[i]))
         throw std::invalid_argument("SimulatedFalconConfig: initial_position must lie inside the box [m]");
+    hand.path.validate();
+    if (!std::isfinite(hand.stiffness) || hand.stiffness < 0.0 || !std::isfinite(hand.damping) || hand.damping < 0.0)
+      throw std::invalid_argument("SimulatedFalconConfig: hand stiffness and damping must be finite and >= 0");
     if (homing_packets < 0 || flaky_loads < 0)
       throw std::invalid_argument("SimulatedFalconConfig: homing_packets and flaky_loads must be >= 0");
   }
@@ -197,7 +206,8 @@ class SimulatedFalconUsb final : public FalconUsb {
     in_size_ = 0;
     framer_.clear();
   }
-  void set_hand_force(const glm::dvec3& f) noexcept { hand_ = f; }  ///< [N]
+  void set_push(const glm::dvec3& f) noexcept { push_ = f; }  ///< a constant force on the handle [N]
+  void set_hand(const Hand& h) noexcept { config_.hand = h; }
   void set_buttons(std::uint8_t b) noexcept { buttons_ = static_cast<std::uint8_t>(b & 0xF); }
 
   // --- what it shows -----------------------------------------------------------
@@ -275,15 +285,22 @@ class SimulatedFalconUsb final : public FalconUsb {
     glm::dvec3 tau{0.0};
     for (int i = 0; i < 3; ++i)
       tau[i] = -static_cast<double>(c.motor[static_cast<std::size_t>(i)]) / config_.counts_per_newton_metre;
-    glm::dmat3 j;
+    glm::dmat3 j{0.0};
     motor_force_ = glm::dvec3{0.0};
     if (kin_.angle_jacobian(position_, j)) motor_force_ = glm::transpose(j) * tau;  // F = (dtheta/dp)^T tau
     glm::dvec3 wall{0.0};
     for (int i = 0; i < 3; ++i) {
-      if (position_[i] > config_.box) wall[i] = -config_.wall_stiffness * (position_[i] - config_.box);
-      if (position_[i] < -config_.box) wall[i] = -config_.wall_stiffness * (position_[i] + config_.box);
+      if (position_[i] > config_.box_max[i]) wall[i] = -config_.wall_stiffness * (position_[i] - config_.box_max[i]);
+      if (position_[i] < config_.box_min[i]) wall[i] = -config_.wall_stiffness * (position_[i] - config_.box_min[i]);
     }
-    const glm::dvec3 f = motor_force_ + hand_ + wall - config_.damping * velocity_;
+    glm::dvec3 hand{0.0};
+    if (config_.hand.holding) {
+      const double t = static_cast<double>(counters_.commands) * config_.period;
+      const glm::dvec3 target = config_.hand.path.at(t);
+      const glm::dvec3 target_v = (config_.hand.path.at(t + config_.period) - target) / config_.period;
+      hand = config_.hand.stiffness * (target - position_) + config_.hand.damping * (target_v - velocity_);
+    }
+    const glm::dvec3 f = motor_force_ + hand + push_ + wall - config_.damping * velocity_;
     velocity_ += f / config_.mass * config_.period;
     position_ += velocity_ * config_.period;
   }
@@ -299,7 +316,7 @@ class SimulatedFalconUsb final : public FalconUsb {
   std::array<std::int16_t, 3> forced_counts_{};
   glm::dvec3 position_{0.0};
   glm::dvec3 velocity_{0.0};
-  glm::dvec3 hand_{0.0};
+  glm::dvec3 push_{0.0};
   glm::dvec3 motor_force_{0.0};
   std::uint16_t baud_{falcon::sio::baud_normal};
   int flaky_left_{0};
