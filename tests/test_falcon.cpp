@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <span>
@@ -797,4 +798,43 @@ TEST_CASE("Ctrl-C on servo_demo --device falcon:sim: stopped through the loop, e
   CHECK(tool.status() == 130);
   CHECK(tool.out().find("stopped by signal 2") != std::string::npos);
 }
+#endif
+
+// ------------------------------------------------- the shared device suite
+
+#if __has_include("device_suite.hpp")
+#include "device_suite.hpp"
+
+namespace {
+
+/// The Falcon behind the front door's AnyDevice, on the fake USB link.
+class FalconTwin {
+ public:
+  explicit FalconTwin(VirtualClock& clock) {
+    auto parts = std::make_unique<Parts>();
+    parts->usb = std::make_unique<SimulatedFalconUsb>(Rig::running());
+    parts->arm = std::make_unique<Falcon>(*parts->usb, Rig::host(clock));
+    usb_ = parts->usb.get();
+    any_ = AnyDevice::holding(std::move(parts));
+  }
+  AnyDevice& device() noexcept { return any_; }
+  /// The handle force the last command's motor counts apply [N].
+  [[nodiscard]] double effort() const noexcept { return glm::length(usb_->motor_force()); }
+  void lose() noexcept { usb_->lose(); }
+  void send_impossible() noexcept { usb_->impossible_report({32000, -32000, 32000}); }
+
+ private:
+  struct Parts {
+    std::unique_ptr<SimulatedFalconUsb> usb;
+    std::unique_ptr<Falcon> arm;
+    Falcon& device() noexcept { return *arm; }
+  };
+  SimulatedFalconUsb* usb_{nullptr};
+  AnyDevice any_;
+};
+static_assert(test::device_suite::Twin<FalconTwin>);
+
+}  // namespace
+
+HAPTICFIELD_DEVICE_SUITE(FalconTwin, "falcon")
 #endif
