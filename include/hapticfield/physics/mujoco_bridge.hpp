@@ -94,8 +94,8 @@ struct MujocoBridgeConfig {
   double detect_distance{0.01};    ///< tool-to-surface distance within which planes are published [m]
   double stall_time{0.05};         ///< no model for this long zeroes the force [s]
   double fade_time{0.2};           ///< force fade-in after a scene change or a fault [s]
-  /// Called on the simulator thread before each step, inside the step's
-  /// protection (tests inject faults here); may be empty.
+  /// Called on the simulator thread before each substep, inside the step's
+  /// protection (tests inject faults here); must not throw; may be empty.
   std::function<void(const mjModel*, mjData*)> before_step;
   /// The clock overruns are measured on [ns]; empty: std::chrono::steady_clock.
   std::function<std::int64_t()> clock;
@@ -257,7 +257,8 @@ class MujocoBridge {
 
   /// The channels the servo side reads and writes.
   [[nodiscard]] LocalModelLink& link() noexcept { return link_; }
-  /// The field the servo loop renders (one per bridge).
+  /// The field the servo loop renders: one per bridge (the link has one
+  /// reader and one writer on each side).
   [[nodiscard]] LocalModelField field() noexcept { return LocalModelField(link_); }
 
   /// One simulator step (the threaded runner calls it at the rate; tests
@@ -379,7 +380,11 @@ class MujocoBridge {
             events_.mujoco_errors.load(), events_.warnings.load(), events_.scene_changes.load()};
   }
   [[nodiscard]] double period() const noexcept { return period_; }
-  [[nodiscard]] double tool_radius() const noexcept { return scene_->tool_radius; }
+  /// The tool's radius in the current scene [m].
+  [[nodiscard]] double tool_radius() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return scene_->tool_radius;
+  }
   [[nodiscard]] const MujocoBridgeConfig& config() const noexcept { return config_; }
 
   // ---- inspection: between step_once() calls, never while start()ed ----
