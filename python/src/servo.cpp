@@ -2,12 +2,8 @@
 // simulated or real arm, with the GIL released for the whole run.
 #include "field.hpp"
 
-#include <hapticfield/arms.hpp>
+#include <hapticfield/devices/open_device.hpp>
 #include <hapticfield/servo.hpp>
-#include <hapticfield/transport.hpp>
-#if HAPTICFIELD_PYTHON_HID
-#include <hapticfield/transport/hid_transport.hpp>
-#endif
 
 #include <pybind11/stl.h>
 
@@ -20,6 +16,8 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <tuple>
+#include <vector>
 
 namespace hapticfield::python {
 
@@ -235,24 +233,38 @@ py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, 
   return result;
 }
 
-/// The simulated arm held by the scripted hand, on `clock`.
+/// The arm `spec` names, opened through the front door on `clock`; a
+/// simulated one held by the scripted hand.
 template <ServoClock C>
-py::dict run_simulated(C& clock, Field& field, double seconds, double rate, RealTime rt, const std::string& hand,
-                       const V3& hand_centre, double hand_size, double hand_speed, StopToken* token) {
-  SimulatedArmConfig c;
-  c.hand.path = hand_path(hand, hand_centre, hand_size, hand_speed);
-  c.validate();
-  SimulatedArm arm(c);
-  SimulatedTransport link(arm, [&clock] { return clock.now(); });
-  ForceArm arm_device(link);
-  return run_on(arm_device, clock, field, seconds, rate, rt, token);
+py::dict run_device(const DeviceSpec& spec, C& clock, Field& field, double seconds, double rate, RealTime rt,
+                    const std::string& hand, const V3& hand_centre, double hand_size, double hand_speed,
+                    StopToken* token) {
+  DeviceOptions options;
+  options.now = [&clock] { return clock.now(); };
+  if (spec.simulated) {
+    options.hand.path = hand_path(hand, hand_centre, hand_size, hand_speed);
+    options.hand.path.validate();
+  }
+  AnyDevice arm = open_device(spec, options);
+  return run_on(arm, clock, field, seconds, rate, rt, token);
+}
+
+/// A device string checked by the front door; a bad one is a ValueError
+/// naming it.
+DeviceSpec device_spec(const std::string& device) {
+  try {
+    return parse_device_spec(device);
+  } catch (const DeviceSpecError& e) {
+    throw py::value_error(e.what());
+  }
 }
 
 py::dict run_servo(Field& field, double seconds, double rate, const std::string& device, const std::string& hand,
                    const V3& hand_centre, double hand_size, double hand_speed, const std::string& realtime,
                    bool confirm_hardware, const std::optional<std::string>& clock_name,
                    const std::shared_ptr<StopToken>& stop) {
-  const bool real_arm = device.rfind("hid", 0) == 0;
+  const DeviceSpec spec = device_spec(device);
+  const bool real_arm = !spec.simulated;
   // The simulated arm runs on the virtual clock unless told otherwise: what a run renders is then the same on
   // any machine, however loaded. A real arm lives in real time.
   const std::string clock_kind = clock_name.value_or(real_arm ? "wall" : "virtual");
@@ -262,7 +274,7 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
   if (virtual_time && real_arm)
     throw py::value_error(
         "clock: the virtual clock cannot drive a real arm, which moves in real time; use "
-        "clock='wall' (the default for hid)");
+        "clock='wall' (the default for a real arm)");
   if (virtual_time && realtime != "off")
     throw py::value_error("realtime: '" + realtime +
                           "' is for the wall clock; a virtual run never sleeps and would "
@@ -280,50 +292,29 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
   else if (realtime != "off")
     throw py::value_error("realtime: unknown '" + realtime + "' (choose off, best_effort or enforce)");
   const FieldUse use(field);  // for the whole run: no other thread evaluates the field or its parts meanwhile
-  if (device == "sim") {
-    if (virtual_time) {
-      // Every video the field is made of waits for its frames at each tick for the run: the worker has no
-      // real time to keep up with.
-      struct Lockstep {
-        const Guards& guards;
-        explicit Lockstep(const Guards& g) : guards(g) {
-          for (const auto& guard : guards)
-            if (guard->lockstep) guard->lockstep(true);
-        }
-        ~Lockstep() {
-          for (const auto& guard : guards)
-            if (guard->lockstep) guard->lockstep(false);
-        }
-      } lockstep(field.guards);
-      VirtualClock clock;
-      return run_simulated(clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
-    }
-    SteadyClock clock;
-    return run_simulated(clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
+  if (real_arm && !confirm_hardware)
+    throw py::value_error("device " + device +
+                          ": a real arm will move and push; pass confirm_hardware=True once the "
+                          "handle is held and the workspace clear");
+  if (virtual_time) {
+    // Every video the field is made of waits for its frames at each tick for the run: the worker has no
+    // real time to keep up with.
+    struct Lockstep {
+      const Guards& guards;
+      explicit Lockstep(const Guards& g) : guards(g) {
+        for (const auto& guard : guards)
+          if (guard->lockstep) guard->lockstep(true);
+      }
+      ~Lockstep() {
+        for (const auto& guard : guards)
+          if (guard->lockstep) guard->lockstep(false);
+      }
+    } lockstep(field.guards);
+    VirtualClock clock;
+    return run_device(spec, clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
   }
-  if (real_arm) {
-#if HAPTICFIELD_PYTHON_HID
-    if (!confirm_hardware)
-      throw py::value_error(
-          "device hid: a real arm will move and push; pass confirm_hardware=True once the "
-          "handle is held and the workspace clear");
-    std::uint16_t vid = default_vendor_id, pid = default_product_id;
-    if (device.size() > 3) {
-      unsigned v = 0, p = 0;
-      if (std::sscanf(device.c_str(), "hid:%x:%x", &v, &p) != 2 || v > 0xFFFF || p > 0xFFFF)
-        throw py::value_error("device: hid:VID:PID takes hexadecimal ids, e.g. hid:1209:0001");
-      vid = static_cast<std::uint16_t>(v), pid = static_cast<std::uint16_t>(p);
-    }
-    SteadyClock clock;
-    HidTransport link(vid, pid);
-    ForceArm arm_device(link);
-    return run_on(arm_device, clock, field, seconds, rate, rt, stop.get());
-#else
-    (void)confirm_hardware;
-    throw py::value_error("device hid: this build of the module has no hidapi");
-#endif
-  }
-  throw py::value_error("device: unknown '" + device + "' (choose sim or hid[:VID:PID])");
+  SteadyClock clock;
+  return run_device(spec, clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
 }
 
 }  // namespace
@@ -358,18 +349,32 @@ void bind_servo(py::module_& m) {
         "(counts per histogram_bin_s), stop_reason, final_force (the last force written to the arm [N], the stop's "
         "zero after a stop), and loop_allocations / loop_frees (malloc / free calls on this "
         "thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None "
-        "otherwise). device sim: the simulated arm, held by a scripted hand "
-        "(raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID]: a real arm "
-        "(needs confirm_hardware=True). clock virtual (the default for sim): the loop runs on simulated time as "
+        "otherwise). device: any string the device front door opens (list_devices() names them and says which "
+        "are present): sim, woody:GEN[:PRESET]:sim and inverse3:sim are simulated arms, held by a scripted hand "
+        "(raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID], "
+        "serial:PATH, woody:GEN[:PRESET][:PATH] and inverse3:PATH are real arms "
+        "(they need confirm_hardware=True). clock virtual (the default for a simulated arm): the loop runs on "
+        "simulated time as "
         "fast as the CPU allows, with the same ticks, safety chain and trace as in real time, so a run renders "
         "the same forces on any machine (its timing statistics are nominal: every period exact, compute time 0); "
-        "wall (the default for hid, the only choice there): real time, for timing studies and live interaction. "
+        "wall (the default for a real arm, the only choice there): real time, for timing studies and live interaction. "
         "realtime off|best_effort|enforce (SCHED_FIFO; wall clock only). The loop runs on a thread of its own, "
         "evaluating the field in C++, never taking the GIL; the calling thread waits with the GIL released. "
         "stop: a ServoStop token another thread can request() to end the run (stop_reason 'requested'). Ctrl-C "
         "(any exception a signal handler raises) stops the loop within a few ms with zero force and is then "
         "raised, the result attached as its `result` attribute (stop_reason 'interrupted'): "
         "`except KeyboardInterrupt as e: run = e.result`.");
+  m.def(
+      "list_devices",
+      [] {
+        std::vector<std::tuple<std::string, bool, std::string>> out;
+        for (const DeviceListing& listing : list_devices())
+          out.emplace_back(listing.family, listing.present, listing.line);
+        return out;
+      },
+      "Every arm family the device front door knows, one (family, present, line) tuple each: line says what strings "
+      "it takes and that an arm is present, or why not (library not built in, no device found, permission "
+      "denied). Probes only: nothing moves.");
 }
 
 }  // namespace hapticfield::python
