@@ -193,6 +193,10 @@ void bind_core(py::module_& m) {
       "F = Fc + parts on a solid penalty sphere: centre [m], radius [m], stiffness [N/m], damping [N s/m].");
 }
 
+#ifdef HAPTICFIELD_PYTHON_HJIF
+void bind_hjif(py::module_& m);  // hjif.cpp: .hjif haptic media (nlohmann-json)
+#endif
+
 }  // namespace hapticfield::python
 
 PYBIND11_MODULE(hapticfield, m) {
@@ -225,4 +229,7 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_video(m);
   hp::bind_budget(m);
   hp::bind_surface(m);
+#ifdef HAPTICFIELD_PYTHON_HJIF
+  hp::bind_hjif(m);
+#endif
 }

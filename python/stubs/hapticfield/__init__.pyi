@@ -42,6 +42,21 @@ class FileError(Error, OSError):
     ...
 
 
+class HapticMedia:
+    """An MPEG-I Haptics media (.hjif): perceptions, channels, bands, effects, keyframes. docs/hjif.md lists every field and whether it is rendered, kept or skipped."""
+    def __repr__(self) -> str: ...
+    @property
+    def channels(self) -> List[Any]: ...
+    @property
+    def duration(self) -> float: ...
+    @property
+    def notes(self) -> List[str]: ...
+    def render(self, rate: float) -> numpy.typing.NDArray[numpy.float64]:
+        """every channel at rate [Hz]: a channels x samples float64 array (sample i at i / rate)"""
+    @property
+    def timescale(self) -> int: ...
+
+
 class Pose:
     """Where a shape's own frame goes: world = rotation @ local + translation. Every shape constructor takes pose= (origin= is a pose without rotation)."""
     def __init__(self, rotation: Optional[object] = None, translation: _Vec3 = ...) -> None:
@@ -169,11 +184,17 @@ def height_field_from_picture(image: object, pixel_size: float = 0.0001, mm_per_
 
     image: a path (any format OpenCV reads; 16-bit files are scaled by 255/65535) or a numpy array, H x W gray or H x W x 3 / x 4 colour (alpha ignored). channels='rgb' (default: numpy, PIL, imageio order) or 'bgr' (cv2.imread order) names a colour array's channel order. White level: 255 for uint8 and other integer arrays, 65535 for uint16 (as 16-bit files); a float or bool array needs levels= (its white level: 1.0 for a picture in [0, 1], 255 for [0, 255]) and is refused without it; levels= overrides the white level of any array."""
 
+def hjif_from_run(force: numpy.typing.ArrayLike, contact: Optional[numpy.typing.ArrayLike] = None, vibration: Optional[numpy.typing.ArrayLike] = None, servo_rate: float = 1000.0, vibration_rate: float = 8000.0, full_scale_force: float = 0.0) -> HapticMedia:
+    """A recorded run as a HapticMedia: force (N x 3) [N] at servo_rate [Hz] as a Force perception, contact (N) |Fc| [N] as a Pressure perception, vibration (M) at vibration_rate [Hz] as a Vibrotactile perception; full_scale_force [N] (0: the largest recorded) is each force channel's gain."""
+
 def lattice_texture(noise: str = 'gaussian', sigma: float = 1.0, seed: int = 1, grain: _Vec3 = ..., dim: int = 2, interpolation: str = 'linear', octaves: int = 0, h: float = 0.5, gain: float = 1.0, velocity_threshold: float = 0.001, scale_with_normal_force: bool = False, axes: _Vec3 = ...) -> Field:
     """A stochastic texture Ft sampled on a hashed noise lattice (Fritz & Barner 1996): noise gaussian|laplacian|uniform of standard deviation sigma, seed, lattice spacing grain [m] per axis, dim 2 (x, y) or 3, interpolation nearest|linear|cubic. octaves > 0 makes it fBm with self-similarity h (PSD ~ f^-(2h+1)). gain [N per texture unit] (or [N/N] with scale_with_normal_force: Ft proportional to |Fc|), velocity_threshold [m/s] (silent below it), axes: weights along (t1, t2, n) of the surface frame ((1, 1, 0): tangential only)."""
 
 def list_devices() -> List[Tuple[str, bool, str]]:
     """Every arm family the device front door knows, one (family, present, line) tuple each: line says what strings it takes and that an arm is present, or why not (library not built in, no device found, permission denied). Probes only: nothing moves."""
+
+def load_hjif(path: str) -> HapticMedia:
+    """Reads a .hjif file. Raises FileError (an OSError) naming the file and the JSON path for a missing file, text that is not JSON, a wrong type or a passed limit (64 MiB, nesting 32, 8,000,000 values, 4,000,000 elements per array, 1 MiB per string)."""
 
 def local_sphere_texture(noise: str = 'gaussian', sigma: float = 1.0, seed: int = 1, radius: float = 0.0005, surface_normal: _Vec3 = ..., gain: float = 1.0, velocity_threshold: float = 0.001, scale_with_normal_force: bool = False, axes: _Vec3 = ...) -> Field:
     """A texture that draws a new noise sample each time the HIP leaves a ball of radius [m] (the local circle on a surface of unit surface_normal). gain [N per texture unit] (or [N/N] with scale_with_normal_force: Ft proportional to |Fc|), velocity_threshold [m/s] (silent below it), axes: weights along (t1, t2, n) of the surface frame ((1, 1, 0): tangential only)."""
@@ -204,8 +225,14 @@ def plane_contact(parts: Sequence[Field] = ..., point: _Vec3 = ..., normal: _Vec
 def plane_surface(point: _Vec3 = ..., normal: _Vec3 = ..., size: float = 0.01, pose: Optional[Pose] = None) -> Surface:
     """The solid half-space behind a plane through point [m] with unit normal (toward the user), both in the frame that pose (a Pose; default none) places; uv are metres along the plane; size [m]: the length its tolerances scale with."""
 
+def render_hjif(path: str, rate: float = 8000.0) -> numpy.typing.NDArray[numpy.float64]:
+    """Renders every channel of a .hjif file at rate [Hz]: a channels x samples float64 array, channels in file order (as hjif_render's WAV)."""
+
 def run_servo(field: Field, seconds: float = 1.0, rate: float = 1000.0, device: str = 'sim', hand: str = 'raster', hand_centre: _Vec3 = ..., hand_size: float = 0.06, hand_speed: float = 0.06, realtime: str = 'off', confirm_hardware: bool = False, clock: Optional[str] = None, stop: Optional[ServoStop] = None) -> Dict[str, Any]:
     """Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace (one row a tick: t [s], position N x 3 [m], force N x 3 [N] as that tick commanded after the safety chain, homed and armed N booleans: the tick's device state, False before homing / arming), period_histogram (counts per histogram_bin_s), stop_reason, final_force (the last force written to the arm [N], the stop's zero after a stop), and loop_allocations / loop_frees (malloc / free calls on this thread while the loop ran, when an allocation counter is preloaded as in python/tests/test_alloc.py; None otherwise). device: any string the device front door opens (list_devices() names them and says which are present): sim, woody:GEN[:PRESET]:sim and inverse3:sim are simulated arms, held by a scripted hand (raster|circle|hold around hand_centre [m], hand_size [m], hand_speed [m/s]); hid[:VID:PID], serial:PATH, woody:GEN[:PRESET][:PATH] and inverse3:PATH are real arms (they need confirm_hardware=True). clock virtual (the default for a simulated arm): the loop runs on simulated time as fast as the CPU allows, with the same ticks, safety chain and trace as in real time, so a run renders the same forces on any machine (its timing statistics are nominal: every period exact, compute time 0); wall (the default for a real arm, the only choice there): real time, for timing studies and live interaction. realtime off|best_effort|enforce (SCHED_FIFO; wall clock only). The loop runs on a thread of its own, evaluating the field in C++, never taking the GIL; the calling thread waits with the GIL released. stop: a ServoStop token another thread can request() to end the run (stop_reason 'requested'). Ctrl-C (any exception a signal handler raises) stops the loop within a few ms with zero force and is then raised, the result attached as its `result` attribute (stop_reason 'interrupted'): `except KeyboardInterrupt as e: run = e.result`."""
+
+def save_hjif(media: HapticMedia, path: str) -> None:
+    """Writes the media as .hjif, laid out as the MPEG reference software writes and reads it."""
 
 def scale(field: Field, factor: float) -> Field:
     """F = factor x field [N]."""
