@@ -162,10 +162,19 @@ class FalconKinematics {
   /// differentiation of the leg's closure g = |(u + c, w) - a(cos t1, sin t1)|^2 - k(v)^2;
   /// false when p is unreachable or singular (a thigh in line with its shin).
   bool angle_jacobian(const glm::dvec3& p, glm::dmat3& rows) const noexcept {
+    glm::dvec3 theta{0.0};
+    return inverse_and_jacobian(p, theta, rows);
+  }
+
+  /// inverse() and angle_jacobian() in one pass over the legs; false (both
+  /// untouched) when p is unreachable or singular.
+  bool inverse_and_jacobian(const glm::dvec3& p, glm::dvec3& theta, glm::dmat3& rows) const noexcept {
     glm::dmat3 jt{0.0};  // column i: row i of the Jacobian
+    glm::dvec3 t{0.0};
     for (std::size_t i = 0; i < 3; ++i) {
       FalconLegAngles a;
       if (!leg_inverse(i, p, a)) return false;
+      t[static_cast<int>(i)] = a.theta1;
       const glm::dvec3 q = to_leg(i, p);
       const double s1 = std::sin(a.theta1), c1 = std::cos(a.theta1);
       const double k = g_.d + g_.e + g_.b * std::sin(a.theta3);
@@ -181,6 +190,7 @@ class FalconKinematics {
           glm::dvec3{du * cos_phi_[i] - dv * sin_phi_[i], du * sin_phi_[i] + dv * cos_phi_[i], dw};
     }
     rows = glm::transpose(jt);
+    theta = t;
     return true;
   }
 
@@ -193,9 +203,10 @@ class FalconKinematics {
                                       int max_iterations = default_max_iterations) const noexcept {
     FalconForward out;
     glm::dvec3 t{0.0};
-    if (!inverse(guess, t)) {
+    glm::dmat3 j{0.0};
+    if (!inverse_and_jacobian(guess, t, j)) {
       guess = glm::dvec3{0.0};
-      if (!inverse(guess, t)) return out;
+      if (!inverse_and_jacobian(guess, t, j)) return out;
     }
     glm::dvec3 p = guess;
     for (int it = 0; it < max_iterations; ++it) {
@@ -206,17 +217,19 @@ class FalconKinematics {
         out.converged = true;
         return out;
       }
-      glm::dmat3 j{0.0};
-      if (!angle_jacobian(p, j)) break;
       if (!(std::fabs(glm::determinant(j)) > 1e-9)) break;
       glm::dvec3 step = glm::inverse(j) * err;
       bool moved = false;
-      for (int h = 0; h < 8 && !moved; ++h, step *= 0.5) {
+      for (int h = 0; h < 8 && !moved; ++h) {
         glm::dvec3 tn{0.0};
-        if (inverse(p + step, tn)) {
+        glm::dmat3 jn{0.0};
+        if (inverse_and_jacobian(p + step, tn, jn)) {
           p += step;
           t = tn;
+          j = jn;
           moved = true;
+        } else {
+          step *= 0.5;
         }
       }
       out.iterations = it + 1;
