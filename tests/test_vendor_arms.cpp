@@ -8,18 +8,28 @@
 #include <dlfcn.h>
 #include <stdlib.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <csignal>
+#include <filesystem>
 #include <random>
+#include <stdexcept>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
 
 #include "alloc_counter.hpp"
+#include "child_process.hpp"
 #include "hapticfield/arms/dhd.hpp"
 #include "hapticfield/arms/dynamic_library.hpp"
 #include "hapticfield/arms/openhaptics.hpp"
+#include "hapticfield/devices/open_device.hpp"
 #include "hapticfield/servo/clock.hpp"
 #include "hapticfield/servo/loop.hpp"
 #include "run_seed.hpp"
@@ -108,10 +118,26 @@ auto spring() {
   return [](const TickInput& in) { return -200.0 * (in.probe.position - glm::dvec3{0.0, 0.01, 0.0}); };
 }
 
+/// An environment variable set for a scope, then restored.
 struct Env {
-  Env(const char* name, const char* value) : name_(name) { setenv(name, value, 1); }
-  ~Env() { unsetenv(name_); }
+  Env(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) {
+      had_ = true;
+      old_ = old;
+    }
+    setenv(name, value, 1);
+  }
+  ~Env() {
+    if (had_)
+      setenv(name_, old_.c_str(), 1);
+    else
+      unsetenv(name_);
+  }
+  Env(const Env&) = delete;
+  Env& operator=(const Env&) = delete;
   const char* name_;
+  std::string old_;
+  bool had_{false};
 };
 
 }  // namespace
@@ -596,3 +622,247 @@ TEST_CASE("Vendor arms: read and write allocate nothing", "[vendor]") {
     CHECK(n == 0);
   }
 }
+
+namespace {
+/// The host's time as HD's ticks count it [ns]: one period per tick.
+std::int64_t hd_time() {
+  return hd_standin().ticks() * 1'000'000;
+}
+
+/// HD's scheduler thread for the lockstep stand-in: ticks as fast as the
+/// machine runs them (the loop's time is the HD tick count, so nothing
+/// depends on the machine's speed).
+struct HdSchedulerThread {
+  std::atomic<bool> go{true};
+  std::thread thread{[this] {
+    while (go.load()) {
+      hd_standin().step(1);
+      std::this_thread::yield();
+    }
+  }};
+  ~HdSchedulerThread() {
+    go = false;
+    thread.join();
+  }
+};
+}  // namespace
+
+TEST_CASE("OpenHapticsServo: our tick inside HD's callback, with the loop's semantics", "[vendor][openhaptics]") {
+  Env env("HFSTANDIN_HD", "lockstep");
+  HdStandin& s = hd_standin();
+  {
+    OpenHapticsDevice device(hd_config());
+    OpenHapticsServo servo(device, quiet_loop(), hd_time);
+    HdSchedulerThread scheduler;
+    auto f = spring();
+    int same_tick = 0;
+    auto check = [&](const TickInput& in) {
+      if (in.read_status == Status::ok) {
+        // read inside this tick's frame: the arm's pose now, mm to m
+        CHECK(glm::length(in.state.position - s.position_mm() * 1e-3) < 1e-12);
+        // the last tick's force is on the arm, set in that tick's own frame
+        CHECK(glm::length(s.force() - servo.last_command()) < 1e-12);
+        ++same_tick;
+      }
+      return f(in);
+    };
+    REQUIRE(servo.run(check, {.max_ticks = 1000}) == StopReason::tick_limit);
+    CHECK(same_tick == 1000);
+    const LoopSnapshot st = servo.statistics();
+    CHECK(st.ticks == 1000);
+    CHECK(st.rate == Approx(1000.0));  // the loop's time is HD's ticks
+    CHECK(st.missed_deadlines == 0);
+    CHECK(st.latches == 0);
+    CHECK(st.peak_force > 1.0);
+    // The stop's zero was set in the last callback's frame: on the arm already.
+    CHECK(glm::length(s.force()) == 0.0);
+
+    SECTION("request_stop from another thread (as Ctrl-C does): zero force at once") {
+      std::thread stopper([&] {
+        while (servo.callbacks() < 500)
+          std::this_thread::yield();
+        servo.request_stop();
+      });
+      CHECK(servo.run(f) == StopReason::requested);
+      stopper.join();
+      CHECK(glm::length(s.force()) == 0.0);
+    }
+    SECTION("a restart ramps up from zero") {
+      std::vector<double> asked;
+      auto watch = [&](const TickInput&) {
+        if (asked.size() < 20) asked.push_back(glm::length(servo.last_command()));
+        return glm::dvec3{2.0, 0.0, 0.0};
+      };
+      servo.run(watch, {.max_ticks = 400});
+      for (std::size_t i = 0; i < asked.size(); ++i)
+        CHECK(asked[i] <= 1e-3 * static_cast<double>(i) * 1000.0 + 1e-9);
+      CHECK(glm::length(s.force()) == 0.0);
+    }
+    SECTION("a callback that throws: zero force, ServoError on the caller's thread") {
+      int ticks = 0;
+      auto bad = [&ticks](const TickInput&) -> glm::dvec3 {
+        if (++ticks == 300) throw std::runtime_error("boom");
+        return {1.0, 0.0, 0.0};
+      };
+      CHECK_THROWS_AS(servo.run(bad), ServoError);
+      CHECK(glm::length(s.force()) == 0.0);
+      CHECK(servo.safety().latched() & safety_events::callback_threw);
+    }
+  }
+  CHECK(s.shutdown_order_ok() == 1);
+  CHECK(s.frames_outside_callback() == 0);
+}
+
+TEST_CASE("OpenHapticsServo: faults inside HD's callback", "[vendor][openhaptics]") {
+  HdStandin& s = hd_standin();
+  auto f = spring();
+  SECTION("a device error ends the run as a lost device") {
+    Env env("HFSTANDIN_HD", "lockstep,device_error_at=500");
+    OpenHapticsDevice device(hd_config());
+    OpenHapticsServo servo(device, quiet_loop(), hd_time);
+    HdSchedulerThread scheduler;
+    CHECK(servo.run(f, {.max_ticks = 3000}) == StopReason::disconnected);
+    CHECK(servo.safety().latched() & safety_events::disconnected);
+    CHECK(glm::length(s.force()) == 0.0);
+  }
+  SECTION("an impossible pose latches") {
+    Env env("HFSTANDIN_HD", "lockstep,nan_at=500");
+    OpenHapticsDevice device(hd_config());
+    OpenHapticsServo servo(device, quiet_loop(), hd_time);
+    HdSchedulerThread scheduler;
+    servo.run(f, {.max_ticks = 1000});
+    CHECK(servo.safety().latched() & safety_events::impossible_state);
+    CHECK(glm::length(s.force()) == 0.0);
+  }
+  SECTION("a scheduler that stops calling ends the run with one clear error") {
+    Env env("HFSTANDIN_HD", "lockstep,scheduler_stops_at=500");
+    OpenHapticsDevice device(hd_config());
+    OpenHapticsServo servo(device, quiet_loop(), hd_time);
+    HdSchedulerThread scheduler;
+    CHECK_THROWS_WITH(servo.run(f, {}, std::chrono::milliseconds(100)),
+                      Catch::Contains("HD scheduler stopped calling"));
+    CHECK(servo.last_command() == glm::dvec3{0.0});
+    CHECK_FALSE(servo.trusted());
+  }
+  CHECK(s.shutdown_order_ok() == 1);
+  CHECK(s.frames_outside_callback() == 0);
+}
+
+TEST_CASE("The front door opens openhaptics[:NAME] and dhd[:INDEX]", "[vendor]") {
+  CHECK_THROWS_AS(parse_device_spec("dhd:x"), DeviceSpecError);
+  CHECK_THROWS_AS(parse_device_spec("dhd:127"), DeviceSpecError);
+  CHECK_THROWS_AS(parse_device_spec("openhaptics:"), DeviceSpecError);
+  CHECK_FALSE(parse_device_spec("dhd:2").simulated);
+  CHECK(parse_device_spec("openhaptics:Left Touch").args == "Left Touch");
+  {
+    Env library("HAPTICFIELD_HD_LIBRARY", HAPTICFIELD_STANDIN_HD);
+    Env faults("HFSTANDIN_HD", "lockstep");
+    AnyDevice touch = open_device("openhaptics");
+    CHECK(touch.info().name == "OpenHaptics Stand-in Touch");
+    CHECK(touch.target<OpenHapticsDevice>() != nullptr);
+  }
+  {
+    Env library("HAPTICFIELD_DHD_LIBRARY", HAPTICFIELD_STANDIN_DHD);
+    Env faults("HFSTANDIN_DHD", "");
+    AnyDevice omega = open_device("dhd:0");
+    CHECK(omega.info().name == "Force Dimension stand-in omega.3");
+    CHECK_THROWS_WITH(open_device("dhd:1"), Catch::Contains("no device 1: 1 connected"));
+    bool listed = false;
+    for (const DeviceListing& l : list_devices())
+      if (l.family == "dhd") {
+        listed = true;
+        CHECK(l.present);
+        CHECK(l.line.find("1 device(s)") != std::string::npos);
+      }
+    CHECK(listed);
+  }
+}
+
+#ifdef HAPTICFIELD_SERVO_DEMO
+namespace {
+namespace fs = std::filesystem;
+/// What a stand-in wrote when the tool closed the arm ("" when it did not).
+std::string report_value(const fs::path& report, const std::string& key) {
+  const std::string text = testing::slurp(report);
+  const std::size_t at = text.find(key + " ");
+  if (at == std::string::npos) return "";
+  return text.substr(at + key.size() + 1, text.find('\n', at) - at - key.size() - 1);
+}
+const fs::path tool_tmp = fs::path(HAPTICFIELD_TEST_TMP) / "vendor_arms";
+}  // namespace
+
+TEST_CASE("servo_demo --device openhaptics and dhd against the stand-ins, as a user runs it", "[vendor][cli]") {
+  fs::create_directories(tool_tmp);
+  const fs::path report = tool_tmp / "report.txt";
+  Env report_to("HFSTANDIN_REPORT", report.c_str());
+  const std::string dhd_folder = fs::path(HAPTICFIELD_STANDIN_DHD).parent_path().string();
+  struct Arm {
+    const char* device;
+    const char* variable;  // how the tool finds the stand-in
+    std::string value;
+    const char* faults;
+    const char* device_error;
+  };
+  const Arm arms[] = {
+      {"openhaptics", "HAPTICFIELD_HD_LIBRARY", HAPTICFIELD_STANDIN_HD, "HFSTANDIN_HD", "device_error_at=300"},
+      // the documented name, found through the loader's search path
+      {"dhd", "LD_LIBRARY_PATH", dhd_folder, "HFSTANDIN_DHD", "com_error_at=300"},
+  };
+  for (const Arm& arm : arms) {
+    INFO(arm.device);
+    Env library(arm.variable, arm.value.c_str());
+    SECTION(std::string(arm.device) + ": a run ends with zero force") {
+      Env faults(arm.faults, "");
+      fs::remove(report);
+      testing::Child tool(HAPTICFIELD_SERVO_DEMO, {"--device", arm.device, "--field", "spring", "--seconds", "1"},
+                          tool_tmp, std::string(arm.device) + "_run");
+      REQUIRE(tool.wait());
+      INFO(tool.out() << tool.err());
+      CHECK(tool.status() == 0);
+      CHECK(tool.out().find("1000 ticks") != std::string::npos);
+      CHECK(report_value(report, "last_force") == "0 0 0");
+      if (std::string(arm.device) == "openhaptics") {
+        CHECK(report_value(report, "shutdown_order") == "ok");
+        CHECK(report_value(report, "frames_outside_callback") == "0");
+      } else {
+        CHECK(report_value(report, "force_enabled") == "0");
+        CHECK(report_value(report, "expert_calls") == "0");
+      }
+    }
+    SECTION(std::string(arm.device) + ": Ctrl-C gives zero force") {
+      Env faults(arm.faults, "");
+      fs::remove(report);
+      testing::Child tool(HAPTICFIELD_SERVO_DEMO, {"--device", arm.device, "--field", "spring", "--seconds", "60"},
+                          tool_tmp, std::string(arm.device) + "_sigint");
+      std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+      tool.signal(SIGINT);
+      REQUIRE(tool.wait());
+      INFO(tool.out() << tool.err());
+      CHECK(tool.killed_by() == 0);
+      CHECK(tool.out().find("stopped by signal") != std::string::npos);
+      CHECK(report_value(report, "last_force") == "0 0 0");
+    }
+    SECTION(std::string(arm.device) + ": a device error mid-run latches, zero force, exit 1") {
+      Env faults(arm.faults, arm.device_error);
+      fs::remove(report);
+      testing::Child tool(HAPTICFIELD_SERVO_DEMO, {"--device", arm.device, "--field", "spring", "--seconds", "5"},
+                          tool_tmp, std::string(arm.device) + "_error");
+      REQUIRE(tool.wait());
+      INFO(tool.out() << tool.err());
+      CHECK(tool.status() == 1);
+      CHECK(tool.out().find("the device disconnected; zero force was commanded") != std::string::npos);
+      CHECK(report_value(report, "last_force") == "0 0 0");
+    }
+  }
+  SECTION("without the SDK: one line on stderr, exit 1") {
+    for (const char* device : {"openhaptics", "dhd"}) {
+      testing::Child tool(HAPTICFIELD_SERVO_DEMO, {"--device", device}, tool_tmp, std::string(device) + "_missing");
+      REQUIRE(tool.wait());
+      CHECK(tool.status() == 1);
+      const std::string err = tool.err();
+      CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+      CHECK(err.find("cannot load") != std::string::npos);
+    }
+  }
+}
+#endif

@@ -54,7 +54,8 @@ struct Faults {
   bool lockstep{false};
 };
 
-std::mutex mutex;  // guards the callback list and the arm's state between threads
+std::mutex mutex;       // guards the callback list and the arm's state between threads
+std::mutex tick_mutex;  // held while a tick's callbacks run: hdUnschedule waits for them
 std::vector<Scheduled> callbacks;
 std::thread scheduler;
 std::atomic<bool> running{false};
@@ -130,6 +131,7 @@ void run_tick() {
     move_arm(tick);
     now = callbacks;
   }
+  std::lock_guard<std::mutex> running_callbacks(tick_mutex);
   in_callback = true;
   for (const Scheduled& s : now) {
     if (s.fn(s.data) == 0) {  // HD_CALLBACK_DONE: removed
@@ -322,8 +324,9 @@ HF_EXPORT unsigned long hdScheduleAsynchronous(Callback fn, void* data, unsigned
   return s.handle;
 }
 HF_EXPORT void hdUnschedule(unsigned long handle) {
+  std::unique_lock<std::mutex> wait_for_tick(tick_mutex, std::defer_lock);
+  if (!in_callback) wait_for_tick.lock();  // a callback running now finishes first
   std::lock_guard<std::mutex> lock(mutex);
-  if (running.load()) order_ok = false;  // documented: the scheduler is stopped first
   for (auto it = callbacks.begin(); it != callbacks.end(); ++it)
     if (it->handle == handle) {
       callbacks.erase(it);

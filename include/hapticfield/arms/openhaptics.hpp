@@ -5,3 +5,4 @@
 
 #include "hapticfield/arms/openhaptics/hd_api.hpp"
 #include "hapticfield/arms/openhaptics/openhaptics_device.hpp"
+#include "hapticfield/arms/openhaptics/openhaptics_servo.hpp"

@@ -15,9 +15,11 @@
 #include <string_view>
 #include <vector>
 
+#include "hapticfield/arms/dhd/dhd_door.hpp"
 #include "hapticfield/arms/falcon/falcon_door.hpp"
 #include "hapticfield/arms/force_arm/force_arm_door.hpp"
 #include "hapticfield/arms/inverse3/inverse3_door.hpp"
+#include "hapticfield/arms/openhaptics/openhaptics_door.hpp"
 #include "hapticfield/arms/woody/woody_door.hpp"
 #include "hapticfield/device/any_device.hpp"
 #include "hapticfield/device/device_family.hpp"
@@ -26,17 +28,19 @@ namespace hapticfield {
 
 /// Every family the front door opens, one line each.
 inline constexpr std::array device_families{
-    sim_family,       //
-    hid_family,       //
-    serial_family,    //
-    woody_family,     //
-    inverse3_family,  //
-    falcon_family,    //
+    sim_family,          //
+    hid_family,          //
+    serial_family,       //
+    woody_family,        //
+    inverse3_family,     //
+    openhaptics_family,  //
+    dhd_family,          //
+    falcon_family,       //
 };
 
 /// Families whose support is not in this version: their names give a clear
 /// error instead of "unknown". A family that gets its line leaves this list.
-inline constexpr std::array<std::string_view, 2> planned_device_families{"openhaptics", "dhd"};
+inline constexpr std::array<std::string_view, 0> planned_device_families{};
 
 /// The syntax of every family, "sim, hid[:VID:PID], ...", for messages and --help.
 [[nodiscard]] inline std::string device_syntaxes() {

@@ -138,45 +138,22 @@ class OpenHapticsDevice {
     Sample newest{};
     bool fresh = false;
     while (auto s = states_.try_pop()) {
-      const hd::ErrorCode e = s->error;
-      if (hd::is_fatal(e)) fatal_ = true;
-      if (const std::uint16_t bits = hd::guard_bits(e)) {
-        guard_flags_ |= bits;
-        ++counters_.guard_errors;
-      }
-      if (e != hd::success) counters_.last_error = e;
+      ++counters_.ticks;
+      take_error(s->error);
       newest = *s;
       fresh = true;
-      ++counters_.ticks;
     }
     counters_.dropped_states = states_.rejected();
     if (fatal_) return Status::disconnected;
     if (!fresh) return Status::no_data;
-    constexpr double m_per_mm = 1e-3;
-    for (int i = 0; i < 3; ++i) {
-      state.position[i] = (newest.position[i] - config_.origin_mm[i]) * m_per_mm;
-      state.velocity[i] = newest.velocity[i] * m_per_mm;
-    }
-    state.buttons = static_cast<std::uint8_t>(newest.buttons & 0xff);
-    state.device_time = static_cast<double>(newest.tick) / config_.scheduler_rate;
-    state.sequence = static_cast<std::uint16_t>(newest.tick & 0xffff);
-    state.flags = static_cast<std::uint16_t>(status_bits::homed | guard_flags_ |
-                                             (armed_.load(std::memory_order_relaxed) ? status_bits::armed : 0));
-    state.valid = true;
+    publish(newest, state);
     return Status::ok;
   }
 
   /// Posts a force [N] in our frame for the next HD tick; magnitude clamped
   /// to max_force, zero when disarmed, faulted or non-finite.
   Status write(const glm::dvec3& force) noexcept {
-    Command c{{0.0, 0.0, 0.0}};
-    const bool finite = std::isfinite(force.x) && std::isfinite(force.y) && std::isfinite(force.z);
-    if (armed_.load(std::memory_order_relaxed) && guard_flags_ == 0 && finite) {
-      const double m = std::sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
-      const double k = m > info_.max_force ? info_.max_force / m : 1.0;
-      for (int i = 0; i < 3; ++i)
-        c.force[i] = force[i] * k;
-    }
+    const Command c = command_for(force);
     if (!commands_.try_push(c)) return Status::overflow;  // the HD thread is behind: it still has a newer one
     return fatal_ ? Status::disconnected : Status::ok;
   }
@@ -197,12 +174,120 @@ class OpenHapticsDevice {
     return Status::ok;
   }
 
+  /// Schedules another callback with HD (hdScheduleAsynchronous) at the
+  /// highest priority; 0 and the error in last_error() when HD refuses.
+  hd::SchedulerHandle schedule(hd::Callback callback, void* data) noexcept {
+    const hd::SchedulerHandle h = api_.schedule_asynchronous(callback, data, hd::max_scheduler_priority);
+    const hd::ErrorCode e = api_.get_error().error_code;
+    if (e == hd::success) return h;
+    counters_.last_error = e;
+    return 0;
+  }
+  /// Removes a callback schedule() added (hdUnschedule).
+  void unschedule(hd::SchedulerHandle h) noexcept {
+    if (h != 0) api_.unschedule(h);
+  }
+
+  /// For OpenHapticsServo, which runs our tick inside its own HD callback:
+  /// while direct, the device's own callback leaves the frames alone.
+  void set_direct(bool on) noexcept { direct_.store(on, std::memory_order_release); }
+
+  /// Inside an HD callback: begins this tick's frame and reads the state
+  /// (as read() does, without the rings). Outside one (live false): no_data.
+  Status read_frame(DeviceState& state, bool live) noexcept {
+    if (fatal_) return Status::disconnected;
+    if (!live) return Status::no_data;
+    Sample s{};
+    api_.make_current_device(handle_);
+    api_.begin_frame(handle_);
+    frame_open_ = true;
+    api_.get_doublev(hd::current_position, s.position);
+    api_.get_doublev(hd::current_velocity, s.velocity);
+    api_.get_integerv(hd::current_buttons, &s.buttons);
+    s.tick = counters_.ticks++;
+    take_error(drain_errors());
+    if (fatal_) return Status::disconnected;
+    publish(s, state);
+    return Status::ok;
+  }
+
+  /// Inside an HD callback: sets the force [N, our frame] (clamped, zero
+  /// when disarmed, faulted or non-finite) and ends the frame (opening one
+  /// when the tick has none, as a stop's zero after the tick's own write).
+  /// Outside one (live false): remembered only; HD is not called.
+  Status write_frame(const glm::dvec3& force, bool live) noexcept {
+    const Command c = command_for(force);
+    if (!live) return fatal_ ? Status::disconnected : Status::ok;
+    if (!frame_open_) {
+      api_.make_current_device(handle_);
+      api_.begin_frame(handle_);
+    }
+    api_.set_doublev(hd::current_force, c.force);
+    api_.end_frame(handle_);
+    frame_open_ = false;
+    take_error(drain_errors());
+    return fatal_ ? Status::disconnected : Status::ok;
+  }
+
   /// A message for the last HD error seen, "" when none.
   [[nodiscard]] std::string last_error() const {
     return counters_.last_error == 0 ? std::string{} : "OpenHaptics: " + api_.describe(counters_.last_error);
   }
 
  private:
+  /// What a force [N] becomes on the arm: clamped, zero when disarmed,
+  /// faulted or non-finite.
+  [[nodiscard]] Command command_for(const glm::dvec3& force) const noexcept {
+    Command c{{0.0, 0.0, 0.0}};
+    const bool finite = std::isfinite(force.x) && std::isfinite(force.y) && std::isfinite(force.z);
+    if (armed_.load(std::memory_order_relaxed) && guard_flags_ == 0 && finite) {
+      const double m = std::sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
+      const double k = m > info_.max_force ? info_.max_force / m : 1.0;
+      for (int i = 0; i < 3; ++i)
+        c.force[i] = force[i] * k;
+    }
+    return c;
+  }
+
+  /// Notes one tick's error: fatal ones end the run, guard errors set
+  /// their fault bits until clear_fault().
+  void take_error(hd::ErrorCode e) noexcept {
+    if (e == hd::success) return;
+    counters_.last_error = e;
+    if (hd::is_fatal(e)) fatal_ = true;
+    if (const std::uint16_t bits = hd::guard_bits(e)) {
+      guard_flags_ |= bits;
+      ++counters_.guard_errors;
+    }
+  }
+
+  /// The worst of the errors HD has queued on this thread: fatal over
+  /// guard over the rest (0: none).
+  hd::ErrorCode drain_errors() noexcept {
+    hd::ErrorCode worst = hd::success;
+    for (int i = 0; i < 8; ++i) {
+      const hd::ErrorCode e = api_.get_error().error_code;
+      if (e == hd::success) break;
+      if (hd::is_fatal(e) || (!hd::is_fatal(worst) && (hd::guard_bits(e) || worst == hd::success))) worst = e;
+    }
+    return worst;
+  }
+
+  /// One HD sample in our frame (HD's axes are ours; mm to m).
+  void publish(const Sample& s, DeviceState& state) const noexcept {
+    constexpr double m_per_mm = 1e-3;
+    for (int i = 0; i < 3; ++i) {
+      state.position[i] = (s.position[i] - config_.origin_mm[i]) * m_per_mm;
+      state.velocity[i] = s.velocity[i] * m_per_mm;
+    }
+    state.buttons = static_cast<std::uint8_t>(s.buttons & 0xff);
+    state.device_time = static_cast<double>(s.tick) / config_.scheduler_rate;
+    state.sequence = static_cast<std::uint16_t>(s.tick & 0xffff);
+    state.flags = static_cast<std::uint16_t>(status_bits::homed | guard_flags_ |
+                                             (armed_.load(std::memory_order_relaxed) ? status_bits::armed : 0));
+    state.valid = true;
+  }
+
   void initialise() {
     const char* name = config_.device_name.empty() ? hd::default_device : config_.device_name.c_str();
     const std::string shown = config_.device_name.empty() ? "the default device" : "'" + config_.device_name + "'";
@@ -318,6 +403,8 @@ class OpenHapticsDevice {
   }
 
   hd::CallbackCode tick() noexcept {
+    const std::uint64_t n = hd_ticks_.fetch_add(1, std::memory_order_acq_rel);
+    if (direct_.load(std::memory_order_acquire)) return hd::callback_continue;  // OpenHapticsServo has the frames
     Sample s{};
     api_.make_current_device(handle_);
     api_.begin_frame(handle_);
@@ -331,16 +418,10 @@ class OpenHapticsDevice {
     const double none[3] = {0.0, 0.0, 0.0};
     api_.set_doublev(hd::current_force, zero ? none : hd_force_.force);
     api_.end_frame(handle_);
-    s.error = hd::success;
-    for (int i = 0; i < 8; ++i) {  // the worst of this tick's errors: fatal over guard over the rest
-      const hd::ErrorCode e = api_.get_error().error_code;
-      if (e == hd::success) break;
-      if (hd::is_fatal(e) || (!hd::is_fatal(s.error) && (hd::guard_bits(e) || s.error == hd::success))) s.error = e;
-    }
-    s.tick = hd_ticks_.load(std::memory_order_relaxed);
+    s.error = drain_errors();
+    s.tick = n;
     states_.try_push(s);  // full: our loop is behind; it reads the newest it gets
     if (quitting) zeroed_ticks_.fetch_add(1, std::memory_order_release);
-    hd_ticks_.fetch_add(1, std::memory_order_release);
     return hd::callback_continue;
   }
 
@@ -359,6 +440,8 @@ class OpenHapticsDevice {
   Command hd_force_{{0.0, 0.0, 0.0}};  ///< the HD thread's current force
   std::atomic<bool> armed_{false};
   std::atomic<bool> quitting_{false};
+  std::atomic<bool> direct_{false};
+  bool frame_open_{false};  ///< direct mode: read_frame() began this tick's frame
   std::atomic<std::uint64_t> hd_ticks_{0};
   std::atomic<std::uint64_t> zeroed_ticks_{0};
   // The loop's thread only.
