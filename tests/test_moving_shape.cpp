@@ -478,6 +478,7 @@ TEST_CASE("DeformingMesh: a refit mesh is felt like a rebuilt one, frame by fram
   nan[3].y = NAN;
   CHECK_THROWS_AS(feed->publish(nan), std::invalid_argument);
   CHECK_THROWS_AS(feed->publish(sheet.positions, wrong), std::invalid_argument);
+  CHECK_THROWS_AS(feed->publish(sheet.positions, sheet.positions), std::invalid_argument);  // the sheet has no normals
   CHECK_THROWS_AS(DeformingMesh(std::shared_ptr<DeformingMeshFeed>{}), std::invalid_argument);
 }
 
@@ -489,12 +490,15 @@ TEST_CASE("Moving<S> and DeformingMesh: a tick allocates nothing; poses and fram
   const std::shared_ptr<DeformingMeshFeed> frames = deforming.feed();
   ProxyConstraint deformed_proxy(std::move(deforming), ProxyConfig{.stiffness = 1000.0});
   const std::shared_ptr<PoseFeed> poses = moving.shape().feed();
-  long allocations = 0;
+  long allocations = 0, writer_allocations = 0;
   for (int i = 0; i < 200; ++i) {
-    if (i % 10 == 0) {  // the writers' work, outside the count
-      poses->publish(sliding({0, 0, -0.03 + 0.5 * i * tick}, {0, 0, 0.5}));
+    if (i % 10 == 0) {  // the writers' work: no allocation once three frames and poses circulate
       const TriangleMesh now = deformed(ball, 0.001, {0, 0, 100.0}, {1, 0, 0}, 0.1 * i);
-      frames->publish(now.positions);
+      const long n = test::count_allocations([&] {
+        poses->publish(sliding({0, 0, -0.03 + 0.5 * i * tick}, {0, 0, 0.5}));
+        frames->publish(now.positions, now.normals);
+      });
+      if (i >= 50) writer_allocations += n;
     }
     const Probe p = probe_at_tick(i, {0.001, 0.0, 0.0}, {0, 0, 0.01});
     allocations += test::count_allocations([&] {
@@ -503,6 +507,25 @@ TEST_CASE("Moving<S> and DeformingMesh: a tick allocates nothing; poses and fram
     });
   }
   if (test::allocations_counted) CHECK(allocations == 0);
+  if (test::allocations_counted) CHECK(writer_allocations == 0);
+
+  // MeshShape::refit changes a shape no copy shares, and answers like a rebuilt one
+  MeshShape shape(ball);
+  const TriangleMesh moved = deformed(ball, 0.002, {0, 80.0, 0}, {0, 0, 1}, 0.5);
+  {
+    const MeshShape copy = shape;
+    CHECK_FALSE(shape.refit(moved.positions));
+    CHECK(shape.mesh().positions == ball.positions);
+  }
+  CHECK(shape.refit(moved.positions, moved.normals));
+  const MeshShape rebuilt(moved);
+  for (int i = 0; i < 100; ++i) {
+    const glm::dvec3 from = 0.03 * glm::dvec3{std::sin(i), std::cos(3.0 * i), std::sin(7.0 * i)};
+    CHECK(shape.first_hit(from, -from).t == rebuilt.first_hit(from, -from).t);
+    CHECK(glm::length(shape.first_hit(from, -from).normal - rebuilt.first_hit(from, -from).normal) == 0.0);
+  }
+  std::vector<glm::dvec3> short_list(3);
+  CHECK_THROWS_AS(shape.refit(short_list), std::invalid_argument);
 
   // a writer thread publishing poses while the loop ticks: whatever pose a
   // tick takes, the proxy stays outside the sphere

@@ -14,14 +14,18 @@
 /// and moves vertices of equal positions alike (MeshBvh::refit); boxes
 /// overlap more after large deformations and queries visit more nodes.
 ///
-/// The proxy does not follow a deformation (it is not rigid): a surface
-/// that moves through the proxy within one tick can take it behind.
-/// Keep each frame's motion at the proxy under the surface's thickness, or
-/// move the shape rigidly with Moving<S> (surface/moving_shape.hpp).
+/// A deformation is not rigid, so the proxy is not carried with it: after a
+/// new frame a touching proxy is put back in front of the face it touched
+/// when that face has come up to it (surface/proxy.hpp); a free proxy is
+/// not followed, so a surface that moves through the HIP within one tick
+/// leaves it inside, felt as nothing until it comes out (as a HIP that
+/// starts inside a solid). Rigid motion: Moving<S> (surface/moving_shape.hpp).
 ///
-/// Threads: one writer (publish(): refits, copies the mesh and the tree into
-/// a new frame, allocates; may throw); one reader, the servo thread, owns
-/// the DeformingMesh (advance and the queries: no allocation, no lock).
+/// Threads: one writer (publish(): refits a frame the reader gave back in
+/// place, with no allocation once three frames circulate; the first ones are
+/// copies of the mesh and its tree; may throw); one reader, the servo
+/// thread, owns the DeformingMesh (advance and the queries: no allocation,
+/// no lock). Three frames: three copies of the mesh and its tree in memory.
 
 #include <algorithm>
 #include <cstdint>
@@ -30,6 +34,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -64,12 +69,14 @@ class DeformingMeshFeed {
   /// Writer thread: the mesh with its vertices at `positions` [m] (one per
   /// vertex) and, when given, new vertex normals (one per vertex; empty: the
   /// last ones), its tree refit; the reader feels it from its next tick on.
-  /// @throws std::invalid_argument for a wrong count or a non-finite value
-  ///         (nothing is published then).
+  /// @throws std::invalid_argument for a wrong count, a non-finite value or
+  ///         normals for a mesh without them (nothing is published then).
   void publish(std::span<const glm::dvec3> positions, std::span<const glm::dvec3> normals = {}) {
     if (positions.size() != mesh_.positions.size())
       throw std::invalid_argument("DeformingMeshFeed: " + std::to_string(positions.size()) + " positions for " +
                                   std::to_string(mesh_.positions.size()) + " vertices");
+    if (!normals.empty() && !mesh_.has_normals())
+      throw std::invalid_argument("DeformingMeshFeed: the mesh has no vertex normals to replace");
     if (!normals.empty() && normals.size() != mesh_.positions.size())
       throw std::invalid_argument("DeformingMeshFeed: " + std::to_string(normals.size()) + " normals for " +
                                   std::to_string(mesh_.positions.size()) + " vertices");
@@ -77,25 +84,29 @@ class DeformingMeshFeed {
       if (!is_finite(p)) throw std::invalid_argument("DeformingMeshFeed: a position is not finite");
     for (const glm::dvec3& n : normals)
       if (!is_finite(n)) throw std::invalid_argument("DeformingMeshFeed: a normal is not finite");
-    std::copy(positions.begin(), positions.end(), mesh_.positions.begin());
-    if (!normals.empty()) mesh_.normals.assign(normals.begin(), normals.end());
-    bvh_.refit(mesh_);
-    ++sequence_;
-    (void)buffer_.publish(
-        std::make_unique<DeformedFrame>(DeformedFrame{MeshShape(mesh_, bvh_, shade_normals_), sequence_}));
+    if (!normals.empty()) normals_.assign(normals.begin(), normals.end());
+    // a frame the reader gave back, refit in place; else (the first two, or
+    // one still shared) a new one from the first frame's mesh and tree
+    std::unique_ptr<DeformedFrame> frame = std::move(spare_);
+    if (!frame || !frame->shape.refit(positions, normals_)) {
+      frame = std::make_unique<DeformedFrame>(DeformedFrame{MeshShape(mesh_, bvh_, shade_normals_), 0});
+      (void)frame->shape.refit(positions, normals_);  // unshared: always refits
+    }
+    frame->sequence = ++sequence_;
+    spare_ = buffer_.publish(std::move(frame));
   }
 
-  /// The mesh as last published (writer thread).
-  [[nodiscard]] const TriangleMesh& mesh() const noexcept { return mesh_; }
   /// Reader thread: the newest frame (wait-free, no allocation).
   [[nodiscard]] const DeformedFrame& newest() noexcept { return *buffer_.acquire(); }
 
  private:
-  TriangleMesh mesh_;
+  TriangleMesh mesh_;  ///< the first frame's mesh and tree: the topology new frames start from
   MeshBvh bvh_;
   bool shade_normals_;
+  std::vector<glm::dvec3> normals_;  ///< the last normals published (empty: the mesh's own)
   std::uint64_t sequence_{0};
   TripleBuffer<DeformedFrame> buffer_;
+  std::unique_ptr<DeformedFrame> spare_;  ///< a frame the reader gave back, for the next publish
 };
 
 /// The Shape of a deforming mesh: MeshShape's answers on the frame taken at

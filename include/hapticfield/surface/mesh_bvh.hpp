@@ -300,14 +300,16 @@ class MeshBvh {
   ///         (too few, an index out of range) or with a non-finite position;
   ///         the tree is unchanged then.
   void refit(const TriangleMesh& mesh) {
-    for (const Triangle& tri : triangles_) {
+    // checked first, in memory order: the tree is unchanged on bad input
+    for (const Triangle& tri : triangles_)
       if (tri.id >= mesh.triangles.size())
         throw std::invalid_argument("MeshBvh::refit: the mesh has fewer triangles than the tree");
-      for (const std::uint32_t k : mesh.triangles[tri.id])
-        if (k >= mesh.positions.size() || !is_finite(mesh.positions[k]))
-          throw std::invalid_argument("MeshBvh::refit: triangle " + std::to_string(tri.id) +
-                                      " has a vertex out of range or not finite");
-    }
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (const std::uint32_t k : mesh.triangles[t])
+        if (k >= mesh.positions.size())
+          throw std::invalid_argument("MeshBvh::refit: triangle " + std::to_string(t) + " uses a vertex out of range");
+    for (const glm::dvec3& p : mesh.positions)
+      if (!is_finite(p)) throw std::invalid_argument("MeshBvh::refit: a vertex is not finite");
     for (Triangle& tri : triangles_) {
       const TriangleIndices& t = mesh.triangles[tri.id];
       const glm::dvec3 a = mesh.positions[t[0]];
@@ -315,7 +317,8 @@ class MeshBvh {
       tri.e1 = mesh.positions[t[1]] - a;
       tri.e2 = mesh.positions[t[2]] - a;
     }
-    // a node's box: its triangles' corners (a leaf) or its children's boxes
+    // a node's box: its triangles' corners as the queries see them (a leaf,
+    // contiguous in tree order) or its children's boxes
     const auto box = [&](std::uint32_t index, std::uint32_t count, std::array<float, 3>& lo,
                          std::array<float, 3>& hi) noexcept {
       if (count == 0) {
@@ -327,11 +330,13 @@ class MeshBvh {
         return;
       }
       glm::dvec3 low{std::numeric_limits<double>::max()}, high{-std::numeric_limits<double>::max()};
-      for (std::uint32_t i = index; i < index + count; ++i)
-        for (const std::uint32_t k : mesh.triangles[triangles_[i].id]) {
-          low = glm::min(low, mesh.positions[k]);
-          high = glm::max(high, mesh.positions[k]);
+      for (std::uint32_t i = index; i < index + count; ++i) {
+        const Triangle& tri = triangles_[i];
+        for (const glm::dvec3& corner : {tri.a, tri.a + tri.e1, tri.a + tri.e2}) {
+          low = glm::min(low, corner);
+          high = glm::max(high, corner);
         }
+      }
       for (int k = 0; k < 3; ++k) {  // float, rounded outward
         const auto axis = static_cast<std::size_t>(k);
         lo[axis] = static_cast<float>(low[k]);

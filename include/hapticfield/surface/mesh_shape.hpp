@@ -13,12 +13,15 @@
 /// Meshes as they come: open meshes and non-manifold edges need nothing
 /// special (each triangle is a one-sided surface, felt from the side its
 /// normal points to: the back of an open sheet lets the proxy through);
-/// triangles with no area are left out. A built MeshShape never changes;
-/// copies share the built data (publish a new one through LiveField).
+/// triangles with no area are left out. Copies share the built data, which
+/// never changes while shared (publish a new shape through LiveField;
+/// refit() moves the vertices of an unshared one: surface/deforming_mesh.hpp).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -131,6 +134,29 @@ class MeshShape {
     return out;
   }
 
+  /// Moves the vertices of a shape no copy shares (a deforming mesh's frame
+  /// on its writer's thread, surface/deforming_mesh.hpp): the positions
+  /// [m] and, when given, the vertex normals replaced (one per vertex), the
+  /// tree refit (MeshBvh::refit). No allocation; linear time. False, with
+  /// nothing changed, when a copy shares this shape's data.
+  /// @throws std::invalid_argument for a wrong count or a non-finite value
+  ///         (nothing changed).
+  bool refit(std::span<const glm::dvec3> positions, std::span<const glm::dvec3> normals = {}) {
+    TriangleMesh& m = data_->mesh;
+    if (positions.size() != m.positions.size() || (!normals.empty() && normals.size() != m.positions.size()))
+      throw std::invalid_argument("MeshShape::refit: one position (and normal, if any) per vertex");
+    for (const glm::dvec3& p : positions)
+      if (!is_finite(p)) throw std::invalid_argument("MeshShape::refit: a position is not finite");
+    for (const glm::dvec3& n : normals)
+      if (!is_finite(n)) throw std::invalid_argument("MeshShape::refit: a normal is not finite");
+    // shared, or new normals on a mesh without (that would allocate): not here
+    if (data_.use_count() != 1 || (!normals.empty() && m.normals.size() != normals.size())) return false;
+    std::copy(positions.begin(), positions.end(), m.positions.begin());
+    std::copy(normals.begin(), normals.end(), m.normals.begin());
+    data_->bvh.refit(m);
+    return true;
+  }
+
   [[nodiscard]] const TriangleMesh& mesh() const noexcept { return data_->mesh; }
   [[nodiscard]] const MeshBvh& bvh() const noexcept { return data_->bvh; }
   [[nodiscard]] const MeshShapeConfig& config() const noexcept { return config_; }
@@ -179,7 +205,7 @@ class MeshShape {
     return out;
   }
 
-  std::shared_ptr<const Data> data_;
+  std::shared_ptr<Data> data_;  ///< shared by copies; changed only by refit(), unshared
   MeshShapeConfig config_;
 };
 
