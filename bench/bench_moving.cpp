@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
   std::printf("\n## Refit against rebuild after a deformation (a travelling wave of 2 mm)\n\n");
   std::printf(
       "| triangles | build [ms] | refit [ms] | refit [ms per M] | build / refit | publish [ms] | "
-      "tick nodes refit / rebuilt |\n|---:|---:|---:|---:|---:|---:|---:|\n");
+      "closest() nodes refit / rebuilt |\n|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const hf::TriangleMesh& mesh : meshes) {
     hf::TriangleMesh moved = mesh;
     for (glm::dvec3& p : moved.positions)
