@@ -49,7 +49,8 @@ std::string describe(const material::HapticMedia& m) {
     for (const material::Channel& c : p.channels) {
       s += "channel " + std::to_string(index++) + ": perception " + std::to_string(p.id) + " modality " + p.modality +
            " channel " + std::to_string(c.id) + " bands";
-      for (const material::Band& b : c.bands) s += std::string(" ") + material::band_type_name(b.type);
+      for (const material::Band& b : c.bands)
+        s += std::string(" ") + material::band_type_name(b.type);
       if (c.bands.empty()) s += " none";
       s += "\n";
     }
@@ -60,7 +61,8 @@ int run(const Args& a) {
   const io::HjifFile file = io::load_hjif(a.input);
   const material::HapticMedia& m = file.media;
   std::size_t channels = 0;
-  for (const auto& p : m.perceptions) channels += p.channels.size();
+  for (const auto& p : m.perceptions)
+    channels += p.channels.size();
   const double duration = material::media_duration(m);
   char head[256];
   std::snprintf(head, sizeof head, "%s: %zu channel(s), %.6g s, timescale %lld\n", a.input.c_str(), channels, duration,
@@ -68,7 +70,8 @@ int run(const Args& a) {
   if (a.info) {
     std::fputs(head, stdout);
     std::fputs(describe(m).c_str(), stdout);
-    for (const std::string& n : file.notes) std::printf("note: %s\n", n.c_str());
+    for (const std::string& n : file.notes)
+      std::printf("note: %s\n", n.c_str());
     return cli::exit_ok;
   }
   if (channels == 0) throw FileError(a.input + ": no channel to render");
@@ -76,9 +79,11 @@ int run(const Args& a) {
   // the header line: every channel's perception and modality, in WAV channel order
   std::string header = "hjif_render: " + std::to_string(channels) + " WAV channel(s) at " +
                        std::to_string(static_cast<long long>(a.rate)) + " Hz:";
-  for (std::size_t i = 0; i < r.names.size(); ++i) header += " [" + std::to_string(i) + "] " + r.names[i] + ";";
+  for (std::size_t i = 0; i < r.names.size(); ++i)
+    header += " [" + std::to_string(i) + "] " + r.names[i] + ";";
   std::fprintf(stderr, "%s\n", header.c_str());
-  for (const std::string& n : file.notes) std::fprintf(stderr, "note: %s\n", n.c_str());
+  for (const std::string& n : file.notes)
+    std::fprintf(stderr, "note: %s\n", n.c_str());
 
   SF_INFO info{};
   info.samplerate = static_cast<int>(a.rate);
@@ -94,7 +99,8 @@ int run(const Args& a) {
     const std::size_t n = std::min(chunk, frames - f0);
     block.assign(n * channels, 0.0f);
     for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t c = 0; c < channels; ++c) block[i * channels + c] = static_cast<float>(r.channels[c][f0 + i]);
+      for (std::size_t c = 0; c < channels; ++c)
+        block[i * channels + c] = static_cast<float>(r.channels[c][f0 + i]);
     if (sf_writef_float(out, block.data(), static_cast<sf_count_t>(n)) != static_cast<sf_count_t>(n)) {
       sf_close(out);
       throw FileError("--wav: cannot write '" + a.wav + "': write failed");
@@ -118,7 +124,8 @@ int main(int argc, char** argv) {
         a.info = true;
       else if (p.is("--rate")) {
         a.rate = p.real(cli::closed(100.0, 384000.0));
-        if (a.rate != std::floor(a.rate)) throw cli::UsageError("--rate must be a whole number of Hz, got '" + p.token() + "'");
+        if (a.rate != std::floor(a.rate))
+          throw cli::UsageError("--rate must be a whole number of Hz, got '" + p.token() + "'");
       } else if (p.positional() && a.input.empty())
         a.input = p.token();
       else

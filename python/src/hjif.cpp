@@ -49,7 +49,8 @@ py::list channel_list(const material::HapticMedia& m) {
   for (const material::Perception& p : m.perceptions)
     for (const material::Channel& c : p.channels) {
       py::list bands;
-      for (const material::Band& b : c.bands) bands.append(material::band_type_name(b.type));
+      for (const material::Band& b : c.bands)
+        bands.append(material::band_type_name(b.type));
       py::dict d;
       d["perception"] = p.id;
       d["modality"] = p.modality;
@@ -82,7 +83,8 @@ void bind_hjif(py::module_& m) {
           py::arg("rate"), "every channel at rate [Hz]: a channels x samples float64 array (sample i at i / rate)")
       .def("__repr__", [](const PyHjif& h) {
         std::size_t n = 0;
-        for (const auto& p : h.media.perceptions) n += p.channels.size();
+        for (const auto& p : h.media.perceptions)
+          n += p.channels.size();
         return "HapticMedia(" + std::to_string(n) + " channel(s), " +
                std::to_string(material::media_duration(h.media)) + " s)";
       });
@@ -118,14 +120,17 @@ void bind_hjif(py::module_& m) {
         run.vibration_rate = vibration_rate;
         run.full_scale_force = full_scale_force;
         const py::ssize_t n = rows_of(force, 3, "force");
-        for (py::ssize_t i = 0; i < n; ++i) run.force.push_back({force.at(i, 0), force.at(i, 1), force.at(i, 2)});
+        for (py::ssize_t i = 0; i < n; ++i)
+          run.force.push_back({force.at(i, 0), force.at(i, 1), force.at(i, 2)});
         if (contact) {
           const py::ssize_t k = rows_of(*contact, 0, "contact");
-          for (py::ssize_t i = 0; i < k; ++i) run.contact.push_back(contact->data()[i]);
+          for (py::ssize_t i = 0; i < k; ++i)
+            run.contact.push_back(contact->data()[i]);
         }
         if (vibration) {
           const py::ssize_t k = rows_of(*vibration, 0, "vibration");
-          for (py::ssize_t i = 0; i < k; ++i) run.vibration.push_back(vibration->data()[i]);
+          for (py::ssize_t i = 0; i < k; ++i)
+            run.vibration.push_back(vibration->data()[i]);
         }
         try {
           return PyHjif{material::media_from_run(run), {}};

@@ -131,9 +131,9 @@ class HjifReader {
     if (j.is_number_unsigned()) d = static_cast<double>(j.get<std::uint64_t>());
     if (!(d >= static_cast<double>(lo) && d <= static_cast<double>(hi)))
       fail(path, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return j.is_number_float() ? static_cast<std::int64_t>(d)
-                               : (j.is_number_unsigned() ? static_cast<std::int64_t>(j.get<std::uint64_t>())
-                                                         : j.get<std::int64_t>());
+    return j.is_number_float()
+               ? static_cast<std::int64_t>(d)
+               : (j.is_number_unsigned() ? static_cast<std::int64_t>(j.get<std::uint64_t>()) : j.get<std::int64_t>());
   }
   std::string string(const Json& j, const std::string& path) const {
     expect(j.is_string(), j, path, "a string");
@@ -152,7 +152,8 @@ class HjifReader {
                  const char* level) {
     for (auto it = obj.begin(); it != obj.end(); ++it) {
       bool modelled = false;
-      for (std::string_view k : known) modelled = modelled || it.key() == k;
+      for (std::string_view k : known)
+        modelled = modelled || it.key() == k;
       if (modelled) continue;
       extra.emplace_back(it.key(), it.value().dump());
       note(std::string("kept, not rendered: ") + level + "." + it.key());
@@ -330,7 +331,8 @@ class HjifReader {
         if (s == n) e.base_signal = t, found = true;
       if (!found) note("base_signal \"" + s.substr(0, 64) + "\" unknown: rendered as Sine");
     }
-    if (const auto it = j.find("wavelet_stream"); it != j.end()) e.wavelet_stream = string(*it, path + ".wavelet_stream");
+    if (const auto it = j.find("wavelet_stream"); it != j.end())
+      e.wavelet_stream = string(*it, path + ".wavelet_stream");
     if (const auto it = j.find("keyframes"); it != j.end()) {
       const Json& ks = array(*it, path + ".keyframes");
       e.keyframes.reserve(ks.size());
@@ -360,9 +362,8 @@ class HjifReader {
       }
       if (!sorted) {
         note("keyframes out of order: sorted by relative_position");
-        std::stable_sort(e.keyframes.begin(), e.keyframes.end(), [](const auto& a, const auto& b) {
-          return *a.relative_position < *b.relative_position;
-        });
+        std::stable_sort(e.keyframes.begin(), e.keyframes.end(),
+                         [](const auto& a, const auto& b) { return *a.relative_position < *b.relative_position; });
       }
     }
     keep_rest(j, {"effect_type", "id", "position", "phase", "base_signal", "wavelet_stream", "keyframes"}, e.extra,
@@ -378,7 +379,8 @@ class HjifReader {
 using OrderedJson = nlohmann::ordered_json;
 
 inline void put_extra(OrderedJson& j, const material::ExtraFields& extra) {
-  for (const auto& [k, v] : extra) j[k] = OrderedJson::parse(v);
+  for (const auto& [k, v] : extra)
+    j[k] = OrderedJson::parse(v);
 }
 inline void put_number(OrderedJson& j, const char* key, double v) {
   if (std::floor(v) == v && std::abs(v) < 9.0e15)
@@ -484,7 +486,8 @@ inline OrderedJson effect_json(const material::Effect& e, material::BandType ban
         detail::put_number(bj, "lower_frequency_limit", b.lower_frequency_limit);
         detail::put_number(bj, "upper_frequency_limit", b.upper_frequency_limit);
         OrderedJson es = OrderedJson::array();
-        for (const material::Effect& e : b.effects) es.push_back(detail::effect_json(e, b.type, false));
+        for (const material::Effect& e : b.effects)
+          es.push_back(detail::effect_json(e, b.type, false));
         bj["effects"] = std::move(es);
         detail::put_extra(bj, b.extra);
         bs.push_back(std::move(bj));

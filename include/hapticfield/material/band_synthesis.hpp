@@ -72,14 +72,18 @@ struct TimedValue {
 [[nodiscard]] inline double base_wave(BaseSignal s, double phase) noexcept {
   const double u = phase / (2.0 * std::numbers::pi);  // cycles
   switch (s) {
-    case BaseSignal::sine: return std::sin(phase);
-    case BaseSignal::square: return (u - std::floor(u)) < 0.5 ? 1.0 : -1.0;
+    case BaseSignal::sine:
+      return std::sin(phase);
+    case BaseSignal::square:
+      return (u - std::floor(u)) < 0.5 ? 1.0 : -1.0;
     case BaseSignal::triangle: {
       const double w = u - 0.25;
       return 1.0 - 4.0 * std::abs(std::round(w) - w);
     }
-    case BaseSignal::saw_tooth_up: return 2.0 * (u - std::floor(u + 0.5));
-    case BaseSignal::saw_tooth_down: return -2.0 * (u - std::floor(u + 0.5));
+    case BaseSignal::saw_tooth_up:
+      return 2.0 * (u - std::floor(u + 0.5));
+    case BaseSignal::saw_tooth_down:
+      return -2.0 * (u - std::floor(u + 0.5));
   }
   return 0.0;
 }
@@ -189,8 +193,8 @@ class CurvePlan {
       const std::size_t n = points_.size();
       knots_.assign(n + 3, 0.0);
       for (std::size_t i = 0; i < n + 3; ++i)
-        knots_[i] = std::clamp(static_cast<double>(static_cast<std::ptrdiff_t>(i) - 2) / static_cast<double>(n - 2),
-                               0.0, 1.0);
+        knots_[i] =
+            std::clamp(static_cast<double>(static_cast<std::ptrdiff_t>(i) - 2) / static_cast<double>(n - 2), 0.0, 1.0);
     }
   }
   [[nodiscard]] bool empty() const noexcept { return points_.empty(); }
@@ -205,12 +209,16 @@ class CurvePlan {
     const auto it = std::upper_bound(p.begin(), p.end(), t, [](double x, const TimedValue& q) { return x < q.t; });
     std::size_t i = it == p.end() ? p.size() - 2 : static_cast<std::size_t>(it - p.begin()) - 1;
     switch (type_) {
-      case CurveType::linear: return linear_at(p, t);
-      case CurveType::akima: return hermite(p[i], p[i + 1], slopes_[i], slopes_[i + 1], t);
-      case CurveType::bezier: return bezier(i, t);
+      case CurveType::linear:
+        return linear_at(p, t);
+      case CurveType::akima:
+        return hermite(p[i], p[i + 1], slopes_[i], slopes_[i + 1], t);
+      case CurveType::bezier:
+        return bezier(i, t);
       case CurveType::unknown:
       case CurveType::cubic:
-      case CurveType::bspline: break;
+      case CurveType::bspline:
+        break;
     }
     return hermite(p[i], p[i + 1], 0.0, 0.0, t);
   }
@@ -232,7 +240,8 @@ class CurvePlan {
   [[nodiscard]] TimedValue bspline_point(double u) const noexcept {
     const std::size_t n = points_.size();
     std::size_t k = 2;  // knot span: knots_[k] <= u < knots_[k + 1]
-    while (k + 1 < n && knots_[k + 1] <= u) ++k;
+    while (k + 1 < n && knots_[k + 1] <= u)
+      ++k;
     TimedValue d[3] = {points_[k - 2], points_[k - 1], points_[k]};
     for (int r = 1; r <= 2; ++r)
       for (int j = 2; j >= r; --j) {
@@ -262,7 +271,8 @@ void add_span(std::vector<double>& out, double rate, double t0, double begin, do
   if (last < 0.0 || first >= static_cast<double>(out.size())) return;
   const auto i0 = static_cast<std::size_t>(std::max(first, 0.0));
   const auto i1 = static_cast<std::size_t>(std::min(last, static_cast<double>(out.size() - 1)));
-  for (std::size_t i = i0; i <= i1; ++i) out[i] += f(std::clamp(static_cast<double>(i) / rate - t0, begin, end));
+  for (std::size_t i = i0; i <= i1; ++i)
+    out[i] += f(std::clamp(static_cast<double>(i) / rate - t0, begin, end));
 }
 
 }  // namespace detail
@@ -313,7 +323,8 @@ void add_span(std::vector<double>& out, double rate, double t0, double begin, do
 [[nodiscard]] inline double media_duration(const HapticMedia& m) noexcept {
   double end = 0.0;
   for (const Perception& p : m.perceptions)
-    for (const Channel& c : p.channels) end = std::max(end, channel_duration(m, p, c));
+    for (const Channel& c : p.channels)
+      end = std::max(end, channel_duration(m, p, c));
   return end;
 }
 
@@ -347,7 +358,8 @@ inline void render_band(const HapticMedia& m, const Perception& p, const Band& b
                            [&](double t) { return a * std::sin(2.0 * std::numbers::pi * f * (t - tk)); });
         }
         break;
-      case BandType::wavelet_wave: break;
+      case BandType::wavelet_wave:
+        break;
     }
   }
 }
@@ -358,7 +370,8 @@ inline void render_band(const HapticMedia& m, const Perception& p, const Band& b
 [[nodiscard]] inline std::vector<double> render_channel(const HapticMedia& m, const Perception& p, const Channel& c,
                                                         double rate, std::size_t count) {
   std::vector<double> out(count, 0.0);
-  for (const Band& b : c.bands) render_band(m, p, b, rate, out);
+  for (const Band& b : c.bands)
+    render_band(m, p, b, rate, out);
   const double scale = c.gain * std::pow(10.0, static_cast<double>(p.perception_unit_exponent));
   for (double& y : out) {
     y = std::clamp(y, -1.0, 1.0) * scale;
@@ -369,7 +382,7 @@ inline void render_band(const HapticMedia& m, const Perception& p, const Band& b
 
 /// Every channel of a media, in file order (perception by perception).
 struct RenderedMedia {
-  double rate{0.0};                          ///< [Hz]
+  double rate{0.0};                           ///< [Hz]
   std::vector<std::vector<double>> channels;  ///< one signal per channel, all the same length
   std::vector<std::string> names;             ///< "perception 0 (Vibrotactile) channel 0"
 };

@@ -39,12 +39,12 @@ struct Keyframe {
 
 struct Effect {
   EffectType type{EffectType::basis};
-  std::int64_t id{-1};                    ///< library id (Reference effects name one) or -1
-  std::int64_t position{0};               ///< start in the band [ticks]
-  double phase{0.0};                      ///< VectorialWave start phase [rad]
+  std::int64_t id{-1};       ///< library id (Reference effects name one) or -1
+  std::int64_t position{0};  ///< start in the band [ticks]
+  double phase{0.0};         ///< VectorialWave start phase [rad]
   BaseSignal base_signal{BaseSignal::sine};
   std::vector<Keyframe> keyframes;
-  std::string wavelet_stream;             ///< WaveletWave: base64 SPIHT block, kept verbatim
+  std::string wavelet_stream;  ///< WaveletWave: base64 SPIHT block, kept verbatim
   ExtraFields extra;
 };
 
@@ -108,39 +108,57 @@ struct HapticMedia {
 
 [[nodiscard]] inline const char* band_type_name(BandType t) noexcept {
   switch (t) {
-    case BandType::transient: return "Transient";
-    case BandType::curve: return "Curve";
-    case BandType::vectorial_wave: return "VectorialWave";
-    case BandType::wavelet_wave: return "WaveletWave";
+    case BandType::transient:
+      return "Transient";
+    case BandType::curve:
+      return "Curve";
+    case BandType::vectorial_wave:
+      return "VectorialWave";
+    case BandType::wavelet_wave:
+      return "WaveletWave";
   }
   return "VectorialWave";
 }
 [[nodiscard]] inline const char* curve_type_name(CurveType t) noexcept {
   switch (t) {
-    case CurveType::unknown: return "Unknown";
-    case CurveType::cubic: return "Cubic";
-    case CurveType::linear: return "Linear";
-    case CurveType::akima: return "Akima";
-    case CurveType::bezier: return "Bezier";
-    case CurveType::bspline: return "Bspline";
+    case CurveType::unknown:
+      return "Unknown";
+    case CurveType::cubic:
+      return "Cubic";
+    case CurveType::linear:
+      return "Linear";
+    case CurveType::akima:
+      return "Akima";
+    case CurveType::bezier:
+      return "Bezier";
+    case CurveType::bspline:
+      return "Bspline";
   }
   return "Unknown";
 }
 [[nodiscard]] inline const char* base_signal_name(BaseSignal s) noexcept {
   switch (s) {
-    case BaseSignal::sine: return "Sine";
-    case BaseSignal::square: return "Square";
-    case BaseSignal::triangle: return "Triangle";
-    case BaseSignal::saw_tooth_up: return "SawToothUp";
-    case BaseSignal::saw_tooth_down: return "SawToothDown";
+    case BaseSignal::sine:
+      return "Sine";
+    case BaseSignal::square:
+      return "Square";
+    case BaseSignal::triangle:
+      return "Triangle";
+    case BaseSignal::saw_tooth_up:
+      return "SawToothUp";
+    case BaseSignal::saw_tooth_down:
+      return "SawToothDown";
   }
   return "Sine";
 }
 [[nodiscard]] inline const char* effect_type_name(EffectType t) noexcept {
   switch (t) {
-    case EffectType::basis: return "Basis";
-    case EffectType::reference: return "Reference";
-    case EffectType::composite: return "Composite";
+    case EffectType::basis:
+      return "Basis";
+    case EffectType::reference:
+      return "Reference";
+    case EffectType::composite:
+      return "Composite";
   }
   return "Basis";
 }

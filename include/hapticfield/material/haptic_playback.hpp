@@ -33,10 +33,10 @@ enum class ClipStart {
 };
 
 struct ClipConfig {
-  double rate{8000.0};                    ///< rate the clip was rendered at [Hz]
-  double gain{1.0};                       ///< output per clip unit [-] (NormalClipField: [N])
+  double rate{8000.0};  ///< rate the clip was rendered at [Hz]
+  double gain{1.0};     ///< output per clip unit [-] (NormalClipField: [N])
   ClipStart start{ClipStart::on_contact};
-  double full_force{0.0};                 ///< > 0: the output also scales with min(|Fc| / full_force, 1) [N]
+  double full_force{0.0};  ///< > 0: the output also scales with min(|Fc| / full_force, 1) [N]
 };
 
 namespace detail {

@@ -27,12 +27,12 @@
 namespace hapticfield::material {
 
 struct RecordedRun {
-  double servo_rate{1000.0};        ///< ticks per second of force and contact [Hz]
-  std::vector<glm::dvec3> force;    ///< commanded force per tick [N]
-  std::vector<double> contact;      ///< |Fc| per tick [N] (empty: not recorded)
-  double vibration_rate{8000.0};    ///< [Hz]
-  std::vector<double> vibration;    ///< vibration output, nominal [-1, 1] (empty: not recorded)
-  double full_scale_force{0.0};     ///< [N]; 0: the largest |component| recorded (at least 1e-9)
+  double servo_rate{1000.0};      ///< ticks per second of force and contact [Hz]
+  std::vector<glm::dvec3> force;  ///< commanded force per tick [N]
+  std::vector<double> contact;    ///< |Fc| per tick [N] (empty: not recorded)
+  double vibration_rate{8000.0};  ///< [Hz]
+  std::vector<double> vibration;  ///< vibration output, nominal [-1, 1] (empty: not recorded)
+  double full_scale_force{0.0};   ///< [N]; 0: the largest |component| recorded (at least 1e-9)
   std::string description{"recorded run"};
 };
 
@@ -53,7 +53,8 @@ namespace detail {
   e.keyframes.reserve(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) {
     const double a = std::isfinite(v[i]) ? std::clamp(v[i] / scale, -1.0, 1.0) : 0.0;
-    const auto t = static_cast<std::int64_t>(std::llround(static_cast<double>(i) * static_cast<double>(timescale) / rate));
+    const auto t =
+        static_cast<std::int64_t>(std::llround(static_cast<double>(i) * static_cast<double>(timescale) / rate));
     e.keyframes.push_back({t, a, std::nullopt});
   }
   b.effects.push_back(std::move(e));
@@ -93,7 +94,8 @@ namespace detail {
     const char* axis[] = {"x", "y", "z"};
     for (int a = 0; a < 3; ++a) {
       std::vector<double> v(run.force.size());
-      for (std::size_t i = 0; i < v.size(); ++i) v[i] = run.force[i][a];
+      for (std::size_t i = 0; i < v.size(); ++i)
+        v[i] = run.force[i][a];
       p.channels.push_back(
           detail::curve_channel(a, std::string("force ") + axis[a] + " [N]", v, full, run.servo_rate, m.timescale));
     }
