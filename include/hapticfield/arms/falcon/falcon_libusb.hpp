@@ -5,7 +5,7 @@
 /// pkg-config libusb-1.0). The only code that includes libusb.h.
 ///
 /// FTDI vendor requests are synchronous control transfers (setup only).
-/// Short writes (the 16-byte commands) are asynchronous bulk transfers that
+/// Writes of up to 16 bytes (the commands) are asynchronous bulk transfers that
 /// never wait; one bulk IN transfer of one USB packet is kept in flight and
 /// polled without waiting, so a tick never blocks on the bus. libusb's own
 /// submit may allocate inside the library (its Linux back end does), which
@@ -123,7 +123,7 @@ class LibusbFalconUsb final : public FalconUsb {
   Status write(std::span<const std::uint8_t> bytes) noexcept override {
     if (!handle_ || gone_) return Status::disconnected;
     pump(0);
-    if (bytes.size() > out_buf_.size()) {  // a firmware chunk: wait for it
+    if (bytes.size() > falcon::packet_size) {  // a firmware chunk: wait for it
       for (int i = 0; i < 1000 && out_busy_; ++i)
         pump(1000);
       if (out_busy_) return Status::timeout;

@@ -26,10 +26,10 @@ class FalconUsb {
   /// may block up to a second. disconnected when the device is gone.
   virtual Status control(std::uint8_t request, std::uint16_t value) noexcept = 0;
 
-  /// Queues bytes for the bulk OUT endpoint. Up to 64 bytes never wait;
-  /// longer writes (firmware chunks) wait for the transfer. overflow when
-  /// the previous short write has not gone out yet (the bytes are dropped),
-  /// disconnected when the device is gone.
+  /// Queues bytes for the bulk OUT endpoint. Up to 16 bytes (a command)
+  /// never wait; longer writes (firmware chunks) wait for the transfer.
+  /// overflow when the previous short write has not gone out yet (the bytes
+  /// are dropped), disconnected when the device is gone.
   virtual Status write(std::span<const std::uint8_t> bytes) noexcept = 0;
 
   /// Copies received bytes (FTDI status bytes removed) into buffer and sets
