@@ -324,6 +324,21 @@ class ProxyConstraint {
   [[nodiscard]] const ProxyPath& last_path() const noexcept { return path_; }
   [[nodiscard]] const S& shape() const noexcept { return shape_; }
   [[nodiscard]] const ProxyConfig& config() const noexcept { return config_; }
+  /// Tick-safe: the surface's material from the next move on (a material
+  /// map sampled at the touched point, material/material_surface.hpp).
+  /// Never throws: stiffness [N/m] is kept > 0, damping [N s/m] and mu_s
+  /// [-] >= 0, mu_k [-] in [0, mu_s]; false (nothing changed) when a value
+  /// is not finite.
+  bool set_material(double stiffness, double damping, double static_friction, double dynamic_friction) noexcept {
+    if (!std::isfinite(stiffness) || !std::isfinite(damping) || !std::isfinite(static_friction) ||
+        !std::isfinite(dynamic_friction))
+      return false;
+    config_.stiffness = std::fmax(stiffness, 1e-9);
+    config_.damping = std::fmax(damping, 0.0);
+    config_.static_friction = std::fmax(static_friction, 0.0);
+    config_.dynamic_friction = std::clamp(dynamic_friction, 0.0, config_.static_friction);
+    return true;
+  }
 
  private:
   /// The constraint planes of one tick: n . x >= c.
