@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Writes the hapticfield wheel from a built module, with the standard library only.
 
-    make_wheel.py --module hapticfield.cpython-311-x86_64-linux-gnu.so --stubs python/stubs/hapticfield
-                  --readme python/README.md --version 0.1.0 --out DIR
+    make_wheel.py --module __init__.cpython-311-x86_64-linux-gnu.so --stubs python/stubs/hapticfield
+                  --modules python/hapticfield/batch.py --readme python/README.md --version 0.1.0 --out DIR
 
 The wheel (PEP 427, binary distribution format) holds the package hapticfield/: the extension as
-its __init__, the type stubs __init__.pyi and the PEP 561 marker py.typed, and hapticfield-V.dist-info/
+its __init__, the type stubs __init__.pyi and the PEP 561 marker py.typed, the pure-Python modules
+(hapticfield.batch), and hapticfield-V.dist-info/
 with METADATA, WHEEL and RECORD (sha256 of every file). Its tag is the running interpreter's (e.g.
 cp311-cp311-linux_x86_64): run it with the Python the module was built for. Prints the wheel's path.
 """
@@ -60,6 +61,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--module", required=True, type=pathlib.Path, help="the built extension")
     parser.add_argument("--stubs", required=True, type=pathlib.Path, help="the directory of __init__.pyi and py.typed")
+    parser.add_argument("--modules", nargs="*", default=[], type=pathlib.Path,
+                        help="pure-Python modules of the package (e.g. python/hapticfield/batch.py)")
     parser.add_argument("--readme", required=True, type=pathlib.Path, help="the long description (Markdown)")
     parser.add_argument("--version", required=True)
     parser.add_argument("--out", required=True, type=pathlib.Path, help="the directory the wheel is written to")
@@ -74,6 +77,7 @@ def main():
         (f"{NAME}/__init__{suffix}", args.module.read_bytes(), True),
         (f"{NAME}/__init__.pyi", (args.stubs / "__init__.pyi").read_bytes(), False),
         (f"{NAME}/py.typed", (args.stubs / "py.typed").read_bytes(), False),
+        *((f"{NAME}/{m.name}", m.read_bytes(), False) for m in sorted(args.modules)),
         (f"{dist_info}/METADATA", metadata(args.version, args.readme.read_text(encoding="utf-8")).encode(), False),
         (f"{dist_info}/WHEEL",
          f"Wheel-Version: 1.0\nGenerator: {NAME} make_wheel.py\nRoot-Is-Purelib: false\nTag: {wheel_tag}\n".encode(),

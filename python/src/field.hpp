@@ -219,5 +219,6 @@ void bind_servo(py::module_& m);
 void bind_video(py::module_& m);
 void bind_budget(py::module_& m);
 void bind_surface(py::module_& m);
+void bind_relief_map(py::module_& m);
 
 }  // namespace hapticfield::python

@@ -232,4 +232,5 @@ PYBIND11_MODULE(hapticfield, m) {
 #ifdef HAPTICFIELD_PYTHON_HJIF
   hp::bind_hjif(m);
 #endif
+  hp::bind_relief_map(m);
 }

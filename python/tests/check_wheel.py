@@ -8,8 +8,8 @@ with zipfile.ZipFile(sys.argv[1]) as z:
     names = z.namelist()
     dist_info = next(n.split("/")[0] for n in names if n.endswith(".dist-info/WHEEL"))
     package = sorted(n for n in names if not n.startswith(dist_info))
-    assert len(package) == 3 and package[0].startswith("hapticfield/__init__.") and package[0].endswith(".so"), package
-    assert package[1:] == ["hapticfield/__init__.pyi", "hapticfield/py.typed"], package
+    assert len(package) == 4 and package[0].startswith("hapticfield/__init__.") and package[0].endswith(".so"), package
+    assert package[1:] == ["hapticfield/__init__.pyi", "hapticfield/batch.py", "hapticfield/py.typed"], package
     wheel = z.read(f"{dist_info}/WHEEL").decode()
     assert "Root-Is-Purelib: false" in wheel and "Wheel-Version: 1.0" in wheel, wheel
     metadata = z.read(f"{dist_info}/METADATA").decode()

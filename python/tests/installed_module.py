@@ -11,4 +11,9 @@ assert os.path.isfile(os.path.join(here, "__init__.pyi")) and os.path.isfile(os.
 # A penalty plane of 1500 N/m pressed 1 mm: 1.5 N along its normal (closed form).
 f = hf.plane_contact(stiffness=1500.0).force([0.0, 0.0, -0.001])
 assert abs(f[2] - 1.5) < 1e-12 and f[0] == 0.0 and f[1] == 0.0, f
+# The pure-Python part of the package comes with it, in the same place.
+import hapticfield.batch as hb  # noqa: E402
+
+assert os.path.dirname(os.path.realpath(hb.__file__)) == here, hb.__file__
+assert hb.force_map().name == "force_map"
 print(f"hapticfield {hf.__version__} imported from {hf.__file__}")

@@ -205,10 +205,10 @@ def test_a_broadcast_height_array_is_refused_at_once():
 
 
 def feel_shape_tool():
-    """The feel_shape of the same build as the module (build/python next to build/examples), if there is one."""
+    """The feel_shape of the same build as the module (build/python/hapticfield next to build/examples), if any."""
     if os.environ.get("HAPTICFIELD_FEEL_SHAPE"):
         return pathlib.Path(os.environ["HAPTICFIELD_FEEL_SHAPE"])
-    tool = pathlib.Path(hf.__file__).resolve().parent.parent / "examples" / "feel_shape"
+    tool = pathlib.Path(hf.__file__).resolve().parents[2] / "examples" / "feel_shape"
     return tool if tool.exists() else None
 
 

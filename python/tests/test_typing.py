@@ -1,7 +1,7 @@
 """mypy --strict passes on the Python the documentation shows (every ```python block of README.md,
 python/README.md and docs/*.md) and on python/examples/*.py, against the module under test and the stubs
-beside it: the build tree's (build/python: hapticfield.pyi and hapticfield-stubs/, from
-cmake/HapticfieldPythonStubs.cmake) and, from there, an install's (hapticfield/__init__.pyi and py.typed)."""
+beside it: the build tree's (build/python/hapticfield/: __init__.pyi and py.typed beside the extension, from
+cmake/HapticfieldPythonStubs.cmake) and, from there, an install's (the same package)."""
 import os
 import pathlib
 import re
@@ -57,11 +57,12 @@ def explained(r, names):
 
 @pytest.fixture(scope="module")
 def module_dir():
+    """build/python: the directory the build tree's package hapticfield/ is in."""
     import hapticfield as hf
     module = pathlib.Path(hf.__file__).resolve()
-    if module.name.startswith("__init__."):
+    if not (module.parents[2] / "CMakeCache.txt").is_file():
         pytest.skip(f"an installed package is under test ({module}); the build tree's stubs are checked from a build")
-    return module.parent
+    return module.parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -74,13 +75,14 @@ def test_the_documentation_has_python_blocks_and_the_examples_exist():
 
 
 def test_the_build_tree_holds_the_committed_stubs_beside_the_module(module_dir):
-    for stub in (module_dir / "hapticfield.pyi", module_dir / "hapticfield-stubs" / "__init__.pyi"):
-        assert stub.is_file(), f"{stub} is missing: build the module's target again (cmake --build)"
-        assert stub.read_text() == STUB.read_text(), f"{stub} is stale: build the module's target again"
+    stub = module_dir / "hapticfield" / "__init__.pyi"
+    assert stub.is_file(), f"{stub} is missing: build the module's target again (cmake --build)"
+    assert stub.read_text() == STUB.read_text(), f"{stub} is stale: build the module's target again"
+    assert (module_dir / "hapticfield" / "py.typed").is_file()
 
 
 def test_the_documentation_and_the_examples_pass_mypy_strict(module_dir, cache, tmp_path):
-    # found as `PYTHONPATH=build/python python3 -m mypy` finds it: hapticfield-stubs/ on the path
+    # found as `PYTHONPATH=build/python python3 -m mypy` finds it: the package hapticfield/ (py.typed) on the path
     names = write_blocks(tmp_path)
     r = run_mypy([*sorted(tmp_path.glob("*.py")), *EXAMPLES], tmp_path, cache, PYTHONPATH=str(module_dir))
     assert r.returncode == 0, explained(r, names)
@@ -124,7 +126,7 @@ def test_what_the_stubs_accept_is_what_the_module_accepts(module_dir, cache, tmp
 
 
 def test_the_stubs_are_found_through_mypypath_too(module_dir, cache, tmp_path):
-    # hapticfield.pyi beside the module, the directory given as MYPYPATH (no PYTHONPATH)
+    # hapticfield/__init__.pyi, the directory given as MYPYPATH (no PYTHONPATH)
     (tmp_path / "checks.py").write_text(CHECKS)
     r = run_mypy([tmp_path / "checks.py"], tmp_path, cache, MYPYPATH=str(module_dir))
     assert r.returncode == 0, r.stdout + r.stderr

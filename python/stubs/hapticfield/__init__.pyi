@@ -225,6 +225,11 @@ def plane_contact(parts: Sequence[Field] = ..., point: _Vec3 = ..., normal: _Vec
 def plane_surface(point: _Vec3 = ..., normal: _Vec3 = ..., size: float = 0.01, pose: Optional[Pose] = None) -> Surface:
     """The solid half-space behind a plane through point [m] with unit normal (toward the user), both in the frame that pose (a Pose; default none) places; uv are metres along the plane; size [m]: the length its tolerances scale with."""
 
+def relief_map(image: object, pixel_size: float = 0.0001, mm_per_level: float = 0.01, blur: float = 0.0, dark_is_high: bool = False, gray: str = 'paper', channels: str = 'rgb', levels: Optional[float] = None) -> Tuple[Any, ...]:
+    """The relief of a picture as arrays, as height_field_from_picture() builds it: (heights, normals), H x W heights [m] (gray level x mm_per_level [mm], dark_is_high: 255 - level, after a Gaussian blur of blur [px]) and H x W x 3 unit normals (central differences over pixel_size [m], one-sided at the border; x right, y up the picture, z toward the user), row 0 the picture's top row. A missing or undecodable file, or one under 2 x 2 px, raises FileError.
+
+    image: a path (any format OpenCV reads; 16-bit files are scaled by 255/65535) or a numpy array, H x W gray or H x W x 3 / x 4 colour (alpha ignored). channels='rgb' (default: numpy, PIL, imageio order) or 'bgr' (cv2.imread order) names a colour array's channel order. White level: 255 for uint8 and other integer arrays, 65535 for uint16 (as 16-bit files); a float or bool array needs levels= (its white level: 1.0 for a picture in [0, 1], 255 for [0, 255]) and is refused without it; levels= overrides the white level of any array."""
+
 def render_hjif(path: str, rate: float = 8000.0) -> numpy.typing.NDArray[numpy.float64]:
     """Renders every channel of a .hjif file at rate [Hz]: a channels x samples float64 array, channels in file order (as hjif_render's WAV)."""
 
