@@ -13,6 +13,7 @@
 // one; the seed is printed.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -548,4 +549,30 @@ TEST_CASE("Moving<S> and DeformingMesh: a tick allocates nothing; poses and fram
   }
   stop = true;
   writer.join();
+
+  // a writer thread publishing deformed frames while the loop presses on the mesh
+  DeformingMesh breathing(ball);
+  const std::shared_ptr<DeformingMeshFeed> breaths = breathing.feed();
+  ProxyConstraint pressed(std::move(breathing), ProxyConfig{.stiffness = 1000.0});
+  (void)pressed.contact(probe_at_tick(0, {0.0, 0.0, 0.03}));
+  std::atomic<bool> done{false};
+  std::thread deformer([&] {
+    std::vector<glm::dvec3> positions = ball.positions;
+    for (int j = 0; !done.load(); ++j) {
+      const double scale = 1.0 + 0.02 * std::sin(1e-2 * j);  // the ball breathes by 2 %
+      for (std::size_t v = 0; v < positions.size(); ++v)
+        positions[v] = scale * ball.positions[v];
+      breaths->publish(positions);
+      std::this_thread::yield();
+    }
+  });
+  int touching = 0;
+  for (int i = 1; i < 5000; ++i) {
+    const Contact c = pressed.contact(probe_at_tick(i, {0.0, 0.0, std::max(0.0185, 0.03 - 3e-4 * i)}));
+    REQUIRE(is_finite(c.force));
+    touching += c.touching ? 1 : 0;
+  }
+  done = true;
+  deformer.join();
+  CHECK(touching > 4000);  // pressed 1.5 mm into a ball of 20 +- 0.4 mm: held on it throughout
 }
