@@ -31,7 +31,7 @@ const char* const usage_text =
     "  --info          print the channels, their bands and the notes on stdout; write nothing\n"
     "  --rate HZ       output rate [Hz], a whole number in [100, 384000] (default 8000, the reference's)\n"
     "Rendered: Curve (all curve types), VectorialWave (all base signals, AM/FM keyframes, chirps),\n"
-    "Transient; WaveletWave bands are kept but not rendered (silent); docs/hjif.md lists every field.\n"
+    "Transient, WaveletWave (SPIHT blocks); docs/hjif.md lists every field.\n"
     "Limits: 64 MiB per file, nesting 32 levels, 8,000,000 JSON values, 4,000,000 elements per array,\n"
     "1 MiB per string, 3600 s of signal; a file past one is refused with one line naming it.\n"
     "Exit status: 0 done, 1 bad input, 2 bad usage.\n";

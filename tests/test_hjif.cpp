@@ -404,6 +404,54 @@ TEST_CASE("hjif: every shared sample file loads, renders finite and bounded, and
   WARN("no reference synthesizer output (.wav) comes with the samples: nothing to compare sample by sample");
 }
 
+TEST_CASE("WaveletWave: the Actronika file renders its PCM input back (Curve + wavelet blocks)", "[hjif][real]") {
+  const fs::path dir = haptics_data();
+  if (dir.empty() || !fs::is_directory(dir)) {
+    WARN("skipped: no shared data folder (set HAPTICFIELD_SHARED_DATA)");
+    return;
+  }
+  SF_INFO info{};
+  SNDFILE* f = sf_open((dir / "inputs" / "ACTK-vib-pantheongrandstarfall-8kHz-16-nopad.wav").c_str(), SFM_READ, &info);
+  REQUIRE(f != nullptr);
+  std::vector<double> pcm(static_cast<std::size_t>(info.frames));
+  CHECK(sf_readf_double(f, pcm.data(), info.frames) == info.frames);
+  sf_close(f);
+  const auto snr_db = [&](const std::string& name) {
+    const auto y = render_media(io::load_hjif((dir / name).string()).media, info.samplerate).channels[0];
+    REQUIRE(y.size() >= pcm.size());
+    double signal = 0.0, error = 0.0;
+    for (std::size_t i = 0; i < pcm.size(); ++i)
+      signal += pcm[i] * pcm[i], error += (pcm[i] - y[i]) * (pcm[i] - y[i]);
+    return 10.0 * std::log10(signal / error);
+  };
+  const double full = snr_db("ACTK-vib-pantheongrandstarfall.hjif");
+  const double curve_only = snr_db("ACTK-vib-pantheongrandstarfall-curveonly.hjif");
+  INFO("SNR against the encoder's input: " << full << " dB with the wavelet band, " << curve_only << " dB without");
+  CHECK(full >= 15.0);  // measured 15.97 dB
+  CHECK(curve_only <= 4.0);
+}
+
+TEST_CASE("WaveletWave: garbage streams decode to finite samples; other block lengths to nothing", "[hjif][hostile]") {
+  const auto seed = test::run_seed();
+  INFO("seed " << seed);
+  std::mt19937 rng(seed);
+  const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/=?";
+  for (int trial = 0; trial < 200; ++trial) {
+    std::string s(std::uniform_int_distribution<std::size_t>(0, 300)(rng), 'A');
+    for (char& c : s)
+      c = alphabet[std::uniform_int_distribution<std::size_t>(0, alphabet.size() - 1)(rng)];
+    const std::size_t n = std::size_t{16} << std::uniform_int_distribution<int>(0, 8)(rng);
+    const auto x = decode_wavelet_block(s, n);
+    REQUIRE(x.size() == n);
+    for (double v : x)
+      REQUIRE(std::isfinite(v));
+  }
+  CHECK(decode_wavelet_block("AAAA", 1000).empty());
+  CHECK(decode_wavelet_block("AAAA", 8).empty());  // the tree roots would have no room for their children
+  CHECK(decode_wavelet_block("AAAA", max_wavelet_block * 2).empty());
+  CHECK(decode_wavelet_block("", 1024) == std::vector<double>(1024, 0.0));
+}
+
 // --- export of a recorded run, round trip -------------------------------------------------------------------------
 TEST_CASE("hjif: a recorded run exported and read back renders the recorded force, contact and vibration",
           "[hjif][export]") {

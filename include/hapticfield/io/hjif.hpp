@@ -268,8 +268,6 @@ class HjifReader {
       note("skipped: band of unknown band_type \"" + type.substr(0, 64) + "\"");
       return false;
     }
-    if (b.type == material::BandType::wavelet_wave)
-      note("kept, not rendered: WaveletWave band (its SPIHT stream is written back verbatim)");
     if (const auto it = j.find("curve_type"); it != j.end()) {
       const std::string ct = string(*it, path + ".curve_type");
       b.has_curve_type = true;

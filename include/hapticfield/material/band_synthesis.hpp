@@ -22,7 +22,11 @@
 ///   Transient      per keyframe, two periods of a sine at the keyframe's
 ///                  frequency (90.9 Hz, the reference's 22 ms, without one),
 ///                  scaled by its amplitude.
-///   WaveletWave    not rendered (silent): its SPIHT stream is kept verbatim.
+///   WaveletWave    each effect one block of block_length [ms] at
+///                  upper_frequency_limit [Hz] samples per second, decoded by
+///                  wavelet_synthesis.hpp and held sample by sample (as the
+///                  reference); blocks past a budget of
+///                  max_wavelet_samples are skipped.
 
 #include <algorithm>
 #include <cmath>
@@ -34,6 +38,7 @@
 #include <vector>
 
 #include "hapticfield/material/haptic_media.hpp"
+#include "hapticfield/material/wavelet_synthesis.hpp"
 
 namespace hapticfield::material {
 
@@ -41,6 +46,10 @@ namespace hapticfield::material {
 inline constexpr double default_transient_frequency = 2.0 / 0.022;
 /// Longest signal render_media makes [s] (a file may place an effect at tick 2^62).
 inline constexpr double max_render_seconds = 3600.0;
+/// Most WaveletWave samples decoded per band (bounds the work a hostile file can ask for).
+inline constexpr std::size_t max_wavelet_samples = std::size_t{1} << 26;
+/// Highest WaveletWave sampling rate (upper_frequency_limit) decoded [Hz].
+inline constexpr double max_wavelet_rate = 384000.0;
 /// Output rates render_media accepts [Hz].
 inline constexpr double min_render_rate = 1.0;
 inline constexpr double max_render_rate = 384000.0;
@@ -303,6 +312,16 @@ void add_span(std::vector<double>& out, double rate, double t0, double begin, do
   return end;
 }
 
+/// Samples of one WaveletWave block: block_length [ms] x upper_frequency_limit [Hz] (as the reference
+/// Synthesizer reads block_length), 0 when that is not a power of two in [16, max_wavelet_block].
+[[nodiscard]] inline std::size_t wavelet_block_samples(const Band& b) noexcept {
+  if (!b.block_length || !(b.upper_frequency_limit > 0.0 && b.upper_frequency_limit <= max_wavelet_rate)) return 0;
+  const double n = static_cast<double>(*b.block_length) * 1e-3 * b.upper_frequency_limit;
+  if (!(n >= 16.0 && n <= static_cast<double>(max_wavelet_block))) return 0;
+  const auto k = static_cast<std::size_t>(n);
+  return (k & (k - 1)) == 0 ? k : 0;
+}
+
 /// Length of a channel [s]: the end of its last effect, or sample_count /
 /// frequency_sampling where the channel has both (PCM-derived channels).
 [[nodiscard]] inline double channel_duration(const HapticMedia& m, const Perception& p, const Channel& c) noexcept {
@@ -314,6 +333,11 @@ void add_span(std::vector<double>& out, double rate, double t0, double begin, do
     for (const Effect& e : b.effects) {
       const Effect* r = resolve_effect(p, e);
       if (r == nullptr) continue;
+      if (b.type == BandType::wavelet_wave) {
+        if (const std::size_t n = wavelet_block_samples(b); n > 0)
+          end = std::max(end, static_cast<double>(e.position) / ts + static_cast<double>(n) / b.upper_frequency_limit);
+        continue;
+      }
       end = std::max(end, (static_cast<double>(e.position) + effect_length_ticks(b.type, *r, ts)) / ts);
     }
   return end;
@@ -332,6 +356,22 @@ void add_span(std::vector<double>& out, double rate, double t0, double begin, do
 inline void render_band(const HapticMedia& m, const Perception& p, const Band& band, double rate,
                         std::vector<double>& out) {
   const auto ts = static_cast<double>(m.timescale);
+  if (band.type == BandType::wavelet_wave) {
+    const std::size_t n = wavelet_block_samples(band);
+    const double fs = band.upper_frequency_limit;
+    std::size_t budget = max_wavelet_samples;
+    for (const Effect& e : band.effects) {
+      if (n == 0 || budget < n) break;
+      budget -= n;
+      const std::vector<double> block = decode_wavelet_block(e.wavelet_stream, n);
+      const double t0 = static_cast<double>(e.position) / ts;
+      detail::add_span(out, rate, t0, 0.0, static_cast<double>(n) / fs, [&](double t) {
+        const auto k = static_cast<std::size_t>(std::floor(t * fs + 1e-9));  // held, as the reference
+        return k < block.size() ? block[k] : 0.0;
+      });
+    }
+    return;
+  }
   for (const Effect& e : band.effects) {
     const Effect* r = resolve_effect(p, e);
     if (r == nullptr || r->keyframes.empty()) continue;
