@@ -145,7 +145,7 @@ class Report:
         return not self.failed
 
     def __str__(self) -> str:
-        return (f"{self.inputs} inputs: {len(self.written)} outputs written, {len(self.skipped)} skipped, "
+        return (f"{self.inputs} input{'' if self.inputs == 1 else 's'}: {len(self.written)} outputs written, {len(self.skipped)} skipped, "
                 f"{len(self.failed)} failed in {self.seconds:.2f} s")
 
 
