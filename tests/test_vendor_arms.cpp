@@ -26,6 +26,7 @@
 
 #include "alloc_counter.hpp"
 #include "child_process.hpp"
+#include "device_suite.hpp"
 #include "hapticfield/arms/dhd.hpp"
 #include "hapticfield/arms/dynamic_library.hpp"
 #include "hapticfield/arms/openhaptics.hpp"
@@ -49,6 +50,7 @@ struct HdStandin {
   int (*shutdown_order_ok)() = lib.get<int (*)()>("hfstandin_hd_shutdown_order_ok");
   long (*frames_outside_callback)() = lib.get<long (*)()>("hfstandin_hd_frames_outside_callback");
   int (*initiated)() = lib.get<int (*)()>("hfstandin_hd_initiated");
+  void (*inject)(const char*) = lib.get<void (*)(const char*)>("hfstandin_hd_inject");
 
   [[nodiscard]] glm::dvec3 force() const {
     glm::dvec3 f;
@@ -72,6 +74,7 @@ struct DhdStandin {
   long (*expert_calls)() = lib.get<long (*)()>("hfstandin_dhd_expert_calls");
   int (*force_enabled)() = lib.get<int (*)()>("hfstandin_dhd_force_enabled");
   void (*position)(double*) = lib.get<void (*)(double*)>("hfstandin_dhd_position");
+  void (*inject)(const char*) = lib.get<void (*)(const char*)>("hfstandin_dhd_inject");
 
   [[nodiscard]] glm::dvec3 force() const {
     glm::dvec3 f;
@@ -866,3 +869,65 @@ TEST_CASE("servo_demo --device openhaptics and dhd against the stand-ins, as a u
   }
 }
 #endif
+
+// ---- the device suite every family passes, on the stand-ins ----
+
+namespace {
+
+/// An OpenHaptics arm on the lockstep stand-in: HD's scheduler runs one
+/// tick before each read (a loop period is one HD tick).
+class HdTwin {
+  struct OnHdTicks {
+    OpenHapticsDevice arm;
+    Status read(DeviceState& s) noexcept {
+      hd_standin().step(1);
+      return arm.read(s);
+    }
+    Status write(const glm::dvec3& f) noexcept { return arm.write(f); }
+    Status set_armed(bool on) noexcept { return arm.set_armed(on); }
+    Status request_home() noexcept { return arm.request_home(); }
+    Status clear_fault() noexcept { return arm.clear_fault(); }
+    [[nodiscard]] const DeviceInfo& info() const noexcept { return arm.info(); }
+  };
+  struct Parts {
+    OnHdTicks ticks{OpenHapticsDevice(hd_config())};
+    OnHdTicks& device() noexcept { return ticks; }
+  };
+
+ public:
+  explicit HdTwin(VirtualClock&) : env_("HFSTANDIN_HD", "lockstep"), device_(AnyDevice::holding(make())) {}
+  AnyDevice& device() noexcept { return device_; }
+  [[nodiscard]] double effort() const { return glm::length(hd_standin().force()); }
+  void lose() { hd_standin().inject("lose"); }
+  void send_impossible() { hd_standin().inject("impossible"); }
+
+ private:
+  static std::unique_ptr<Parts> make() { return std::make_unique<Parts>(); }
+  Env env_;
+  AnyDevice device_;
+};
+
+/// A Force Dimension arm on the DHD stand-in, on the loop's clock.
+class DhdTwin {
+ public:
+  explicit DhdTwin(VirtualClock& clock)
+      : env_("HFSTANDIN_DHD", ""), library_("HAPTICFIELD_DHD_LIBRARY", HAPTICFIELD_STANDIN_DHD) {
+    DeviceOptions options;
+    options.now = [&clock] { return clock.now(); };
+    device_ = open_device("dhd:0", options);
+  }
+  AnyDevice& device() noexcept { return device_; }
+  [[nodiscard]] double effort() const { return glm::length(dhd_standin().force()); }
+  void lose() { dhd_standin().inject("lose"); }
+  void send_impossible() { dhd_standin().inject("impossible"); }
+
+ private:
+  Env env_;
+  Env library_;
+  AnyDevice device_;
+};
+
+}  // namespace
+
+HAPTICFIELD_DEVICE_SUITE(HdTwin, "device suite, openhaptics (stand-in libHD)")
+HAPTICFIELD_DEVICE_SUITE(DhdTwin, "device suite, dhd (stand-in libdhd)")

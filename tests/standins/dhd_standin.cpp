@@ -13,6 +13,7 @@
 //   falcon               dhdGetSystemType is DHD_DEVICE_FALCON (60), else OMEGA3 (33)
 //   no_velocity          dhdGetLinearVelocity fails: the adapter differentiates positions
 // HFSTANDIN_REPORT=PATH  dhdClose writes what the arm was last told.
+// hfstandin_dhd_inject("lose" | "impossible") raises a fault from now on.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -38,8 +39,10 @@ thread_local int last_error = 0;
 bool open = false;
 bool force_enabled = false;
 long position_calls = 0;
-double force[3] = {0, 0, 0};  // last force the motors were told [N], DHD frame
-long expert_calls = 0;        // dhdSetVelocityThreshold / dhdSetWatchdog / dhdEnableExpertMode
+double force[3] = {0, 0, 0};       // last force the motors were told [N], DHD frame
+long expert_calls = 0;             // dhdSetVelocityThreshold / dhdSetWatchdog / dhdEnableExpertMode
+bool injected_lost = false;        // hfstandin_dhd_inject("lose"): every call fails (DHD_ERROR_COM)
+bool injected_impossible = false;  // hfstandin_dhd_inject("impossible"): NaN positions
 
 void read_faults() {
   faults = Faults{};
@@ -100,6 +103,7 @@ HF_EXPORT int dhdOpenID(char id) {
   if (faults.open_fails) return fail(20);  // DHD_ERROR_DEVICE_IN_USE
   if (id != 0) return fail(5);             // DHD_ERROR_NO_DEVICE_FOUND
   open = true;
+  injected_lost = injected_impossible = false;
   position_calls = 0;
   force[0] = force[1] = force[2] = 0.0;
   return 0;
@@ -125,10 +129,10 @@ HF_EXPORT int dhdEnableForce(unsigned char on, char) {
 HF_EXPORT int dhdGetPosition(double* x, double* y, double* z, char) {
   if (!open) return fail(2);
   const long call = position_calls++;
-  if (faults.com_error_at >= 0 && call >= faults.com_error_at) return fail(2);  // DHD_ERROR_COM
+  if ((faults.com_error_at >= 0 && call >= faults.com_error_at) || injected_lost) return fail(2);  // DHD_ERROR_COM
   double p[3], v[3];
   hand(call, p, v);
-  if (faults.nan_at >= 0 && call >= faults.nan_at) p[0] = std::nan("");
+  if ((faults.nan_at >= 0 && call >= faults.nan_at) || injected_impossible) p[0] = std::nan("");
   *x = p[0];
   *y = p[1];
   *z = p[2];
@@ -148,7 +152,7 @@ HF_EXPORT unsigned int dhdGetButtonMask(char) {
   return 0;
 }
 HF_EXPORT int dhdSetForce(double fx, double fy, double fz, char) {
-  if (!open) return fail(2);
+  if (!open || injected_lost) return fail(2);
   const double f[3] = {fx, fy, fz};
   const double m = std::sqrt(fx * fx + fy * fy + fz * fz);
   const bool saturated = faults.saturate_above >= 0.0 && m > faults.saturate_above;
@@ -192,6 +196,10 @@ HF_EXPORT int dhdSetWatchdog(unsigned char, char) {
 }
 
 // Controls for the tests.
+HF_EXPORT void hfstandin_dhd_inject(const char* fault) {  // "lose" or "impossible", until the next dhdOpenID
+  if (std::strcmp(fault, "lose") == 0) injected_lost = true;
+  if (std::strcmp(fault, "impossible") == 0) injected_impossible = true;
+}
 HF_EXPORT void hfstandin_dhd_last_force(double* f) {
   std::memcpy(f, force, sizeof force);
 }

@@ -14,6 +14,7 @@
 //   scheduler_stops_at=N    the scheduler stops calling callbacks after N ticks
 //   lockstep                no scheduler thread: ticks run in hfstandin_hd_step()
 // HFSTANDIN_REPORT=PATH     hdDisableDevice writes what the arm was last told.
+// hfstandin_hd_inject("lose" | "impossible") raises a fault from now on.
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -70,6 +71,8 @@ double force[3] = {0, 0, 0};  // last force set in a frame [N]
 double position[3] = {0, 0, 0};
 double velocity[3] = {0, 0, 0};
 bool order_ok = true;
+bool injected_impossible = false;  // hfstandin_hd_inject("impossible"): NaN positions from now on
+bool injected_lost = false;        // hfstandin_hd_inject("lose"): HD_COMM_ERROR in every frame from now on
 long frames_outside_callback = 0;
 thread_local bool in_callback = false;
 thread_local bool in_frame = false;
@@ -119,19 +122,19 @@ void move_arm(long tick) {
     position[i] = hand[i] + force[i];
     velocity[i] = hand_v[i];
   }
-  if (faults.nan_at >= 0 && tick >= faults.nan_at) position[0] = std::nan("");
+  if ((faults.nan_at >= 0 && tick >= faults.nan_at) || injected_impossible) position[0] = std::nan("");
 }
 
 void run_tick() {
   const long tick = ticks.load();
   if (faults.scheduler_stops_at >= 0 && tick >= faults.scheduler_stops_at) return;  // stopped calling
-  std::vector<Scheduled> now;
+  std::lock_guard<std::mutex> running_callbacks(tick_mutex);
+  thread_local std::vector<Scheduled> now;  // keeps its capacity: no allocation after the first ticks
   {
     std::lock_guard<std::mutex> lock(mutex);
     move_arm(tick);
-    now = callbacks;
+    now.assign(callbacks.begin(), callbacks.end());
   }
-  std::lock_guard<std::mutex> running_callbacks(tick_mutex);
   in_callback = true;
   for (const Scheduled& s : now) {
     if (s.fn(s.data) == 0) {  // HD_CALLBACK_DONE: removed
@@ -182,6 +185,7 @@ HF_EXPORT unsigned int hdInitDevice(const char* name) {
   }
   initiated = true;
   order_ok = true;
+  injected_impossible = injected_lost = false;
   ticks = 0;
   force[0] = force[1] = force[2] = 0.0;
   return 1;
@@ -211,8 +215,9 @@ HF_EXPORT void hdEndFrame(unsigned int) {
   if (!in_frame) return;
   in_frame = false;
   const long tick = ticks.load();
-  if (faults.device_error_at >= 0 && tick == faults.device_error_at) push_error(0x302);  // HD_COMM_ERROR
-  if (faults.exceeded_at >= 0 && tick == faults.exceeded_at) push_error(0x201);          // HD_EXCEEDED_MAX_FORCE
+  if ((faults.device_error_at >= 0 && tick == faults.device_error_at) || injected_lost)
+    push_error(0x302);                                                           // HD_COMM_ERROR
+  if (faults.exceeded_at >= 0 && tick == faults.exceeded_at) push_error(0x201);  // HD_EXCEEDED_MAX_FORCE
 }
 HF_EXPORT void hdGetIntegerv(unsigned int what, int* v) {
   if (what == 0x2000) {  // HD_CURRENT_BUTTONS
@@ -358,4 +363,9 @@ HF_EXPORT long hfstandin_hd_frames_outside_callback() {
 }
 HF_EXPORT int hfstandin_hd_initiated() {
   return initiated ? 1 : 0;
+}
+HF_EXPORT void hfstandin_hd_inject(const char* fault) {  // "lose" or "impossible", until the next hdInitDevice
+  std::lock_guard<std::mutex> lock(mutex);
+  if (std::strcmp(fault, "lose") == 0) injected_lost = true;
+  if (std::strcmp(fault, "impossible") == 0) injected_impossible = true;
 }
