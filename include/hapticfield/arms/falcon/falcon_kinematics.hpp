@@ -32,6 +32,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
 #include <glm/vec3.hpp>
@@ -93,6 +94,7 @@ class FalconKinematics {
  public:
   static constexpr int default_max_iterations = 30;
   static constexpr double angle_tolerance = 1e-11;  ///< Newton stops below this max |theta error| [rad]
+  static constexpr double max_step = 0.02;          ///< longest Newton step [m]
 
   explicit FalconKinematics(FalconGeometry g = {}) : g_(g) {
     g_.validate();
@@ -196,8 +198,9 @@ class FalconKinematics {
 
   /// Forward kinematics: the handle position whose inverse gives theta,
   /// by Newton's method from guess (the last pose, or the origin), at most
-  /// max_iterations steps, each halved up to 8 times while it leaves the
-  /// reachable set. converged is false when no step gets the angles within
+  /// max_iterations steps, each at most max_step long (without that bound a
+  /// far guess can leap to the edge of the reach and stall there) and halved
+  /// up to 8 times while it leaves the reachable set. converged is false when no step gets the angles within
   /// angle_tolerance: the angles are impossible (or the guess too far).
   [[nodiscard]] FalconForward forward(const glm::dvec3& theta, glm::dvec3 guess = glm::dvec3{0.0},
                                       int max_iterations = default_max_iterations) const noexcept {
@@ -219,6 +222,8 @@ class FalconKinematics {
       }
       if (!(std::fabs(glm::determinant(j)) > 1e-9)) break;
       glm::dvec3 step = glm::inverse(j) * err;
+      const double length = glm::length(step);
+      if (length > max_step) step *= max_step / length;  // a trust region: no leap across the workspace
       bool moved = false;
       for (int h = 0; h < 8 && !moved; ++h) {
         glm::dvec3 tn{0.0};
