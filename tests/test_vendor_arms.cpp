@@ -837,7 +837,9 @@ TEST_CASE("servo_demo --device openhaptics and dhd against the stand-ins, as a u
       fs::remove(report);
       testing::Child tool(HAPTICFIELD_SERVO_DEMO, {"--device", arm.device, "--field", "spring", "--seconds", "60"},
                           tool_tmp, std::string(arm.device) + "_sigint");
-      std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+      // the prompt comes once the tool's Ctrl-C handler is in place
+      REQUIRE(tool.wait_for_output("Press Enter"));
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
       tool.signal(SIGINT);
       REQUIRE(tool.wait());
       INFO(tool.out() << tool.err());
