@@ -21,6 +21,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -32,6 +33,7 @@
 #include <iterator>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
@@ -324,4 +326,65 @@ TEST_CASE("servo_demo: a serial arm that hangs up mid-run is one line on stderr 
   CHECK(err == "servo_demo: the device disconnected during the run; zero force was commanded\n");
   CHECK(tool.out().find("the device disconnected") != std::string::npos);
   CHECK(ours.arm.core().counters().commands > 0);
+}
+
+TEST_CASE("Ctrl-C on the tools with every simulated arm family: stopped through the loop, exit 130") {
+  struct Tool {
+    std::string name, path;
+    std::vector<std::string> args;
+    std::string ready;
+  };
+  std::vector<Tool> tools;
+  // (sim itself is above; the P4 twin through the viewer below)
+  for (const char* device : {"woody:p1:sim", "inverse3:sim"})
+    tools.push_back({std::string("servo_demo ") + device,
+                     HAPTICFIELD_TOOL_SERVO_DEMO,
+                     {"--seconds", "3000", "--realtime", "off", "--device", device},
+                     "Hz"});
+  tools.push_back({"two_arms woody, inverse3",
+                   HAPTICFIELD_TOOL_TWO_ARMS,
+                   {"--seconds", "60", "--teacher", "woody:p4:sim", "--student", "inverse3:sim"},
+                   "Ctrl-C stops"});
+#ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
+  tools.push_back({"hapticfield_view woody:p4:sim",
+                   HAPTICFIELD_TOOL_HAPTICFIELD_VIEW,
+                   {std::string(HAPTICFIELD_SOURCE_DIR) + "/examples/data/coffee.png", "--device", "woody:p4:sim",
+                    "--seconds", "3000", "--realtime", "off", "--screenshot", (tmp / "view_arm.png").string()},
+                   "Ctrl-C stops"});
+#endif
+  int n = 0;
+  for (Tool& t : tools) {
+    CAPTURE(t.name);
+    Child tool(t.path, t.args, tmp, "families" + std::to_string(n++));
+    const bool ready = tool.wait_for_output(t.ready);
+    INFO(tool.out() << tool.err());
+    REQUIRE(ready);
+    tool.signal(SIGINT);
+    check_stopped(tool, SIGINT);
+    CHECK(tool.out().find("zero force") != std::string::npos);
+  }
+}
+
+TEST_CASE("--list-devices: every tool that opens arms says, one line a family, which are present; exit 0") {
+  std::vector<std::pair<std::string, std::string>> tools = {{"servo_demo", HAPTICFIELD_TOOL_SERVO_DEMO},
+                                                            {"two_arms", HAPTICFIELD_TOOL_TWO_ARMS}};
+#ifdef HAPTICFIELD_TOOL_HAPTICFIELD_VIEW
+  tools.emplace_back("hapticfield_view", HAPTICFIELD_TOOL_HAPTICFIELD_VIEW);
+#endif
+  std::string first;
+  for (const auto& [name, path] : tools) {
+    CAPTURE(name);
+    Child tool(path, {"--list-devices"}, tmp, "list_" + name);
+    REQUIRE(tool.wait());
+    const std::string out = tool.out();
+    CAPTURE(out, tool.err());
+    CHECK(tool.status() == 0);
+    CHECK(tool.err().empty());
+    CHECK(out.rfind("sim: present: ", 0) == 0);
+    CHECK(out.find("hid[:VID:PID]: ") != std::string::npos);
+    CHECK(out.find("woody:p1|p2|p4[:PRESET][:sim|:PATH]: ") != std::string::npos);
+    CHECK(out.find("inverse3:PATH|sim: ") != std::string::npos);
+    if (first.empty()) first = out;
+    CHECK(std::count(out.begin(), out.end(), '\n') == std::count(first.begin(), first.end(), '\n'));
+  }
 }
