@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <random>
 #include <string>
 #include <vector>
@@ -445,3 +446,156 @@ TEST_CASE("a stroke over a painted friction mask: the mask and the felt forces d
       std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / "docs" / "images" / "material_map.png";
   CHECK(cv::imwrite(file.string(), out));
 }
+
+// --- a model felt with its own texture ---------------------------------------
+
+#ifdef HAPTICFIELD_TEST_HAS_IO
+#include "hapticfield/io/gltf.hpp"
+#include "hapticfield/material/model_texture.hpp"
+
+namespace {
+
+/// A loaded mesh as a reader returns it: a flat sheet of side 0.2 m (uv 0..1)
+/// with one material whose base-colour texture is picture, PNG-encoded.
+io::LoadedMesh sheet_with_texture(const cv::Mat& picture) {
+  io::LoadedMesh loaded;
+  loaded.mesh = hapticfield::test::flat_sheet(0.2, 8);
+  loaded.material_names = {"painted"};
+  loaded.mesh.materials.assign(loaded.mesh.triangles.size(), 0u);
+  std::vector<unsigned char> png;
+  REQUIRE(cv::imencode(".png", picture, png));
+  loaded.base_colour_textures = {png};
+  return loaded;
+}
+
+}  // namespace
+
+TEST_CASE("metres per uv is the median of the triangles' ratio of space to uv") {
+  CHECK_THAT(metres_per_uv(hapticfield::test::flat_sheet(0.2, 8)), WithinRel(0.2, 1e-12));
+  TriangleMesh stretched = hapticfield::test::flat_sheet(0.2, 8);
+  for (auto& uv : stretched.uvs)
+    uv *= 4.0;  // the picture repeats four times across: 5 cm per uv unit
+  CHECK_THAT(metres_per_uv(stretched), WithinRel(0.05, 1e-12));
+  TriangleMesh bare = hapticfield::test::flat_sheet(0.2, 2);
+  bare.uvs.clear();
+  CHECK_THROWS_WITH(metres_per_uv(bare), Catch::Contains("no texture coordinates"));
+}
+
+TEST_CASE("a model's base-colour texture is felt where it is drawn, at the size the uvs give it") {
+  // a 64 x 64 picture: white, with a black square over columns 32.. and rows ..15 (u > 0.5, v > 0.75)
+  cv::Mat picture(64, 64, CV_8UC3, cv::Scalar(255, 255, 255));
+  picture(cv::Rect(32, 0, 32, 16)).setTo(cv::Scalar(0, 0, 0));
+  ModelTextureConfig config;
+  config.proxy.stiffness = 1000.0;
+  config.texture_gain = 1.0;
+  config.tangible.size = 5;
+  auto model = textured_model(sheet_with_texture(picture), config);
+  // the sheet spans x, y in [-0.1, 0.1]: u = 0.5 at x = 0, v = 0.75 at y = 0.05
+  const auto stroke = [&](glm::dvec3 from, glm::dvec3 step, int ticks, auto&& each) {
+    model.reset();
+    (void)model.force(probe_at(from + glm::dvec3{0.0, 0.0, 0.003}));
+    for (int tick = 0; tick < ticks; ++tick) {
+      const glm::dvec3 at = from + static_cast<double>(tick) * step;
+      const glm::dvec3 f = model.force(probe_at(at, step * 1000.0));
+      REQUIRE(model.last_contact().touching);
+      each(at, f);
+    }
+  };
+  // along u at v = 0.875 (inside the black square's rows): the edge at x = 0 pushes along x
+  double peak_x = 0.0, peak = 0.0;
+  stroke({-0.05, 0.075, -0.001}, {1e-4, 0.0, 0.0}, 1000, [&](glm::dvec3 at, glm::dvec3 f) {
+    if (std::fabs(f.x) > peak) {
+      peak = std::fabs(f.x);
+      peak_x = at.x;
+    }
+  });
+  INFO("peak " << peak << " N at x " << peak_x);
+  CHECK(peak > 0.1);
+  CHECK(std::fabs(peak_x) < 2.0 * 0.2 / 64.0);  // within two pixels (3.1 mm each) of the drawn edge
+  // along u at v = 0.25 (white rows): nothing to feel
+  double quiet = 0.0;
+  stroke({-0.05, -0.05, -0.001}, {1e-4, 0.0, 0.0}, 1000,
+         [&](glm::dvec3, glm::dvec3 f) { quiet = std::fmax(quiet, std::hypot(f.x, f.y)); });
+  CHECK(quiet < 1e-9);
+  // along v at u = 0.75: the square's lower edge at v = 0.75, y = 0.05
+  double peak_y = 0.0;
+  peak = 0.0;
+  stroke({0.05, 0.0, -0.001}, {0.0, 1e-4, 0.0}, 1000, [&](glm::dvec3 at, glm::dvec3 f) {
+    if (std::fabs(f.y) > peak) {
+      peak = std::fabs(f.y);
+      peak_y = at.y;
+    }
+  });
+  CHECK(std::fabs(peak_y - 0.05) < 2.0 * 0.2 / 64.0);
+
+  io::LoadedMesh no_texture = sheet_with_texture(picture);
+  no_texture.base_colour_textures = {{}};
+  CHECK_THROWS_WITH(textured_model(no_texture), Catch::Contains("has no base-colour texture"));
+  io::LoadedMesh garbage = sheet_with_texture(picture);
+  garbage.base_colour_textures = {{1, 2, 3, 4, 5}};
+  CHECK_THROWS_WITH(textured_model(garbage), Catch::Contains("not a picture OpenCV can decode"));
+}
+
+TEST_CASE("the Duck (glTF, embedded base-colour texture) is felt with its texture, without allocating") {
+  const std::filesystem::path duck =
+      std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / ".." / "shared" / "data" / "gltf" / "Duck.gltf";
+  if (!std::filesystem::exists(duck)) return;  // the real files are not part of the project
+  const io::LoadedMesh loaded = io::load_gltf(duck.string());
+  REQUIRE(loaded.base_colour_textures.size() == loaded.material_names.size() + (loaded.material_names.empty() ? 1 : 0));
+  const cv::Mat picture = base_colour_picture(loaded);
+  CHECK(picture.cols > 16);
+  const double metres = metres_per_uv(loaded.mesh);
+  std::cout << "Duck: " << loaded.mesh.triangle_count() << " triangles, texture " << picture.cols << " x "
+            << picture.rows << " px, " << metres << " m per uv unit\n";
+  // the texel where the picture's image force is largest, and the point of the duck that wears it
+  const TangibleImage image(to_gray(picture), TangibleConfig{});
+  glm::dvec2 best_px{0.0};
+  double best = 0.0;
+  for (int y = 0; y < picture.rows; y += 2)
+    for (int x = 0; x < picture.cols; x += 2)
+      if (const double m = glm::length(image.at(x, y)); m > best) {
+        best = m;
+        best_px = {x, y};
+      }
+  const glm::dvec2 uv{(best_px.x + 0.5) / picture.cols, 1.0 - (best_px.y + 0.5) / picture.rows};
+  glm::dvec3 point{0.0}, normal{0.0}, along{0.0};
+  for (const TriangleIndices& t : loaded.mesh.triangles) {
+    const glm::dvec2 a = loaded.mesh.uvs[t[0]], b = loaded.mesh.uvs[t[1]], c = loaded.mesh.uvs[t[2]];
+    const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+    if (std::fabs(det) < 1e-12) continue;
+    const double wb = ((uv.x - a.x) * (c.y - a.y) - (c.x - a.x) * (uv.y - a.y)) / det;
+    const double wc = ((b.x - a.x) * (uv.y - a.y) - (uv.x - a.x) * (b.y - a.y)) / det;
+    if (wb < 0.0 || wc < 0.0 || wb + wc > 1.0) continue;
+    const glm::dvec3 pa = loaded.mesh.positions[t[0]], pb = loaded.mesh.positions[t[1]],
+                     pc = loaded.mesh.positions[t[2]];
+    point = (1.0 - wb - wc) * pa + wb * pb + wc * pc;
+    normal = glm::normalize(glm::cross(pb - pa, pc - pa));
+    along = glm::normalize(pb - pa);
+    break;
+  }
+  REQUIRE(glm::length(normal) > 0.5);
+  INFO("image force " << best << " at texel (" << best_px.x << ", " << best_px.y << ")");
+  ModelTextureConfig config;
+  config.proxy.stiffness = 1000.0;
+  config.texture_gain = 1.0;
+  auto model = textured_model(loaded, config);
+  (void)model.force(probe_at(point + 0.01 * normal));
+  double texture = 0.0;
+  int touching = 0;
+  const long allocations = hapticfield::test::count_allocations([&] {
+    for (int tick = 0; tick < 400; ++tick) {  // pressed 1 mm in, rubbing +-5 mm along the triangle
+      const glm::dvec3 at = point - 0.001 * normal + 0.005 * std::sin(tick * 0.05) * along;
+      const glm::dvec3 f = model.force(probe_at(at, 0.25 * std::cos(tick * 0.05) * along));
+      if (!model.last_contact().touching) continue;
+      ++touching;
+      const glm::dvec3 n = model.last_contact().normal;
+      const glm::dvec3 ft = f - model.last_contact().force;  // the texture's part
+      texture = std::fmax(texture, glm::length(ft - glm::dot(ft, n) * n));
+    }
+  });
+  INFO("touching ticks " << touching << ", largest texture force " << texture << " N");
+  CHECK(touching > 390);
+  CHECK_THAT(texture, WithinRel(best, 0.05));  // the felt texture is the picture's own force there (gain 1 N)
+  if (hapticfield::test::allocations_counted) CHECK(allocations == 0);
+}
+#endif

@@ -145,10 +145,11 @@ struct GltfFiles {
   }
 };
 
-/// Textures are not decoded: their bytes are bounded by the file's size and
-/// never used here.
-inline bool skip_gltf_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*,
-                            int, void*) {
+/// Textures are not decoded here: their encoded bytes (bounded by the
+/// file's size) are kept as they are, for LoadedMesh::base_colour_textures.
+inline bool keep_gltf_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                            const unsigned char* bytes, int size, void*) {
+  if (image != nullptr && bytes != nullptr && size > 0) image->image.assign(bytes, bytes + size);
   return true;
 }
 
@@ -178,6 +179,8 @@ class GltfReader {
     for (std::size_t i = 0; i < model_.materials.size(); ++i)
       out_.material_names.push_back(model_.materials[i].name.empty() ? "material " + std::to_string(i)
                                                                      : model_.materials[i].name);
+    for (const tinygltf::Material& m : model_.materials)
+      out_.base_colour_textures.push_back(base_colour_of(m));
     parts_.resize(model_.meshes.size());
     converted_.assign(model_.meshes.size(), false);
     std::vector<int> roots;
@@ -205,10 +208,21 @@ class GltfReader {
                                              " vertices have no TEXCOORD_0: (0, 0) given");
     if (model_.materials.empty()) {  // one material: no list
       out_.material_names.clear();
+      out_.base_colour_textures.clear();
       out_.mesh.materials.clear();
     } else if (use_default_material_) {
       out_.material_names.emplace_back("(default)");
+      out_.base_colour_textures.emplace_back();
     }
+  }
+
+  /// The encoded picture of a material's baseColorTexture (empty: none).
+  [[nodiscard]] std::vector<unsigned char> base_colour_of(const tinygltf::Material& m) const {
+    const int texture = m.pbrMetallicRoughness.baseColorTexture.index;
+    if (texture < 0 || static_cast<std::size_t>(texture) >= model_.textures.size()) return {};
+    const int image = model_.textures[static_cast<std::size_t>(texture)].source;
+    if (image < 0 || static_cast<std::size_t>(image) >= model_.images.size()) return {};
+    return model_.images[static_cast<std::size_t>(image)].image;
   }
 
   [[nodiscard]] std::vector<bool> take_normal_missing() { return std::move(normal_missing_); }
@@ -597,7 +611,7 @@ class GltfReader {
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks(
       tinygltf::FsCallbacks{&GltfFiles::exists, &GltfFiles::expand, &GltfFiles::read, &GltfFiles::write, &files});
-  loader.SetImageLoader(&skip_gltf_image, nullptr);
+  loader.SetImageLoader(&keep_gltf_image, nullptr);
   tinygltf::Model model;
   std::string err;
   std::string warn;

@@ -71,6 +71,11 @@ struct LoadedMesh {
   TriangleMesh mesh;                        ///< positions [m], validated
   std::vector<std::string> material_names;  ///< names of mesh.materials' indices (empty: one material)
   std::vector<MeshWarning> warnings;        ///< what was accepted but may surprise
+  /// Per entry of material_names: its base-colour texture as the file holds
+  /// it, encoded (PNG, JPEG; glTF's baseColorTexture, embedded or beside
+  /// the file), or empty when it has none. Decode with cv::imdecode
+  /// (material/model_texture.hpp).
+  std::vector<std::vector<unsigned char>> base_colour_textures;
 
   [[nodiscard]] bool has_warning(MeshWarningKind kind) const noexcept {
     return std::any_of(warnings.begin(), warnings.end(), [kind](const MeshWarning& w) { return w.kind == kind; });
