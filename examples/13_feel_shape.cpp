@@ -24,10 +24,13 @@
 // normals the proxy pushes along and each warning of the mesh reader.
 // Meshes are force-shaded by default (the file's vertex normals, else
 // normals from the faces: io/mesh_shading.hpp, the default of every tool
-// and of Python); --facets feels the bare triangles.
+// and of Python); --facets feels the bare triangles. --feel-texture lays a
+// glTF mesh's base-colour texture on it by uv as a tangible-image texture
+// (material/model_texture.hpp), at the size the mesh's uvs give it.
 // Bad input: one line on stderr and exit status 1 (2 for usage errors).
 #include <hapticfield/io.hpp>
 #include <hapticfield/io/mesh_shading.hpp>
+#include <hapticfield/material/model_texture.hpp>
 #include <hapticfield/surface.hpp>
 
 #include <array>
@@ -39,6 +42,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -83,6 +87,8 @@ constexpr const char* usage =
     "  --height-scale H      picture: height of one gray level [mm] (default 0.01);\n"
     "                        depth map: metres per unit (default 1e-6), in (0, 1e6]\n"
     "  --spacing S           height map: distance between pixel centres [m], in (0, 1e3] (default 1e-4)\n"
+    "  --feel-texture        a glTF mesh's base-colour texture felt as a tangible-image texture\n"
+    "                        laid by uv (its pixel size from the mesh's uvs; 0.5 N at an edge)\n"
     "  -h, --help            this text\n"
     "Height maps: pixel (column c, row r) of a W x H map is at x = c S, y = (H - 1 - r) S,\n"
     "z = its height; the surface is solid below. Reads at most 1000000 probes.\n"
@@ -105,6 +111,7 @@ struct Arguments {
   std::optional<double> height_scale;
   double spacing = 1e-4;
   bool spacing_given = false;
+  bool feel_texture = false;
 };
 
 /// N comma-separated finite numbers.
@@ -167,6 +174,8 @@ Arguments parse(hf::cli::Parser& p) {
       a.smooth = true;
     } else if (p.is("--facets")) {
       a.facets = true;
+    } else if (p.is("--feel-texture")) {
+      a.feel_texture = true;
     } else if (p.is("--rotate")) {
       const auto r = parse_reals<4>(p.value(), "--rotate", "AX,AY,AZ,DEG");
       const glm::dvec3 axis{r[0], r[1], r[2]};
@@ -235,10 +244,9 @@ std::vector<std::array<double, 4>> read_probes(const std::string& path) {
 }
 
 /// Feels the path on one shape and writes a line per probe.
-template <hf::Shape S>
-void feel(S shape, const Arguments& args, const std::vector<std::array<double, 4>>& probes, std::FILE* out,
-          std::size_t& touching, double& largest) {
-  auto field = hf::contact(hf::ProxyConstraint<S>(std::move(shape), args.proxy));
+template <class Field>
+void feel(Field field, const std::vector<std::array<double, 4>>& probes, std::FILE* out, std::size_t& touching,
+          double& largest) {
   std::fprintf(out, "t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact\n");
   glm::dvec3 previous{0.0};
   for (std::size_t i = 0; i < probes.size(); ++i) {
@@ -268,6 +276,8 @@ void feel(S shape, const Arguments& args, const std::vector<std::array<double, 4
 struct Loaded {
   std::variant<hf::Posed<hf::MeshShape>, hf::Posed<hf::HeightFieldShape>> shape;
   std::vector<std::string> notes;  ///< for stderr, once the input is known good
+  cv::Mat texture;                 ///< --feel-texture: the mesh's base-colour picture
+  double metres_per_uv = 0.0;      ///< --feel-texture: the mesh's size of one uv unit [m]
 };
 
 std::string box_text(const hf::io::Bounds& b) {
@@ -282,17 +292,31 @@ Loaded load_shape(const Arguments& args, bool mesh) {
     hf::io::MeshReadConfig read;
     read.scale = args.scale;
     hf::io::LoadedMesh loaded = hf::io::load_mesh(args.shape, read);
+    cv::Mat texture;  // --feel-texture: read before the mesh moves into its shape
+    double uv_metres = 0.0;
+    if (args.feel_texture) {
+      texture = hf::material::base_colour_picture(loaded);
+      uv_metres = hf::material::metres_per_uv(loaded.mesh);
+    }
     hf::io::MeshShapeReport report;
     hf::MeshShape shape = hf::io::mesh_shape_from(
         loaded, args.shape, args.facets ? hf::io::MeshShading::faceted : hf::io::MeshShading::smooth,
         hf::bvh_default_max_nodes, &report);
-    Loaded out{hf::Posed<hf::MeshShape>(shape, args.pose), {}};
+    Loaded out{hf::Posed<hf::MeshShape>(shape, args.pose), {}, {}, 0.0};
     std::string what = "mesh of " + std::to_string(report.triangles) + " triangles";
     if (report.touchable < report.triangles) what += " (" + std::to_string(report.touchable) + " with an area)";
     out.notes.push_back(what + ", " + box_text(hf::io::placed_bounds(shape.mesh(), args.pose)) +
                         ", normals: " + report.normals);
     for (const hf::io::MeshWarning& w : loaded.warnings)
       out.notes.push_back("warning: " + w.message);
+    if (args.feel_texture) {
+      out.texture = texture;
+      out.metres_per_uv = uv_metres;
+      char text[160];
+      std::snprintf(text, sizeof text, "texture: %d x %d px felt by uv, %.6g m per uv unit", out.texture.cols,
+                    out.texture.rows, out.metres_per_uv);
+      out.notes.emplace_back(text);
+    }
     return out;
   }
   const cv::Mat image = hf::cli::quiet_stderr([&] { return hf::load_image(args.shape); });
@@ -320,7 +344,7 @@ Loaded load_shape(const Arguments& args, bool mesh) {
     lo = std::fmin(lo, h), hi = std::fmax(hi, h);
   const hf::io::Bounds box = hf::io::placed_bounds(
       {0.0, 0.0, lo}, {(grid.width - 1) * grid.spacing_x, (grid.height - 1) * grid.spacing_y, hi}, args.pose);
-  Loaded out{hf::Posed<hf::HeightFieldShape>(hf::HeightFieldShape(grid), args.pose), {}};
+  Loaded out{hf::Posed<hf::HeightFieldShape>(hf::HeightFieldShape(grid), args.pose), {}, {}, 0.0};
   out.notes.push_back(std::string(depth ? "depth map" : "height map") + " of " + std::to_string(grid.width) + " x " +
                       std::to_string(grid.height) + " samples, " + box_text(box) +
                       ", normals: blended corner normals (force shading)");
@@ -331,6 +355,8 @@ int run(const Arguments& args) {
   const bool mesh = args.kind == Kind::mesh || (args.kind == Kind::automatic && is_mesh_file(args.shape));
   if (mesh && (args.height_scale || args.spacing_given))
     throw hf::cli::UsageError("--height-scale and --spacing are for height maps, not meshes");
+  if (!mesh && args.feel_texture)
+    throw hf::cli::UsageError("--feel-texture is for meshes with a base-colour texture (glTF)");
   if (!mesh && args.scale_given)
     throw hf::cli::UsageError("--scale is for meshes; a height map takes --spacing and --height-scale");
   if (!mesh && args.proxy.radius > 0.0)
@@ -355,7 +381,19 @@ int run(const Arguments& args) {
   std::fflush(stderr);
   std::size_t touching = 0;
   double largest = 0.0;
-  std::visit([&](auto& s) { feel(std::move(s), args, probes, out, touching, largest); }, loaded.shape);
+  std::visit(
+      [&](auto& s) {
+        using S = std::remove_cvref_t<decltype(s)>;
+        if (loaded.texture.empty()) {
+          feel(hf::contact(hf::ProxyConstraint<S>(std::move(s), args.proxy)), probes, out, touching, largest);
+        } else {
+          hf::material::ModelTextureConfig texture;
+          texture.proxy = args.proxy;
+          feel(hf::material::textured_surface(std::move(s), loaded.texture, loaded.metres_per_uv, texture), probes, out,
+               touching, largest);
+        }
+      },
+      loaded.shape);
   const bool failed = std::ferror(out) != 0;
   if (out != stdout ? std::fclose(out) != 0 || failed : std::fflush(out) != 0 || failed)
     throw hf::FileError("cannot write forces file '" + args.forces + "'");

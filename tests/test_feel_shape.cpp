@@ -593,3 +593,31 @@ TEST_CASE("feel_shape: real meshes run end to end with finite output", "[feel_sh
   }
   if (felt == 0) WARN("no real mesh found under " << shared.string());
 }
+
+TEST_CASE("feel_shape --feel-texture: a glTF model felt with its base-colour texture; no texture is one error",
+          "[feel_shape][texture]") {
+  check_error({flat_plane_stl(0.1), "--probes", "-", "--feel-texture"}, 1, "has no base-colour texture");
+  const fs::path shared = shared_data();
+  const fs::path duck = shared.empty() ? fs::path() : shared / "gltf" / "Duck.gltf";
+  if (duck.empty() || !fs::exists(duck)) {
+    WARN("the shared data folder is absent: the textured Duck skipped");
+    return;
+  }
+  std::vector<glm::dvec3> path;
+  for (int i = 0; i <= 400; ++i)  // down onto the Duck's back and along it
+    path.push_back({0.2 + 0.001 * i, 2.0 - 0.005 * std::min(i, 240), 0.0});
+  const std::string probes = write(in_tmp("duck.csv"), probe_csv(path));
+  const Result plain = run({duck.string(), "--probes", probes, "--stiffness", "1000"});
+  const Result textured = run({duck.string(), "--probes", probes, "--stiffness", "1000", "--feel-texture"});
+  INFO(textured.err);
+  REQUIRE(plain.status == 0);
+  REQUIRE(textured.status == 0);
+  CHECK(textured.err.find("texture: 512 x 512 px felt by uv") != std::string::npos);
+  const std::vector<Row> a = parse_rows(plain.out), b = parse_rows(textured.out);
+  REQUIRE(a.size() == path.size());
+  REQUIRE(b.size() == path.size());
+  int touching = 0;
+  for (const Row& row : b)
+    touching += row.contact;
+  CHECK(touching > 0);
+}

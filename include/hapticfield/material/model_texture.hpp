@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -93,8 +94,11 @@ struct ModelTextureConfig {
   MeshShapeConfig shape{};    ///< force shading, node budget
 };
 
+/// A shape felt with a picture laid on it by uv (textured_surface()).
+template <Shape S>
+using TexturedSurface = MaterialSurface<S, OnSurface<TangibleImageField<TangibleImage>>>;
 /// The field textured_model() returns.
-using TexturedModel = MaterialSurface<MeshShape, OnSurface<TangibleImageField<TangibleImage>>>;
+using TexturedModel = TexturedSurface<MeshShape>;
 
 /// The uv mapping and plane mapping that lay a W x H picture over uv
 /// [0, 1]^2 at `metres` per uv unit (row 0 at v = 1, as mesh uvs are v up).
@@ -111,15 +115,16 @@ struct PictureOnUv {
                      PlaneMapping(px_per_m / 1000.0, glm::dvec2{-0.5, height - 0.5})};
 }
 
-/// The loaded mesh felt with its own base-colour texture (see the file
-/// comment). The material is the proxy's, everywhere; the vibration id is
-/// each triangle's material.
-/// @throws std::invalid_argument for a mesh without uvs, a material without
-///         a base-colour texture, an undecodable or too small picture, or a
-///         bad proxy or texture configuration.
-[[nodiscard]] inline TexturedModel textured_model(io::LoadedMesh loaded, const ModelTextureConfig& config = {}) {
-  const cv::Mat picture = base_colour_picture(loaded, config.material);
-  const double metres = metres_per_uv(loaded.mesh);
+/// Any shape with uvs (a mesh, posed or not) felt with `picture` laid on it
+/// by uv at `metres` per uv unit (metres_per_uv() of its mesh) as a
+/// tangible-image texture. The material is the proxy's everywhere; the
+/// vibration id is each triangle's material.
+/// @throws std::invalid_argument for an empty or too small picture, metres
+///         that are not finite and > 0, or a bad proxy or texture configuration.
+template <Shape S>
+[[nodiscard]] TexturedSurface<std::remove_cvref_t<S>> textured_surface(S&& shape, const cv::Mat& picture, double metres,
+                                                                       const ModelTextureConfig& config = {}) {
+  if (picture.empty()) throw std::invalid_argument("textured_surface: the picture is empty");
   const PictureOnUv lay = picture_on_uv(picture.cols, picture.rows, metres);
   MaterialMaps maps;
   maps.stiffness = config.proxy.stiffness;
@@ -129,8 +134,21 @@ struct PictureOnUv {
   maps.vibration = per_primitive_material;
   TangibleImageField<TangibleImage> image(TangibleImage(to_gray(picture), config.tangible), lay.plane,
                                           config.texture_gain);
-  return TexturedModel(MeshShape(std::move(loaded.mesh), config.shape), config.proxy, MaterialMap(std::move(maps)),
-                       OnSurface<TangibleImageField<TangibleImage>>(std::move(image), lay.uv));
+  return TexturedSurface<std::remove_cvref_t<S>>(
+      std::forward<S>(shape), config.proxy, MaterialMap(std::move(maps)),
+      OnSurface<TangibleImageField<TangibleImage>>(std::move(image), lay.uv));
+}
+
+/// The loaded mesh felt with its own base-colour texture (see the file
+/// comment): textured_surface() of its MeshShape, its material's picture
+/// and its metres_per_uv().
+/// @throws std::invalid_argument for a mesh without uvs, a material without
+///         a base-colour texture, an undecodable or too small picture, or a
+///         bad proxy or texture configuration.
+[[nodiscard]] inline TexturedModel textured_model(io::LoadedMesh loaded, const ModelTextureConfig& config = {}) {
+  const cv::Mat picture = base_colour_picture(loaded, config.material);
+  const double metres = metres_per_uv(loaded.mesh);
+  return textured_surface(MeshShape(std::move(loaded.mesh), config.shape), picture, metres, config);
 }
 
 }  // namespace hapticfield::material
