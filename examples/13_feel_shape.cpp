@@ -18,8 +18,8 @@
 // the proxy [m], the force on the HIP [N], the contact normal, the touched
 // point's uv, its triangle or grid cell (-1: none) and 1 while touching.
 // --radius R [m] makes the tool a ball of radius R centred on the HIP (the
-// proxy is its centre, resting R above a face); a mesh only: a height map
-// takes a point tool, and --radius > 0 with one is a usage error.
+// proxy is its centre, resting R above a face; a height map's cells are two
+// flat triangles each for a ball).
 // Before the forces, stderr tells the shape's box once placed [m], the
 // normals the proxy pushes along and each warning of the mesh reader.
 // Meshes are force-shaded by default (the file's vertex normals, else
@@ -73,8 +73,8 @@ constexpr const char* usage =
     "  --friction MU         static and dynamic friction [-], MU_S,MU_K or one value for both,\n"
     "                        0 <= MU_K <= MU_S <= 10 (default 0: frictionless)\n"
     "  --radius R            the tool's radius [m], in [0, 0.05] (default 0: a point); > 0 a ball\n"
-    "                        centred on the HIP: the proxy columns are its centre, R above a face.\n"
-    "                        A mesh only: a height map (picture, depth map) takes a point tool\n"
+    "                        centred on the HIP: the proxy columns are its centre, R above a face\n"
+    "                        (a height map's cells are two flat triangles each for a ball)\n"
     "  --scale S             a mesh file's unit in metres, in (0, 1e6] (default 1; 0.001 for mm)\n"
     "  --facets              a mesh is felt by its face normals (flat facets); default: force\n"
     "                        shading with the file's vertex normals, else normals from the faces\n"
@@ -359,8 +359,6 @@ int run(const Arguments& args) {
     throw hf::cli::UsageError("--feel-texture is for meshes with a base-colour texture (glTF)");
   if (!mesh && args.scale_given)
     throw hf::cli::UsageError("--scale is for meshes; a height map takes --spacing and --height-scale");
-  if (!mesh && args.proxy.radius > 0.0)
-    throw hf::cli::UsageError("--radius is for meshes: a height map (picture or depth map) takes a point tool only");
   if (!mesh && (args.smooth || args.facets))
     throw hf::cli::UsageError(std::string(args.smooth ? "--smooth" : "--facets") +
                               " is for meshes (a height field is always shaded)");

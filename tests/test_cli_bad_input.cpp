@@ -807,11 +807,9 @@ TEST_CASE("--shape: bad shapes exit 1, bad shape options exit 2, before any wind
                      "more than 3 triangles by line 8 (raise --max-triangles to allow it)"});
   }
   add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--distance", {}, "", "", offscreen);
-  // the tool's radius [mm]: in [0, 50], for a mesh only
+  // the tool's radius [mm]: in [0, 50], for --shape
   add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--radius", {"0"}, "", "", offscreen);
   cases.push_back({"hapticfield_view", view({"--shape", mesh, "--radius", "50.5"}), usage, "[0, 50]"});
-  cases.push_back(
-      {"hapticfield_view", view({"--shape", picture, "--radius", "2"}), usage, "a height map ('" + picture + "')"});
   cases.push_back({"hapticfield_view", view({picture, "--radius", "2"}), usage, "--radius is for --shape"});
   add_numeric(cases, "hapticfield_view", {"--shape", mesh}, "--view", {"0", "-1", " 3"}, "", ",10", offscreen);
   for (const std::string& file : {b.missing, b.empty, b.folder, b.truncated_png, unknown, no_triangles})

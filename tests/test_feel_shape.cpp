@@ -277,19 +277,13 @@ TEST_CASE("feel_shape: each bad input is one line on stderr and a non-zero exit"
   check_error({plane, "--probes", good, "--translate", "1,2"}, 2, "--translate expects X,Y,Z");
   check_error({plane, "--probes", good, "--translate", "1,2,3,4"}, 2, "--translate expects X,Y,Z");
   check_error({plane, "--probes", good, "--translate", "0,inf,0"}, 2, "--translate");
-  // the tool's radius: metres in [0, 0.05]; a height map takes a point tool only
+  // the tool's radius: metres in [0, 0.05]
   check_error({plane, "--probes", good, "--radius", "-0.001"}, 2, "--radius must be in [0, 0.05]");
   check_error({plane, "--probes", good, "--radius", "0.051"}, 2, "--radius must be in [0, 0.05]");
   check_error({plane, "--probes", good, "--radius", "2"}, 2, "--radius must be in [0, 0.05]");
   check_error({plane, "--probes", good, "--radius", "nan"}, 2, "--radius");
   check_error({plane, "--probes", good, "--radius", "2mm"}, 2, "--radius");
   check_error({plane, "--probes", good, "--radius"}, 2, "--radius needs a value");
-  check_error({picture, "--probes", good, "--radius", "0.001"}, 2, "--radius is for meshes");
-  cv::Mat depth16(20, 20, CV_16U, cv::Scalar(1000));
-  const std::string depth_map = in_tmp("depth16.png");
-  REQUIRE(cv::imwrite(depth_map, depth16));
-  check_error({depth_map, "--probes", good, "--radius", "0.001"}, 2, "--radius is for meshes");
-  check_error({depth_map, "--kind", "picture", "--probes", good, "--radius", "0.05"}, 2, "--radius is for meshes");
   // a mesh with nothing to touch: every triangle without area
   const std::string flat = write(in_tmp("degenerate.stl"),
                                  "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 2 0 0\n"
@@ -535,6 +529,18 @@ TEST_CASE("feel_shape: a flat picture and a 16-bit depth map give F = k (height 
       CHECK_THAT(rows[static_cast<std::size_t>(i)].proxy.z, WithinAbs(c.height, 1e-6));
       // uv runs 0..1 over the footprint (39 x 29 mm)
       CHECK_THAT(rows[static_cast<std::size_t>(i)].u, WithinAbs(path[static_cast<std::size_t>(i)].x / 0.039, 1e-6));
+    }
+    // a 3 mm ball on the same map rests 3 mm above it: F = k (height + r - z)
+    args.insert(args.end(), {"--radius", "0.003"});
+    const Result ball = run(args);
+    INFO(ball.err);
+    REQUIRE(ball.status == 0);
+    const std::vector<Row> balls = parse_rows(ball.out);
+    REQUIRE(balls.size() == 3);
+    for (int i : {1, 2}) {
+      CHECK(balls[static_cast<std::size_t>(i)].contact == 1);
+      CHECK_THAT(balls[static_cast<std::size_t>(i)].f.z, WithinAbs(1200.0 * (0.003 + 0.001 * i), 1e-6));
+      CHECK_THAT(balls[static_cast<std::size_t>(i)].proxy.z, WithinAbs(c.height + 0.003, 1e-6));
     }
   }
 }

@@ -404,6 +404,8 @@ std::array<double, 2> ball_slides(const TriangleMesh& mesh, std::mt19937& rng, i
       const double press = std::fmin(1.0, j / 10.0);
       const glm::dvec3 hip = point + (r + 0.002 - 0.003 * press) * t.n + std::fmax(0, j - 10) * 1e-3 * speed * dir;
       touching += proxy.contact(probe_at(hip, speed * dir)).touching ? 1.0 : 0.0;
+      // a start within r of another part of the model: that ball is free until clear (ProxyTick::embedded), no slide
+      if (j == 0 && proxy.last_tick().embedded) break;
       const ProxyPath& path = proxy.last_path();
       for (int q = 0; q + 1 < path.count; ++q)
         nearest = std::fmin(nearest, checker.entered(path.points[static_cast<std::size_t>(q)],

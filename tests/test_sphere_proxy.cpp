@@ -369,3 +369,47 @@ TEST_CASE(
     CHECK(nearest >= r * (1.0 - 1e-6));
   }
 }
+
+TEST_CASE(
+    "a ball that begins in the surface is free until clear of it; it leaves a solid and an open sheet from "
+    "behind as a point does",
+    "[radius]") {
+  const double r = 0.002;
+  SECTION("begun on a fine wavy sheet: no force while it overlaps, then a contact from above") {
+    // 0.14 mm triangles under a 2 mm ball: swept from where it overlaps, it would meet a corner at t = 0 whichever
+    // way it moved (the proxy stuck where it began, the force growing as the HIP moved away)
+    const TriangleMesh sheet = test::wavy_sheet(0.1, 350, 0.002, 0.03);
+    ProxyConstraint proxy(MeshShape(sheet), ProxyConfig{.stiffness = k, .radius = r});
+    for (int i = 0; i <= 200; ++i) {  // sideways 20 mm along the surface, never farther than 1 mm from it
+      const glm::dvec3 hip{1e-4 * i, 0.0, 0.0};
+      const Contact c = proxy.contact(probe_at(hip));
+      INFO("tick " << i);
+      CHECK_FALSE(c.touching);
+      CHECK(c.force == glm::dvec3{0.0});
+      CHECK(proxy.last_tick().embedded);
+      CHECK(proxy.proxy() == hip);
+    }
+    (void)proxy.contact(probe_at({0.02, 0.0, 0.01}));  // lifted clear: an ordinary ball again
+    CHECK_FALSE(proxy.last_tick().embedded);
+    const Contact c = press(proxy, {0.02, 0.0, 0.01}, {0.02, 0.0, -0.001});  // the sheet is at z = 0 along y = 0
+    REQUIRE(c.touching);
+    CHECK(MeshChecker(sheet).distance(proxy.proxy(), 2 * r) >= r * (1.0 - 1e-6));
+    CHECK(c.force.z > 0.5 * k * 0.001);
+  }
+  SECTION("from under an open sheet up through it, and from the centre of a closed sphere out: no force") {
+    ProxyConstraint sheet(MeshShape(test::flat_sheet(0.1, 60)), ProxyConfig{.stiffness = k, .radius = r});
+    ProxyConstraint solid(MeshShape(test::icosphere(3, 0.03)), ProxyConfig{.stiffness = k, .radius = r});
+    for (int i = 0; i <= 400; ++i) {
+      const glm::dvec3 hip{0.001, 0.002, -0.01 + 5e-5 * i};  // z from -10 to +10 mm
+      const Contact a = sheet.contact(probe_at(hip));
+      const Contact b = solid.contact(probe_at({0.0, 0.0, 0.05 * i / 400.0}));  // the centre to 5 cm, out the top
+      INFO("tick " << i);
+      CHECK(a.force == glm::dvec3{0.0});
+      CHECK(b.force == glm::dvec3{0.0});
+    }
+    // from above again, both are felt
+    CHECK(press(sheet, {0.001, 0.002, 0.01}, {0.001, 0.002, -0.001}).touching);
+    CHECK(sheet.proxy().z == Approx(r).epsilon(1e-4));
+    CHECK(press(solid, {0.0, 0.0, 0.05}, {0.0, 0.0, 0.029}).touching);
+  }
+}

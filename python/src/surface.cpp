@@ -432,21 +432,16 @@ Surface mesh_surface_from_arrays(const py::array& vertices, const py::array& fac
   }
 }
 
-/// The tool's radius [m] checked for a surface of `kind`: in [0, proxy_max_radius], and 0 on a height field (it
-/// has no swept ball: surface/height_field.hpp). `what` names the surface in the message.
-void check_radius(double radius, const std::string& kind, const std::string& what) {
+/// The tool's radius [m] checked: in [0, proxy_max_radius].
+void check_radius(double radius) {
   if (!(std::isfinite(radius) && radius >= 0.0 && radius <= proxy_max_radius))
     throw py::value_error("radius: the tool's radius must be in [0, " + metres(proxy_max_radius) +
                           "] m (0: a point), got " + metres(radius));
-  if (radius > 0.0 && kind == "height_field")
-    throw py::value_error("radius: " + what +
-                          " is a height field, and height fields take a point tool only (radius 0), got radius " +
-                          metres(radius) + " m; a mesh, plane or sphere surface takes a ball");
 }
 
 SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& parts, double stiffness, double damping,
                              double static_friction, double dynamic_friction, double offset, double radius) {
-  check_radius(radius, surface.kind, "the surface (" + surface.description + ")");
+  check_radius(radius);
   ProxyConfig config{stiffness, damping, static_friction, dynamic_friction, offset};
   config.radius = radius;
   FieldSum sum;
@@ -524,7 +519,7 @@ SurfaceField picture_relief_of(const py::object& image, double mm_per_level, dou
                                std::optional<int> size, const std::string& border, double sigma,
                                const std::string& gray, const std::string& channels, std::optional<double> levels,
                                double radius) {
-  check_radius(radius, "height_field", "a picture relief");
+  check_radius(radius);
   PictureReliefConfig c;
   c.mm_per_level = mm_per_level;
   c.width_m = width_m;
@@ -534,6 +529,7 @@ SurfaceField picture_relief_of(const py::object& image, double mm_per_level, dou
   c.damping = damping;
   c.static_friction = static_friction;
   c.dynamic_friction = dynamic_friction;
+  c.radius = radius;
   c.texture_gain = texture_gain;
   c.tangible = tangible_options(mask, size, border, sigma);
   c.weights = gray_weights(gray);
@@ -733,8 +729,8 @@ void bind_surface(py::module_& m) {
         "static_friction >= dynamic_friction >= 0; offset: the proxy's lift relative to a primitive's size. "
         "radius [m], in [0, 0.05]: the tool's radius; 0 (default) a point, > 0 a ball centred on the HIP, swept "
         "against the shape: it rests radius above a face (proxy = the ball's centre, d = radius - the HIP's "
-        "height) and does not enter a crack narrower than 2 radius. A mesh, plane or sphere surface takes a ball; a "
-        "height field (height_field, height_field_from_picture, depth_map) a point only (ValueError). While "
+        "height) and does not enter a crack narrower than 2 radius. Every surface takes a ball (a height field's "
+        "cells are two flat triangles each for it). While "
         "touching, the parts see |Fc| [N], the normal, and the touched point's uv and tangent frame: lay a field "
         "on the surface with on_surface(). Returns a SurfaceField (contacts() tells where the proxy is).");
   m.def(
@@ -750,8 +746,8 @@ void bind_surface(py::module_& m) {
            "forces (texture_gain [N] at a black/white edge; 0: the relief alone; mask, size, border, sigma as "
            "tangible_field) are laid on the relief in its tangent plane. The picture spans width_m [m] from the first "
            "to the last pixel centre, its bottom-left pixel at the origin, x right, y up the picture, z toward the "
-           "user. radius: the tool's radius [m]; a relief is a height field, which takes a point tool only: 0 (a ball "
-           "raises ValueError; feel a ball on a mesh). Returns a SurfaceField.\n\n") +
+           "user. radius: the tool's radius [m] in [0, 0.05] (0: a point; > 0 a ball, resting radius above the relief "
+           "whose cells are two flat triangles each for it). Returns a SurfaceField.\n\n") +
        picture_argument_doc)
           .c_str());
   m.def("on_surface", &on_surface_of, py::arg("field"), py::arg("scale") = 1.0, py::arg("offset") = 0.0,

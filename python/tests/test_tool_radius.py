@@ -129,16 +129,21 @@ def test_a_radius_out_of_range_raises_a_value_error(radius):
         hf.picture_relief(np.zeros((20, 30), dtype=np.uint8), radius=radius)
 
 
-def test_height_fields_and_depth_maps_take_a_point_tool_only(tmp_path, coffee):
+def test_a_ball_on_height_fields_depth_maps_and_reliefs_rests_r_above_them(tmp_path):
+    r = 0.002
     depth = tmp_path / "depth.png"
-    write_png16(depth, np.full((8, 8), 1000, dtype=np.uint16))
-    for surface in (hf.height_field(np.zeros((4, 4)), spacing=1e-3), hf.height_field_from_picture(coffee),
-                    hf.depth_map(depth)):
-        with pytest.raises(ValueError, match="height fields take a point tool only"):
-            hf.surface_contact(surface, radius=0.001)
-        hf.surface_contact(surface, radius=0.0)  # a point is fine
-    with pytest.raises(ValueError, match="height fields take a point tool only"):
-        hf.picture_relief(np.zeros((20, 30), dtype=np.uint8), radius=0.001)
-    hf.picture_relief(np.zeros((20, 30), dtype=np.uint8), radius=0.0)
-    # the largest radius is taken where a ball is
+    write_png16(depth, np.full((21, 21), 1000, dtype=np.uint16))
+    for surface in (hf.height_field(np.zeros((21, 21)), spacing=1e-3), hf.depth_map(depth, pixel_size=1e-3)):
+        top = surface.bounds[1][2]
+        c = hf.surface_contact(surface, stiffness=K, radius=r).contacts(
+            press((0.01, 0.01, top + 0.01), (0.01, 0.01, top - 0.001)))
+        assert c["touching"][-1]
+        assert c["proxy"][-1][2] == pytest.approx(top + r, rel=1e-6)
+        np.testing.assert_allclose(c["contact_force"][-1], [0.0, 0.0, K * (r + 0.001)], rtol=1e-6, atol=1e-9)
+    # a relief of a uniform picture: a plane 100 levels x 0.01 mm = 1 mm high
+    relief = hf.picture_relief(np.full((20, 30), 100, dtype=np.uint8), width_m=0.03, texture_gain=0.0,
+                               stiffness=K, radius=r)
+    c = relief.contacts(press((0.015, 0.01, 0.02), (0.015, 0.01, 0.0)))
+    assert c["touching"][-1]
+    assert c["proxy"][-1][2] == pytest.approx(0.001 + r, rel=1e-6)
     hf.surface_contact(hf.plane_surface(), radius=0.05)

@@ -58,6 +58,7 @@ struct PictureReliefConfig {
   double damping = 0.0;           ///< b on the normal velocity while touching [N s/m]
   double static_friction = 0.0;   ///< mu_s of the proxy [-]
   double dynamic_friction = 0.0;  ///< mu_k of the proxy [-], <= mu_s
+  double radius = 0.0;            ///< the tool's radius [m] (ProxyConfig::radius); 0: a point
   double texture_gain = 1.0;      ///< tangible-image force at a black/white edge [N]; 0: relief only
   TangibleConfig tangible{};      ///< mask, size, border of the tangible image (Prewitt 17 x 17 by default)
   GrayWeights weights = GrayWeights::paper;       ///< colour -> gray
@@ -99,9 +100,12 @@ inline void check_relief_config(const PictureReliefConfig& c) {
   heights.weights = config.weights;
   heights.max_pixels = config.max_pixels;
   const io::HeightGrid grid = io::height_grid_from_gray(gray, heights);
-  ProxyConstraint<HeightFieldShape> proxy(
-      HeightFieldShape(grid),
-      ProxyConfig{config.stiffness, config.damping, config.static_friction, config.dynamic_friction});
+  ProxyConstraint<HeightFieldShape> proxy(HeightFieldShape(grid),
+                                          ProxyConfig{.stiffness = config.stiffness,
+                                                      .damping = config.damping,
+                                                      .static_friction = config.static_friction,
+                                                      .dynamic_friction = config.dynamic_friction,
+                                                      .radius = config.radius});
   // uv (0..1 over the footprint) -> the flat frame in metres, x right and
   // y up from the bottom-left pixel; that frame -> pixels, y down from the
   // top row.

@@ -59,11 +59,15 @@ namespace hapticfield::detail {
 }
 
 /// The ball of radius r whose centre moves from + t d (t in [0, t_best))
-/// against the triangle a, a + e1, a + e2: its face is met from its front
-/// only (the side cross(e1, e2) points to), its edges and corners from any
-/// side; a ball that already overlaps a feature and moves toward it meets it
-/// at t = 0. True when it touches before t_best, which then receives the
-/// time, and contact the touched point of the triangle.
+/// against the triangle a, a + e1, a + e2, met from its front only (the side
+/// cross(e1, e2) points to): its face, and its edges and corners where the
+/// contact normal (from the touched point to the centre) leans to that side.
+/// A convex edge or corner always lies in front of one of the faces that
+/// share it, so a closed mesh loses no contact, while a ball inside a solid
+/// or under an open sheet leaves through it as a point does. A ball that
+/// already overlaps a feature and moves toward it meets it at t = 0. True
+/// when it touches before t_best, which then receives the time, and contact
+/// the touched point of the triangle.
 [[nodiscard]] inline bool sweep_ball_triangle(const glm::dvec3& a, const glm::dvec3& e1, const glm::dvec3& e2,
                                               const glm::dvec3& from, const glm::dvec3& d, double r, double& t_best,
                                               glm::dvec3& contact) noexcept {
@@ -109,16 +113,17 @@ namespace hapticfield::detail {
   const glm::dvec3 gap = to_middle - along * d;
   const double bound = r + std::sqrt(reach2);
   if (glm::dot(gap, gap) > bound * bound) return false;
+  const auto in_front = [&](double t, const glm::dvec3& q) { return glm::dot(from + t * d - q, cross) > 0.0; };
   for (std::size_t k = 0; k < 3; ++k) {
     double t = 0.0;
-    if (ball_entry(from - corner[k], d, r, t) && t < t_best) {
+    if (ball_entry(from - corner[k], d, r, t) && t < t_best && in_front(t, corner[k])) {
       t_best = t;
       contact = corner[k];
       found = true;
     }
     const glm::dvec3 p = corner[k], e = corner[(k + 1) % 3] - p;
     double s = 0.0;
-    if (cylinder_entry(from - p, d, e, r, t, s) && t < t_best) {
+    if (cylinder_entry(from - p, d, e, r, t, s) && t < t_best && in_front(t, p + s * e)) {
       t_best = t;
       contact = p + s * e;
       found = true;

@@ -386,6 +386,12 @@ class MeshBvh {
     const glm::dvec3 d = to - from;
     if (triangles_.empty() || !is_finite(from) || !is_finite(d)) return best;
     const Slabs<Grown> slabs(from, d, grow);
+    // Grown: a box within `grow` of some point of the segment is within
+    // grow + |d| / 2 of its middle (Euclidean; the slabs test the box grown
+    // on each axis, whose corners reach farther)
+    const glm::dvec3 middle = from + 0.5 * d;
+    const double reach = grow + 0.5 * std::sqrt(glm::dot(d, d));
+    const double reach2 = reach * reach * (1.0 + 1e-12);
     std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
     std::size_t top = 0;
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
@@ -407,7 +413,12 @@ class MeshBvh {
       } else {
         const BvhNodePair& pair = pairs_[index];
         std::array<double, 2> t{};
-        const std::array<bool, 2> hit = slabs.cross(pair, best_t, t);
+        std::array<bool, 2> hit = slabs.cross(pair, best_t, t);
+        if constexpr (Grown) {
+          const std::array<double, 2> d2 = box_distance2(pair, middle);
+          hit[0] = hit[0] && d2[0] <= reach2;
+          hit[1] = hit[1] && d2[1] <= reach2;
+        }
         if (hit[0] && hit[1]) {
           const std::size_t near = t[1] < t[0] ? 1 : 0, far = 1 - near;
           stack[top++] = Pending{pair.index[far], pair.count[far], t[far]};

@@ -134,6 +134,9 @@ struct ProxyTick {
       0};               ///< tree nodes (or grid cells) visited by all the tick's queries, where the shape counts them
   bool blocked{false};  ///< a query ran out of its budget: the proxy stayed
   bool sliding{false};  ///< friction: the proxy slides (else sticks)
+  /// A ball that began overlapping the surface (at the first tick, or after
+  /// reset()): it follows the HIP with no force until it is clear of it.
+  bool embedded{false};
 };
 
 template <Shape S>
@@ -182,6 +185,15 @@ class ProxyConstraint {
       started_ = true;
       proxy_ = goal;
       touching_ = false;
+      embedded_ = overlaps(goal);
+      tick_.embedded = embedded_;
+      visit(goal);
+      return Contact{};
+    }
+    if (embedded_) {  // a ball that began in the surface follows the HIP, free, until it is clear of it
+      proxy_ = goal;
+      embedded_ = overlaps(goal);
+      tick_.embedded = embedded_;
       visit(goal);
       return Contact{};
     }
@@ -310,6 +322,7 @@ class ProxyConstraint {
   void reset() noexcept {
     started_ = false;
     touching_ = false;
+    embedded_ = false;
     sliding_ = false;
     proxy_ = glm::dvec3{0.0};
     held_planes_ = Planes{};
@@ -570,6 +583,16 @@ class ProxyConstraint {
     }
   }
 
+  /// True when a ball of the tool's radius centred at p overlaps the
+  /// surface (some point nearer than the radius); never for a point. Swept
+  /// from there, it would meet what it overlaps at once, wherever it moved:
+  /// such a ball is left free until it is clear (embedded_).
+  [[nodiscard]] bool overlaps(const glm::dvec3& p) noexcept {
+    if (!(config_.radius > 0.0)) return false;
+    const Hit h = nearest(p, config_.radius, Hit{});
+    return h.found() && h.distance < config_.radius * (1.0 - 1e-9);
+  }
+
   /// The shape can sweep a ball (sweep_sphere), for a radius > 0.
   static constexpr bool sweeps_spheres = requires(const S& s, const glm::dvec3& p) { s.sweep_sphere(p, p, 1.0); };
 
@@ -656,6 +679,7 @@ class ProxyConstraint {
   ProxyConfig config_;
   glm::dvec3 proxy_{0.0};
   bool started_{false};
+  bool embedded_{false};  ///< a ball that began overlapping the surface, free until clear (overlaps())
   bool touching_{false};
   bool sliding_{false};
   Planes held_planes_{};  ///< the constraint planes of the last tick that touched

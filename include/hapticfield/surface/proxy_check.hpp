@@ -154,10 +154,11 @@ class MeshChecker {
   /// For a ball of radius r whose centre moves from a to b: the smallest
   /// distance [m], over points every r / 8 along the move, to a triangle
   /// whose reach (r) the ball entered from outside and from the front, or
-  /// infinity when it entered none. Faces are one-sided: a ball that starts
-  /// within r of a triangle, or first comes within r of it behind its plane
-  /// over its inside (from inside the solid, or behind an open or
-  /// overlapping part), is not held to it.
+  /// infinity when it entered none. Triangles are one-sided, as the ball's
+  /// sweep is (ball_sweep.hpp): a ball that starts within r of a triangle,
+  /// or first comes within r of it behind its plane or crossing it (from
+  /// inside the solid, or behind an open or overlapping part), is not held
+  /// to it.
   [[nodiscard]] double entered(const glm::dvec3& a, const glm::dvec3& b, double r) const noexcept {
     double best = std::numeric_limits<double>::infinity();
     if (triangles_.empty() || !is_finite(a) || !is_finite(b)) return best;
@@ -169,7 +170,10 @@ class MeshChecker {
         const glm::dvec3 x = a + (static_cast<double>(w) / samples) * (b - a);
         const double d = two_sided(f, x);
         if (!(d < clear)) continue;
-        if (std::isfinite(one_sided(f, x))) best = std::fmin(best, d);  // from the front (or at an edge)
+        // from the front: the centre in front of the plane on both sides of
+        // the entry (the last sample outside and the first inside)
+        const glm::dvec3 before = a + (static_cast<double>(w - 1) / samples) * (b - a);
+        if (glm::dot(x - f.a, f.n) >= 0.0 && glm::dot(before - f.a, f.n) >= 0.0) best = std::fmin(best, d);
         return;
       }
     });
