@@ -9,6 +9,7 @@
 #include "hapticfield/kernels.hpp"
 #include "hapticfield/normals.hpp"
 #include "hapticfield/offline.hpp"
+#include "hapticfield/physics.hpp"
 #include "hapticfield/protocol.hpp"
 #include "hapticfield/servo.hpp"
 #include "hapticfield/simulation.hpp"
