@@ -451,6 +451,7 @@ TEST_CASE("a stroke over a painted friction mask: the mask and the felt forces d
 
 #ifdef HAPTICFIELD_TEST_HAS_IO
 #include "hapticfield/io/gltf.hpp"
+#include "hapticfield/io/obj.hpp"
 #include "hapticfield/material/model_texture.hpp"
 
 namespace {
@@ -534,6 +535,52 @@ TEST_CASE("a model's base-colour texture is felt where it is drawn, at the size 
   io::LoadedMesh garbage = sheet_with_texture(picture);
   garbage.base_colour_textures = {{1, 2, 3, 4, 5}};
   CHECK_THROWS_WITH(textured_model(garbage), Catch::Contains("not a picture OpenCV can decode"));
+}
+
+TEST_CASE("an OBJ's map_Kd is its base-colour texture; a missing one is a warning, then one clear error") {
+  const std::filesystem::path dir = std::filesystem::path(HAPTICFIELD_TEST_TMP) / "material_obj";
+  std::filesystem::create_directories(dir);
+  cv::Mat picture(32, 48, CV_8UC3, cv::Scalar(255, 255, 255));
+  picture(cv::Rect(24, 0, 24, 32)).setTo(cv::Scalar(0, 0, 0));
+  REQUIRE(cv::imwrite((dir / "painted.png").string(), picture));
+  const auto write_text = [](const std::filesystem::path& path, const std::string& text) {
+    std::FILE* f = std::fopen(path.string().c_str(), "wb");
+    REQUIRE(f != nullptr);
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  };
+  const std::string quad =
+      "v -0.1 -0.1 0\nv 0.1 -0.1 0\nv 0.1 0.1 0\nv -0.1 0.1 0\n"
+      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+  write_text(dir / "sheet.mtl", "newmtl painted\nmap_Kd painted.png\n");
+  write_text(dir / "sheet.obj", "mtllib sheet.mtl\n" + quad + "usemtl painted\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
+  const io::LoadedMesh loaded = io::load_obj((dir / "sheet.obj").string());
+  REQUIRE(loaded.base_colour_textures.size() == loaded.material_names.size());
+  const cv::Mat read = base_colour_picture(loaded);
+  CHECK(read.cols == 48);
+  CHECK(read.rows == 32);
+  CHECK_THAT(metres_per_uv(loaded.mesh), WithinRel(0.2, 1e-12));
+  ModelTextureConfig config;
+  config.tangible.size = 5;
+  auto model = textured_model(loaded, config);
+  (void)model.force(probe_at({-0.05, 0.0, 0.003}));
+  double peak = 0.0, peak_x = 0.0;
+  for (int tick = 0; tick < 1000; ++tick) {  // the drawn edge is at u = 0.5, x = 0
+    const glm::dvec3 at{-0.05 + 1e-4 * tick, 0.0, -0.001};
+    const glm::dvec3 f = model.force(probe_at(at, {0.1, 0.0, 0.0}));
+    if (std::fabs(f.x) > peak) {
+      peak = std::fabs(f.x);
+      peak_x = at.x;
+    }
+  }
+  CHECK(peak > 0.1);
+  CHECK(std::fabs(peak_x) < 2.0 * 0.2 / 48.0);
+
+  write_text(dir / "lost.mtl", "newmtl painted\nmap_Kd nowhere.png\n");
+  write_text(dir / "lost.obj", "mtllib lost.mtl\n" + quad + "usemtl painted\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
+  const io::LoadedMesh lost = io::load_obj((dir / "lost.obj").string());
+  CHECK(lost.has_warning(io::MeshWarningKind::reader));
+  CHECK_THROWS_WITH(textured_model(lost), Catch::Contains("has no base-colour texture"));
 }
 
 TEST_CASE("the Duck (glTF, embedded base-colour texture) is felt with its texture, without allocating") {

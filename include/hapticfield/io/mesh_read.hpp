@@ -73,7 +73,8 @@ struct LoadedMesh {
   std::vector<MeshWarning> warnings;        ///< what was accepted but may surprise
   /// Per entry of material_names: its base-colour texture as the file holds
   /// it, encoded (PNG, JPEG; glTF's baseColorTexture, embedded or beside
-  /// the file), or empty when it has none. Decode with cv::imdecode
+  /// the file; an OBJ's map_Kd, read only from the OBJ's folder), or empty
+  /// when it has none or its file is missing (a warning). Decode with cv::imdecode
   /// (material/model_texture.hpp).
   std::vector<std::vector<unsigned char>> base_colour_textures;
 

@@ -452,10 +452,29 @@ inline void check_obj_numbers(std::string_view text, const std::string& name) {
                                                               std::to_string(corners.size()) +
                                                               " vertices have no texture coordinate: (0, 0) given"});
   if (!materials.empty()) {
-    for (const tinyobj::material_t& m : materials)
+    for (const tinyobj::material_t& m : materials) {
       out.material_names.push_back(m.name);
+      out.base_colour_textures.emplace_back();  // map_Kd, read only from the OBJ's folder
+      if (m.diffuse_texname.empty() || material_dir.empty()) continue;
+      const std::string path = path_inside(material_dir, m.diffuse_texname);
+      if (path.empty()) {
+        out.warnings.push_back(
+            {MeshWarningKind::reader, "texture '" + m.diffuse_texname + "' is not inside the OBJ's folder: not read"});
+        continue;
+      }
+      try {
+        const std::string bytes = read_file(path, config.max_file_bytes);
+        out.base_colour_textures.back().assign(bytes.begin(), bytes.end());
+      } catch (const FileError& e) {
+        out.warnings.push_back(
+            {MeshWarningKind::reader, std::string(e.what()) + ": texture of material '" + m.name + "' not read"});
+      }
+    }
     const auto fallback = static_cast<std::uint32_t>(materials.size());
-    if (any_default_material) out.material_names.emplace_back("(default)");
+    if (any_default_material) {
+      out.material_names.emplace_back("(default)");
+      out.base_colour_textures.emplace_back();
+    }
     mesh.materials.reserve(face_material.size());
     for (const int id : face_material)
       mesh.materials.push_back(id < 0 ? fallback : static_cast<std::uint32_t>(id));
