@@ -7,6 +7,7 @@
 #include "hapticfield/device.hpp"
 #include "hapticfield/image.hpp"
 #include "hapticfield/kernels.hpp"
+#include "hapticfield/material.hpp"
 #include "hapticfield/normals.hpp"
 #include "hapticfield/offline.hpp"
 #include "hapticfield/physics.hpp"
