@@ -4,6 +4,7 @@
 #                         compiled with `pkg-config --cflags --libs hapticfield`, and the tools
 #                         installed in bin/ (TOOLS=ON) run from there
 #   MODE=add_subdirectory the consumer adds the source tree directly
+#   HAS_mujoco, HAS_falcon_usb  the build tree has that part: its consumer must be built and run
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
 
@@ -36,6 +37,13 @@ if(EXISTS "${WORK_DIR}/build/consumer_io")
   file(MAKE_DIRECTORY "${WORK_DIR}/meshes")
   run("${WORK_DIR}/build/consumer_io" "${WORK_DIR}/meshes")
 endif()
+foreach(part mujoco falcon_usb)
+  if(EXISTS "${WORK_DIR}/build/consumer_${part}")
+    run("${WORK_DIR}/build/consumer_${part}")
+  elseif(HAS_${part})
+    message(FATAL_ERROR "the build tree has hapticfield::${part}, the consumer did not find it")
+  endif()
+endforeach()
 if(MODE STREQUAL "find_package")
   # The pkg-config file names the headers where the tree now is: a program built with its flags alone.
   file(GLOB pc "${WORK_DIR}/moved/*/pkgconfig/hapticfield.pc" "${WORK_DIR}/moved/*/*/pkgconfig/hapticfield.pc")

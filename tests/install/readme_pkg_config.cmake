@@ -1,7 +1,8 @@
 # The README's program ("A field in a loop") built through pkg-config alone from an installed prefix
 # (moved after installing), with -Wall -Wextra -Werror: the dependencies' headers come as system
-# headers (-isystem), and only the libraries it uses are linked (no videoio, hidapi, ALSA, libsndfile,
-# tinygltf or tinyobjloader). Then it runs on the example picture.
+# headers (-isystem), and only the libraries it uses are linked (no videoio, hidapi, libusb, ALSA, libsndfile,
+# tinygltf, tinyobjloader or MuJoCo). Then it runs on the example picture; the mujoco and falcon-usb parts
+# build and run their consumers with their flags alone.
 #   -DBUILD_DIR= -DWORK_DIR= -DSOURCE_DIR= -DCXX= -DPKG_CONFIG=
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
@@ -44,7 +45,7 @@ run(COMMAND "${CXX}" -Wall -Wextra -Werror -O1 readme_program.cpp ${flags} -o re
 find_program(READELF NAMES readelf)
 if(READELF)
   run(COMMAND "${READELF}" -d readme_program OUT dynamic)
-  foreach(other opencv_videoio opencv_highgui opencv_dnn hidapi asound sndfile tinygltf tinyobjloader)
+  foreach(other opencv_videoio opencv_highgui opencv_dnn hidapi usb-1.0 asound sndfile tinygltf tinyobjloader mujoco)
     if(dynamic MATCHES "lib${other}")
       message(FATAL_ERROR "the README's program links lib${other}, which it does not use:\n${dynamic}")
     endif()
@@ -52,12 +53,26 @@ if(READELF)
 endif()
 
 # every part's file gives flags that compile its own header
-foreach(part IN ITEMS core video hid vibration-alsa vibration-wav gltf obj io)
+foreach(part IN ITEMS core video hid falcon-usb vibration-alsa vibration-wav gltf obj hjif mujoco io)
   if(EXISTS "${pc_dir}/hapticfield-${part}.pc")
     run(COMMAND "${PKG_CONFIG}" --cflags --libs hapticfield-${part} OUT part_flags)
     if(NOT part_flags MATCHES "-I[^ ]*/moved/")
       message(FATAL_ERROR "hapticfield-${part}.pc does not follow the moved prefix: ${part_flags}")
     endif()
+  endif()
+endforeach()
+
+# the simulator bridge and the Falcon's USB link: a program built and run with their flags alone
+foreach(part IN ITEMS mujoco falcon-usb)
+  string(REPLACE "-" "_" program "consumer_${part}")
+  if(EXISTS "${pc_dir}/hapticfield-${part}.pc")
+    run(COMMAND "${PKG_CONFIG}" --cflags --libs hapticfield-${part} OUT part_flags)
+    string(STRIP "${part_flags}" part_flags)
+    message(STATUS "pkg-config --cflags --libs hapticfield-${part}: ${part_flags}")
+    separate_arguments(part_flags UNIX_COMMAND "${part_flags}")
+    run(COMMAND "${CXX}" -Wall -Wextra -Werror -O1 "${SOURCE_DIR}/tests/consumer/${program}.cpp" ${part_flags}
+                -o ${program})
+    run(COMMAND "${WORK_DIR}/${program}")
   endif()
 endforeach()
 
