@@ -30,6 +30,7 @@ const char* const usage_text =
     "  --wav OUT.wav   32-bit float WAV; a header line on stderr names each channel's perception and modality\n"
     "  --info          print the channels, their bands and the notes on stdout; write nothing\n"
     "  --rate HZ       output rate [Hz], a whole number in [100, 384000] (default 8000, the reference's)\n"
+    "  -h, --help      this text\n"
     "Rendered: Curve (all curve types), VectorialWave (all base signals, AM/FM keyframes, chirps),\n"
     "Transient, WaveletWave (SPIHT blocks); docs/hjif.md lists every field.\n"
     "Limits: 64 MiB per file, nesting 32 levels, 8,000,000 JSON values, 4,000,000 elements per array,\n"
