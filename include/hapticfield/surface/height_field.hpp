@@ -132,40 +132,13 @@ class HeightFieldShape {
     const glm::dvec3 d = to - from;
     if (!is_finite(from) || !is_finite(d)) return best;
     const Data& g = *data_;
-    const glm::dvec3 inv{1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
     double best_t = 1.0;
     std::uint32_t best_cell = no_primitive;
     glm::dvec2 best_st{0.0};
-    std::array<NodeRef, stack_size> stack{};
-    std::size_t top = 0;
-    stack[top++] = smallest_node(g, glm::min(from, to), glm::max(from, to));
-    bool complete = true;
-    while (top > 0) {
-      const NodeRef node = stack[--top];
-      double entry = 0.0, exit = 0.0;
-      if (!segment_box(box_of(g, node), from, inv, best_t, entry, exit)) continue;
-      if (++work.nodes > config_.max_nodes) {
-        complete = false;
-        break;
-      }
-      if (node.level == 0) {
-        ++work.primitives;
-        intersect_cell(g, node.i, node.j, from, d, entry, exit, best_t, best_cell, best_st);
-        continue;
-      }
-      // children in order of entry, nearest on top of the stack
-      Kids kids{};
-      int count = 0;
-      for (std::uint32_t dj = 0; dj < 2; ++dj)
-        for (std::uint32_t di = 0; di < 2; ++di) {
-          const NodeRef child{node.level - 1, 2 * node.i + di, 2 * node.j + dj};
-          if (!exists(g, child)) continue;
-          double t0 = 0.0, t1 = 0.0;
-          if (!segment_box(box_of(g, child), from, inv, best_t, t0, t1)) continue;
-          kids[static_cast<std::size_t>(count++)] = {t0, child};
-        }
-      push_nearest_last(kids, count, stack, top);
-    }
+    const bool complete =
+        traverse(from, to, 0.0, best_t, work, [&](std::uint32_t i, std::uint32_t j, double entry, double exit) {
+          intersect_cell(g, i, j, from, d, entry, exit, best_t, best_cell, best_st);
+        });
     if (stats) *stats = work;
     if (!complete) {
       best.complete = false;
@@ -196,50 +169,17 @@ class HeightFieldShape {
     if (!(radius > 0.0) || !std::isfinite(radius) || !is_finite(from) || !is_finite(d)) return best;
     const Data& g = *data_;
     if (below_triangles(g, from)) return best;
-    const glm::dvec3 inv{1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
-    const glm::dvec3 grow{radius};
     double best_t = 1.0;
     std::uint32_t best_cell = no_primitive;
     glm::dvec3 best_contact{0.0};
-    std::array<NodeRef, stack_size> stack{};
-    std::size_t top = 0;
-    stack[top++] = smallest_node(g, glm::min(from, to) - grow, glm::max(from, to) + grow);
-    bool complete = true;
-    const auto grown = [&](const NodeRef& node) {
-      Box b = box_of(g, node);
-      b.lo -= grow;
-      b.hi += grow;
-      return b;
-    };
-    while (top > 0) {
-      const NodeRef node = stack[--top];
-      double entry = 0.0, exit = 0.0;
-      if (!segment_box(grown(node), from, inv, best_t, entry, exit)) continue;
-      if (++work.nodes > config_.max_nodes) {
-        complete = false;
-        break;
-      }
-      if (node.level == 0) {
-        ++work.primitives;
-        for (int half = 0; half < 2; ++half) {
-          const Triangle tri = cell_triangle(g, node.i, node.j, half);
-          if (detail::sweep_ball_triangle(tri.a, tri.e1, tri.e2, from, d, radius, best_t, best_contact))
-            best_cell = node.j * (g.width - 1) + node.i;
-        }
-        continue;
-      }
-      Kids kids{};
-      int count = 0;
-      for (std::uint32_t dj = 0; dj < 2; ++dj)
-        for (std::uint32_t di = 0; di < 2; ++di) {
-          const NodeRef child{node.level - 1, 2 * node.i + di, 2 * node.j + dj};
-          if (!exists(g, child)) continue;
-          double t0 = 0.0, t1 = 0.0;
-          if (!segment_box(grown(child), from, inv, best_t, t0, t1)) continue;
-          kids[static_cast<std::size_t>(count++)] = {t0, child};
-        }
-      push_nearest_last(kids, count, stack, top);
-    }
+    const bool complete =
+        traverse(from, to, radius, best_t, work, [&](std::uint32_t i, std::uint32_t j, double, double) {
+          for (int half = 0; half < 2; ++half) {
+            const Triangle tri = cell_triangle(g, i, j, half);
+            if (detail::sweep_ball_triangle(tri.a, tri.e1, tri.e2, from, d, radius, best_t, best_contact))
+              best_cell = j * (g.width - 1) + i;
+          }
+        });
     if (stats) *stats = work;
     if (!complete) {
       best.complete = false;
@@ -485,6 +425,53 @@ class HeightFieldShape {
       b.hi.z = r[1];
     }
     return b;
+  }
+
+  /// The segment queries' traversal (first_hit, sweep_sphere): the nodes
+  /// whose boxes, grown by `grow` [m] on every side, the segment from -> to
+  /// meets before best_t, nearest first, within the node budget; each cell
+  /// goes to cell(i, j, entry, exit) with the segment's parameters in its
+  /// box, which may lower best_t. False when the budget ran out.
+  template <class Cell>
+  bool traverse(const glm::dvec3& from, const glm::dvec3& to, double grow, const double& best_t, QueryStats& work,
+                Cell&& cell) const noexcept {
+    const Data& g = *data_;
+    const glm::dvec3 d = to - from;
+    const glm::dvec3 inv{1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
+    const glm::dvec3 margin{grow};
+    const auto box = [&](const NodeRef& node) {
+      Box b = box_of(g, node);
+      b.lo -= margin;
+      b.hi += margin;
+      return b;
+    };
+    std::array<NodeRef, stack_size> stack{};
+    std::size_t top = 0;
+    stack[top++] = smallest_node(g, glm::min(from, to) - margin, glm::max(from, to) + margin);
+    while (top > 0) {
+      const NodeRef node = stack[--top];
+      double entry = 0.0, exit = 0.0;
+      if (!segment_box(box(node), from, inv, best_t, entry, exit)) continue;
+      if (++work.nodes > config_.max_nodes) return false;
+      if (node.level == 0) {
+        ++work.primitives;
+        cell(node.i, node.j, entry, exit);
+        continue;
+      }
+      // children in order of entry, nearest on top of the stack
+      Kids kids{};
+      int count = 0;
+      for (std::uint32_t dj = 0; dj < 2; ++dj)
+        for (std::uint32_t di = 0; di < 2; ++di) {
+          const NodeRef child{node.level - 1, 2 * node.i + di, 2 * node.j + dj};
+          if (!exists(g, child)) continue;
+          double t0 = 0.0, t1 = 0.0;
+          if (!segment_box(box(child), from, inv, best_t, t0, t1)) continue;
+          kids[static_cast<std::size_t>(count++)] = {t0, child};
+        }
+      push_nearest_last(kids, count, stack, top);
+    }
+    return true;
   }
 
   /// One flat half of cell (i, j) as a ball sees it: half 0 is (i, j),
