@@ -53,6 +53,12 @@ const std::map<std::string, std::string> tools = {
 #ifdef HAPTICFIELD_TOOL_TANGIBLE_VIDEO
     {"tangible_video", HAPTICFIELD_TOOL_TANGIBLE_VIDEO},
 #endif
+#ifdef HAPTICFIELD_TOOL_HJIF_RENDER
+    {"hjif_render", HAPTICFIELD_TOOL_HJIF_RENDER},
+#endif
+#ifdef HAPTICFIELD_TOOL_FEEL_MUJOCO
+    {"feel_mujoco", HAPTICFIELD_TOOL_FEEL_MUJOCO},
+#endif
 };
 
 constexpr int ok = 0;
@@ -820,5 +826,58 @@ TEST_CASE("--shape: bad shapes exit 1, bad shape options exit 2, before any wind
   for (const Case& c : cases)
     check_error(c);
   CHECK_FALSE(fs::exists(shot));  // no case drew anything
+}
+#endif
+
+#ifdef HAPTICFIELD_TOOL_HJIF_RENDER
+TEST_CASE("hjif_render: bad command lines and numbers exit 2, bad files exit 1") {
+  const BadFiles b = make_bad_files();
+  const std::string wav = in_tmp("hjif_render.wav");
+  std::vector<Case> cases = {
+      {"hjif_render", {}, usage, "FILE.hjif is required"},
+      {"hjif_render", {"x.hjif"}, usage, "--wav OUT.wav or --info is required"},
+      {"hjif_render", {"x.hjif", "--info", "--bogus"}, usage, "unknown option '--bogus'"},
+      {"hjif_render", {"x.hjif", "--wav"}, usage, "--wav needs a value"},
+      {"hjif_render", {"x.hjif", "--info", "--rate"}, usage, "--rate needs a value"},
+      {"hjif_render", {"x.hjif", "y.hjif", "--info"}, usage},
+      {"hjif_render", {"x.hjif", "--info", "--rate", "8000.5"}, usage, "whole number"},
+      {"hjif_render", {"x.hjif", "--info", "--rate", "99"}, usage, "--rate"},
+      {"hjif_render", {"x.hjif", "--info", "--rate", "384001"}, usage, "--rate"},
+  };
+  add_numeric(cases, "hjif_render", {"x.hjif", "--info"}, "--rate");
+  // the file's faults come after the command line's: one line naming the file
+  for (const std::string& file : {b.missing, b.empty, b.folder, b.text_png}) {
+    cases.push_back({"hjif_render", {file, "--info"}, bad_input, file});
+    cases.push_back({"hjif_render", {file, "--wav", wav}, bad_input, file});
+  }
+  for (const Case& c : cases)
+    check_error(c);
+  CHECK_FALSE(fs::exists(wav));  // nothing written from a bad file
+}
+#endif
+
+#ifdef HAPTICFIELD_TOOL_FEEL_MUJOCO
+TEST_CASE("feel_mujoco: bad command lines and numbers exit 2, bad scenes exit 1") {
+  const BadFiles b = make_bad_files();
+  const std::string scene = (fs::path(HAPTICFIELD_SOURCE_DIR) / "examples/data/mujoco_ball.xml").string();
+  // the command line is read before the scene: a bad number is named even with no scene there
+  std::vector<Case> cases = {
+      {"feel_mujoco", {}, usage, "give a scene"},
+      {"feel_mujoco", {scene, "--bogus"}, usage, "unknown option '--bogus'"},
+      {"feel_mujoco", {scene, "--seconds"}, usage, "--seconds needs a value"},
+      {"feel_mujoco", {scene, "--trace"}, usage, "--trace needs a value"},
+      {"feel_mujoco", {scene, scene}, usage},
+      {"feel_mujoco", {scene, "--mode", "glue"}, usage, "glue"},
+      {"feel_mujoco", {scene, "--view", "0,90"}, usage, "pitch"},
+  };
+  add_numeric(cases, "feel_mujoco", {"no_scene.xml"}, "--seconds");
+  add_numeric(cases, "feel_mujoco", {"no_scene.xml"}, "--rate");
+  add_numeric(cases, "feel_mujoco", {"no_scene.xml"}, "--stiffness");
+  add_numeric(cases, "feel_mujoco", {"no_scene.xml"}, "--speed");
+  add_numeric(cases, "feel_mujoco", {"no_scene.xml"}, "--distance");
+  for (const std::string& file : {b.missing, b.empty, b.folder, b.text_png})
+    cases.push_back({"feel_mujoco", {file, "--seconds", "0.01"}, bad_input, file});
+  for (const Case& c : cases)
+    check_error(c);
 }
 #endif
