@@ -1,6 +1,7 @@
 # The installed tools stand alone: installs into a temporary prefix, moves the prefix elsewhere, then
-# runs servo_demo on its default picture (a short virtual-clock run) and servo_demo and tangible_image
-# with --plots/--maps, checking that the picture and the plot script are the prefix's
+# asks every tool in bin/ for --help, runs servo_demo on its default picture (a short virtual-clock
+# run) and servo_demo and tangible_image with --plots/--maps, checking that the picture and the plot
+# script are the prefix's
 # (share/hapticfield/), and that without share/hapticfield/ they are missing rather than read from the
 # source tree.
 #   -DBUILD_DIR= -DWORK_DIR= -DPYTHON=(an interpreter, for the matplotlib run when it has matplotlib)
@@ -32,6 +33,27 @@ foreach(file data/coffee.png data/README.md hapticfield_plots.py)
     message(FATAL_ERROR "share/hapticfield/${file} was not installed")
   endif()
 endforeach()
+
+# Every installed tool answers --help from the moved prefix (usage on stdout, exit 0); the MuJoCo
+# scenes feel_mujoco names come with it.
+file(GLOB installed "${bin}/*")
+if(NOT installed)
+  message(FATAL_ERROR "no tool was installed in bin/")
+endif()
+foreach(tool IN LISTS installed)
+  get_filename_component(name "${tool}" NAME)
+  run(COMMAND "${tool}" --help OUT out)
+  if(NOT out MATCHES "^usage: ${name}")
+    message(FATAL_ERROR "the installed ${name} --help did not print its usage:\n${out}")
+  endif()
+endforeach()
+if(EXISTS "${bin}/feel_mujoco")
+  foreach(file data/mujoco_table.xml data/mujoco_door.xml data/mujoco_ball.xml)
+    if(NOT EXISTS "${share}/${file}")
+      message(FATAL_ERROR "share/hapticfield/${file} was not installed with feel_mujoco")
+    endif()
+  endforeach()
+endif()
 
 # The default picture, from the prefix: a short run on the virtual clock.
 run(COMMAND "${bin}/servo_demo" --clock virtual --seconds 0.2 OUT out)
