@@ -302,7 +302,7 @@ TEST_CASE("list_devices: one line per family, present or why not; the simulated 
   REQUIRE(all.size() == device_families.size() + planned_device_families.size());
   for (std::size_t i = 0; i < device_families.size(); ++i) {
     CAPTURE(all[i].line);
-    CHECK(all[i].family == device_families[i].name);
+    CHECK(all[i].family == std::string(device_families[i].name));
     CHECK(all[i].line.rfind(std::string(device_families[i].syntax) + ": ", 0) == 0);
     CHECK(all[i].line.find(all[i].present ? ": present: " : ": not present: ") != std::string::npos);
     CHECK(all[i].line.find('\n') == std::string::npos);
