@@ -162,8 +162,7 @@ class Posed {
   }
   { return world(shape_.first_hit(local(from), local(to), stats)); }
 
-  /// The point of one primitive nearest to p, where the inner shape answers
-  /// for one primitive.
+  /// A ball of `radius` [m] swept from -> to, where the inner shape sweeps one.
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius) const noexcept requires
       requires(const S& s) {
     s.sweep_sphere(from, to, radius);
@@ -175,6 +174,8 @@ class Posed {
   }
   { return world(shape_.sweep_sphere(local(from), local(to), radius, stats)); }
 
+  /// The point of one primitive nearest to p, where the inner shape answers
+  /// for one primitive.
   [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p,
                                  double max_distance) const noexcept requires requires(const S& s) {
     s.on_primitive(primitive, p, max_distance);
