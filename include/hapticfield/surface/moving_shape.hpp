@@ -209,15 +209,7 @@ class Moving {
 
  private:
   [[nodiscard]] glm::dvec3 local(const glm::dvec3& p) const noexcept { return current_.point_to_local(p); }
-  [[nodiscard]] Hit world(Hit h) const noexcept {
-    if (!h.found()) return h;
-    h.point = current_.point_to_world(h.point);
-    h.normal = current_.vector_to_world(h.normal);
-    h.face_normal = current_.vector_to_world(h.face_normal);
-    h.tangent = current_.vector_to_world(h.tangent);
-    h.bitangent = current_.vector_to_world(h.bitangent);
-    return h;
-  }
+  [[nodiscard]] Hit world(const Hit& h) const noexcept { return current_.hit_to_world(h); }
 
   S shape_;
   std::shared_ptr<PoseFeed> feed_;

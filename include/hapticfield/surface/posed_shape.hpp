@@ -126,6 +126,17 @@ struct Pose {
   [[nodiscard]] glm::dvec3 vector_to_world(const glm::dvec3& v) const noexcept { return rotation * v; }
   /// A direction of the world frame in the shape's frame.
   [[nodiscard]] glm::dvec3 vector_to_local(const glm::dvec3& v) const noexcept { return v * rotation; }
+  /// A hit of a shape placed by this pose, in the world frame (nothing
+  /// found: as it is, so a blocked segment stays blocked).
+  [[nodiscard]] Hit hit_to_world(Hit h) const noexcept {
+    if (!h.found()) return h;
+    h.point = point_to_world(h.point);
+    h.normal = vector_to_world(h.normal);
+    h.face_normal = vector_to_world(h.face_normal);
+    h.tangent = vector_to_world(h.tangent);
+    h.bitangent = vector_to_world(h.bitangent);
+    return h;
+  }
   /// True for the identity (no rotation, no translation).
   [[nodiscard]] bool is_identity() const noexcept {
     return rotation == glm::dmat3{1.0} && translation == glm::dvec3{0.0};
@@ -188,17 +199,8 @@ class Posed {
  private:
   /// A query point in the shape's frame.
   [[nodiscard]] glm::dvec3 local(const glm::dvec3& p) const noexcept { return pose_.point_to_local(p); }
-  /// A hit of the inner shape in the world frame (nothing found: as it is,
-  /// so a blocked segment stays blocked).
-  [[nodiscard]] Hit world(Hit h) const noexcept {
-    if (!h.found()) return h;
-    h.point = pose_.point_to_world(h.point);
-    h.normal = pose_.vector_to_world(h.normal);
-    h.face_normal = pose_.vector_to_world(h.face_normal);
-    h.tangent = pose_.vector_to_world(h.tangent);
-    h.bitangent = pose_.vector_to_world(h.bitangent);
-    return h;
-  }
+  /// A hit of the inner shape in the world frame.
+  [[nodiscard]] Hit world(const Hit& h) const noexcept { return pose_.hit_to_world(h); }
 
   S shape_;
   Pose pose_;
