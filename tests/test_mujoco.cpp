@@ -58,7 +58,9 @@ struct Rig {
       : bridge(path, config),
         field(bridge.field()),
         plant(arm_config(path_of_hand)),
-        ratio(static_cast<int>(std::lround(1.0 / (config.rate * dt)))) {}
+        ratio(static_cast<int>(std::lround(1.0 / (config.rate * dt)))) {
+    if (config.lockstep) bridge.start();  // the simulator's own thread, stepped by the ticks' time
+  }
 
   static SimulatedArmConfig arm_config(const HandPath& path) {
     SimulatedArmConfig c;
@@ -81,7 +83,7 @@ struct Rig {
     // the force is held over the tick: the work it did on the HIP is exact
     into_scene -= glm::dot(f, plant.position() - p0);
     ++tick;
-    if (simulate && tick % static_cast<std::uint64_t>(ratio) == 0) {
+    if (simulate && !bridge.config().lockstep && tick % static_cast<std::uint64_t>(ratio) == 0) {
       (void)bridge.step_once();
       if (!observing) {  // from the first step on: the scene and the tool have met the HIP
         observing = true;
@@ -220,6 +222,130 @@ TEST_CASE("momentum the hand gives is momentum the ball gains", "[mujoco]") {
     CHECK(glm::length(gained - given) <= 1e-9 + 1e-9 * glm::length(given));
     CHECK(ball.velocity.x > 0.0);
   }
+}
+
+namespace {
+/// One run on the virtual clock: every tick's force and the bodies at the end.
+struct LockstepRun {
+  std::vector<glm::dvec3> forces;
+  BodyState box, ball;
+  double hinge = 0.0;
+  std::uint64_t steps = 0;
+};
+LockstepRun table_run(bool lockstep) {
+  MujocoBridgeConfig c = config_at(100.0);
+  c.plane_damping = 5.0;  // T k / 2 at 100 Hz
+  c.lockstep = lockstep;
+  // feel_mujoco's push: the box along the table
+  Rig rig(scene_file("mujoco_table.xml"), c, HandPath::line(glm::dvec3{0.0}, glm::dvec3{-0.07, -0.02, 0.01}, 0.05));
+  LockstepRun out;
+  for (int i = 0; i < 3000; ++i) {
+    rig.step();
+    out.forces.push_back(rig.last_force);
+  }
+  rig.bridge.stop();  // in lockstep: takes the steps due first
+  out.box = rig.bridge.body("box");
+  out.ball = rig.bridge.body("ball");
+  out.hinge = rig.bridge.joint_position("hinge");
+  out.steps = rig.bridge.events().steps;
+  return out;
+}
+bool same(const BodyState& a, const BodyState& b) {
+  return a.position == b.position && a.velocity == b.velocity;
+}
+}  // namespace
+
+TEST_CASE("lockstep: the same run run to run, and the same as stepping by hand", "[mujoco]") {
+  const LockstepRun by_hand = table_run(false);
+  const LockstepRun first = table_run(true);
+  const LockstepRun second = table_run(true);
+  REQUIRE(by_hand.steps == 300);  // 3 s at 100 Hz
+  CHECK(first.steps == 300);
+  CHECK(second.steps == 300);
+  double peak = 0.0;
+  for (const glm::dvec3& f : by_hand.forces)
+    peak = std::max(peak, glm::length(f));
+  CHECK(peak > 0.1);  // the hand met the scene [N]
+  // bitwise: the same steps with the same samples, whatever the threads' speeds
+  CHECK(first.forces == by_hand.forces);
+  CHECK(second.forces == first.forces);
+  CHECK(same(first.box, by_hand.box));
+  CHECK(same(second.box, first.box));
+  CHECK(same(first.ball, by_hand.ball));
+  CHECK(first.hinge == by_hand.hinge);
+}
+
+TEST_CASE("lockstep keeps the bridge's laws: momentum given is momentum gained, the door turns about its hinge",
+          "[mujoco]") {
+  const std::uint32_t seed = test::run_seed();
+  INFO("seed " << seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> speed(0.05, 0.3), sideways(-0.01, 0.01);
+  for (int trial = 0; trial < 6; ++trial) {
+    const CouplingMode mode = trial % 2 ? CouplingMode::virtual_coupling : CouplingMode::local_model;
+    const double rate = trial < 3 ? 100.0 : 500.0;
+    MujocoBridgeConfig c = config_at(rate, mode);
+    c.plane_damping = c.plane_stiffness / rate / 2.0;
+    c.coupling.damping = std::max(c.coupling.damping, c.coupling.stiffness / rate / 2.0);
+    c.lockstep = true;
+    const glm::dvec3 aim{0.08, sideways(rng), sideways(rng)};
+    Rig rig(scene_file("mujoco_ball.xml"), c, HandPath::line(glm::dvec3{0.0}, aim, speed(rng)));
+    for (int i = 0; i < rig.ratio; ++i)
+      rig.step();
+    rig.bridge.stop();  // inspected between steps; started again where the servo's time is
+    const BodyState tool0 = rig.bridge.body("tool");
+    const BodyState ball0 = rig.bridge.body("ball");
+    const glm::dvec3 impulse0 = rig.hand_impulse;
+    rig.bridge.start();
+    rig.run(0.6);
+    rig.bridge.stop();
+    INFO("trial " << trial << (mode == CouplingMode::local_model ? " local" : " coupling") << " at " << rate << " Hz");
+    const BodyState ball = rig.bridge.body("ball");
+    glm::dvec3 gained = ball.mass * (ball.velocity - ball0.velocity);
+    if (mode == CouplingMode::virtual_coupling) {
+      const BodyState tool = rig.bridge.body("tool");
+      gained += tool.mass * (tool.velocity - tool0.velocity);
+    }
+    const glm::dvec3 given = -(rig.hand_impulse - impulse0);
+    REQUIRE(glm::length(given) > 1e-3);  // [N s]
+    CHECK(glm::length(gained - given) <= 1e-9 + 1e-9 * glm::length(given));
+    CHECK(rig.bridge.events().steps == static_cast<std::uint64_t>(std::lround(0.6 * rate)) + 1);
+  }
+  MujocoBridgeConfig c = config_at(200.0);
+  c.plane_damping = c.plane_stiffness / 200.0 / 2.0;
+  c.lockstep = true;
+  Rig rig(scene_file("mujoco_door.xml"), c,
+          HandPath::line(glm::dvec3{-0.03, 0.0, 0.0}, glm::dvec3{-0.03, 0.0, -0.06}, 0.05));
+  double radius_error = 0.0;
+  for (int i = 0; i < 30; ++i) {
+    rig.run(0.05);
+    rig.bridge.stop();
+    const BodyState door = rig.bridge.body("door");
+    radius_error = std::max(radius_error, std::fabs(std::hypot(door.position.x - 0.05, door.position.z + 0.03) - 0.05));
+    rig.bridge.start();
+  }
+  rig.bridge.stop();
+  CHECK(rig.bridge.joint_position("hinge") < -0.2);  // [rad]
+  CHECK(radius_error < 1e-3);                        // [m]
+  CHECK(rig.bridge.events().steps == 300);           // 1.5 s at 200 Hz
+}
+
+TEST_CASE("lockstep without a servo: the runner waits, and stops at once", "[mujoco]") {
+  MujocoBridgeConfig c = config_at(500.0);
+  c.lockstep = true;
+  MujocoBridge bridge(scene_file("mujoco_ball.xml"), c);
+  bridge.start();
+  CHECK(bridge.lockstep_running());
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  bridge.stop();
+  CHECK_FALSE(bridge.lockstep_running());
+  CHECK(bridge.events().steps == 0);  // no servo time, no step
+  // a field ticking with no runner never waits
+  LocalModelField field = bridge.field();
+  Probe probe;
+  for (int i = 0; i < 10; ++i)
+    (void)field.force(probe);
+  CHECK(field.touching() == 0);
 }
 
 TEST_CASE("energy does not grow over 10 s of pushing at 100 Hz", "[mujoco]") {

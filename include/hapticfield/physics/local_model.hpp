@@ -24,6 +24,14 @@
 /// simulator reads fewer samples than the servo writes. The hand's momentum
 /// lost is the scene's momentum gained, exactly.
 ///
+/// Lockstep (a simulator stepped from the servo's own clock, for loops on a
+/// virtual clock): while LocalModelLink::lockstep is set, each tick first
+/// waits, spinning with yield, until the model of the simulator step its
+/// servo time has made due has come (lockstep_steps_due()): step j is taken
+/// with the HIP and the impulses of servo time j T and rendered from servo
+/// time j T on, whatever either thread's speed. No allocation, no lock; a
+/// real-time loop never sets it.
+///
 /// Faults: a model marked faulty, or one that stops changing for longer
 /// than its stall_time, gives zero force from the next tick on and counts
 /// an event; the force then fades in again over fade_time once the models
@@ -36,6 +44,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <thread>
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
@@ -43,7 +52,7 @@
 #include "hapticfield/core/field.hpp"
 #include "hapticfield/core/probe.hpp"
 #include "hapticfield/core/vector_math.hpp"
-#include "hapticfield/physics/latest_value.hpp"
+#include "hapticfield/rt/latest_value.hpp"
 
 namespace hapticfield {
 
@@ -54,6 +63,13 @@ inline constexpr int local_model_max_planes = 8;
 inline constexpr int local_model_max_bodies = 64;
 /// ContactPlane::body of a plane whose body does not move (the world).
 inline constexpr int static_body = -1;
+
+/// Simulator steps of period T [s] due by servo time t [s] in lockstep:
+/// floor(t / T), rounding up what a sum of servo periods misses by 1e-6 T.
+[[nodiscard]] inline std::uint64_t lockstep_steps_due(double servo_time, double period) noexcept {
+  if (!(servo_time > 0.0) || !(period > 0.0)) return 0;
+  return static_cast<std::uint64_t>(std::floor(servo_time / period + 1e-6));
+}
 
 /// How the hand meets the simulated scene.
 enum class CouplingMode : std::uint8_t {
@@ -73,9 +89,10 @@ struct ContactPlane {
 
 /// What the simulator thread publishes each step (device frame).
 struct LocalModel {
-  std::uint64_t sequence{0};  ///< step count: a model that stops changing is a stalled simulator
-  std::uint32_t scene{0};     ///< changes when the scene changes
-  bool fault{false};          ///< the simulator failed: render nothing
+  std::uint64_t sequence{0};       ///< step count: a model that stops changing is a stalled simulator
+  std::uint32_t scene{0};          ///< changes when the scene changes
+  bool fault{false};               ///< the simulator failed: render nothing
+  std::uint64_t lockstep_step{0};  ///< lockstep: the steps taken, the last one at servo time lockstep_step T
   CouplingMode mode{CouplingMode::local_model};
   double tool_radius{0.0};  ///< r [m]
   double period{0.01};      ///< the simulator's step period [s]
@@ -113,6 +130,8 @@ struct LocalModelLink {
   std::atomic<std::uint64_t> stalls{0};        ///< times the models stopped coming
   std::atomic<std::uint64_t> faults_seen{0};   ///< times a faulty model arrived
   std::atomic<std::uint64_t> zeroed_ticks{0};  ///< ticks that gave zero force for a stall or a fault
+  /// A simulator steps in lockstep with the servo's time: each tick waits for the model of the step due.
+  std::atomic<bool> lockstep{false};
 };
 
 /// The servo side: a HapticField (and ResettableField) over a link. One
@@ -132,8 +151,15 @@ class LocalModelField {
       sample_.valid = true;
     }
     sample_.tick = tick_;
+    const double rendered = sample_.time;  // servo time at the start of this tick [s]
     sample_.time += dt;
     const LocalModel* model = link_->model.latest();
+    // lockstep: the model of the step due at this tick's start, once the simulator has taken it
+    while (model != nullptr && link_->lockstep.load(std::memory_order_acquire) &&
+           model->lockstep_step < lockstep_steps_due(rendered, model->period)) {
+      std::this_thread::yield();
+      model = link_->model.latest();
+    }
     glm::dvec3 total{0.0};
     if (model != nullptr) total = render(*model, probe.position, velocity, dt, finite_position);
     link_->handle.publish(sample_);

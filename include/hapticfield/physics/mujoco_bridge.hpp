@@ -41,6 +41,15 @@
 /// thread. A step that takes longer than its period counts an overrun;
 /// models that stop coming are a stall the field detects by itself. A new
 /// scene (load()) or a cleared fault fades the force in again.
+///
+/// Two runners (start()): real time (the default) steps at the rate on the
+/// wall clock, for a real-time servo loop; lockstep (for a servo loop on a
+/// virtual clock: tests, off-line runs, Python's run_servo) steps on its own
+/// thread when the servo's time reaches the next step's, j T, with the HIP
+/// and impulses of that tick, while the servo's field waits for that step's
+/// model before rendering the next tick (LocalModelLink::lockstep). A run in
+/// lockstep is then the same run to run and machine to machine, and equals
+/// one stepped by hand with step_once() after each tick that reaches j T.
 
 #include <algorithm>
 #include <array>
@@ -94,6 +103,9 @@ struct MujocoBridgeConfig {
   double detect_distance{0.01};    ///< tool-to-surface distance within which planes are published [m]
   double stall_time{0.05};         ///< no model for this long zeroes the force [s]
   double fade_time{0.2};           ///< force fade-in after a scene change or a fault [s]
+  /// start() steps in lockstep with the servo's time (a loop on a virtual
+  /// clock) instead of at the rate on the wall clock.
+  bool lockstep{false};
   /// Called on the simulator thread before each substep, inside the step's
   /// protection (tests inject faults here); must not throw; may be empty.
   std::function<void(const mjModel*, mjData*)> before_step;
@@ -300,17 +312,37 @@ class MujocoBridge {
     sim_time_ += period_;
     events_.steps.fetch_add(1, std::memory_order_relaxed);
     publish_model();
-    if (now() - started > static_cast<std::int64_t>(period_ * 1e9))
+    // in lockstep the wall clock says nothing of the servo's time: no overrun
+    if (!link_.lockstep.load(std::memory_order_relaxed) && now() - started > static_cast<std::int64_t>(period_ * 1e9))
       events_.overruns.fetch_add(1, std::memory_order_relaxed);
     return !faulted_;
   }
 
-  /// Steps on a thread of its own at the rate (absolute deadlines; after an
-  /// overrun the late steps are skipped, not bunched). Does nothing when
+  /// Steps on a thread of its own: in lockstep when config().lockstep (see
+  /// start(bool)), else at the rate in real time. Does nothing when running.
+  void start() { start(config_.lockstep); }
+
+  /// Steps on a thread of its own. Real time (lockstep false): at the rate
+  /// (absolute deadlines; after an overrun the late steps are skipped, not
+  /// bunched). Lockstep: step j when the servo's time (HandleSample::time)
+  /// reaches j T, counted from the servo time at start (no steps to catch
+  /// up), the field waiting for each; for loops on a virtual clock only (a
+  /// real-time loop would wait on a slow simulator). Does nothing when
   /// running.
-  void start() {
+  void start(bool lockstep) {
     if (thread_.joinable()) return;
     stop_requested_.store(false, std::memory_order_release);
+    if (lockstep) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const HandleSample* h = link_.handle.latest();
+        lockstep_step_.store(h != nullptr ? lockstep_steps_due(h->time, period_) : 0, std::memory_order_relaxed);
+        publish_model();  // the step due now is the one taken
+      }
+      link_.lockstep.store(true, std::memory_order_release);
+      thread_ = std::thread([this] { run_lockstep(); });
+      return;
+    }
     thread_ = std::thread([this] {
       using Clock = std::chrono::steady_clock;
       const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(period_ * 1e9));
@@ -325,11 +357,15 @@ class MujocoBridge {
     });
   }
   /// Stops the thread (the field then sees a stall and gives zero force).
+  /// In lockstep, the steps the servo's time has made due are taken first.
   void stop() noexcept {
     stop_requested_.store(true, std::memory_order_release);
     if (thread_.joinable()) thread_.join();
+    link_.lockstep.store(false, std::memory_order_release);
   }
   [[nodiscard]] bool running() const noexcept { return thread_.joinable(); }
+  /// True while the thread steps in lockstep with the servo's time.
+  [[nodiscard]] bool lockstep_running() const noexcept { return link_.lockstep.load(std::memory_order_acquire); }
 
   /// Changes the scene (call from any thread but the servo's): loads it here,
   /// swaps it in between two steps; the field fades its force in again.
@@ -506,6 +542,33 @@ class MujocoBridge {
   }
   using MujocoJump = detail::MujocoJump;
 
+  /// The lockstep runner: steps while the servo's time has made steps due,
+  /// spinning with yield between (then sleeping 0.1 ms once the servo has
+  /// been idle for a while); on stop, the steps due are taken first.
+  void run_lockstep() {
+    int idle = 0;
+    for (;;) {
+      const bool stopping = stop_requested_.load(std::memory_order_acquire);
+      std::uint64_t due = 0;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const HandleSample* h = link_.handle.latest();
+        due = h != nullptr ? lockstep_steps_due(h->time, period_) : 0;
+      }
+      if (due > lockstep_step_.load(std::memory_order_relaxed)) {
+        lockstep_step_.fetch_add(1, std::memory_order_relaxed);
+        (void)step_once();  // with the newest sample: the servo waits for this step's model
+        idle = 0;
+        continue;
+      }
+      if (stopping) return;
+      if (++idle < 10000)
+        std::this_thread::yield();
+      else
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+  }
+
   [[nodiscard]] std::int64_t now() const {
     if (config_.clock) return config_.clock();
     return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
@@ -608,6 +671,7 @@ class MujocoBridge {
     out.sequence = ++sequence_;
     out.scene = scene_id_;
     out.fault = faulted_;
+    out.lockstep_step = lockstep_step_.load(std::memory_order_relaxed);
     out.mode = config_.mode;
     out.tool_radius = s.tool_radius;
     out.period = period_;
@@ -692,6 +756,7 @@ class MujocoBridge {
   } events_;
   std::thread thread_;
   std::atomic<bool> stop_requested_{false};
+  std::atomic<std::uint64_t> lockstep_step_{0};  ///< lockstep: the steps taken (see LocalModel::lockstep_step)
 };
 
 }  // namespace hapticfield
