@@ -12,7 +12,7 @@
 // agreement columns say how much that matters on these paths.
 //
 //   bench_embree [--ticks N] [--max-triangles N]
-#include <hapticfield/offline/tick_budget.hpp>
+#include <hapticfield/servo/tick_budget.hpp>
 #include <hapticfield/surface.hpp>
 
 #include <embree3/rtcore.h>

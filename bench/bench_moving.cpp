@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
   const double side = 0.1;  // [m]
   const std::vector<hf::Probe> path = hf::bench::sliding_path(ticks, side / 2);
   std::printf(
-      "Times are this thread's CPU time: per call for ticks (tick-budget harness, offline/tick_budget.hpp), the\n"
+      "Times are this thread's CPU time: per call for ticks (tick-budget harness, servo/tick_budget.hpp), the\n"
       "best of 3 for build, refit and publish (DeformingMeshFeed::publish once three frames circulate: a refit in\n"
       "place plus the copy of the positions).\n\n");
   std::printf("## Proxy tick on a moving wavy mesh against the same mesh standing still (%ld ticks)\n\n", ticks);

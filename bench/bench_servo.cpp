@@ -484,7 +484,7 @@ int main(int argc, char** argv) {
   row("whole tick: device + safety + wall + simulated arm", full_cost);
   row("(empty body: what is left after the clock's cost)", empty);
   std::printf(
-      "\nMeasured by the tick-budget harness (offline/tick_budget.hpp): percentiles and worst have the median\n"
+      "\nMeasured by the tick-budget harness (servo/tick_budget.hpp): percentiles and worst have the median\n"
       "cost of a clock read pair (%.0f ns) subtracted; the worst case includes preemption by other processes\n"
       "(no real-time priority for this part).\n",
       empty.clock_overhead_ns);

@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
   std::uint32_t plane_worst_nodes = 0;
   const hf::bench::Cost base = tick_cost(plane, path, plane_nodes, plane_worst_nodes);
   std::printf(
-      "Times are this thread's CPU time per call, measured by the tick-budget harness (offline/tick_budget.hpp;\n"
+      "Times are this thread's CPU time per call, measured by the tick-budget harness (servo/tick_budget.hpp;\n"
       "the clock read pair's median cost, %.0f ns, subtracted). Baseline verdict: %s.\n\n",
       base.clock_overhead_ns, base.fits_1khz ? "fits 1 kHz" : "does NOT fit 1 kHz");
   std::printf("## Proxy tick on a wavy mesh (sliding 2 mm deep with friction, %ld ticks)\n\n", ticks);

@@ -8,7 +8,7 @@
 //
 //   bench_tangible [IMAGE] [--queries N] [--maps N] [--floor-only]
 #include <hapticfield/kernels.hpp>
-#include <hapticfield/offline/tick_budget.hpp>
+#include <hapticfield/servo/tick_budget.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -75,7 +75,7 @@ std::vector<glm::dvec2> query_points(int width, int height, int count, bool traj
 }
 
 /// Times each query alone through the tick-budget harness
-/// (offline/tick_budget.hpp): a query is a tick whose probe sits at a pixel;
+/// (servo/tick_budget.hpp): a query is a tick whose probe sits at a pixel;
 /// mean from an untimed pass, p99 and worst timed one by one, the clock's
 /// own cost subtracted.
 template <class Source>

@@ -8,7 +8,7 @@
 //    sine (ToneSource) rendered in the same run; as a share of the block's
 //    real-time length.
 // 2. The tap's cost in the servo tick, through the tick-budget harness
-//    (offline/tick_budget.hpp): contact(plane, HaTT texture) with and without
+//    (servo/tick_budget.hpp): contact(plane, HaTT texture) with and without
 //    tap(..., ring), ratio of the means.
 // 3. Latency, wall clock: a 1 kHz servo thread (absolute deadlines) toggles
 //    the contact every 50 ms through tap(); the audio thread
@@ -28,9 +28,9 @@
 #include <vector>
 
 #include "hapticfield/core.hpp"
-#include "hapticfield/offline/tick_budget.hpp"
 #include "hapticfield/servo/clock.hpp"
 #include "hapticfield/servo/pacer.hpp"
+#include "hapticfield/servo/tick_budget.hpp"
 #include "hapticfield/texture/hatt.hpp"
 #include "hapticfield/vibration.hpp"
 #include "tick_cost.hpp"

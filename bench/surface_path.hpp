@@ -4,7 +4,7 @@
 /// HIP path over a mesh and the tick-budget settings they time it with.
 
 #include <hapticfield/core/probe.hpp>
-#include <hapticfield/offline/tick_budget.hpp>
+#include <hapticfield/servo/tick_budget.hpp>
 
 #include <cmath>
 #include <random>
@@ -38,7 +38,7 @@ inline std::vector<Probe> sliding_path(long ticks, double half_extent) {
   return path;
 }
 
-/// The tick-budget harness (offline/tick_budget.hpp) on this thread's CPU
+/// The tick-budget harness (servo/tick_budget.hpp) on this thread's CPU
 /// time (CLOCK_THREAD_CPUTIME_ID): time the scheduler gives to other
 /// processes is not counted, so a shared, loaded machine still measures the
 /// work of the tick. No warm-up: the path is timed as scripted, once

@@ -7,8 +7,8 @@
 #include <span>
 
 #include "hapticfield/device/transport.hpp"
-#include "hapticfield/offline/tick_budget.hpp"
 #include "hapticfield/protocol/reports.hpp"
+#include "hapticfield/servo/tick_budget.hpp"
 
 namespace hapticfield::bench {
 
@@ -18,7 +18,7 @@ namespace hapticfield::bench {
 using Cost = offline::TickBudgetReport;
 
 /// n calls of tick(), untimed then timed one by one, through the harness
-/// (offline/tick_budget.hpp), on wall time or on this thread's CPU time.
+/// (servo/tick_budget.hpp), on wall time or on this thread's CPU time.
 template <class Tick>
 Cost measure(long n, Tick&& tick, offline::TickClock clock = offline::TickClock::wall) {
   offline::TickBudgetConfig config;

@@ -1,7 +1,7 @@
 // tick_budget [--field wall|friction|hatt|allocating] [--hatt FILE] [--ticks N] [--speed M/S]
 //
 // Does a field fit in a servo tick? Runs the field over the scripted probe
-// path of offline/tick_budget.hpp (a circle of 20 mm pressed 2 mm into the
+// path of servo/tick_budget.hpp (a circle of 20 mm pressed 2 mm into the
 // plane z = 0, 0.1 m/s by default) and prints its tick cost (mean, p50,
 // p99, p99.9, worst), allocations per tick, exceptions, and whether it fits
 // the 1 kHz and 10 kHz budgets (p99 at most a quarter of the period, no
@@ -11,7 +11,7 @@
 //   auto report = hapticfield::offline::measure_tick_budget(my_field);
 //   std::puts(report.summary().c_str());
 #define HAPTICFIELD_TICK_BUDGET_COUNT_NEW  // this program counts operator new
-#include "hapticfield/offline/tick_budget.hpp"
+#include "hapticfield/servo/tick_budget.hpp"
 
 #include <cstdio>
 #include <cstdlib>

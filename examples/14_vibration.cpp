@@ -28,8 +28,8 @@
 
 #include "common/cli.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/offline/psd.hpp"
 #include "hapticfield/texture/hatt.hpp"
+#include "hapticfield/texture/psd.hpp"
 #include "hapticfield/vibration.hpp"
 #ifdef HAPTICFIELD_EXAMPLE_ALSA
 #include "hapticfield/vibration/alsa_sink.hpp"

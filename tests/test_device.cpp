@@ -13,8 +13,8 @@
 #include <random>
 #include <vector>
 
+#include "crc16_reference.hpp"
 #include "hapticfield/arms.hpp"
-#include "hapticfield/offline/crc16_reference.hpp"
 #include "hapticfield/transport.hpp"
 
 using namespace hapticfield;

@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "hapticfield/core.hpp"
-#include "hapticfield/offline/fft.hpp"
 #include "hapticfield/texture/data_texture.hpp"
+#include "hapticfield/texture/fft.hpp"
 #include "hapticfield/texture/friction.hpp"
 #include "hapticfield/texture/lattice.hpp"
 #include "hapticfield/texture/local_sphere.hpp"

@@ -1,4 +1,4 @@
-// Tests of the tick-budget harness (offline/tick_budget.hpp): the scripted
+// Tests of the tick-budget harness (servo/tick_budget.hpp): the scripted
 // path, allocation and exception counting, and the verdict's rules. Timing
 // figures are printed, never asserted (they depend on the machine).
 #include <catch2/catch.hpp>
@@ -13,7 +13,7 @@
 
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/offline/tick_budget.hpp"
+#include "hapticfield/servo/tick_budget.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;

@@ -19,8 +19,8 @@
 
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
-#include "hapticfield/offline/psd.hpp"
 #include "hapticfield/texture/hatt.hpp"
+#include "hapticfield/texture/psd.hpp"
 #include "hapticfield/vibration.hpp"
 #ifdef HAPTICFIELD_TEST_ALSA
 #include "hapticfield/vibration/alsa_sink.hpp"

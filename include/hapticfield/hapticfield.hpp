@@ -9,7 +9,6 @@
 #include "hapticfield/kernels.hpp"
 #include "hapticfield/material.hpp"
 #include "hapticfield/normals.hpp"
-#include "hapticfield/offline.hpp"
 #include "hapticfield/physics.hpp"
 #include "hapticfield/protocol.hpp"
 #include "hapticfield/servo.hpp"

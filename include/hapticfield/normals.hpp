@@ -5,8 +5,8 @@
 /// Needs OpenCV (link hapticfield::image).
 
 #include "hapticfield/core.hpp"
+#include "hapticfield/normals/box_stimulus.hpp"
 #include "hapticfield/normals/camera.hpp"
 #include "hapticfield/normals/face_pose.hpp"
 #include "hapticfield/normals/homography.hpp"
 #include "hapticfield/normals/normal_field.hpp"
-#include "hapticfield/offline/box_stimulus.hpp"

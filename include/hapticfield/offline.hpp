@@ -1,14 +1,13 @@
 #pragma once
 /// @file offline.hpp
-/// Offline tools: code that never runs in a servo tick. Figures of force
-/// maps, the tangible-images paper's section 5 laws for choosing a mask,
-/// the rotated-box stimulus of the normals paper, the FFT the texture
-/// figures and tests use, and the bit-by-bit CRC reference. Everything
-/// outside offline/ that a field or the loop calls per tick is noexcept and
-/// allocation-free.
+/// Deprecated forwarding umbrella, kept so that existing includes still
+/// build; include the component umbrellas (or the headers) instead. The
+/// headers it once gathered now stand with what they are about: force-map
+/// figures and the section 5 mask laws in kernels/, the FFT (and the PSD) in
+/// texture/, the rotated-box stimulus in normals/. The bit-by-bit CRC
+/// reference is a test oracle now (tests/crc16_reference.hpp).
 
-#include "hapticfield/offline/box_stimulus.hpp"
-#include "hapticfield/offline/crc16_reference.hpp"
-#include "hapticfield/offline/fft.hpp"
-#include "hapticfield/offline/force_map_render.hpp"
-#include "hapticfield/offline/mask_choice.hpp"
+#include "hapticfield/kernels/force_map_render.hpp"
+#include "hapticfield/kernels/mask_choice.hpp"
+#include "hapticfield/normals/box_stimulus.hpp"
+#include "hapticfield/texture/fft.hpp"

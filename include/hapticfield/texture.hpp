@@ -7,9 +7,9 @@
 /// (pugixml, target hapticfield::hatt) in hapticfield/texture/hatt.hpp;
 /// neither is included here.
 
-#include "hapticfield/offline/fft.hpp"
 #include "hapticfield/texture/arma.hpp"
 #include "hapticfield/texture/data_texture.hpp"
+#include "hapticfield/texture/fft.hpp"
 #include "hapticfield/texture/fir.hpp"
 #include "hapticfield/texture/friction.hpp"
 #include "hapticfield/texture/hatt_model_set.hpp"

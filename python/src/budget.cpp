@@ -1,11 +1,11 @@
 // hapticfield.tick_budget(field, ...): does a field fit in a servo tick? The
-// tick-budget harness (offline/tick_budget.hpp) run on a field built in
+// tick-budget harness (servo/tick_budget.hpp) run on a field built in
 // Python. Allocations are counted when the process has the allocation
 // counter preloaded (python/tests/alloc/alloc_counter.c), else reported as
 // None.
 #include "field.hpp"
 
-#include <hapticfield/offline/tick_budget.hpp>
+#include <hapticfield/servo/tick_budget.hpp>
 
 #include <dlfcn.h>
 

@@ -4,7 +4,8 @@
 /// field (or any callable Probe -> force) over a scripted probe path, times
 /// every call, counts allocations (when a counter is installed, see below)
 /// and exceptions, and judges the result against the 1 kHz and 10 kHz
-/// budgets. Offline code: it allocates, and servo/ never includes it.
+/// budgets. Offline code: it allocates; no other servo/ header, nor servo.hpp,
+/// includes it.
 ///
 /// The verdict: a field fits a rate when its p99 tick cost is at most
 /// `share` of the period (default 0.25: the rest of the tick belongs to the

@@ -14,7 +14,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "hapticfield/offline/fft.hpp"
+#include "hapticfield/texture/fft.hpp"
 
 namespace hapticfield::offline {
 
