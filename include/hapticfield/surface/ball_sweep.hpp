@@ -74,10 +74,10 @@ namespace hapticfield::detail {
   const glm::dvec3 cross = glm::cross(e1, e2);
   // the ball stays r or more on one side of the triangle's plane along the
   // whole move (heights are linear in t): it meets nothing of it
-  const double lift = r * std::sqrt(glm::dot(cross, cross));  // r |cross| [m^3]
+  const double area2 = glm::length(cross);  // twice the area [m^2]
+  const double lift = r * area2;            // r |cross| [m^3]
   const double g0 = glm::dot(from - a, cross), g1 = glm::dot(from + t_best * d - a, cross);
   if ((g0 >= lift && g1 >= lift) || (g0 <= -lift && g1 <= -lift)) return false;
-  const double area2 = glm::length(cross);
   if (!(area2 > 0.0)) return false;
   const glm::dvec3 n = cross / area2;
   bool found = false;
@@ -100,18 +100,27 @@ namespace hapticfield::detail {
     }
   }
   // the corners' balls and the edges' cylinders: none is met before a
-  // contact inside the face (they lie in its plane), nor when the moving
-  // centre never comes within r of the triangle's bounding ball
+  // contact inside the face (they lie in its plane); nor while the centre is
+  // behind the plane (a feature counts from the front only); nor when the
+  // ball's cut with the plane, a disk of radius sqrt(r^2 - h^2) about the
+  // centre's projection, never reaches the triangle's bounding circle: over
+  // [0, t_best] the disk is at most rho across, at the least height in front
   if (found) return true;
+  const double h1 = h0 + t_best * dn;  // [m] the height at t_best
+  if (h0 <= 0.0 && h1 <= 0.0) return false;
+  const double low = h0 > 0.0 && h1 > 0.0 ? std::fmin(h0, h1) : 0.0;  // [m]
+  if (!(low < r)) return false;
+  const double rho = std::sqrt(r * r - low * low);  // [m]
   const std::array<glm::dvec3, 3> corner{a, a + e1, a + e2};
   const glm::dvec3 middle = (corner[0] + corner[1] + corner[2]) / 3.0;
-  double reach2 = 0.0;  // the bounding ball's radius, squared [m^2]
+  double reach2 = 0.0;  // the bounding circle's radius, squared [m^2]
   for (const glm::dvec3& c : corner)
     reach2 = std::fmax(reach2, glm::dot(c - middle, c - middle));
-  const glm::dvec3 to_middle = middle - from;
-  const double along = std::clamp(glm::dot(to_middle, d) / std::fmax(glm::dot(d, d), 1e-300), 0.0, t_best);
-  const glm::dvec3 gap = to_middle - along * d;
-  const double bound = r + std::sqrt(reach2);
+  const glm::dvec3 to_middle = middle - from + h0 * n;  // from the centre's projection, in the plane
+  const glm::dvec3 slide = d - dn * n;                  // the projected move
+  const double along = std::clamp(glm::dot(to_middle, slide) / std::fmax(glm::dot(slide, slide), 1e-300), 0.0, t_best);
+  const glm::dvec3 gap = to_middle - along * slide;
+  const double bound = rho + std::sqrt(reach2);
   if (glm::dot(gap, gap) > bound * bound) return false;
   const auto in_front = [&](double t, const glm::dvec3& q) { return glm::dot(from + t * d - q, cross) > 0.0; };
   for (std::size_t k = 0; k < 3; ++k) {
