@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -325,6 +326,88 @@ TEST_CASE("Moving<S>: a sphere sweeping past at up to 1 m/s never takes the prox
     }
   }
   CHECK(touched > 200);  // most passes met the probe
+}
+
+TEST_CASE(
+    "Moving<S> with a ball-shaped tool: a moving plane pushes a still ball with k (r + overlap); a sphere sweeping "
+    "past never brings its centre nearer than r",
+    "[invariant][radius]") {
+  const double k = 1000.0, v = 0.2, r = 0.001;  // [N/m], [m/s], [m]
+  SECTION("a plane rising into a still ball") {
+    ProxyConstraint proxy(Moving<PlaneShape>(PlaneShape({}), sliding({0, 0, -0.004}, {0, 0, v})),
+                          ProxyConfig{.stiffness = k, .radius = r});
+    int pushed = 0;
+    for (int i = 0; i <= 30; ++i) {
+      const Contact c = proxy.contact(probe_at_tick(i, {0.002, -0.001, 0.0}));
+      const double plane = -0.004 + v * i * tick;  // the plane's height [m]; the probe is at z = 0
+      const double overlap = plane + r;            // how far the ball's centre would sink [m]
+      if (overlap <= 1e-9) {
+        CHECK(glm::length(c.force) == 0.0);
+        continue;
+      }
+      ++pushed;
+      REQUIRE(c.touching);
+      CHECK(c.force.z == Approx(k * overlap).margin(1e-6));
+      CHECK(std::fabs(c.force.x) + std::fabs(c.force.y) < 1e-9);
+      CHECK(proxy.proxy().z >= plane + r * (1.0 - 1e-9));  // the centre rides r above the surface
+    }
+    CHECK(pushed == 15);
+  }
+  SECTION("a sphere and an icosphere sweeping past at up to 1 m/s, turning") {
+    const unsigned seed = run_seed();
+    INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const double radius = 0.02;  // [m]
+    const TriangleMesh ball = test::icosphere(3, radius);
+    const MeshChecker checker(ball);
+    int touched = 0;
+    double nearest = std::numeric_limits<double>::infinity();  // the centre's least distance to the icosphere / r
+    for (int pass = 0; pass < 120; ++pass) {
+      const bool mesh = pass % 2 == 1;
+      const glm::dvec3 direction = random_direction(rng);
+      const double speed = 0.05 + 0.95 * unit(rng);  // [m/s]
+      glm::dvec3 aside = random_direction(rng);
+      aside -= glm::dot(aside, direction) * direction;
+      aside = glm::normalize(aside) * (1.2 * radius * unit(rng));
+      const glm::dvec3 hip0{0.01 * unit(rng), 0.01 * unit(rng), 0.01 * unit(rng)};
+      const glm::dvec3 drift = 0.05 * random_direction(rng);
+      MovingPose m = sliding(hip0 + aside - 0.04 * direction, speed * direction);
+      m.angular_velocity = 5.0 * unit(rng) * random_direction(rng);  // [rad/s]
+      const int ticks = static_cast<int>(0.08 / (speed * tick));
+      INFO("pass " << pass << (mesh ? " (icosphere)" : " (sphere)") << " speed " << speed);
+      const auto run = [&](auto& proxy) {
+        bool contact = false;
+        for (int i = 0; i <= ticks; ++i) {
+          const glm::dvec3 hip = hip0 + drift * (i * tick);
+          const Contact c = proxy.contact(probe_at_tick(i, hip, drift));
+          contact = contact || c.touching;
+          const Pose& pose = proxy.shape().pose();
+          if (mesh) {
+            const ProxyPath local = local_path(proxy.last_path(), pose);
+            for (int q = 0; q + 1 < local.count; ++q)
+              nearest = std::fmin(nearest, checker.entered(local.points[static_cast<std::size_t>(q)],
+                                                           local.points[static_cast<std::size_t>(q + 1)], r) /
+                                               r);
+          } else {
+            REQUIRE(glm::length(pose.point_to_local(proxy.proxy())) >= (radius + r) * (1.0 - 1e-9));
+          }
+        }
+        if (contact) ++touched;
+      };
+      if (mesh) {
+        ProxyConstraint proxy(Moving<MeshShape>(MeshShape(ball), m), ProxyConfig{.stiffness = k, .radius = r});
+        run(proxy);
+      } else {
+        ProxyConstraint proxy(Moving<SphereShape>(SphereShape({.radius = radius}), m),
+                              ProxyConfig{.stiffness = k, .radius = r});
+        run(proxy);
+      }
+    }
+    INFO("nearest " << nearest << " r");
+    CHECK(nearest >= 1.0 - 1e-6);
+    CHECK(touched > 80);
+  }
 }
 
 TEST_CASE("Moving<S>: a box turning under the probe") {

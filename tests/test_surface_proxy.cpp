@@ -22,12 +22,14 @@
 #include "hapticfield/core.hpp"
 #include "hapticfield/surface.hpp"
 #include "hapticfield/texture.hpp"
+#include "run_seed.hpp"
 #include "surface_energy.hpp"
 #include "surface_meshes.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
 using hapticfield::test::probe_at;
+using hapticfield::test::run_seed;
 
 namespace {
 
@@ -216,6 +218,55 @@ TEST_CASE("a 0.5 mm sheet and a thin ridge are never passed at 2 m/s, with 20 um
       for (int i = 0; i < 20; ++i, hip += period * v) {
         (void)wall.contact(probe_at(hip, v));
         CHECK(wall.proxy().x <= 1e-12);  // never inside or past the ridge
+      }
+    }
+  }
+}
+
+TEST_CASE("a ball-shaped tool on 20 um and 10 cm triangles: the 0.5 mm sheet and the ridge are never passed at 2 m/s",
+          "[radius]") {
+  const double speed = 2.0, period = 1e-3, k = 2000.0;  // [m/s], [s], [N/m]
+  for (const auto& [triangle, r] : {std::pair{20e-6, 0.2e-3}, std::pair{0.1, 0.005}}) {
+    INFO("triangles " << triangle << " m, ball " << r << " m");
+    const double thickness = 0.5e-3;
+    const double side = triangle < 1e-3 ? 6e-3 : 0.6;
+    const int n = static_cast<int>(std::lround(side / triangle));
+    const TriangleMesh sheet = slab({-side / 2, -side / 2, -thickness}, {side / 2, side / 2, 0.0}, n);
+    ProxyConstraint proxy(MeshShape(sheet), ProxyConfig{.stiffness = k, .radius = r});
+    const std::uint32_t seed = run_seed();
+    INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-0.25, 0.25), a(-0.15, 0.15);
+    for (int pass = 0; pass < 40; ++pass) {
+      proxy.reset();
+      glm::dvec3 aim{u(rng) * side, u(rng) * side, 0.0};  // at grid vertices and edges on some passes
+      if (pass % 2 == 0)
+        aim = glm::dvec3{std::round(aim.x / triangle) * triangle, std::round(aim.y / triangle) * triangle, 0.0};
+      if (pass % 4 == 1) aim.x = std::round(aim.x / triangle) * triangle;
+      const glm::dvec3 v = speed * glm::normalize(glm::dvec3{a(rng), a(rng), -1.0});
+      glm::dvec3 hip = aim - 6.5 * period * v;  // 6.5 ticks above, then down through
+      for (int i = 0; i < 13; ++i, hip += period * v) {
+        const Contact c = proxy.contact(probe_at(hip, v));
+        INFO("pass " << pass << " tick " << i);
+        CHECK(proxy.proxy().z >= r * (1.0 - 1e-6));  // the centre never nearer than r to the top
+        if (hip.z < -thickness) {
+          CHECK(c.touching);
+          CHECK_THAT(c.force.z, WithinAbs(k * (r - hip.z), 1e-6 * k * r));
+        }
+      }
+    }
+    const double h = triangle < 1e-3 ? 2e-3 : 0.2;
+    const TriangleMesh ridge = test::box({0.0, -h, -h}, {thickness, h, h}, n / 2 > 0 ? n / 2 : 1);
+    ProxyConstraint wall(MeshShape(ridge), ProxyConfig{.stiffness = k, .radius = r});
+    for (int pass = 0; pass < 20; ++pass) {
+      wall.reset();
+      const glm::dvec3 aim{0.0, u(rng) * h, u(rng) * h};
+      const glm::dvec3 v = speed * glm::normalize(glm::dvec3{1.0, a(rng) * 0.3, a(rng) * 0.3});
+      glm::dvec3 hip = aim - (10.0 * period * speed + 2.0 * r) * glm::normalize(v);
+      for (int i = 0; i < 20; ++i, hip += period * v) {
+        (void)wall.contact(probe_at(hip, v));
+        INFO("pass " << pass << " tick " << i);
+        CHECK(wall.proxy().x <= -r * (1.0 - 1e-6));  // never nearer than r to the ridge's near face
       }
     }
   }
