@@ -9,6 +9,7 @@
 
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
+#include "hapticfield/rt/latest_value.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
@@ -220,4 +221,39 @@ TEST_CASE("LiveField: a writer replaces the field while the reader ticks, lock- 
   });
   CHECK(reader_allocations == 0);
   CHECK(live.force(Probe{}).x == 7.0);
+}
+
+TEST_CASE("LatestValue: the triple buffer over values, newest only, monotonic across threads") {
+  LatestValue<long> value;
+  CHECK(value.latest() == nullptr);  // nothing published yet
+  constexpr long published = 20000;
+  std::atomic<bool> done{false};
+  std::atomic<bool> reading{false};
+  std::thread writer([&] {
+    while (!reading.load())
+      std::this_thread::yield();
+    for (long i = 1; i <= published; ++i)
+      value.publish(i);
+    done = true;
+  });
+  long last = 0;
+  bool monotonic = true;
+  reading = true;
+  do {
+    if (const long* v = value.latest()) {
+      monotonic = monotonic && *v >= last;
+      last = *v;
+    }
+  } while (!done.load());
+  writer.join();
+  CHECK(monotonic);
+  REQUIRE(value.latest() != nullptr);
+  CHECK(*value.latest() == published);
+  const long allocations = test::count_allocations([&] {
+    for (long i = 0; i < 1000; ++i) {
+      value.publish(i);
+      (void)value.latest();
+    }
+  });
+  CHECK(allocations == 0);
 }

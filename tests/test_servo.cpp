@@ -696,6 +696,24 @@ TEST_CASE("real-time enforce either is granted or refuses to start with a clear 
   CHECK(threw != loop.realtime_granted());
 }
 
+TEST_CASE("real-time best effort runs on and reports what was refused as a value") {
+  LoopConfig c;
+  c.realtime = RealTime::best_effort;
+  c.priority = 10;
+  VirtualClock clock;
+  SimulatedArm arm(free_arm());
+  SimulatedTransport link(arm, [&] { return clock.now(); });
+  ForceArm device(link);
+  ServoLoop<ForceArm, VirtualClock> loop(device, clock, c);
+  ZeroField zero;
+  loop.run(zero, {.max_ticks = 10});
+  CHECK(loop.statistics().ticks == 10);
+  CHECK(loop.realtime_refused().empty() == loop.realtime_granted());
+  const rt::RealTimeGrant again = rt::request_realtime(10);
+  rt::release_realtime(again.memory_locked);
+  CHECK(again.granted() == again.refused.empty());
+}
+
 // ------------------------------------------------- life cycle (stop, restart)
 
 namespace {

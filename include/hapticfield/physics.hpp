@@ -5,6 +5,6 @@
 /// (hapticfield::core). The MuJoCo bridge, physics/mujoco_bridge.hpp, needs
 /// libmujoco and comes with its own target, hapticfield::mujoco.
 
-#include "hapticfield/physics/latest_value.hpp"
 #include "hapticfield/physics/local_model.hpp"
 #include "hapticfield/physics/virtual_coupling.hpp"
+#include "hapticfield/rt/latest_value.hpp"

@@ -18,7 +18,7 @@
 ///
 /// A changed material reaches the servo loop without a lock: publish()
 /// from one writer thread hands it over through a TripleBuffer
-/// (core/live_field.hpp); the tick picks it up at its start, the proxy
+/// (rt/triple_buffer.hpp); the tick picks it up at its start, the proxy
 /// keeps its place. touched_material() tells the vibration tap
 /// (vibration/tap.hpp) the touched point's vibration id: the map's id
 /// there, or with MaterialMaps::vibration left at per_primitive_material,

@@ -5,19 +5,11 @@
 /// commands it. Absolute deadlines; after an overrun whole periods are
 /// skipped instead of bursting; statistics every tick; an injectable clock.
 
-#include <pthread.h>
-#include <sched.h>
-#include <sys/mman.h>
-#include <sys/prctl.h>
-
 #include <array>
 #include <atomic>
-#include <cerrno>
 #include <cmath>
 #include <concepts>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <exception>
 #include <memory>
 #include <stdexcept>
@@ -32,6 +24,7 @@
 #include "hapticfield/core/field.hpp"
 #include "hapticfield/core/probe.hpp"
 #include "hapticfield/device/state.hpp"
+#include "hapticfield/rt/realtime_thread.hpp"
 #include "hapticfield/servo/clock.hpp"
 #include "hapticfield/servo/pacer.hpp"
 #include "hapticfield/servo/safety.hpp"
@@ -42,7 +35,7 @@ namespace hapticfield {
 /// Real-time scheduling request for the loop thread.
 enum class RealTime : std::uint8_t {
   off,          ///< ordinary scheduling
-  best_effort,  ///< ask for SCHED_FIFO, mlockall and 1 ns timer slack; warn once if refused
+  best_effort,  ///< ask for SCHED_FIFO, mlockall and 1 ns timer slack; run on if refused (realtime_refused())
   enforce,      ///< as best_effort, but refuse to start when anything is refused
 };
 
@@ -120,30 +113,6 @@ class ServoError : public Error {
   std::vector<DeviceState> last_states_;
 };
 
-namespace detail {
-/// Requests real-time scheduling for the calling thread; returns what was
-/// refused ("" when everything was granted).
-inline std::string request_realtime(int priority, bool& locked) {
-  std::string refused;
-  sched_param sp{};
-  sp.sched_priority = priority;
-  if (const int e = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp); e != 0)
-    refused += std::string("SCHED_FIFO priority ") + std::to_string(priority) + " (" + std::strerror(e) + ")";
-  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-    refused += std::string(refused.empty() ? "" : ", ") + "mlockall (" + std::strerror(errno) + ")";
-  } else {
-    locked = true;
-  }
-  if (prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL) != 0)
-    refused += std::string(refused.empty() ? "" : ", ") + "timer slack (" + std::strerror(errno) + ")";
-  return refused;
-}
-inline std::atomic<bool>& realtime_warned() {
-  static std::atomic<bool> warned{false};
-  return warned;
-}
-}  // namespace detail
-
 /// The servo loop over a Device D on a clock C.
 ///
 /// @code
@@ -164,6 +133,8 @@ class ServoLoop {
  public:
   static constexpr std::size_t history_size = 8;  ///< states kept for ServoError
 
+  /// Safety stages turned off by the configuration are not announced here:
+  /// config().safety.disabled_stages() names them for the caller to show.
   /// @throws std::invalid_argument for a bad rate, priority or safety setting.
   ServoLoop(D& device, C& clock, LoopConfig config = {})
       : device_(&device),
@@ -173,8 +144,6 @@ class ServoLoop {
         stats_(std::make_unique<LoopStatistics>()) {
     period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / config_.rate));
     period_ = static_cast<double>(period_ns_) * 1e-9;
-    const std::string off = config_.safety.disabled_stages();
-    if (!off.empty()) std::fprintf(stderr, "hapticfield: safety stages disabled by configuration: %s\n", off.c_str());
   }
 
   /// Runs a field until request_stop(), the tick limit or a disconnect.
@@ -305,6 +274,10 @@ class ServoLoop {
   [[nodiscard]] const LoopConfig& config() const noexcept { return config_; }
   /// True when the last real-time request was fully granted.
   [[nodiscard]] bool realtime_granted() const noexcept { return realtime_granted_; }
+  /// What the last RealTime::best_effort request was refused ("" when all
+  /// was granted or nothing was asked): the loop runs on and prints
+  /// nothing; a tool tells its user (with rt::realtime_advice).
+  [[nodiscard]] const std::string& realtime_refused() const noexcept { return realtime_refused_; }
 
  private:
   /// The known state every run starts from: the device was last sent zero
@@ -393,28 +366,23 @@ class ServoLoop {
 
   void apply_realtime() {
     realtime_granted_ = false;
+    realtime_refused_.clear();
     if (config_.realtime == RealTime::off) return;
-    const std::string refused = detail::request_realtime(config_.priority, locked_);
-    realtime_granted_ = refused.empty();
-    if (refused.empty()) return;
-    const std::string advice =
-        "grant the user real-time limits (e.g. '@realtime - rtprio 95' and '- memlock unlimited' in "
-        "/etc/security/limits.d/) or CAP_SYS_NICE and CAP_IPC_LOCK";
+    rt::RealTimeGrant grant = rt::request_realtime(config_.priority);
+    locked_ = grant.memory_locked;
+    realtime_granted_ = grant.granted();
+    if (realtime_granted_) return;
+    realtime_refused_ = std::move(grant.refused);
     if (config_.realtime == RealTime::enforce) {
       restore_realtime();
-      throw std::runtime_error("ServoLoop: RealTime::enforce refused: " + refused + "; " + advice);
+      throw std::runtime_error("ServoLoop: RealTime::enforce refused: " + realtime_refused_ + "; " +
+                               rt::realtime_advice);
     }
-    if (!detail::realtime_warned().exchange(true))
-      std::fprintf(stderr, "hapticfield: real-time scheduling not granted (%s); running best-effort. %s\n",
-                   refused.c_str(), advice.c_str());
   }
 
   void restore_realtime() noexcept {
     if (config_.realtime == RealTime::off) return;
-    sched_param sp{};
-    sp.sched_priority = 0;
-    pthread_setschedparam(pthread_self(), SCHED_OTHER, &sp);
-    if (locked_) munlockall();
+    rt::release_realtime(locked_);
     locked_ = false;
   }
 
@@ -556,6 +524,7 @@ class ServoLoop {
   bool recovering_{false};       ///< recover_after cleared a latch; counted once force is back
   bool locked_{false};
   bool realtime_granted_{false};
+  std::string realtime_refused_;
 };
 
 }  // namespace hapticfield
