@@ -26,11 +26,11 @@
 // normals from the faces: io/mesh_shading.hpp, the default of every tool
 // and of Python); --facets feels the bare triangles. --feel-texture lays a
 // glTF mesh's base-colour texture on it by uv as a tangible-image texture
-// (material/model_texture.hpp), at the size the mesh's uvs give it.
+// (scenes/model_texture.hpp), at the size the mesh's uvs give it.
 // Bad input: one line on stderr and exit status 1 (2 for usage errors).
 #include <hapticfield/io.hpp>
 #include <hapticfield/io/mesh_shading.hpp>
-#include <hapticfield/material/model_texture.hpp>
+#include <hapticfield/scenes/model_texture.hpp>
 #include <hapticfield/surface.hpp>
 
 #include <array>

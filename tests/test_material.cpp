@@ -452,7 +452,7 @@ TEST_CASE("a stroke over a painted friction mask: the mask and the felt forces d
 #ifdef HAPTICFIELD_TEST_HAS_IO
 #include "hapticfield/io/gltf.hpp"
 #include "hapticfield/io/obj.hpp"
-#include "hapticfield/material/model_texture.hpp"
+#include "hapticfield/scenes/model_texture.hpp"
 
 namespace {
 

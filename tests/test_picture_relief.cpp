@@ -1,4 +1,4 @@
-// Tests of picture_relief() (io/picture_relief.hpp): the relief's height at
+// Tests of picture_relief() (scenes/picture_relief.hpp): the relief's height at
 // each pixel is the gray level OpenCV reads x mm_per_level, the proxy rests
 // on it with Fc = k depth, and the texture is the flat tangible image's
 // force turned into the tangent plane of the touched point.
@@ -18,7 +18,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
-#include "hapticfield/io/picture_relief.hpp"
+#include "hapticfield/scenes/picture_relief.hpp"
 #include "surface_meshes.hpp"
 
 using namespace hapticfield;

@@ -4,8 +4,8 @@
 /// the proxy's uv (MaterialSurface), HaTT taxel maps, and the MPEG-I haptic
 /// media model (.hjif) with its synthesis, playback and recording. Needs
 /// OpenCV for maps from pictures (material_image.hpp). Not here: a model's
-/// own textures (material/model_texture.hpp, which reads meshes through
-/// io/) and the .hjif reader (io/hjif.hpp, hapticfield::hjif).
+/// own textures (scenes/model_texture.hpp, a composition over what io/
+/// reads) and the .hjif reader (io/hjif.hpp, hapticfield::hjif).
 
 #include "hapticfield/material/band_synthesis.hpp"
 #include "hapticfield/material/haptic_media.hpp"

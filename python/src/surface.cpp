@@ -3,7 +3,7 @@
 #include "field.hpp"
 
 #include <hapticfield/io/height_map.hpp>
-#include <hapticfield/io/picture_relief.hpp>
+#include <hapticfield/scenes/picture_relief.hpp>
 #include <hapticfield/io/stl.hpp>
 #include <hapticfield/surface.hpp>
 #if HAPTICFIELD_PYTHON_IO

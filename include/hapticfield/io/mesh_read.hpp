@@ -75,7 +75,7 @@ struct LoadedMesh {
   /// it, encoded (PNG, JPEG; glTF's baseColorTexture, embedded or beside
   /// the file; an OBJ's map_Kd, read only from the OBJ's folder), or empty
   /// when it has none or its file is missing (a warning). Decode with cv::imdecode
-  /// (material/model_texture.hpp).
+  /// (scenes/model_texture.hpp).
   std::vector<std::vector<unsigned char>> base_colour_textures;
 
   [[nodiscard]] bool has_warning(MeshWarningKind kind) const noexcept {
