@@ -16,8 +16,9 @@
 /// Allocations: give TickBudgetConfig::allocation_count a function that
 /// returns the allocation calls made so far. One translation unit of a
 /// program may define HAPTICFIELD_TICK_BUDGET_COUNT_NEW before including
-/// this header: it then replaces the global operator new with a counting
-/// one and the harness uses it by default (examples/12_tick_budget.cpp).
+/// this header: it then replaces the global operator new with the counting
+/// one of rt/count_operator_new.hpp and the harness uses it by default
+/// (examples/12_tick_budget.cpp).
 ///
 ///   auto report = hapticfield::offline::measure_tick_budget(field);
 ///   std::puts(report.summary().c_str());
@@ -47,6 +48,7 @@
 
 #include "hapticfield/core/field.hpp"
 #include "hapticfield/core/probe.hpp"
+#include "hapticfield/rt/allocation_count.hpp"
 
 namespace hapticfield::offline {
 
@@ -86,12 +88,8 @@ struct ProbePathConfig {
 using AllocationCount = std::int64_t (*)() noexcept;
 
 namespace detail {
-inline std::atomic<std::int64_t> tick_budget_news{0};
-inline std::int64_t count_news() noexcept {
-  return tick_budget_news.load(std::memory_order_relaxed);
-}
 #ifdef HAPTICFIELD_TICK_BUDGET_COUNT_NEW
-inline constexpr AllocationCount default_allocation_count = &count_news;
+inline constexpr AllocationCount default_allocation_count = &rt::allocations_so_far;
 #else
 inline constexpr AllocationCount default_allocation_count = nullptr;
 #endif
@@ -329,33 +327,6 @@ template <TimedField F>
 }  // namespace hapticfield::offline
 
 #ifdef HAPTICFIELD_TICK_BUDGET_COUNT_NEW
-// Counting replacements of the global allocation functions (one translation
-// unit per program: it defines HAPTICFIELD_TICK_BUDGET_COUNT_NEW).
-#include <cstdlib>
-#include <new>
-// g++ 12 warns that the replacement delete frees what the replacement new
-// malloc'd, once both are inlined: that pairing is exactly what is intended.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-void* operator new(std::size_t size) {
-  hapticfield::offline::detail::tick_budget_news.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) {
-  return operator new(size);
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
+// This translation unit defines the program's counting operator new.
+#include "hapticfield/rt/count_operator_new.hpp"
 #endif
