@@ -2,7 +2,8 @@
 /// @file gltf.hpp
 /// glTF 2.0 (.gltf with embedded or external buffers, and .glb) into a
 /// TriangleMesh through tinygltf (Debian's libtinygltf-dev 2.7; CMake
-/// target hapticfield::gltf). The only header that includes tinygltf.
+/// target hapticfield::gltf). With io/gltf_haptic_material.hpp, the only
+/// headers that include tinygltf.
 ///
 /// The default scene (else the first, else every root node) is walked and
 /// each mesh placed in world space by its node transforms (matrix or
@@ -580,23 +581,15 @@ class GltfReader {
 
 }  // namespace detail
 
-/// Reads a .gltf or .glb already in memory (a .glb is told by its "glTF"
-/// magic).
-/// @param name          the file's name for messages
-/// @param resource_dir  the folder external buffers are read from (never
-///                      outside it); empty: only embedded data is allowed
-/// @throws FileError naming the file for anything tinygltf refuses, an
-///         external buffer given by an absolute path (uris must be relative
-///         to the file, inside its folder), a
-///         broken .glb layout, JSON nested too deeply, an accessor whose
-///         count x stride overruns its buffer, indices out of range,
-///         non-finite values, cycles in the node graph, required
-///         extensions that change geometry (Draco, meshopt, quantization,
-///         GPU instancing), sparse accessors, no triangles, or more than
-///         config.max_triangles.
-/// @throws std::invalid_argument for bad settings.
-[[nodiscard]] inline LoadedMesh parse_gltf(std::string_view bytes, const std::string& name,
-                                           const MeshReadConfig& config = {}, const std::string& resource_dir = {}) {
+/// The tinygltf model of a .gltf or .glb in memory, read with every check
+/// parse_gltf() makes before tinygltf parses (size, .glb layout, nesting,
+/// external files only from resource_dir within config.max_file_bytes);
+/// images are kept encoded (Image::image holds the PNG or JPEG bytes).
+/// For readers of glTF extensions (io/gltf_haptic_material.hpp).
+/// @throws FileError as parse_gltf() for what tinygltf refuses.
+[[nodiscard]] inline tinygltf::Model read_gltf_model(std::string_view bytes, const std::string& name,
+                                                     const MeshReadConfig& config, const std::string& resource_dir,
+                                                     std::string& warn) {
   using namespace detail;
   check_config(config);
   if (bytes.size() > std::numeric_limits<std::uint32_t>::max() / 2)
@@ -614,7 +607,6 @@ class GltfReader {
   loader.SetImageLoader(&keep_gltf_image, nullptr);
   tinygltf::Model model;
   std::string err;
-  std::string warn;
   bool ok = false;
   try {
     const auto length = static_cast<unsigned int>(bytes.size());
@@ -639,11 +631,33 @@ class GltfReader {
     if (!files.refused.empty()) why += " (refused to read '" + files.refused.front() + "': outside the file's folder)";
     throw mesh_error(name, why);
   }
+  return model;
+}
+
+/// Reads a .gltf or .glb already in memory (a .glb is told by its "glTF"
+/// magic).
+/// @param name          the file's name for messages
+/// @param resource_dir  the folder external buffers are read from (never
+///                      outside it); empty: only embedded data is allowed
+/// @throws FileError naming the file for anything tinygltf refuses, an
+///         external buffer given by an absolute path (uris must be relative
+///         to the file, inside its folder), a
+///         broken .glb layout, JSON nested too deeply, an accessor whose
+///         count x stride overruns its buffer, indices out of range,
+///         non-finite values, cycles in the node graph, required
+///         extensions that change geometry (Draco, meshopt, quantization,
+///         GPU instancing), sparse accessors, no triangles, or more than
+///         config.max_triangles.
+/// @throws std::invalid_argument for bad settings.
+[[nodiscard]] inline LoadedMesh parse_gltf(std::string_view bytes, const std::string& name,
+                                           const MeshReadConfig& config = {}, const std::string& resource_dir = {}) {
+  std::string warn;
+  const tinygltf::Model model = read_gltf_model(bytes, name, config, resource_dir, warn);
   LoadedMesh out;
-  add_reader_warnings(out, warn);
-  GltfReader reader(model, name, config, out);
+  detail::add_reader_warnings(out, warn);
+  detail::GltfReader reader(model, name, config, out);
   reader.run();
-  finish_mesh(out, name, config, reader.take_normal_missing());
+  detail::finish_mesh(out, name, config, reader.take_normal_missing());
   return out;
 }
 

@@ -115,6 +115,22 @@ struct PictureOnUv {
                      PlaneMapping(px_per_m / 1000.0, glm::dvec2{-0.5, height - 0.5})};
 }
 
+/// textured_surface() (below) with the material read from `map` at the touched uv (a haptic
+/// material's maps, io/gltf_haptic_material.hpp) instead of the proxy's
+/// constants; config.proxy still gives the contact's offset and radius.
+template <Shape S>
+[[nodiscard]] TexturedSurface<std::remove_cvref_t<S>> textured_surface(S&& shape, const cv::Mat& picture, double metres,
+                                                                       MaterialMap map,
+                                                                       const ModelTextureConfig& config = {}) {
+  if (picture.empty()) throw std::invalid_argument("textured_surface: the picture is empty");
+  const PictureOnUv lay = picture_on_uv(picture.cols, picture.rows, metres);
+  TangibleImageField<TangibleImage> image(TangibleImage(to_gray(picture), config.tangible), lay.plane,
+                                          config.texture_gain);
+  return TexturedSurface<std::remove_cvref_t<S>>(
+      std::forward<S>(shape), config.proxy, std::move(map),
+      OnSurface<TangibleImageField<TangibleImage>>(std::move(image), lay.uv));
+}
+
 /// Any shape with uvs (a mesh, posed or not) felt with `picture` laid on it
 /// by uv at `metres` per uv unit (metres_per_uv() of its mesh) as a
 /// tangible-image texture. The material is the proxy's everywhere; the
@@ -124,19 +140,13 @@ struct PictureOnUv {
 template <Shape S>
 [[nodiscard]] TexturedSurface<std::remove_cvref_t<S>> textured_surface(S&& shape, const cv::Mat& picture, double metres,
                                                                        const ModelTextureConfig& config = {}) {
-  if (picture.empty()) throw std::invalid_argument("textured_surface: the picture is empty");
-  const PictureOnUv lay = picture_on_uv(picture.cols, picture.rows, metres);
   MaterialMaps maps;
   maps.stiffness = config.proxy.stiffness;
   maps.damping = config.proxy.damping;
   maps.static_friction = config.proxy.static_friction;
   maps.dynamic_friction = config.proxy.dynamic_friction;
   maps.vibration = per_primitive_material;
-  TangibleImageField<TangibleImage> image(TangibleImage(to_gray(picture), config.tangible), lay.plane,
-                                          config.texture_gain);
-  return TexturedSurface<std::remove_cvref_t<S>>(
-      std::forward<S>(shape), config.proxy, MaterialMap(std::move(maps)),
-      OnSurface<TangibleImageField<TangibleImage>>(std::move(image), lay.uv));
+  return textured_surface(std::forward<S>(shape), picture, metres, MaterialMap(std::move(maps)), config);
 }
 
 /// The loaded mesh felt with its own base-colour texture (see the file
