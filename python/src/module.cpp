@@ -194,7 +194,7 @@ void bind_core(py::module_& m) {
 }
 
 #ifdef HAPTICFIELD_PYTHON_HJIF
-void bind_hjif(py::module_& m);  // hjif.cpp: .hjif haptic media (nlohmann-json)
+void bind_hjif(py::module_& m);  // hjif_bindings.cpp: .hjif haptic media (nlohmann-json)
 #endif
 
 }  // namespace hapticfield::python
