@@ -675,43 +675,35 @@ TEST_CASE("statistics are readable from another thread while the loop runs") {
   CHECK(rig.loop.statistics().missed_deadlines == 0);
 }
 
-TEST_CASE("real-time enforce either is granted or refuses to start with a clear error") {
-  LoopConfig c;
-  c.realtime = RealTime::enforce;
-  c.priority = 10;
-  VirtualClock clock;
-  SimulatedArm arm(free_arm());
-  SimulatedTransport link(arm, [&] { return clock.now(); });
-  ForceArm device(link);
-  ServoLoop<ForceArm, VirtualClock> loop(device, clock, c);
-  ZeroField zero;
-  bool threw = false;
-  try {
-    loop.run(zero, {.max_ticks = 10});
-  } catch (const std::runtime_error& e) {
-    threw = true;
-    CHECK(std::string(e.what()).find("RealTime::enforce refused") != std::string::npos);
-    CHECK(loop.statistics().ticks == 0);  // refused before the first tick
+TEST_CASE("real-time: enforce is granted or refuses to start; best effort runs on and reports the refusal as a value") {
+  for (const RealTime mode : {RealTime::enforce, RealTime::best_effort}) {
+    LoopConfig c;
+    c.realtime = mode;
+    c.priority = 10;
+    VirtualClock clock;
+    SimulatedArm arm(free_arm());
+    SimulatedTransport link(arm, [&] { return clock.now(); });
+    ForceArm device(link);
+    ServoLoop<ForceArm, VirtualClock> loop(device, clock, c);
+    ZeroField zero;
+    bool threw = false;
+    try {
+      loop.run(zero, {.max_ticks = 10});
+    } catch (const std::runtime_error& e) {
+      threw = true;
+      CHECK(mode == RealTime::enforce);
+      CHECK(std::string(e.what()).find("RealTime::enforce refused") != std::string::npos);
+      CHECK(loop.statistics().ticks == 0);  // refused before the first tick
+    }
+    CHECK(loop.realtime_refused().empty() == loop.realtime_granted());
+    if (mode == RealTime::enforce)
+      CHECK(threw != loop.realtime_granted());
+    else
+      CHECK(loop.statistics().ticks == 10);
   }
-  CHECK(threw != loop.realtime_granted());
-}
-
-TEST_CASE("real-time best effort runs on and reports what was refused as a value") {
-  LoopConfig c;
-  c.realtime = RealTime::best_effort;
-  c.priority = 10;
-  VirtualClock clock;
-  SimulatedArm arm(free_arm());
-  SimulatedTransport link(arm, [&] { return clock.now(); });
-  ForceArm device(link);
-  ServoLoop<ForceArm, VirtualClock> loop(device, clock, c);
-  ZeroField zero;
-  loop.run(zero, {.max_ticks = 10});
-  CHECK(loop.statistics().ticks == 10);
-  CHECK(loop.realtime_refused().empty() == loop.realtime_granted());
-  const rt::RealTimeGrant again = rt::request_realtime(10);
-  rt::release_realtime(again.memory_locked);
-  CHECK(again.granted() == again.refused.empty());
+  const rt::RealTimeGrant grant = rt::request_realtime(10);
+  rt::release_realtime(grant.memory_locked);
+  CHECK(grant.granted() == grant.refused.empty());
 }
 
 // ------------------------------------------------- life cycle (stop, restart)
