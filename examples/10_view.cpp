@@ -50,17 +50,18 @@
 #include "hapticfield/device/device_error.hpp"
 #include "hapticfield/image.hpp"
 #include "hapticfield/io/mesh_read.hpp"
+#include "hapticfield/rt/spsc_ring.hpp"
 #include "hapticfield/servo.hpp"
 #include "hapticfield/transport.hpp"
 #include "hapticfield/video.hpp"
 #include "view/mouse_device.hpp"
 #include "view/orbit_camera.hpp"
-#include "view/sample_ring.hpp"
 #include "view/scene.hpp"
 #include "view/scene3d.hpp"
 #include "view/scope.hpp"
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
+#include "view/view_sample.hpp"
 #include "view/window.hpp"
 #if HAPTICFIELD_EXAMPLE_SHAPES
 #include "view/shape_scene.hpp"
@@ -396,7 +397,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   config.recover_after = 0.5;  // re-arm through the soft start after a stall
   ServoLoop<D, SteadyClock> loop(device, clock, config);
   cli::StopOnSignal stop(loop);  // Ctrl-C: zero force and disarm through the loop's stop
-  SampleRing<8192> ring;
+  rt::SpscRing<ViewSample, 8192> ring;
 
   if (hardware) cli::wait_for_operator();
   if (stop.caught()) return stop.exit_status();
@@ -405,7 +406,7 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
 
   // the tick: tell the viewer where the probe is and what was commanded
   auto tick = [&](const TickInput& in) noexcept {
-    (void)ring.push({in.probe.time, mapping.to_image(in.probe.position), loop.last_command()});
+    (void)ring.try_push({in.probe.time, mapping.to_image(in.probe.position), loop.last_command()});
     return field.force(in.probe);
   };
   const std::uint64_t ticks = o.seconds ? static_cast<std::uint64_t>(std::llround(*o.seconds * o.rate)) : no_tick_limit;
@@ -422,15 +423,14 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
   const bool window = o.screenshot.empty();
   double note_until = 0.0;  // [s of loop time]
   const auto drain = [&] {
-    ViewSample s;
-    while (ring.pop(s)) {
-      scope.add(s);
-      now = s;
+    while (const std::optional<ViewSample> s = ring.try_pop()) {
+      scope.add(*s);
+      now = *s;
     }
     status.loop = loop.statistics();
     status.latched = loop.safety().latched() != 0;
     status.latch_bits = loop.safety().latched();
-    status.dropped = ring.dropped();
+    status.dropped = ring.rejected();
     if (video) {  // the frame being felt, and where the video is
       if (video->playing()) scene.underlay = video->frame();
       const VideoStatus v = video->status();
@@ -646,7 +646,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   config.recover_after = 0.5;
   ServoLoop<D, SteadyClock> loop(device, clock, config);
   cli::StopOnSignal stop(loop);
-  SampleRing<8192, Sample3d> ring;
+  rt::SpscRing<Sample3d, 8192> ring;
   if (hardware) cli::wait_for_operator();
   if (stop.caught()) return stop.exit_status();
   std::printf("%s on %s (Ctrl-C stops; so do q and Esc in the window)\n", o.shape.c_str(),
@@ -661,7 +661,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
       f = field.force(in.probe);
     else
       field.reset();
-    (void)ring.push(
+    (void)ring.try_push(
         {in.probe.time, in.probe.position, field.proxy(), loop.last_command(), field.last_contact().touching});
     return f;
   };
@@ -695,15 +695,14 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   double note_until = 0.0;
   double frame_ms = 0.0;
   const auto drain = [&] {
-    Sample3d s;
-    while (ring.pop(s)) {
-      scope.add(ViewSample{s.t, glm::dvec2{0.0}, s.force});
-      now = s;
+    while (const std::optional<Sample3d> s = ring.try_pop()) {
+      scope.add(ViewSample{s->t, glm::dvec2{0.0}, s->force});
+      now = *s;
     }
     status.loop = loop.statistics();
     status.latched = loop.safety().latched() != 0;
     status.latch_bits = loop.safety().latched();
-    status.dropped = ring.dropped();
+    status.dropped = ring.rejected();
     char text[160];
     std::snprintf(text, sizeof text, "depth %.2f mm   3D frame %.1f ms",
                   now.touching ? glm::length(now.proxy - now.hip) * 1e3 : 0.0, frame_ms);

@@ -5,11 +5,13 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <thread>
 
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/rt/latest_value.hpp"
+#include "hapticfield/rt/spsc_ring.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
@@ -256,4 +258,40 @@ TEST_CASE("LatestValue: the triple buffer over values, newest only, monotonic ac
     }
   });
   CHECK(allocations == 0);
+}
+
+TEST_CASE("SpscRing: in order, a full ring refuses and counts, two threads") {
+  struct Sample {
+    double t;
+    int x, y;
+  };
+  rt::SpscRing<Sample, 4> ring;
+  for (int i = 0; i < 6; ++i)
+    (void)ring.try_push({static_cast<double>(i), 0, 0});
+  CHECK(ring.rejected() == 2);
+  CHECK(ring.size() == 4);
+  for (int i = 0; i < 4; ++i) {
+    const std::optional<Sample> s = ring.try_pop();
+    REQUIRE(s);
+    CHECK(s->t == i);
+  }
+  CHECK_FALSE(ring.try_pop());
+
+  rt::SpscRing<Sample, 256> shared;
+  constexpr int n = 100000;
+  std::thread producer([&] {
+    for (int i = 0; i < n; ++i)
+      while (!shared.try_push({static_cast<double>(i), i, -i}))
+        std::this_thread::yield();
+  });
+  int expected = 0;
+  bool in_order = true;
+  while (expected < n) {
+    if (const std::optional<Sample> s = shared.try_pop()) {
+      in_order = in_order && s->t == expected && s->x == expected && s->y == -expected;
+      ++expected;
+    }
+  }
+  producer.join();
+  CHECK(in_order);
 }

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -19,13 +20,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "hapticfield/rt/spsc_ring.hpp"
 #include "hapticfield/servo.hpp"
 #include "view/mouse_device.hpp"
-#include "view/sample_ring.hpp"
 #include "view/scene.hpp"
 #include "view/scope.hpp"
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
+#include "view/view_sample.hpp"
 #include "view/window.hpp"
 
 using namespace hapticfield;
@@ -92,37 +94,6 @@ TEST_CASE("Scope::range is a nice value above the largest force, and the window 
   scope.add({3.5, {0, 0}, {0.0, 0.0, 0.0}});  // both older than 2 s: dropped
   CHECK(scope.samples().size() == 1);
   CHECK(scope.range() == Catch::Detail::Approx(0.1));
-}
-
-TEST_CASE("SampleRing: in order, a full ring drops and counts, two threads") {
-  SampleRing<4> ring;
-  for (int i = 0; i < 6; ++i)
-    ring.push({static_cast<double>(i), {0, 0}, {0, 0, 0}});
-  CHECK(ring.dropped() == 2);
-  ViewSample s;
-  for (int i = 0; i < 4; ++i) {
-    REQUIRE(ring.pop(s));
-    CHECK(s.t == i);
-  }
-  CHECK_FALSE(ring.pop(s));
-
-  SampleRing<256> shared;
-  constexpr int n = 100000;
-  std::thread producer([&] {
-    for (int i = 0; i < n; ++i)
-      while (!shared.push({static_cast<double>(i), {i, -i}, {0, 0, 0}}))
-        std::this_thread::yield();
-  });
-  int expected = 0;
-  bool in_order = true;
-  while (expected < n) {
-    if (shared.pop(s)) {
-      in_order = in_order && s.t == expected && s.pixel.x == expected && s.pixel.y == -expected;
-      ++expected;
-    }
-  }
-  producer.join();
-  CHECK(in_order);
 }
 
 TEST_CASE("MouseDevice: the pointer's pixel on the plane, a filtered velocity, forces go nowhere") {
@@ -310,19 +281,19 @@ TEST_CASE("the viewer's tick: mouse read, live field, sample push, command, with
   VirtualClock clock;
   MouseDevice<VirtualClock> mouse(mapping, clock);
   mouse.set_pixel(59.5, 40.0);
-  SampleRing<8192> ring;
+  rt::SpscRing<ViewSample, 8192> ring;
 
   // the real loop on a virtual clock, the tick as the viewer writes it
   ServoLoop<MouseDevice<VirtualClock>, VirtualClock> loop(mouse, clock);
   auto tick = [&](const TickInput& in) noexcept {
-    (void)ring.push({in.probe.time, mapping.to_image(in.probe.position), loop.last_command()});
+    (void)ring.try_push({in.probe.time, mapping.to_image(in.probe.position), loop.last_command()});
     return live.force(in.probe);
   };
   loop.run(tick, {.max_ticks = 1000});
-  ViewSample s, last;
+  ViewSample last;
   int n = 0;
-  while (ring.pop(s)) {
-    last = s;
+  while (const std::optional<ViewSample> s = ring.try_pop()) {
+    last = *s;
     ++n;
   }
   CHECK(n == 1000);
@@ -340,10 +311,10 @@ TEST_CASE("the viewer's tick: mouse read, live field, sample push, command, with
       probe.position = state.position;
       probe.velocity = state.velocity;
       const glm::dvec3 f = live.force(probe);
-      (void)ring.push({probe.time, mapping.to_image(probe.position), f});
+      (void)ring.try_push({probe.time, mapping.to_image(probe.position), f});
       (void)mouse.write(f);
       if (i % 100 == 0) {
-        while (ring.pop(s)) {
+        while (ring.try_pop()) {
         }
       }
     }

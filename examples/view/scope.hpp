@@ -14,7 +14,7 @@
 #include <glm/geometric.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "view/sample_ring.hpp"
+#include "view/view_sample.hpp"
 
 namespace hapticfield::view {
 
