@@ -72,6 +72,9 @@ struct FieldGuard {
   /// A video field's lockstep switch (VideoField::set_lockstep), empty for other fields: run_servo turns it
   /// on for a run on the virtual clock, so that each tick waits for its frame, and off after.
   std::function<void(bool)> lockstep;
+  /// A simulator's own real-time thread (a MuJoCo scene's), empty for other fields: run_servo on the wall clock
+  /// starts it (true) and stops it after the run (false).
+  std::function<void(bool)> real_time;
 };
 using Guards = std::vector<std::shared_ptr<FieldGuard>>;
 
@@ -220,5 +223,6 @@ void bind_video(py::module_& m);
 void bind_budget(py::module_& m);
 void bind_surface(py::module_& m);
 void bind_relief_map(py::module_& m);
+void bind_mujoco(py::module_& m);
 
 }  // namespace hapticfield::python

@@ -233,4 +233,5 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_hjif(m);
 #endif
   hp::bind_relief_map(m);
+  hp::bind_mujoco(m);
 }

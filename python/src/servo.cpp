@@ -313,6 +313,18 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
     VirtualClock clock;
     return run_device(spec, clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
   }
+  // Every simulator the field is made of (a MuJoCo scene) steps on its own thread in real time for the run.
+  struct RealTimeSimulators {
+    const Guards& guards;
+    explicit RealTimeSimulators(const Guards& g) : guards(g) {
+      for (const auto& guard : guards)
+        if (guard->real_time) guard->real_time(true);
+    }
+    ~RealTimeSimulators() {
+      for (const auto& guard : guards)
+        if (guard->real_time) guard->real_time(false);
+    }
+  } simulators(field.guards);
   SteadyClock clock;
   return run_device(spec, clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
 }

@@ -3,8 +3,8 @@
 #include "field.hpp"
 
 #include <hapticfield/io/height_map.hpp>
-#include <hapticfield/scenes/picture_relief.hpp>
 #include <hapticfield/io/stl.hpp>
+#include <hapticfield/scenes/picture_relief.hpp>
 #include <hapticfield/surface.hpp>
 #if HAPTICFIELD_PYTHON_IO
 #include <hapticfield/io/load_mesh.hpp>
@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -32,8 +33,50 @@ namespace {
 /// device frame.
 using AnyShape = std::variant<Posed<HeightFieldShape>, Posed<MeshShape>, Posed<PlaneShape>, Posed<SphereShape>>;
 
+/// A moving surface's poses (surface/moving_shape.hpp): each field made on it reads a PoseFeed of its own (one
+/// reader each), and set_pose() publishes to every one still alive.
+struct Motion {
+  std::mutex mutex;  ///< the writers' (Python threads'); the loops never take it
+  MovingPose pose;   ///< the newest
+  std::vector<std::weak_ptr<PoseFeed>> feeds;
+
+  std::shared_ptr<PoseFeed> feed() {
+    const std::lock_guard<std::mutex> lock(mutex);
+    auto f = std::make_shared<PoseFeed>(pose);
+    feeds.push_back(f);
+    return f;
+  }
+  void publish(const MovingPose& next) {
+    next.validate();
+    const std::lock_guard<std::mutex> lock(mutex);
+    pose = next;
+    std::erase_if(feeds, [](const std::weak_ptr<PoseFeed>& f) { return f.expired(); });
+    for (const auto& weak : feeds)
+      if (const auto f = weak.lock()) f->publish(next);
+  }
+};
+
+/// A deforming mesh's vertices (surface/deforming_mesh.hpp): each field made on it reads a DeformingMeshFeed of
+/// its own (its tree built once from the newest mesh), and set_vertices() refits every one still alive.
+struct Deformation {
+  std::mutex mutex;   ///< the writers' (Python threads'); the loops never take it
+  TriangleMesh mesh;  ///< the newest positions (and normals)
+  MeshShapeConfig config;
+  bool normals_from_faces{false};  ///< vertex normals recomputed from the faces at each set_vertices()
+  std::uint64_t frames{0};         ///< set_vertices() calls
+  std::vector<std::weak_ptr<DeformingMeshFeed>> feeds;
+
+  std::shared_ptr<DeformingMeshFeed> feed() {
+    const std::lock_guard<std::mutex> lock(mutex);
+    auto f = std::make_shared<DeformingMeshFeed>(mesh, config);
+    feeds.push_back(f);
+    return f;
+  }
+};
+
 /// A shape built in Python: never changes once built, so it needs no guard (each proxy made on it keeps its
-/// own state).
+/// own state). A moving or deforming one changes through its Motion or Deformation, which each proxy reads
+/// from a feed of its own.
 struct Surface {
   std::shared_ptr<const AnyShape> shape;
   std::string kind;  ///< height_field, mesh, plane, sphere
@@ -45,6 +88,8 @@ struct Surface {
   std::vector<std::string> warnings;                ///< mesh: what the reader accepted but may surprise
   std::string normals;                              ///< mesh: the normals the proxy pushes along, in words
   Pose pose;                                        ///< where the shape's own frame is
+  std::shared_ptr<Motion> motion;                   ///< moving_surface(): the poses that move it
+  std::shared_ptr<Deformation> deformation;         ///< deforming_mesh(): the vertices that deform it
 };
 
 /// A pose argument: a Pose, or None and an optional origin (the older form: a translation alone).
@@ -453,9 +498,24 @@ SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& p
     shared.push_back(&f);
   }
   d += ")";
+  if (surface.deformation) {
+    SurfaceField out;
+    static_cast<Field&>(out) = make_field(
+        contact(ProxyConstraint<DeformingMesh>(DeformingMesh(surface.deformation->feed()), config), std::move(sum)), d,
+        shared);
+    out.trace = &trace_as<SurfaceContact<DeformingMesh>>;
+    return out;
+  }
   return std::visit(
       [&]<class S>(const S& shape) {
         SurfaceField out;
+        if (surface.motion) {
+          static_cast<Field&>(out) = make_field(
+              contact(ProxyConstraint<Moving<S>>(Moving<S>(S(shape), surface.motion->feed()), config), std::move(sum)),
+              d, shared);
+          out.trace = &trace_as<SurfaceContact<Moving<S>>>;
+          return out;
+        }
         static_cast<Field&>(out) = make_field(contact(ProxyConstraint<S>(shape, config), std::move(sum)), d, shared);
         out.trace = &trace_as<SurfaceContact<S>>;
         return out;
@@ -553,6 +613,102 @@ SurfaceField picture_relief_of(const py::object& image, double mm_per_level, dou
 
 }  // namespace
 
+namespace {
+
+/// moving_surface()'s result: a Surface whose pose set_pose() changes while loops run.
+struct MovingSurface : Surface {};
+/// deforming_mesh()'s result: a mesh whose vertices set_vertices() moves while loops run.
+struct DeformingSurface : Surface {};
+
+MovingPose moving_pose(const std::optional<Pose>& pose, const V3& velocity, const V3& angular_velocity, double time) {
+  MovingPose p;
+  p.pose = pose.value_or(Pose{});
+  p.linear_velocity = glm3(velocity);
+  p.angular_velocity = glm3(angular_velocity);
+  p.time = time;
+  p.validate();  // std::invalid_argument: a ValueError
+  return p;
+}
+
+MovingSurface moving_surface(const Surface& surface, const std::optional<Pose>& pose, const V3& velocity,
+                             const V3& angular_velocity, double time) {
+  if (surface.motion || surface.deformation)
+    throw py::value_error("moving_surface: the surface already moves or deforms");
+  MovingSurface out;
+  static_cast<Surface&>(out) = surface;
+  out.motion = std::make_shared<Motion>();
+  out.motion->pose = moving_pose(pose, velocity, angular_velocity, time);
+  out.description = "moving " + surface.description;
+  out.bounds.reset();  // it moves
+  return out;
+}
+
+/// N x 3 rows of real numbers, one per vertex of the mesh, all finite.
+std::vector<glm::dvec3> vertex_rows(const py::array& a, std::size_t count, const char* what) {
+  const auto v = rows_array<double>(a, 3, what, false, 3 * io::default_max_mesh_triangles);
+  if (static_cast<std::size_t>(v.shape(0)) != count)
+    throw py::value_error(std::string(what) + ": need one row per vertex (" + std::to_string(count) + "), got " +
+                          std::to_string(v.shape(0)));
+  std::vector<glm::dvec3> out(count);
+  const double* p = v.data();
+  for (std::size_t i = 0; i < count; ++i) {
+    out[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+    if (!is_finite(out[i])) throw py::value_error(std::string(what) + ": row " + std::to_string(i) + " is not finite");
+  }
+  return out;
+}
+
+DeformingSurface deforming_mesh(const py::array& vertices, const py::array& faces, const std::optional<py::array>& uvs,
+                                const std::optional<py::array>& normals, bool shade_normals, std::uint32_t max_nodes) {
+  const Surface made = mesh_surface_from_arrays(vertices, faces, uvs, normals, std::nullopt, std::nullopt,
+                                                shade_normals, max_nodes, io::default_max_mesh_triangles);
+  DeformingSurface out;
+  static_cast<Surface&>(out) = made;
+  auto d = std::make_shared<Deformation>();
+  d->mesh = std::get<Posed<MeshShape>>(*made.shape).shape().mesh();
+  d->config = MeshShapeConfig{shade_normals, max_nodes};
+  d->normals_from_faces = shade_normals && !normals;
+  out.deformation = std::move(d);
+  out.kind = "mesh";
+  out.description = "deforming " + made.description;
+  out.bounds.reset();  // it deforms
+  return out;
+}
+
+void set_vertices(DeformingSurface& self, const py::array& vertices, const std::optional<py::array>& normals) {
+  Deformation& d = *self.deformation;
+  const std::size_t count = d.mesh.positions.size();
+  std::vector<glm::dvec3> positions = vertex_rows(vertices, count, "vertices");
+  std::vector<glm::dvec3> shading;
+  if (normals && d.mesh.normals.empty())
+    throw py::value_error(
+        "normals: the mesh has no vertex normals to replace (built with shade_normals=False and none)");
+  if (normals) {
+    shading = vertex_rows(*normals, count, "normals");
+    for (std::size_t i = 0; i < count; ++i) {
+      const double length = glm::length(shading[i]);
+      if (!(length > 0.0)) throw py::value_error("normals: row " + std::to_string(i) + " is zero");
+      shading[i] /= length;
+    }
+  }
+  py::gil_scoped_release release;
+  const std::lock_guard<std::mutex> lock(d.mutex);
+  if (!normals && d.normals_from_faces) {  // as a mesh built on these vertices would have them
+    TriangleMesh moved;
+    moved.positions = positions;
+    moved.triangles = d.mesh.triangles;
+    shading = with_vertex_normals(std::move(moved)).normals;
+  }
+  std::erase_if(d.feeds, [](const std::weak_ptr<DeformingMeshFeed>& f) { return f.expired(); });
+  for (const auto& weak : d.feeds)
+    if (const auto f = weak.lock()) f->publish(positions, shading);  // refits the feed's own tree
+  d.mesh.positions = std::move(positions);
+  if (!shading.empty()) d.mesh.normals = std::move(shading);
+  ++d.frames;
+}
+
+}  // namespace
+
 void bind_surface(py::module_& m) {
   py::class_<Pose>(m, "Pose",
                    "Where a shape's own frame goes: world = rotation @ local + translation. Every shape constructor "
@@ -623,6 +779,67 @@ void bind_surface(py::module_& m) {
       .def_property_readonly(
           "pose", [](const Surface& s) { return s.pose; }, "Where the shape's own frame is (a Pose).")
       .def("__repr__", [](const Surface& s) { return "<hapticfield.Surface " + s.description + ">"; });
+
+  py::class_<MovingSurface, Surface>(
+      m, "MovingSurface",
+      "A surface that moves while loops run (moving_surface()): each field made on it with surface_contact() "
+      "takes the newest pose at every tick without a lock, the proxy carried with it (a shape moving into a still "
+      "probe pushes it out, one moving away leaves it free) and the damping on the velocity relative to the "
+      "touched surface's.")
+      .def(
+          "set_pose",
+          [](MovingSurface& self, const std::optional<Pose>& pose, const V3& velocity, const V3& angular_velocity,
+             double time) {
+            const MovingPose next = moving_pose(pose, velocity, angular_velocity, time);
+            py::gil_scoped_release release;
+            self.motion->publish(next);
+          },
+          py::arg("pose") = py::none(), py::arg("velocity") = V3{0.0, 0.0, 0.0},
+          py::arg("angular_velocity") = V3{0.0, 0.0, 0.0}, py::arg("time") = 0.0,
+          "Where the surface's frame is (a Pose; None: where it was built) at time [s] on the loop's clock "
+          "(Probe time: run_servo's from 0, forces()'s start_time + i period), moving at velocity [m/s] (of the "
+          "frame's origin) and angular_velocity [rad/s] (about it), both in the device frame: each field's next "
+          "tick takes it, extrapolated by the velocities from time for at most 0.1 s. Any thread; ValueError for "
+          "an invalid pose or a value not finite.")
+      .def_property_readonly(
+          "moving_pose",
+          [](MovingSurface& self) {
+            const std::lock_guard<std::mutex> lock(self.motion->mutex);
+            const MovingPose& p = self.motion->pose;
+            return py::make_tuple(p.pose, v3(p.linear_velocity), v3(p.angular_velocity), p.time);
+          },
+          "The newest (pose, velocity, angular_velocity, time) set.");
+
+  py::class_<DeformingSurface, Surface>(
+      m, "DeformingSurface",
+      "A triangle mesh whose vertices move while loops run (deforming_mesh()): the same triangles, new positions "
+      "each set_vertices(); each field made on it has its own copy of the tree, refitted (not rebuilt) and swapped "
+      "in without a lock at its next tick.")
+      .def("set_vertices", &set_vertices, py::arg("vertices"), py::arg("normals") = py::none(),
+           "New positions N x 3 [m] (one per vertex, finite) and optionally vertex normals N x 3; without them a "
+           "mesh built with shade_normals and no normals gets new normals from its faces (as a mesh rebuilt on "
+           "these vertices), otherwise keeps its normals. Refits every field's tree on the calling thread (the GIL "
+           "released); ValueError for a wrong shape, a value not finite, or normals for a mesh without them.")
+      .def_property_readonly(
+          "frames",
+          [](DeformingSurface& self) {
+            const std::lock_guard<std::mutex> lock(self.deformation->mutex);
+            return self.deformation->frames;
+          },
+          "set_vertices() calls so far.");
+
+  m.def("moving_surface", &moving_surface, py::arg("surface"), py::arg("pose") = py::none(),
+        py::arg("velocity") = V3{0.0, 0.0, 0.0}, py::arg("angular_velocity") = V3{0.0, 0.0, 0.0}, py::arg("time") = 0.0,
+        "A MovingSurface: surface (placed by its own pose within the moving frame) moved by pose (a Pose; None: "
+        "the identity) at velocity [m/s] and angular_velocity [rad/s] from time [s] on the loop's clock; "
+        "set_pose() moves it while loops run.");
+  m.def("deforming_mesh", &deforming_mesh, py::arg("vertices"), py::arg("faces"), py::arg("uvs") = py::none(),
+        py::arg("normals") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
+        "A DeformingSurface: a triangle mesh from arrays as mesh_surface_from_arrays (vertices N x 3 [m] in the "
+        "device frame, faces M x 3, optional uvs and normals), whose vertices set_vertices() moves while loops "
+        "run. A deformation is not rigid: a touching proxy is put back in front of the face it touched; a "
+        "surface that passes through the HIP within one tick leaves it inside, felt as nothing until it comes "
+        "out.");
 
   py::class_<SurfaceField, Field>(
       m, "SurfaceField",

@@ -17,7 +17,16 @@ _Vec2 = Union[Sequence[SupportsFloat], numpy.typing.NDArray[Union[numpy.floating
 _Vec3 = Union[Sequence[SupportsFloat], numpy.typing.NDArray[Union[numpy.floating[Any], numpy.integer[Any]]]]
 
 __version__: str
+has_mujoco: bool
 has_video: bool
+
+
+class DeformingSurface(Surface):
+    """A triangle mesh whose vertices move while loops run (deforming_mesh()): the same triangles, new positions each set_vertices(); each field made on it has its own copy of the tree, refitted (not rebuilt) and swapped in without a lock at its next tick."""
+    @property
+    def frames(self) -> int: ...
+    def set_vertices(self, vertices: numpy.typing.NDArray[Any], normals: Optional[numpy.typing.NDArray[Any]] = None) -> None:
+        """New positions N x 3 [m] (one per vertex, finite) and optionally vertex normals N x 3; without them a mesh built with shade_normals and no normals gets new normals from its faces (as a mesh rebuilt on these vertices), otherwise keeps its normals. Refits every field's tree on the calling thread (the GIL released); ValueError for a wrong shape, a value not finite, or normals for a mesh without them."""
 
 
 class Error(RuntimeError):
@@ -55,6 +64,42 @@ class HapticMedia:
         """every channel at rate [Hz]: a channels x samples float64 array (sample i at i / rate)"""
     @property
     def timescale(self) -> int: ...
+
+
+class MovingSurface(Surface):
+    """A surface that moves while loops run (moving_surface()): each field made on it with surface_contact() takes the newest pose at every tick without a lock, the proxy carried with it (a shape moving into a still probe pushes it out, one moving away leaves it free) and the damping on the velocity relative to the touched surface's."""
+    @property
+    def moving_pose(self) -> Tuple[Any, ...]: ...
+    def set_pose(self, pose: Optional[Pose] = None, velocity: _Vec3 = ..., angular_velocity: _Vec3 = ..., time: float = 0.0) -> None:
+        """Where the surface's frame is (a Pose; None: where it was built) at time [s] on the loop's clock (Probe time: run_servo's from 0, forces()'s start_time + i period), moving at velocity [m/s] (of the frame's origin) and angular_velocity [rad/s] (about it), both in the device frame: each field's next tick takes it, extrapolated by the velocities from time for at most 0.1 s. Any thread; ValueError for an invalid pose or a value not finite."""
+
+
+class MujocoScene(Field):
+    """A MuJoCo scene felt through the servo loop (mujoco_scene()): a Field, and the simulator behind it. The scene's inspection (body, joint_position, step, ...) waits for no run: it raises RuntimeError while a run_servo loop or a forces() call uses the field."""
+    def body(self, name: str) -> Dict[str, Any]:
+        """A body's centre of mass position [m], its velocity [m/s] (device frame) and mass [kg] as a dict. ValueError for an unknown body."""
+    def clear_fault(self) -> None:
+        """Starts the scene again from its initial state after a fault; the force fades back in."""
+    @property
+    def events(self) -> Dict[str, Any]: ...
+    @property
+    def fault(self) -> str: ...
+    @property
+    def fault_message(self) -> str: ...
+    def joint_position(self, name: str) -> float:
+        """A joint's position (a hinge's angle [rad], a slide's [m]). ValueError for an unknown joint."""
+    def load(self, path: object) -> None:
+        """Changes the scene (MJCF): the new one fades in. FileError / Error as mujoco_scene; the old scene stays on failure."""
+    @property
+    def rate(self) -> float: ...
+    @property
+    def scene_energy(self) -> float: ...
+    @property
+    def simulated_time(self) -> float: ...
+    def step(self, n: int = 1) -> bool:
+        """Takes n simulator steps on the calling thread, with the newest handle sample (for forces() evaluations between steps; run_servo steps the scene by itself). False when the simulator is faulted."""
+    @property
+    def tool_radius(self) -> float: ...
 
 
 class Pose:
@@ -152,6 +197,9 @@ def butterworth(signal: numpy.typing.ArrayLike, order: int = 4, band: str = 'low
 def clamp(field: Field, limit: float) -> Field:
     """|F| limited to limit [N] keeping the direction; a non-finite force becomes zero."""
 
+def deforming_mesh(vertices: numpy.typing.NDArray[Any], faces: numpy.typing.NDArray[Any], uvs: Optional[numpy.typing.NDArray[Any]] = None, normals: Optional[numpy.typing.NDArray[Any]] = None, shade_normals: bool = True, max_nodes: int = 4096) -> DeformingSurface:
+    """A DeformingSurface: a triangle mesh from arrays as mesh_surface_from_arrays (vertices N x 3 [m] in the device frame, faces M x 3, optional uvs and normals), whose vertices set_vertices() moves while loops run. A deformation is not rigid: a touching proxy is put back in front of the face it touched; a surface that passes through the HIP within one tick leaves it inside, felt as nothing until it comes out."""
+
 def depth_map(path: object, pixel_size: float = 0.0001, metres_per_unit: float = 1e-06, blur: float = 0.0, origin: Optional[_Vec3] = None, pose: Optional[Pose] = None, shade_normals: bool = True, max_nodes: int = 4096) -> Surface:
     """A height field from a depth map: a one-channel 16-bit PNG or TIFF, or a 32-bit float TIFF; height = value x metres_per_unit [m] (16-bit in um: 1e-6; float in m: 1.0); pixel_size [m]; blur [px]; origin [m] or pose as for height_field. OpenEXR, 8-bit and colour files, NaN values and missing files raise FileError naming the file."""
 
@@ -204,6 +252,12 @@ def mesh_surface(path: object, scale: float = 1.0, origin: Optional[_Vec3] = Non
 
 def mesh_surface_from_arrays(vertices: numpy.typing.NDArray[Any], faces: numpy.typing.NDArray[Any], uvs: Optional[numpy.typing.NDArray[Any]] = None, normals: Optional[numpy.typing.NDArray[Any]] = None, pose: Optional[Pose] = None, origin: Optional[_Vec3] = None, shade_normals: bool = True, max_nodes: int = 4096, max_triangles: int = 20000000) -> Surface:
     """A triangle mesh from numpy arrays: vertices N x 3 [m] (real), faces M x 3 vertex indices from 0 (integer dtype; each triangle felt from the side its counter-clockwise winding faces), optional uvs N x 2 and normals N x 3 (per vertex; normalised). Placed by pose (a Pose) or origin [m]. shade_normals as mesh_surface: the given normals, else normals from the faces; False: face normals. At most max_triangles faces (default and limit 20 M) and 3 x max_triangles vertices. ValueError naming the array and row for a wrong shape or dtype, an index out of range, a value not finite, a zero normal, no face, or faces that all have zero area; a broadcast (zero-stride) or overlapping array is refused before anything is allocated."""
+
+def moving_surface(surface: Surface, pose: Optional[Pose] = None, velocity: _Vec3 = ..., angular_velocity: _Vec3 = ..., time: float = 0.0) -> MovingSurface:
+    """A MovingSurface: surface (placed by its own pose within the moving frame) moved by pose (a Pose; None: the identity) at velocity [m/s] and angular_velocity [rad/s] from time [s] on the loop's clock; set_pose() moves it while loops run."""
+
+def mujoco_scene(path: object, rate: float = 500.0, mode: str = 'local_model', stiffness: float = 1000.0, damping: Optional[float] = None, coupling_stiffness: float = 200.0, coupling_damping: Optional[float] = None, tool_body: str = 'tool', scene_origin: _Vec3 = ..., detect_distance: float = 0.01, stall_time: float = 0.05, fade_time: float = 0.2) -> MujocoScene:
+    """A MuJoCo scene (an MJCF file with a tool: a free body named tool_body with a sphere geom, the tool's radius) felt as a field (a MujocoScene): the simulator steps at rate [Hz] (10..10000) on a thread of its own, never on the servo loop's. In run_servo on the virtual clock (the default for the simulated arm) it steps in lockstep with the loop's time (step j at j / rate, the loop waiting for it), so a run is the same on any machine; on the wall clock it steps in real time. mode: local_model (default: the touched surfaces as planes rendered at the loop's rate, stiffness [N/m] and damping [N s/m] on them) or virtual_coupling (a spring-damper coupling_stiffness [N/m], coupling_damping [N s/m] to the simulated tool). A damping left None is the least Adams & Hannaford's bound allows, T K / 2 at T = 1 / rate (the coupling's at least 2 N s/m); a smaller one is a ValueError. Device frame (y up) to MuJoCo's z up: (x, y, z) -> (x, -z, y), plus scene_origin [m] (scene frame). detect_distance [m]: contacts published within it; stall_time [s]: no step for this long gives zero force; fade_time [s]: the force fades in after a change or a fault. A missing file or MJCF MuJoCo refuses raises FileError, a scene without a usable tool Error."""
 
 def noise(kind: str = 'gaussian', sigma: float = 1.0, seed: int = 1, n: int = 1000) -> numpy.typing.NDArray[numpy.float64]:
     """n x 3 samples of the library's repeatable noise (gaussian|laplacian|uniform, standard deviation sigma) at lattice points (i, 0, 0), i = 0..n-1: a pure function of (seed, point)."""
