@@ -75,6 +75,18 @@ def test_a_tick_allocates_nothing_on_a_surface_with_fields_laid_on_it(coffee):
     assert abs(long["malloc"] - short["malloc"]) <= 4 and abs(long["free"] - short["free"]) <= 4, runs
 
 
+def test_a_tick_allocates_nothing_for_moving_shapes_and_a_mujoco_scene_in_lockstep():
+    # a moving plane and a deforming mesh (each swaps in its newest snapshot every tick) and the MuJoCo table
+    # scene, whose simulator thread (not counted: it steps MuJoCo) the loop waits for at every step
+    runs = counted_runs("physics")
+    for run in runs:
+        assert run["loop_malloc"] == 0 and run["loop_free"] == 0, runs
+        assert run["peak_force_n"] > 0.3  # the moving plane pushed the arm [N]
+    short, long = runs
+    assert long["ticks"] - short["ticks"] == 2000
+    assert abs(long["malloc"] - short["malloc"]) <= 4 and abs(long["free"] - short["free"]) <= 4, runs
+
+
 def test_watching_a_wall_clock_run_allocates_nothing(coffee):
     # Only allocation counts: the wall clock makes the rest depend on the load.
     short, long = counted_runs("full", "--coffee", coffee, "--clock", "wall")

@@ -6,7 +6,8 @@
 Builds SCENE (full: plane contact with a tangible image, a lattice texture,
 friction, a HaTT texture and a video; surface: a relief from the picture felt
 through the proxy, with the tangible image and a lattice laid on it by uv and
-friction; allocating: the test-only field that allocates every tick), warms up, then runs the loop for S_short and S_long
+friction; physics: a moving plane, a deforming mesh and, when the module has MuJoCo, the table scene stepped
+in lockstep; allocating: the test-only field that allocates every tick), warms up, then runs the loop for S_short and S_long
 seconds, N times each, and prints one JSON line: for each run its ticks and
 the malloc/free calls made on this thread: by the whole run_servo call, and
 by the loop alone (run_servo reports those when this counter is preloaded).
@@ -16,6 +17,9 @@ so which ticks evaluate the field) does not depend on how busy the machine is.
 import argparse
 import ctypes
 import json
+import pathlib
+
+import numpy as np
 
 import hapticfield as hf
 
@@ -29,6 +33,15 @@ HAND = {}
 
 
 def scene(a):
+    if a.scene == "physics":
+        plane = hf.moving_surface(hf.plane_surface(), pose=hf.Pose(translation=(0.0, 0.0, -0.006)))
+        vertices = np.array([[-0.02, -0.02, -0.007], [0.02, -0.02, -0.007], [0.02, 0.02, -0.007], [-0.02, 0.02, -0.007]])
+        mesh = hf.deforming_mesh(vertices, np.array([[0, 1, 2], [0, 2, 3]]))
+        parts = [hf.surface_contact(plane, stiffness=1500.0, damping=0.5), hf.surface_contact(mesh, stiffness=1500.0)]
+        if hf.has_mujoco:  # stepped on its own thread, the loop waiting for each step
+            table = pathlib.Path(__file__).resolve().parents[3] / "examples" / "data" / "mujoco_table.xml"
+            parts.append(hf.mujoco_scene(table, rate=500.0))
+        return hf.sum(parts)
     if a.scene == "allocating":
         return hf.plane_contact([hf._allocating_field()])
     if a.scene == "surface":
@@ -53,7 +66,7 @@ def scene(a):
 
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("scene", choices=["full", "surface", "allocating"])
+    p.add_argument("scene", choices=["full", "surface", "physics", "allocating"])
     p.add_argument("--clip")
     p.add_argument("--hatt")
     p.add_argument("--coffee")
