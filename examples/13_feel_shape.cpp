@@ -26,10 +26,13 @@
 // normals from the faces: io/mesh_shading.hpp, the default of every tool
 // and of Python); --facets feels the bare triangles. --feel-texture lays a
 // glTF mesh's base-colour texture on it by uv as a tangible-image texture
-// (scenes/model_texture.hpp), at the size the mesh's uvs give it.
+// (scenes/model_texture.hpp), at the size the mesh's uvs give it; with
+// --relief-mm H its gray levels are also a relief, white H mm up
+// (scenes/model_relief.hpp).
 // Bad input: one line on stderr and exit status 1 (2 for usage errors).
 #include <hapticfield/io.hpp>
 #include <hapticfield/io/mesh_shading.hpp>
+#include <hapticfield/scenes/model_relief.hpp>
 #include <hapticfield/scenes/model_texture.hpp>
 #include <hapticfield/surface.hpp>
 
@@ -89,6 +92,7 @@ constexpr const char* usage =
     "  --spacing S           height map: distance between pixel centres [m], in (0, 1e3] (default 1e-4)\n"
     "  --feel-texture        a glTF mesh's base-colour texture felt as a tangible-image texture\n"
     "                        laid by uv (its pixel size from the mesh's uvs; 0.5 N at an edge)\n"
+    "  --relief-mm H         with --feel-texture: its gray levels also as a relief, white H mm up, in (0, 10]\n"
     "  -h, --help            this text\n"
     "Height maps: pixel (column c, row r) of a W x H map is at x = c S, y = (H - 1 - r) S,\n"
     "z = its height; the surface is solid below. Reads at most 1000000 probes.\n"
@@ -112,6 +116,7 @@ struct Arguments {
   double spacing = 1e-4;
   bool spacing_given = false;
   bool feel_texture = false;
+  double relief_mm = 0.0;  ///< --relief-mm: the texture's relief at white [mm]; 0: none
 };
 
 /// N comma-separated finite numbers.
@@ -176,6 +181,8 @@ Arguments parse(hf::cli::Parser& p) {
       a.facets = true;
     } else if (p.is("--feel-texture")) {
       a.feel_texture = true;
+    } else if (p.is("--relief-mm")) {
+      a.relief_mm = p.real(hf::cli::open_closed(0.0, 10.0));
     } else if (p.is("--rotate")) {
       const auto r = parse_reals<4>(p.value(), "--rotate", "AX,AY,AZ,DEG");
       const glm::dvec3 axis{r[0], r[1], r[2]};
@@ -316,6 +323,10 @@ Loaded load_shape(const Arguments& args, bool mesh) {
       std::snprintf(text, sizeof text, "texture: %d x %d px felt by uv, %.6g m per uv unit", out.texture.cols,
                     out.texture.rows, out.metres_per_uv);
       out.notes.emplace_back(text);
+      if (args.relief_mm > 0.0) {
+        std::snprintf(text, sizeof text, "relief: the texture's gray levels, white %.6g mm up", args.relief_mm);
+        out.notes.emplace_back(text);
+      }
     }
     return out;
   }
@@ -357,6 +368,7 @@ int run(const Arguments& args) {
     throw hf::cli::UsageError("--height-scale and --spacing are for height maps, not meshes");
   if (!mesh && args.feel_texture)
     throw hf::cli::UsageError("--feel-texture is for meshes with a base-colour texture (glTF)");
+  if (args.relief_mm > 0.0 && !args.feel_texture) throw hf::cli::UsageError("--relief-mm needs --feel-texture");
   if (!mesh && args.scale_given)
     throw hf::cli::UsageError("--scale is for meshes; a height map takes --spacing and --height-scale");
   if (!mesh && (args.smooth || args.facets))
@@ -384,6 +396,12 @@ int run(const Arguments& args) {
         using S = std::remove_cvref_t<decltype(s)>;
         if (loaded.texture.empty()) {
           feel(hf::contact(hf::ProxyConstraint<S>(std::move(s), args.proxy)), probes, out, touching, largest);
+        } else if (args.relief_mm > 0.0) {
+          hf::material::ModelTextureConfig texture;
+          texture.proxy = args.proxy;
+          feel(hf::material::relief_surface(std::move(s), loaded.texture, loaded.metres_per_uv, args.relief_mm / 1000.0,
+                                            texture),
+               probes, out, touching, largest);
         } else {
           hf::material::ModelTextureConfig texture;
           texture.proxy = args.proxy;

@@ -626,4 +626,17 @@ TEST_CASE("feel_shape --feel-texture: a glTF model felt with its base-colour tex
   for (const Row& row : b)
     touching += row.contact;
   CHECK(touching > 0);
+  // --relief-mm: the picture's gray levels as a relief on top: the forces differ from the texture alone where pressed
+  check_error({duck.string(), "--probes", probes, "--relief-mm", "0.5"}, 2, "--relief-mm needs --feel-texture");
+  const Result relief =
+      run({duck.string(), "--probes", probes, "--stiffness", "1000", "--feel-texture", "--relief-mm", "0.5"});
+  INFO(relief.err);
+  REQUIRE(relief.status == 0);
+  CHECK(relief.err.find("relief: the texture's gray levels, white 0.5 mm up") != std::string::npos);
+  const std::vector<Row> c = parse_rows(relief.out);
+  REQUIRE(c.size() == path.size());
+  int differ = 0;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    differ += c[i].contact && glm::length(c[i].f - b[i].f) > 1e-6;
+  CHECK(differ > 0);
 }

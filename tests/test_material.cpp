@@ -645,4 +645,53 @@ TEST_CASE("the Duck (glTF, embedded base-colour texture) is felt with its textur
   CHECK_THAT(texture, WithinRel(best, 0.05));  // the felt texture is the picture's own force there (gain 1 N)
   if (hapticfield::test::allocations_counted) CHECK(allocations == 0);
 }
+
+// --- a model felt with its picture's relief ----------------------------------
+
+#include "hapticfield/scenes/model_relief.hpp"
+
+TEST_CASE("a model's relief: a gray ramp gives Fn = k (d + h(uv)) and a lean of (k d + k h) dh/dx downhill",
+          "[material][relief]") {
+  // a ramp 0..255 across 52 columns on a 0.2 m sheet: h is linear in u between the first and last texel
+  // centres, so bilinear reads and one-texel central differences are exact there
+  constexpr int width = 52;          // 255 / 51 = 5 levels a column: the ramp is exact in 8 bits
+  constexpr double side = 0.2;       // [m]
+  constexpr double height = 0.0005;  // [m] at white
+  constexpr double k = 1200.0;       // [N/m]
+  constexpr double depth = 0.001;    // [m]
+  cv::Mat ramp(32, width, CV_8UC1);
+  for (int x = 0; x < width; ++x)
+    ramp.col(x).setTo(static_cast<double>(x) * 255.0 / (width - 1));
+  ModelTextureConfig config;
+  config.proxy.stiffness = k;
+  config.texture_gain = 0.0;  // the relief alone
+  auto model = relief_model(sheet_with_texture(ramp), height, config);
+  const double slope = height / ((width - 1.0) / width * side);  // dh/dx [m/m]
+  const std::uint32_t seed = hapticfield::test::run_seed();
+  INFO("seed " << seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> across(1.5 / width, 1.0 - 1.5 / width);  // both differences inside
+  std::uniform_real_distribution<double> along(0.1, 0.9);
+  for (int i = 0; i < 300; ++i) {
+    const double u = across(rng);
+    const double v = along(rng);
+    const glm::dvec3 at{-side / 2 + u * side, -side / 2 + v * side, 0.0};
+    model.reset();
+    (void)model.force(probe_at(at + glm::dvec3{0, 0, 0.001}));
+    const glm::dvec3 f = model.force(probe_at(at - glm::dvec3{0, 0, depth}));
+    const double h = height * (u * width - 0.5) / (width - 1.0);  // the ramp's height at u [m]
+    REQUIRE_THAT(f.z, WithinRel(k * (depth + h), 1e-6));          // heights held as floats
+    REQUIRE_THAT(f.x, WithinRel(-(k * depth + k * h) * slope, 1e-6));
+    REQUIRE_THAT(f.y, WithinAbs(0.0, 1e-9));
+  }
+  // out of contact: nothing; and no allocation while stroking
+  model.reset();
+  CHECK(glm::length(model.force(probe_at({0.0, 0.0, 0.01}))) == 0.0);
+  const long allocations = hapticfield::test::count_allocations([&] {
+    for (int tick = 0; tick < 400; ++tick)
+      (void)model.force(probe_at({-0.08 + 0.0004 * tick, 0.0, -depth}, {0.4, 0.0, 0.0}));
+  });
+  if (hapticfield::test::allocations_counted) CHECK(allocations == 0);
+  CHECK_THROWS_AS(relief_model(sheet_with_texture(ramp), -0.001, config), std::invalid_argument);
+}
 #endif
