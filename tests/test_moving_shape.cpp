@@ -406,7 +406,7 @@ TEST_CASE(
     }
     INFO("nearest " << nearest << " r");
     CHECK(nearest >= 1.0 - 1e-6);
-    CHECK(touched > 80);
+    CHECK(touched > 60);  // most passes met the ball
   }
 }
 

@@ -407,6 +407,23 @@ TEST_CASE(
       CHECK(a.force == glm::dvec3{0.0});
       CHECK(b.force == glm::dvec3{0.0});
     }
+    // a fine wavy sheet (0.14 mm triangles, far smaller than the ball) crossed from under, slanting: a ball
+    // overlapping it from behind meets some corner at t = 0 whichever way it moves; it was held there, the force
+    // growing, until it passes on free (ProxyTick::embedded)
+    for (const double radius : {0.0005, 0.002}) {
+      ProxyConstraint wavy(MeshShape(test::wavy_sheet(0.1, 707, 0.002, 0.03)),
+                           ProxyConfig{.stiffness = k, .radius = radius});
+      int passed = 0;
+      for (int i = 0; i <= 400; ++i) {
+        const glm::dvec3 hip{0.01 + 2e-5 * i, 0.005 - 1e-5 * i, -0.006 + 3e-5 * i};  // z from -6 to +6 mm
+        const Contact c = wavy.contact(probe_at(hip));
+        INFO("radius " << radius << " tick " << i);
+        CHECK(c.force == glm::dvec3{0.0});
+        passed += wavy.last_tick().embedded;
+      }
+      CHECK(passed > 0);  // it did overlap the sheet on the way through
+      CHECK(press(wavy, {0.018, 0.001, 0.01}, {0.018, 0.001, -0.001}).touching);  // felt from above once clear
+    }
     // from above again, both are felt
     CHECK(press(sheet, {0.001, 0.002, 0.01}, {0.001, 0.002, -0.001}).touching);
     CHECK(sheet.proxy().z == Approx(r).epsilon(1e-4));

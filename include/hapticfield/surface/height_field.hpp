@@ -81,6 +81,10 @@ concept HeightGridLike = requires(const G& g) {
 
 class HeightFieldShape {
  public:
+  /// closest() measures to the bilinear patches, sweep_sphere() meets the
+  /// cells' two triangles: the two may disagree on whether a ball overlaps.
+  static constexpr bool closest_matches_sweep = false;
+
   /// @throws std::invalid_argument for fewer than 2 x 2 samples (0 x 0
   ///         included), more than height_field_max_samples (checked before
   ///         anything is allocated), spacings that are not finite and > 0,

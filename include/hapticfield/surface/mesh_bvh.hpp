@@ -212,12 +212,20 @@ class MeshBvh {
   /// centre) say where it touches. A ball that already overlaps a feature
   /// and moves toward it touches at t = 0. A face is met from its front
   /// only; an edge or a corner from any side. radius > 0 and finite.
+  ///
+  /// `seed`, when found, is a contact already known on this move (one
+  /// triangle's, e.g. the one the ball touched last tick, from
+  /// sweep_ball_triangle): the traversal starts from its t, so it skips
+  /// every box the ball cannot reach before it. The answer is the seed's
+  /// unless a triangle is met strictly earlier.
   [[nodiscard]] BvhHit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
-                                    QueryStats* stats = nullptr) const noexcept {
+                                    QueryStats* stats = nullptr, const BvhHit& seed = BvhHit{}) const noexcept {
     if (!(radius > 0.0) || !std::isfinite(radius)) return BvhHit{};
-    return traverse<true>(from, to, radius, stats,
-                          [this, radius](std::uint32_t i, const glm::dvec3& a, const glm::dvec3& d, double& best_t,
-                                         BvhHit& best) noexcept { touch(i, a, d, radius, best_t, best); });
+    return traverse<true>(
+        from, to, radius, stats,
+        [this, radius](std::uint32_t i, const glm::dvec3& a, const glm::dvec3& d, double& best_t,
+                       BvhHit& best) noexcept { touch(i, a, d, radius, best_t, best); },
+        seed);
   }
 
   /// The point of the mesh nearest to p if one is within max_distance [m]
@@ -379,23 +387,28 @@ class MeshBvh {
   /// keeps the nearest hit with t in [0, best_t).
   template <bool Grown, class Leaf>
   [[nodiscard]] BvhHit traverse(const glm::dvec3& from, const glm::dvec3& to, double grow, QueryStats* stats,
-                                Leaf&& leaf) const noexcept {
+                                Leaf&& leaf, const BvhHit& seed = BvhHit{}) const noexcept {
     BvhHit best;
     QueryStats work;
     if (stats) *stats = work;
     const glm::dvec3 d = to - from;
     if (triangles_.empty() || !is_finite(from) || !is_finite(d)) return best;
+    // a seed's contact ends the move early: nothing past its t is wanted
+    double best_t = 1.0;
+    if (seed.found() && seed.t >= 0.0 && seed.t <= 1.0) {
+      best = seed;
+      best_t = seed.t;
+    }
     const Slabs<Grown> slabs(from, d, grow);
-    // Grown: a box within `grow` of some point of the segment is within
-    // grow + |d| / 2 of its middle (Euclidean; the slabs test the box grown
-    // on each axis, whose corners reach farther)
-    const glm::dvec3 middle = from + 0.5 * d;
-    const double reach = grow + 0.5 * std::sqrt(glm::dot(d, d));
+    // Grown: a box within `grow` of some point of the segment up to best_t
+    // is within grow + best_t |d| / 2 of that part's middle (Euclidean; the
+    // slabs test the box grown on each axis, whose corners reach farther)
+    const glm::dvec3 middle = from + (0.5 * best_t) * d;
+    const double reach = grow + 0.5 * best_t * std::sqrt(glm::dot(d, d));
     const double reach2 = reach * reach * (1.0 + 1e-12);
     std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
     std::size_t top = 0;
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
-    double best_t = 1.0;
     double entry = 0.0;
     if (!slabs.cross(root_, best_t, entry)) return best;
     for (;;) {

@@ -100,9 +100,29 @@ class MeshShape {
   /// point of the mesh, face_normal the contact normal (unit, from it to the
   /// centre at contact), normal the shaded normal where the ball touches a
   /// face's inside, else the contact normal; t the fraction of the move.
+  ///
+  /// `hint`, a triangle the ball is likely to meet first (the one it touched
+  /// last tick), is tried before the tree: the traversal then skips what
+  /// lies beyond that contact (MeshBvh::sweep_sphere's seed). The answer is
+  /// the same whatever the hint, but for which of two triangles met at the
+  /// very same t is named.
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
-                                 QueryStats* stats = nullptr) const noexcept {
-    const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats);
+                                 QueryStats* stats = nullptr, std::uint32_t hint = no_primitive) const noexcept {
+    BvhHit seed;
+    const TriangleMesh& m = data_->mesh;
+    if (hint < m.triangles.size() && radius > 0.0 && std::isfinite(radius)) {
+      const TriangleIndices& tri = m.triangles[hint];
+      const glm::dvec3 a = m.positions[tri[0]], e1 = m.positions[tri[1]] - a, e2 = m.positions[tri[2]] - a;
+      double t = 1.0;
+      glm::dvec3 contact{0.0};
+      if (detail::sweep_ball_triangle(a, e1, e2, from, to - from, radius, t, contact)) {
+        seed.triangle = hint;
+        seed.t = t;
+        seed.contact_point = contact;
+        (void)detail::closest_on_triangle(contact, a, e1, e2, seed.b1, seed.b2);
+      }
+    }
+    const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats, seed);
     Hit out = describe(h);
     out.t = h.t;
     if (!h.found()) return out;

@@ -126,6 +126,8 @@ template <Shape S>
 class Moving {
  public:
   static constexpr bool flat_primitives = requires { requires S::flat_primitives; };
+  /// closest() and the sweeps see the same surface (the inner shape's say).
+  static constexpr bool closest_matches_sweep = !requires { requires !S::closest_matches_sweep; };
 
   /// A shape with its own feed, starting at `initial` (feed() for the writer).
   /// @throws std::invalid_argument as MovingPose::validate().

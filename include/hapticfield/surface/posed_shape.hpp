@@ -151,6 +151,8 @@ class Posed {
   /// The proxy may move over one primitive without a sweep when the inner
   /// shape's primitives are flat: a rigid motion keeps them flat.
   static constexpr bool flat_primitives = requires { requires S::flat_primitives; };
+  /// closest() and the sweeps see the same surface (the inner shape's say).
+  static constexpr bool closest_matches_sweep = !requires { requires !S::closest_matches_sweep; };
 
   /// @throws std::invalid_argument for an invalid pose (Pose::validate()).
   Posed(S shape, const Pose& pose) : shape_(std::move(shape)), pose_(pose) { pose_.validate(); }

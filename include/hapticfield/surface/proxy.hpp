@@ -22,6 +22,12 @@
 ///      past a convex edge) starts another from there with no planes, at
 ///      most four; if the last one still floats the proxy goes back to where
 ///      it last met a face.
+///   A ball (ProxyConfig::radius > 0) that begins a tick free but already
+///   overlapping the surface has come through it from behind (a ball is
+///   stopped r off the front): it passes on, free, until clear
+///   (ProxyTick::embedded), as one begun in the surface does; not on a
+///   shape whose closest() sees another surface than its sweeps (a height
+///   field: S::closest_matches_sweep false), where overlap is not exact.
 ///   0. With ProxyConfig::stick_first, the friction cone is tested first on
 ///      last tick's planes: a proxy that sticks, or slides and stays over
 ///      its face, needs no sweep; else steps 1-4.
@@ -134,8 +140,9 @@ struct ProxyTick {
       0};               ///< tree nodes (or grid cells) visited by all the tick's queries, where the shape counts them
   bool blocked{false};  ///< a query ran out of its budget: the proxy stayed
   bool sliding{false};  ///< friction: the proxy slides (else sticks)
-  /// A ball that began overlapping the surface (at the first tick, or after
-  /// reset()): it follows the HIP with no force until it is clear of it.
+  /// A ball that began overlapping the surface (at the first tick, after
+  /// reset(), or come through it from behind): it follows the HIP with no
+  /// force until it is clear of it.
   bool embedded{false};
 };
 
@@ -224,6 +231,17 @@ class ProxyConstraint {
         if (!h.complete) {
           blocked = true;
           break;
+        }
+        if (closest_matches_sweep && h.found() && !touching_ && tick_.moves == 1 && overlaps(start)) {
+          // a free ball that overlaps the surface where it starts came
+          // through it from behind (a ball is stopped r off the front): it
+          // passes on, free, until clear, as a ball begun in the surface
+          proxy_ = goal;
+          embedded_ = overlaps(goal);
+          tick_.embedded = true;
+          path_.count = 0;
+          visit(goal);
+          return Contact{};
         }
         if (!h.found()) {
           x = target;
@@ -327,6 +345,7 @@ class ProxyConstraint {
     proxy_ = glm::dvec3{0.0};
     held_planes_ = Planes{};
     held_face_ = Hit{};
+    hint_ = no_primitive;
   }
 
   /// The proxy's position [m] (on the surface while touching, else the HIP).
@@ -593,6 +612,11 @@ class ProxyConstraint {
     return h.found() && h.distance < config_.radius * (1.0 - 1e-9);
   }
 
+  /// closest() sees the surface the sweeps meet (a shape says otherwise
+  /// with closest_matches_sweep = false: a height field's bilinear patches
+  /// against its cells' triangles), so overlaps() is exact for a ball.
+  static constexpr bool closest_matches_sweep = !requires { requires !S::closest_matches_sweep; };
+
   /// The shape can sweep a ball (sweep_sphere), for a radius > 0.
   static constexpr bool sweeps_spheres = requires(const S& s, const glm::dvec3& p) { s.sweep_sphere(p, p, 1.0); };
 
@@ -601,7 +625,13 @@ class ProxyConstraint {
   [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to) noexcept {
     if constexpr (sweeps_spheres) {
       if (config_.radius > 0.0) {
-        if constexpr (requires(QueryStats * q) { shape_.sweep_sphere(from, to, 1.0, q); }) {
+        if constexpr (requires(QueryStats * q) { shape_.sweep_sphere(from, to, 1.0, q, std::uint32_t{0}); }) {
+          QueryStats q;  // the primitive met last is tried first (MeshShape::sweep_sphere's hint)
+          const Hit h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_);
+          tick_.nodes += q.nodes;
+          if (h.found()) hint_ = h.primitive;
+          return h;
+        } else if constexpr (requires(QueryStats * q) { shape_.sweep_sphere(from, to, 1.0, q); }) {
           QueryStats q;
           const Hit h = shape_.sweep_sphere(from, to, config_.radius, &q);
           tick_.nodes += q.nodes;
@@ -682,9 +712,10 @@ class ProxyConstraint {
   bool embedded_{false};  ///< a ball that began overlapping the surface, free until clear (overlaps())
   bool touching_{false};
   bool sliding_{false};
-  Planes held_planes_{};  ///< the constraint planes of the last tick that touched
-  Hit held_face_{};       ///< the face the proxy last touched
-  Hit face_{};            ///< a deforming shape's face the proxy touched last tick
+  Planes held_planes_{};              ///< the constraint planes of the last tick that touched
+  Hit held_face_{};                   ///< the face the proxy last touched
+  Hit face_{};                        ///< a deforming shape's face the proxy touched last tick
+  std::uint32_t hint_{no_primitive};  ///< the primitive a ball's sweep met last, tried first by the next
   ProxyTick tick_{};
   ProxyPath path_{};
 };
