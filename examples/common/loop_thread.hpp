@@ -12,6 +12,7 @@
 #include <string>
 #include <thread>
 
+#include "hapticfield/rt/realtime_thread.hpp"
 #include "hapticfield/servo/loop.hpp"
 
 namespace hapticfield::cli {
@@ -30,14 +31,22 @@ inline void wait_for_operator() {
 /// callback must outlive it; the destructor joins.
 class LoopThread {
  public:
+  /// The library prints nothing: what the loop reports (safety stages the
+  /// configuration turned off, real-time scheduling refused under
+  /// RealTime::best_effort) goes to stderr here, one line each.
   template <class Loop, class Callback>
   LoopThread(Loop& loop, Callback& callback, RunLimits limits)
       : thread_([this, &loop, &callback, limits] {
+          if (const std::string off = loop.config().safety.disabled_stages(); !off.empty())
+            std::fprintf(stderr, "hapticfield: safety stages disabled by configuration: %s\n", off.c_str());
           try {
             reason_ = loop.run(callback, limits);
           } catch (...) {
             failure_ = std::current_exception();
           }
+          if (!loop.realtime_refused().empty())
+            std::fprintf(stderr, "hapticfield: real-time scheduling not granted (%s); ran best-effort. %s\n",
+                         loop.realtime_refused().c_str(), rt::realtime_advice);
           ran_for_ = std::chrono::steady_clock::now() - started_;
           done_.store(true, std::memory_order_release);
         }) {}
