@@ -348,6 +348,108 @@ TEST_CASE("lockstep without a servo: the runner waits, and stops at once", "[muj
   CHECK(field.touching() == 0);
 }
 
+namespace {
+/// A local model of one static plane, published once, never stale.
+LocalModel one_plane(const ContactPlane& plane, double tool_radius) {
+  LocalModel m;
+  m.sequence = 1;
+  m.scene = 1;
+  m.tool_radius = tool_radius;
+  m.stall_time = 1e9;
+  m.fade_time = 0.0;
+  m.planes[0] = plane;
+  m.plane_count = 1;
+  return m;
+}
+glm::dvec3 any_perpendicular(const glm::dvec3& n) {
+  const glm::dvec3 a = std::fabs(n.x) < 0.9 ? glm::dvec3{1.0, 0.0, 0.0} : glm::dvec3{0.0, 1.0, 0.0};
+  return glm::normalize(glm::cross(n, a));
+}
+}  // namespace
+
+TEST_CASE("Coulomb friction on the local model's planes: sticks within mu_s F_n, slides at mu_k F_n", "[mujoco]") {
+  const std::uint32_t seed = test::run_seed();
+  INFO("seed " << seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), u01(0.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    INFO("trial " << trial);
+    glm::dvec3 n{unit(rng), unit(rng), unit(rng)};
+    if (glm::length(n) < 0.1) n = {0.0, 1.0, 0.0};
+    n = glm::normalize(n);
+    const double angle = 6.3 * u01(rng);  // of the slide in the plane [rad]
+    const glm::dvec3 t = std::cos(angle) * any_perpendicular(n) + std::sin(angle) * glm::cross(n, any_perpendicular(n));
+    ContactPlane plane;
+    plane.point = 0.05 * glm::dvec3{unit(rng), unit(rng), unit(rng)};
+    plane.normal = n;
+    plane.stiffness = 200.0 + 2800.0 * u01(rng);   // [N/m]
+    plane.static_friction = 0.1 + 0.9 * u01(rng);  // [-]
+    plane.dynamic_friction = plane.static_friction * u01(rng);
+    const double k = plane.stiffness, mu_s = plane.static_friction, mu_k = plane.dynamic_friction;
+    const double r = 0.005 * u01(rng), d = 0.0005 + 0.0025 * u01(rng);  // tool radius, depth [m]
+    LocalModelLink link;
+    link.model.publish(one_plane(plane, r));
+    LocalModelField field(link);
+    Probe probe;
+    probe.period = 1e-3;
+    const glm::dvec3 x0 = plane.point + (r - d) * n;  // pressed d in, still
+    const double scale = k * d;                       // the normal force [N]
+    probe.position = x0;
+    CHECK(glm::length(field.force(probe) - scale * n) <= 1e-9 * scale);  // a new touch: no tangential force
+    // a straight slide along t: F_t = -k s t while k s <= mu_s F_n; once it broke, -mu_k F_n t
+    const double step = mu_s * d / (5.0 + 10.0 * u01(rng));
+    bool broke = false;
+    glm::dvec3 last{0.0};
+    for (int i = 1; i <= 30; ++i) {
+      const double s = i * step;
+      probe.position = x0 + s * t;
+      broke = broke || s > mu_s * d * (1.0 + 1e-12);
+      const glm::dvec3 expected = scale * n - (broke ? mu_k * scale : k * s) * t;
+      const glm::dvec3 f = field.force(probe);
+      REQUIRE(glm::length(f - expected) <= 1e-9 * scale);
+      last = probe.position;
+    }
+    REQUIRE(broke);
+    // back by delta: the proxy trails mu_k d behind, so the slip is mu_k d - delta: it sticks again within the
+    // dynamic cone, |mu_k d - delta| <= mu_k d, and slides back at mu_k F_n beyond
+    const double delta = (2.0 * mu_k + 0.5 * mu_s) * d * u01(rng);
+    probe.position = last - delta * t;
+    const glm::dvec3 back = field.force(probe);
+    const double slip = std::fabs(mu_k * d - delta) <= mu_k * d * (1.0 + 1e-12) ? mu_k * d - delta : -mu_k * d;
+    CHECK(glm::length(back - (scale * n - k * slip * t)) <= 1e-9 * scale);
+    CHECK(field.spring_energy() == Approx(0.5 * k * (d * d + slip * slip)));
+  }
+}
+
+TEST_CASE("friction drags a still hand along a plane moving under it, up to mu_s F_n, then mu_k F_n", "[mujoco]") {
+  ContactPlane plane;
+  plane.velocity = {0.021, 0.0, 0.0};  // sliding along x under the hand [m/s]
+  plane.normal = {0.0, 1.0, 0.0};
+  plane.stiffness = 1000.0;
+  plane.static_friction = 0.6;
+  plane.dynamic_friction = 0.4;
+  plane.body = 3;
+  LocalModelLink link;
+  link.model.publish(one_plane(plane, 0.0));
+  LocalModelField field(link);
+  Probe probe;
+  probe.period = 1e-3;
+  probe.position = {0.0, -0.002, 0.0};  // 2 mm in: F_n = 2 N
+  (void)field.force(probe);
+  for (int i = 1; i <= 100; ++i) {
+    const glm::dvec3 f = field.force(probe);
+    const double dragged = 1000.0 * 0.021 * i * 1e-3;  // k v t while it sticks [N]
+    const double expected = dragged <= 0.6 * 2.0 * (1.0 + 1e-12) ? dragged : 0.4 * 2.0;
+    INFO("tick " << i);
+    REQUIRE(f.x == Approx(expected).margin(1e-12));
+    REQUIRE(f.y == Approx(2.0).margin(1e-12));
+  }
+  // the plane's body got the opposite of everything the hand got
+  const HandleSample* h = link.handle.latest();
+  REQUIRE(h != nullptr);
+  CHECK(h->impulse[3].x < 0.0);
+}
+
 TEST_CASE("energy does not grow over 10 s of pushing at 100 Hz", "[mujoco]") {
   MujocoBridgeConfig c = config_at(100.0);
   c.plane_stiffness = 1000.0;
@@ -358,13 +460,14 @@ TEST_CASE("energy does not grow over 10 s of pushing at 100 Hz", "[mujoco]") {
     CHECK(rig.worst_passivity < 1e-4);  // [J]
     CHECK(rig.bridge.events().non_finite == 0);
   }
-  SECTION("the table: box, ball and door pushed about stay calm") {
-    c.mode = CouplingMode::local_model;
-    Rig rig(scene_file("mujoco_table.xml"), c, HandPath::raster(glm::dvec3{0.0, -0.01, 0.0}, 0.1, 0.06, 4, 0.05));
-    double peak = 0.0, late = 0.0;
+  // the table: box, ball and door pushed about for 10 s
+  const auto table_stays_calm = [](const MujocoBridgeConfig& config) {
+    Rig rig(scene_file("mujoco_table.xml"), config, HandPath::raster(glm::dvec3{0.0, -0.01, 0.0}, 0.1, 0.06, 4, 0.05));
+    double peak = 0.0, late = 0.0, touched = 0.0;
     for (int i = 0; i < 10000; ++i) {
       rig.step();
       const double kinetic = rig.bridge.scene_energy();
+      touched = std::max(touched, glm::length(rig.last_force));
       peak = std::max(peak, kinetic);
       if (i >= 8000) late = std::max(late, kinetic);
     }
@@ -374,6 +477,15 @@ TEST_CASE("energy does not grow over 10 s of pushing at 100 Hz", "[mujoco]") {
     // pushing at 5 cm/s can give a 0.1 kg box ~1e-4 J of motion, far
     // below what a growing oscillation reaches
     CHECK(peak - rig.bridge.scene_energy() < 0.05);
+    CHECK(touched > 0.5);  // the hand met the scene [N]
+  };
+  SECTION("the table: box, ball and door pushed about stay calm") {
+    table_stays_calm(c);
+  }
+  SECTION("the table with Coulomb friction on the planes stays calm too") {
+    c.plane_static_friction = 0.6;
+    c.plane_dynamic_friction = 0.4;
+    table_stays_calm(c);
   }
 }
 
@@ -564,6 +676,10 @@ TEST_CASE("bad scenes and settings: one clear error each", "[mujoco]") {
   c = {};
   c.mode = CouplingMode::virtual_coupling;
   c.coupling = {2000.0, 1.0};  // B < T K / 2 at 500 Hz
+  CHECK_THROWS_AS(MujocoBridge(ball, c), std::invalid_argument);
+  c = {};
+  c.plane_static_friction = 0.3;
+  c.plane_dynamic_friction = 0.5;  // mu_k > mu_s
   CHECK_THROWS_AS(MujocoBridge(ball, c), std::invalid_argument);
   c = {};
   c.tool_body = "ball";  // a free body without a sphere? the ball has one: fine

@@ -38,9 +38,10 @@ V3 v3(const glm::dvec3& v) {
 }
 
 MujocoScene mujoco_scene(const py::object& path, double rate, const std::string& mode, double stiffness,
-                         std::optional<double> damping, double coupling_stiffness,
-                         std::optional<double> coupling_damping, const std::string& tool_body, const V3& scene_origin,
-                         double detect_distance, double stall_time, double fade_time) {
+                         std::optional<double> damping, double static_friction, double dynamic_friction,
+                         double coupling_stiffness, std::optional<double> coupling_damping,
+                         const std::string& tool_body, const V3& scene_origin, double detect_distance,
+                         double stall_time, double fade_time) {
   MujocoBridgeConfig c;
   c.mode = choose<CouplingMode>(
       "mode", mode, {{"local_model", CouplingMode::local_model}, {"virtual_coupling", CouplingMode::virtual_coupling}});
@@ -49,6 +50,8 @@ MujocoScene mujoco_scene(const py::object& path, double rate, const std::string&
   // the least damping Adams & Hannaford allow, B = T K / 2, unless given
   const double period = std::isfinite(rate) && rate > 0.0 ? 1.0 / rate : 0.0;
   c.plane_damping = damping.value_or(period * stiffness / 2.0);
+  c.plane_static_friction = static_friction;
+  c.plane_dynamic_friction = dynamic_friction;
   c.coupling.stiffness = coupling_stiffness;
   c.coupling.damping = coupling_damping.value_or(std::fmax(2.0, period * coupling_stiffness / 2.0));
   c.tool_body = tool_body;
@@ -202,7 +205,8 @@ void bind_mujoco(py::module_& m) {
           "Changes the scene (MJCF): the new one fades in. FileError / Error as mujoco_scene; the old scene stays "
           "on failure.");
   m.def("mujoco_scene", &mujoco_scene, py::arg("path"), py::arg("rate") = 500.0, py::arg("mode") = "local_model",
-        py::arg("stiffness") = 1000.0, py::arg("damping") = py::none(), py::arg("coupling_stiffness") = 200.0,
+        py::arg("stiffness") = 1000.0, py::arg("damping") = py::none(), py::arg("static_friction") = 0.0,
+        py::arg("dynamic_friction") = 0.0, py::arg("coupling_stiffness") = 200.0,
         py::arg("coupling_damping") = py::none(), py::arg("tool_body") = "tool",
         py::arg("scene_origin") = V3{0.0, 0.0, 0.0}, py::arg("detect_distance") = 0.01, py::arg("stall_time") = 0.05,
         py::arg("fade_time") = 0.2,
@@ -211,7 +215,9 @@ void bind_mujoco(py::module_& m) {
         "own, never on the servo loop's. In run_servo on the virtual clock (the default for the simulated arm) it "
         "steps in lockstep with the loop's time (step j at j / rate, the loop waiting for it), so a run is the same "
         "on any machine; on the wall clock it steps in real time. mode: local_model (default: the touched surfaces "
-        "as planes rendered at the loop's rate, stiffness [N/m] and damping [N s/m] on them) or virtual_coupling (a "
+        "as planes rendered at the loop's rate,  stiffness [N/m] and damping [N s/m] on them, "
+        "Coulomb friction 0 <= dynamic_friction <= static_friction on each: a proxy on the plane sticks in the static "
+        "cone, slides in the dynamic one) or virtual_coupling (a "
         "spring-damper coupling_stiffness [N/m], coupling_damping [N s/m] to the simulated tool). A damping left "
         "None is the least Adams & Hannaford's bound allows, T K / 2 at T = 1 / rate (the coupling's at least 2 N "
         "s/m); a smaller one is a ValueError. Device frame (y up) to MuJoCo's z up: (x, y, z) -> (x, -z, y), plus "

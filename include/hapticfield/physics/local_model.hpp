@@ -15,6 +15,16 @@
 ///                     (first order, at most two simulator periods ahead):
 ///                       d = r - (x - p - v_p a) . n,
 ///                       f = max(0, k d - b (v - v_p) . n) n   while d > 0;
+///                     with Coulomb friction (static mu_s, dynamic mu_k):
+///                     a proxy on the plane where the HIP's projection c
+///                     first touched it, carried with the plane's velocity,
+///                     pulls the HIP back with k (p_f - c) while that stays
+///                     within mu_s |f| (sticking); beyond, the proxy slides,
+///                     held mu_k |f| / k behind c (the force mu_k |f| against
+///                     the slip), until the HIP comes back within the mu_k
+///                     cone and it sticks again (the friction cone of Zilles
+///                     & Salisbury 1995 and Salisbury et al. 1995, with a
+///                     static and a dynamic cone, on each plane);
 ///   virtual_coupling  F = K (x_tool - x) + B (v_tool - v)
 ///                     (physics/virtual_coupling.hpp).
 ///
@@ -79,12 +89,14 @@ enum class CouplingMode : std::uint8_t {
 
 /// One plane of the local model, in the device frame.
 struct ContactPlane {
-  glm::dvec3 point{0.0};     ///< a point of the touched surface [m]
-  glm::dvec3 normal{0.0};    ///< unit normal, out of the touched body toward the tool
-  glm::dvec3 velocity{0.0};  ///< the touched body's velocity at point [m/s]
-  double stiffness{0.0};     ///< k [N/m]
-  double damping{0.0};       ///< b on the normal relative velocity [N s/m]
-  int body{static_body};     ///< the simulator's body id (0..local_model_max_bodies-1) or static_body
+  glm::dvec3 point{0.0};         ///< a point of the touched surface [m]
+  glm::dvec3 normal{0.0};        ///< unit normal, out of the touched body toward the tool
+  glm::dvec3 velocity{0.0};      ///< the touched body's velocity at point [m/s]
+  double stiffness{0.0};         ///< k [N/m]
+  double damping{0.0};           ///< b on the normal relative velocity [N s/m]
+  int body{static_body};         ///< the simulator's body id (0..local_model_max_bodies-1) or static_body
+  double static_friction{0.0};   ///< mu_s: sticks while the tangential force is within mu_s |f| [-]
+  double dynamic_friction{0.0};  ///< mu_k <= mu_s: the sliding force is mu_k |f| [-]
 };
 
 /// What the simulator thread publishes each step (device frame).
@@ -174,6 +186,7 @@ class LocalModelField {
     sample_.angular_impulse.fill(glm::dvec3{0.0});
     fade_start_ = tick_;
     zeroed_ = false;
+    anchors_ = {};
   }
 
   /// True while the last tick gave zero force for a stall or a fault.
@@ -202,6 +215,7 @@ class LocalModelField {
       sample_.impulse.fill(glm::dvec3{0.0});
       sample_.angular_impulse.fill(glm::dvec3{0.0});
       fade_start_ = tick_;
+      anchors_ = {};
     }
     current_ = model;
     touching_ = 0;
@@ -218,6 +232,7 @@ class LocalModelField {
       if (stalled || model.fault) link_->zeroed_ticks.fetch_add(1, std::memory_order_relaxed);
       zeroed_ = stalled || model.fault;
       has_previous_ = false;
+      anchors_ = {};        // the friction proxies start again where the HIP touches
       fade_start_ = tick_;  // fade in again once good models come
       return glm::dvec3{0.0};
     }
@@ -245,6 +260,7 @@ class LocalModelField {
       return f;
     }
     const int count = std::clamp(model.plane_count, 0, local_model_max_planes);
+    std::array<FrictionAnchor, local_model_max_planes> next{};  // this tick's friction proxies
     for (int i = 0; i < count; ++i) {
       const ContactPlane& plane = model.planes[static_cast<std::size_t>(i)];
       const glm::dvec3 point = plane.point + plane.velocity * ahead;
@@ -255,11 +271,57 @@ class LocalModelField {
       if (!(force > 0.0)) continue;
       ++touching_;
       spring_energy_ += 0.5 * weight * plane.stiffness * depth * depth;
-      const glm::dvec3 f = weight * force * plane.normal;
+      const glm::dvec3 contact = x - height * plane.normal;  // the HIP's projection on the plane
+      glm::dvec3 f = force * plane.normal;
+      if (push && plane.static_friction > 0.0)
+        f += friction(plane, point, contact, force, dt, weight, next[static_cast<std::size_t>(i)]);
+      f *= weight;
       total += f;
-      if (push) push_back(plane.body, x - height * plane.normal, f, dt);
+      if (push) push_back(plane.body, contact, f, dt);
     }
+    if (push) anchors_ = next;
     return total;
+  }
+
+  /// A friction proxy on a plane: where it holds the HIP's projection [m].
+  struct FrictionAnchor {
+    glm::dvec3 point{0.0};   ///< on the plane [m]
+    glm::dvec3 normal{0.0};  ///< the plane's, to know it again next tick
+    int body{static_body};
+    bool valid{false};
+    bool sliding{false};  ///< out of the static cone: the dynamic one holds it
+  };
+
+  /// The tangential force of Coulomb friction on plane (moved to `point`)
+  /// for a normal force `normal_force` [N] at the HIP's projection `contact`;
+  /// `anchor` is set to the proxy it leaves for the next tick; weight: the
+  /// fade, for the energy held.
+  glm::dvec3 friction(const ContactPlane& plane, const glm::dvec3& point, const glm::dvec3& contact,
+                      double normal_force, double dt, double weight, FrictionAnchor& anchor) noexcept {
+    glm::dvec3 held = contact;  // a new touch: the proxy where the HIP touches, no tangential force
+    bool sliding = false;
+    for (const FrictionAnchor& a : anchors_) {
+      // the same plane as last tick: the same body, the same normal (to 0.8 degree)
+      if (!a.valid || a.body != plane.body || glm::dot(a.normal, plane.normal) < 0.9999) continue;
+      const glm::dvec3 carried = a.point + plane.velocity * dt;  // the proxy moves with the surface
+      held = carried - glm::dot(carried - point, plane.normal) * plane.normal;
+      sliding = a.sliding;
+      break;
+    }
+    const double k = plane.stiffness;
+    glm::dvec3 slip = contact - held;  // tangential: both on the plane [m]
+    slip -= glm::dot(slip, plane.normal) * plane.normal;
+    const double stretch = glm::length(slip);
+    const double mu_k = std::min(plane.dynamic_friction, plane.static_friction);
+    // sticking: the static cone holds it; sliding: the dynamic one, within which it sticks again
+    sliding = k * stretch > (sliding ? mu_k : plane.static_friction) * normal_force && stretch > 0.0;
+    if (sliding) {  // the proxy follows, mu_k |f| / k behind
+      held = contact - slip * (mu_k * normal_force / k / stretch);
+      slip = contact - held;
+    }
+    anchor = {held, plane.normal, plane.body, true, sliding};
+    spring_energy_ += 0.5 * weight * k * glm::dot(slip, slip);
+    return -k * slip;
   }
 
   /// The body gets -f dt at point p (the HIP got f).
@@ -277,8 +339,9 @@ class LocalModelField {
   std::uint64_t arrived_{0};
   std::uint64_t fade_start_{0};
   std::uint64_t faulty_sequence_{0};
-  LocalModel current_{};   ///< the model of the last tick
-  LocalModel previous_{};  ///< the scene before a change, fading out
+  LocalModel current_{};                                          ///< the model of the last tick
+  LocalModel previous_{};                                         ///< the scene before a change, fading out
+  std::array<FrictionAnchor, local_model_max_planes> anchors_{};  ///< the friction proxies of the last tick
   bool has_previous_{false};
   bool started_{false};
   bool stalled_{false};

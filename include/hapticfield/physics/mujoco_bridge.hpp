@@ -94,15 +94,17 @@ inline constexpr double max_simulator_rate = 10000.0;
 
 struct MujocoBridgeConfig {
   CouplingMode mode{CouplingMode::local_model};
-  double rate{500.0};              ///< simulator steps per second [Hz]
-  std::string tool_body{"tool"};   ///< the free body with the sphere geom
-  glm::dvec3 scene_origin{0.0};    ///< the scene point at the device's origin [m], scene frame
-  double plane_stiffness{1000.0};  ///< k of the local model's planes [N/m]
-  double plane_damping{1.0};       ///< b of the planes on the normal relative velocity, >= T k / 2 [N s/m]
-  VirtualCoupling coupling{};      ///< the virtual_coupling mode's K and B
-  double detect_distance{0.01};    ///< tool-to-surface distance within which planes are published [m]
-  double stall_time{0.05};         ///< no model for this long zeroes the force [s]
-  double fade_time{0.2};           ///< force fade-in after a scene change or a fault [s]
+  double rate{500.0};                  ///< simulator steps per second [Hz]
+  std::string tool_body{"tool"};       ///< the free body with the sphere geom
+  glm::dvec3 scene_origin{0.0};        ///< the scene point at the device's origin [m], scene frame
+  double plane_stiffness{1000.0};      ///< k of the local model's planes [N/m]
+  double plane_damping{1.0};           ///< b of the planes on the normal relative velocity, >= T k / 2 [N s/m]
+  double plane_static_friction{0.0};   ///< mu_s of the planes' Coulomb friction (0: frictionless) [-]
+  double plane_dynamic_friction{0.0};  ///< mu_k, 0 <= mu_k <= mu_s [-]
+  VirtualCoupling coupling{};          ///< the virtual_coupling mode's K and B
+  double detect_distance{0.01};        ///< tool-to-surface distance within which planes are published [m]
+  double stall_time{0.05};             ///< no model for this long zeroes the force [s]
+  double fade_time{0.2};               ///< force fade-in after a scene change or a fault [s]
   /// start() steps in lockstep with the servo's time (a loop on a virtual
   /// clock) instead of at the rate on the wall clock.
   bool lockstep{false};
@@ -127,6 +129,10 @@ struct MujocoBridgeConfig {
     if (plane_damping < plane_stiffness / rate / 2.0 * (1.0 - 1e-12))
       throw std::invalid_argument(
           "MujocoBridgeConfig: plane_damping must be >= T plane_stiffness / 2 at the simulator period T = 1 / rate");
+    if (!std::isfinite(plane_static_friction) || !std::isfinite(plane_dynamic_friction) ||
+        plane_dynamic_friction < 0.0 || plane_dynamic_friction > plane_static_friction)
+      throw std::invalid_argument(
+          "MujocoBridgeConfig: need 0 <= plane_dynamic_friction <= plane_static_friction, finite [-]");
     if (mode == CouplingMode::virtual_coupling) coupling.validate(1.0 / rate);
     if (!std::isfinite(detect_distance) || detect_distance <= 0.0 || detect_distance > 0.1)
       throw std::invalid_argument("MujocoBridgeConfig: detect_distance must be in (0, 0.1] [m]");
@@ -719,6 +725,8 @@ class MujocoBridge {
       }
       ContactPlane plane{to_device_point(surface), detail::scene_to_device(n), detail::scene_to_device(velocity),
                          config_.plane_stiffness,  config_.plane_damping,      body};
+      plane.static_friction = config_.plane_static_friction;
+      plane.dynamic_friction = config_.plane_dynamic_friction;
       if (!is_finite(plane.point) || !is_finite(plane.normal) || !is_finite(plane.velocity)) continue;
       // keep the nearest local_model_max_planes, sorted by distance
       int at = count;
