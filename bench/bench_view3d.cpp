@@ -1,5 +1,5 @@
 // bench_view3d: frame time of the 3D view's software renderer
-// (examples/view/mesh_render.hpp) at 800 x 600 px on UV spheres of 20k to
+// (tools/view/mesh_render.hpp) at 800 x 600 px on UV spheres of 20k to
 // 1.3M triangles, drawn in full and through the display budget (vertex
 // clustering), and on the real meshes of ../shared/data/meshes when
 // present. Each frame turns the camera a little (as a live view does).

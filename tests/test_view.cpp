@@ -1,4 +1,4 @@
-// The live viewer's pieces (examples/view/): nice axis ticks, the servo ->
+// The live viewer's pieces (tools/view/): nice axis ticks, the servo ->
 // viewer sample ring, the mouse as a device, the scene builder, the layout
 // and the drawing (cursor at the probe, arrow along the force), and the
 // viewer's tick path without allocation, the video player (the frame shown

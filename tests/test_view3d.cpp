@@ -1,4 +1,4 @@
-// The 3D view's software renderer (examples/view/orbit_camera.hpp,
+// The 3D view's software renderer (tools/view/orbit_camera.hpp,
 // display_mesh.hpp, mesh_render.hpp, scene3d.hpp) against closed forms: the
 // pinhole projection of known points, the pixels a known triangle covers,
 // the z-buffer keeping the nearer of two triangles, back faces culled, a

@@ -1,4 +1,4 @@
-// The viewer's and servo_demo's --shape pipeline (examples/view/shape_scene.hpp)
+// The viewer's and servo_demo's --shape pipeline (tools/view/shape_scene.hpp)
 // against closed forms: a mesh file scaled to an 80 mm footprint with its
 // top 1 mm below z = 0, a height map picture laid out with its heights, and
 // the proxy started from above the shape giving Fc = k depth along the

@@ -1,4 +1,4 @@
-// libFuzzer target for the example tools' CSV reader (examples/common/csv.hpp):
+// libFuzzer target for the example tools' CSV reader (tools/common/csv.hpp):
 // the input is parsed as an x,y file and as an x,y,vx,vy file, with small
 // bounds so long lines and many rows are reached. Any exception other than
 // FileError, or a result that breaks the reader's promises, is a finding.
