@@ -1,5 +1,6 @@
 // The hapticfield Python module: fields built in Python, evaluated in C++.
 #include "field.hpp"
+#include "material.hpp"
 
 #include <hapticfield/core.hpp>
 #include <hapticfield/texture.hpp>
@@ -228,6 +229,7 @@ PYBIND11_MODULE(hapticfield, m) {
   hp::bind_servo(m);
   hp::bind_video(m);
   hp::bind_budget(m);
+  hp::bind_material(m);  // before surface_contact, which takes a Material
   hp::bind_surface(m);
 #ifdef HAPTICFIELD_PYTHON_HJIF
   hp::bind_hjif(m);

@@ -1,9 +1,11 @@
 // Surfaces from Python: height fields (arrays, pictures, depth maps), meshes (STL, OBJ, glTF) and analytic
 // shapes, felt through the proxy (god-object) and composed with the other fields by uv.
 #include "field.hpp"
+#include "material.hpp"
 
 #include <hapticfield/io/height_map.hpp>
 #include <hapticfield/io/stl.hpp>
+#include <hapticfield/material/material_surface.hpp>
 #include <hapticfield/scenes/picture_relief.hpp>
 #include <hapticfield/surface.hpp>
 #if HAPTICFIELD_PYTHON_IO
@@ -485,7 +487,8 @@ void check_radius(double radius) {
 }
 
 SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& parts, double stiffness, double damping,
-                             double static_friction, double dynamic_friction, double offset, double radius) {
+                             double static_friction, double dynamic_friction, double offset, double radius,
+                             const std::optional<Material>& material) {
   check_radius(radius);
   ProxyConfig config{stiffness, damping, static_friction, dynamic_friction, offset};
   config.radius = radius;
@@ -497,28 +500,28 @@ SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& p
     d += " + " + f.description;
     shared.push_back(&f);
   }
+  if (material) d += " with " + material->description;
   d += ")";
-  if (surface.deformation) {
+  // the proxy on the shape, or with a material the proxy's stiffness, damping and friction read at the touched uv
+  const auto make = [&]<class S>(S shape) {
     SurfaceField out;
-    static_cast<Field&>(out) = make_field(
-        contact(ProxyConstraint<DeformingMesh>(DeformingMesh(surface.deformation->feed()), config), std::move(sum)), d,
-        shared);
-    out.trace = &trace_as<SurfaceContact<DeformingMesh>>;
+    if (material) {
+      static_cast<Field&>(out) = make_field(
+          material::material_surface(std::move(shape), config, material::MaterialMap(*material->map), std::move(sum)),
+          d, shared);
+      out.trace = &trace_as<material::MaterialSurface<S, FieldSum>>;
+    } else {
+      static_cast<Field&>(out) =
+          make_field(contact(ProxyConstraint<S>(std::move(shape), config), std::move(sum)), d, shared);
+      out.trace = &trace_as<SurfaceContact<S>>;
+    }
     return out;
-  }
+  };
+  if (surface.deformation) return make(DeformingMesh(surface.deformation->feed()));
   return std::visit(
       [&]<class S>(const S& shape) {
-        SurfaceField out;
-        if (surface.motion) {
-          static_cast<Field&>(out) = make_field(
-              contact(ProxyConstraint<Moving<S>>(Moving<S>(S(shape), surface.motion->feed()), config), std::move(sum)),
-              d, shared);
-          out.trace = &trace_as<SurfaceContact<Moving<S>>>;
-          return out;
-        }
-        static_cast<Field&>(out) = make_field(contact(ProxyConstraint<S>(shape, config), std::move(sum)), d, shared);
-        out.trace = &trace_as<SurfaceContact<S>>;
-        return out;
+        if (surface.motion) return make(Moving<S>(S(shape), surface.motion->feed()));
+        return make(S(shape));
       },
       *surface.shape);
 }
@@ -941,6 +944,7 @@ void bind_surface(py::module_& m) {
   m.def("surface_contact", &surface_contact, py::arg("surface"), py::arg("parts") = std::vector<Field>{},
         py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0, py::arg("static_friction") = 0.0,
         py::arg("dynamic_friction") = 0.0, py::arg("offset") = 1e-6, py::arg("radius") = 0.0,
+        py::arg("material") = py::none(),
         "F = Fc + parts on a surface, felt through a proxy (god-object, Zilles & Salisbury 1995): Fc = max(0, k d "
         "- b v.n) n + friction, stiffness k [N/m], damping b [N s/m] on the normal velocity, the friction cone "
         "static_friction >= dynamic_friction >= 0; offset: the proxy's lift relative to a primitive's size. "
@@ -949,7 +953,9 @@ void bind_surface(py::module_& m) {
         "height) and does not enter a crack narrower than 2 radius. Every surface takes a ball (a height field's "
         "cells are two flat triangles each for it). While "
         "touching, the parts see |Fc| [N], the normal, and the touched point's uv and tangent frame: lay a field "
-        "on the surface with on_surface(). Returns a SurfaceField (contacts() tells where the proxy is).");
+        "on the surface with on_surface(). material (a Material: material(), load_haptic_material()): the stiffness, "
+        "damping and friction read at the touched uv every tick instead of the numbers, the parts scaled by its "
+        "texture gain there. Returns a SurfaceField (contacts() tells where the proxy is).");
   m.def(
       "picture_relief", &picture_relief_of, py::arg("image"), py::arg("mm_per_level") = 0.01, py::arg("width_m") = 0.1,
       py::arg("blur") = 0.0, py::arg("dark_is_high") = false, py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0,
