@@ -2,6 +2,7 @@
 forms and the C++ bridge's laws; every run on the virtual clock."""
 import os
 import pathlib
+import time
 
 import numpy as np
 import pytest
@@ -180,6 +181,17 @@ def test_a_mujoco_scene_in_run_servo_steps_in_lockstep_and_is_the_same_run_to_ru
     assert np.array_equal(a["trace"]["position"], b["trace"]["position"])
     assert first.body("ball") == second.body("ball")
     assert first.simulated_time == pytest.approx(1.0)
+
+
+@needs_mujoco
+def test_on_the_wall_clock_the_scene_steps_on_its_own_thread_for_the_run_only():
+    scene = hf.mujoco_scene(scene_file("mujoco_ball.xml"), rate=500.0)
+    result = hf.run_servo(scene, seconds=0.1, clock="wall", hand="hold", hand_centre=(0.03, 0.0, 0.0))
+    assert len(result["trace"]["t"]) == 100
+    steps = scene.events["steps"]  # as many as the machine managed in real time
+    time.sleep(0.03)
+    assert scene.events["steps"] == steps  # stopped with the run
+    assert scene.step(2) and scene.events["steps"] == steps + 2  # and stepped by hand after it
 
 
 @needs_mujoco
