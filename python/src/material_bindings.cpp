@@ -15,6 +15,8 @@
 #include "field.hpp"
 #include "material.hpp"
 
+#include <hapticfield/material/uv_relief.hpp>
+
 #if HAPTICFIELD_PYTHON_GLTF_MATERIAL
 #include <hapticfield/io/gltf_haptic_material.hpp>
 #endif
@@ -96,6 +98,15 @@ py::dict sample(const Material& m, double u, double v) {
   d["texture_gain"] = s.texture_gain;
   d["vibration"] = s.vibration;
   return d;
+}
+
+Field uv_relief(const PropertyArg& heights, double stiffness, double metres_per_uv, bool clamp) {
+  material::PropertyMap h = property_of(heights, "heights", clamp);
+  try {
+    return make_field(material::UvRelief(std::move(h), stiffness, metres_per_uv), "uv relief");
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
 }
 
 #if HAPTICFIELD_PYTHON_GLTF_MATERIAL
@@ -189,6 +200,13 @@ void bind_material(py::module_& m) {
         "bilinear between texel centres), repeated outside (clamp=True: edges extended). stiffness [N/m] > 0, "
         "damping [N s/m], friction and texture_gain >= 0 everywhere (ValueError otherwise); dynamic_friction "
         "defaults to static_friction; vibration: an id or an H x W integer array of ids for the vibration tap.");
+  m.def("uv_relief", &uv_relief, py::arg("heights"), py::arg("stiffness") = 1500.0, py::arg("metres_per_uv") = 1.0,
+        py::arg("clamp") = false,
+        "A relief of small height over a surface's uv, felt by haptic bump mapping (Ho, Basdogan & Srinivasan "
+        "1999): heights [m] >= 0, a number or an H x W array over uv as material(); lay it with on_surface() as a "
+        "part of surface_contact() of the same stiffness [N/m]. While touching it adds k h(uv) along the normal and "
+        "-(|Fc| + k h) grad h along the surface, grad h in m per m with metres_per_uv [m] the surface's size of "
+        "one uv unit. ValueError for a negative height or a stiffness or scale not finite and > 0.");
 #if HAPTICFIELD_PYTHON_GLTF_MATERIAL
   m.def("load_haptic_material", &load_haptic_material, py::arg("path"), py::arg("index") = 0,
         "The Material of haptic material `index` of a glTF file's MPEG_haptic_material extension (stiffness, "

@@ -45,6 +45,24 @@ def test_a_two_region_material_gives_each_side_its_stiffness_and_friction():
         np.testing.assert_allclose(ratio, mu, rtol=1e-6)
 
 
+def test_a_relief_over_uv_gives_k_d_plus_h_and_leans_downhill():
+    # an 11-column ramp, 0.5 mm at its top, clamped, on a 0.06 m footprint (uv = (x, y) / 0.06 + 1/2): between the
+    # first and last texel centres h(u) is linear and the one-texel central differences exact
+    size, top, k, depth, n = 0.06, 0.0005, 1200.0, 0.002, 11
+    ramp = np.tile(np.linspace(0.0, top, n), (3, 1))
+    field = hf.surface_contact(flat(size), [hf.on_surface(hf.uv_relief(ramp, k, size, clamp=True))], stiffness=k)
+    slope = top / ((n - 1) / n * size)
+    for u in np.linspace(1.6 / n, 1.0 - 1.6 / n, 9):
+        field.reset()
+        f = field.forces(press((u - 0.5) * size, 0.0, depth))
+        h = top * (u * n - 0.5) / (n - 1)
+        assert f[-1, 2] == pytest.approx(k * (depth + h), rel=1e-6)
+        assert f[-1, 0] == pytest.approx(-(k * depth + k * h) * slope, rel=1e-6)
+        assert f[-1, 1] == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(ValueError, match="heights"):
+        hf.uv_relief(-0.001)
+
+
 def test_bad_materials_are_one_value_error_each():
     with pytest.raises(ValueError, match="stiffness"):
         hf.material(stiffness=0.0)

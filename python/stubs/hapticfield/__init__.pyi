@@ -338,6 +338,9 @@ def temporal_texture(noise: str = 'gaussian', sigma: float = 1.0, seed: int = 1,
 def tick_budget(field: Field, ticks: int = 20000, speed: float = 0.1, radius: float = 0.02, depth: float = 0.002, period: float = 0.001, share: float = 0.25) -> Dict[str, Any]:
     """Does the field fit in a servo tick? Runs it over a scripted path (a circle of radius [m] at speed [m/s], pressed depth [m] into the plane z = 0, ticks period [s] apart) and returns a dict: mean_ns, p50_ns, p99_ns, p999_ns, worst_ns, allocations and allocations_per_tick (None unless the allocation counter is preloaded), exceptions, fits_1khz, fits_10khz (p99 at most share of the period, no allocation, no exception) and summary (the same in words). The GIL is released while it runs."""
 
+def uv_relief(heights: Union[float, numpy.typing.ArrayLike], stiffness: float = 1500.0, metres_per_uv: float = 1.0, clamp: bool = False) -> Field:
+    """A relief of small height over a surface's uv, felt by haptic bump mapping (Ho, Basdogan & Srinivasan 1999): heights [m] >= 0, a number or an H x W array over uv as material(); lay it with on_surface() as a part of surface_contact() of the same stiffness [N/m]. While touching it adds k h(uv) along the normal and -(|Fc| + k h) grad h along the surface, grad h in m per m with metres_per_uv [m] the surface's size of one uv unit. ValueError for a negative height or a stiffness or scale not finite and > 0."""
+
 def video_cuts(path: object) -> List[Any]:
     """The scene cuts of a video: a list of (frame, time [s]), frame the first of the new scene, as `tangible_video --cuts` writes them."""
 
