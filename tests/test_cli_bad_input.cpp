@@ -66,7 +66,8 @@ constexpr int bad_input = 1;
 constexpr int usage = 2;
 constexpr auto time_limit = std::chrono::seconds(20);  // a hung tool is killed and fails
 
-const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / "cli_bad_input";
+// one folder per process: ctest runs parts of this program side by side
+const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / ("cli_bad_input_" + std::to_string(::getpid()));
 
 std::string in_tmp(const std::string& name) {
   return (tmp / name).string();
