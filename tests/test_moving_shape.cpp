@@ -107,6 +107,34 @@ TriangleMesh deformed(TriangleMesh mesh, double amplitude, glm::dvec3 wave, glm:
   return mesh;
 }
 
+/// A shape of `radius` [m] sweeping past a hand that drifts slowly: its
+/// start `lead` [m] before the hand, aimed within 1.2 radii of it (most
+/// passes go through it), at 0.05-1 m/s and turning at up to 5 rad/s; run
+/// for `ticks`, long enough to cover `span` [m].
+struct SweepPast {
+  glm::dvec3 hip0{0.0};   ///< the hand at tick 0 [m]
+  glm::dvec3 drift{0.0};  ///< the hand's own slow motion [m/s]
+  MovingPose shape{};
+  double speed{0.0};  ///< [m/s]
+  int ticks{0};
+};
+
+SweepPast sweep_past(std::mt19937_64& rng, double radius, double lead, double span) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  SweepPast p;
+  const glm::dvec3 direction = random_direction(rng);
+  p.speed = 0.05 + 0.95 * unit(rng);
+  glm::dvec3 aside = random_direction(rng);
+  aside -= glm::dot(aside, direction) * direction;
+  aside = glm::normalize(aside) * (1.2 * radius * unit(rng));
+  p.hip0 = glm::dvec3{0.01 * unit(rng), 0.01 * unit(rng), 0.01 * unit(rng)};
+  p.drift = 0.05 * random_direction(rng);
+  p.shape = sliding(p.hip0 + aside - lead * direction, p.speed * direction);
+  p.shape.angular_velocity = 5.0 * unit(rng) * random_direction(rng);
+  p.ticks = static_cast<int>(span / (p.speed * tick));
+  return p;
+}
+
 /// The mesh's bounding-box diagonal [m].
 double diagonal(const TriangleMesh& mesh) {
   glm::dvec3 lo{1e300}, hi{-1e300};
@@ -280,25 +308,17 @@ TEST_CASE("Moving<S>: a sphere sweeping past at up to 1 m/s never takes the prox
   const unsigned seed = run_seed();
   INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double radius = 0.02;  // [m]
   const TriangleMesh ball = test::icosphere(3, radius);
   const MeshChecker checker(ball);
   int touched = 0;
   for (int pass = 0; pass < 300; ++pass) {
     const bool mesh = pass % 2 == 1;
-    const glm::dvec3 direction = random_direction(rng);
-    const double speed = 0.05 + 0.95 * unit(rng);  // [m/s]
-    // aimed at the probe within 1.2 radii (most passes go through it)
-    glm::dvec3 aside = random_direction(rng);
-    aside -= glm::dot(aside, direction) * direction;
-    aside = glm::normalize(aside) * (1.2 * radius * unit(rng));
-    const glm::dvec3 hip0{0.01 * unit(rng), 0.01 * unit(rng), 0.01 * unit(rng)};
-    const glm::dvec3 drift = 0.05 * random_direction(rng);  // the hand's own slow motion [m/s]
-    MovingPose m = sliding(hip0 + aside - 0.03 * direction, speed * direction);
-    m.angular_velocity = 5.0 * unit(rng) * random_direction(rng);  // and turning [rad/s]
-    const int ticks = static_cast<int>(0.06 / (speed * tick));
-    INFO("pass " << pass << (mesh ? " (icosphere)" : " (sphere)") << " speed " << speed);
+    const SweepPast past = sweep_past(rng, radius, 0.03, 0.06);
+    const glm::dvec3 hip0 = past.hip0, drift = past.drift;
+    const MovingPose& m = past.shape;
+    const int ticks = past.ticks;
+    INFO("pass " << pass << (mesh ? " (icosphere)" : " (sphere)") << " speed " << past.speed);
     const auto run = [&](auto& proxy) {
       bool contact = false;
       for (int i = 0; i <= ticks; ++i) {
@@ -357,7 +377,6 @@ TEST_CASE(
     const unsigned seed = run_seed();
     INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
     std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
     const double radius = 0.02;  // [m]
     const TriangleMesh ball = test::icosphere(3, radius);
     const MeshChecker checker(ball);
@@ -365,17 +384,11 @@ TEST_CASE(
     double nearest = std::numeric_limits<double>::infinity();  // the centre's least distance to the icosphere / r
     for (int pass = 0; pass < 120; ++pass) {
       const bool mesh = pass % 2 == 1;
-      const glm::dvec3 direction = random_direction(rng);
-      const double speed = 0.05 + 0.95 * unit(rng);  // [m/s]
-      glm::dvec3 aside = random_direction(rng);
-      aside -= glm::dot(aside, direction) * direction;
-      aside = glm::normalize(aside) * (1.2 * radius * unit(rng));
-      const glm::dvec3 hip0{0.01 * unit(rng), 0.01 * unit(rng), 0.01 * unit(rng)};
-      const glm::dvec3 drift = 0.05 * random_direction(rng);
-      MovingPose m = sliding(hip0 + aside - 0.04 * direction, speed * direction);
-      m.angular_velocity = 5.0 * unit(rng) * random_direction(rng);  // [rad/s]
-      const int ticks = static_cast<int>(0.08 / (speed * tick));
-      INFO("pass " << pass << (mesh ? " (icosphere)" : " (sphere)") << " speed " << speed);
+      const SweepPast past = sweep_past(rng, radius, 0.04, 0.08);
+      const glm::dvec3 hip0 = past.hip0, drift = past.drift;
+      const MovingPose& m = past.shape;
+      const int ticks = past.ticks;
+      INFO("pass " << pass << (mesh ? " (icosphere)" : " (sphere)") << " speed " << past.speed);
       const auto run = [&](auto& proxy) {
         bool contact = false;
         for (int i = 0; i <= ticks; ++i) {
