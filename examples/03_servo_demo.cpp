@@ -70,7 +70,8 @@ struct Arguments {
   double distance_mm{0.0};                  ///< 0: the shape fills about 70 % of the view
 };
 
-constexpr const char* usage_text =
+/// The usage up to the device's options.
+constexpr const char* usage_head =
     "usage: servo_demo [IMAGE] [options]\n"
     "Runs a field in the servo loop on the simulated arm (or a real HID arm) while a\n"
     "scripted hand raster-scans the picture; shows the loop's rate and jitter live.\n"
@@ -81,21 +82,15 @@ constexpr const char* usage_text =
     "  --rate HZ             servo rate [Hz], in [1, 10000] (default 1000)\n"
     "  --realtime R          off, best_effort (default: ask for SCHED_FIFO, warn if refused)\n"
     "                        or enforce (refuse to start without real-time scheduling)\n"
-    "  --clock C             wall (default) or virtual: simulated time for a simulated arm (sim,\n"
-    "                        woody:GEN[:PRESET]:sim or inverse3:sim), as fast as the CPU allows, the same\n"
+    "  --clock C             wall (default) or virtual: simulated time for a simulated arm (sim, or a\n"
+    "                        family's :sim twin), as fast as the CPU allows, the same\n"
     "                        ticks, safety chain and trace whatever the machine's load\n"
     "  --trace OUT.csv       write t, position [m], force [N], period [s] and the device's\n"
     "                        homed,armed (0/1) per tick\n"
     "  --plots DIR           write force.png and periods.png into DIR (created if needed), drawn with\n"
-    "                        matplotlib when python3 has it, else simpler plots\n"
-    "  --device D            sim (default), hid, hid:VID:PID (hexadecimal ids) or serial:PATH (a\n"
-    "                        tty such as /dev/ttyACM0): our protocol; woody:GEN[:PRESET][:sim|:PATH]:\n"
-    "                        a WoodenHaptics arm, GEN p1 or p2 (USB HID) or p4 (serial text, on the\n"
-    "                        tty PATH), PRESET woody_v2015 (default), woodenhaptics_v2019,\n"
-    "                        aluhaptics_v2 or vintage; :sim simulates it; inverse3:PATH: a Haply\n"
-    "                        Inverse3 on the tty PATH (never run on a real one: check its frame),\n"
-    "                        inverse3:sim its simulated twin\n"
-    "  --list-devices        one line per arm family: present, or why not; then exit\n"
+    "                        matplotlib when python3 has it, else simpler plots\n";
+/// The options after the device's (cli::device_help() in between).
+constexpr const char* usage_tail =
     "  --shape FILE          feel a mesh (.stl, .obj, .gltf, .glb) or a height map picture (white\n"
     "                        high) through a proxy (k = 1500 N/m) instead of --field: scaled so its\n"
     "                        footprint spans 80 mm, its top 1 mm below the start; the hand scans 70 %\n"
@@ -583,5 +578,6 @@ int run_demo(const Arguments& o, D& device, Felt& felt, C& clock, bool hardware)
 
 int main(int argc, char** argv) {
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
-  return cli::main("servo_demo", usage_text, argc, argv, [](cli::Parser& p) { return run(parse(p)); });
+  static const std::string usage_text = usage_head + cli::device_help() + usage_tail;
+  return cli::main("servo_demo", usage_text.c_str(), argc, argv, [](cli::Parser& p) { return run(parse(p)); });
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "common/device_option.hpp"
 #include "device_suite.hpp"
 #include "hapticfield/devices/open_device.hpp"
 #include "hapticfield/servo.hpp"
@@ -327,4 +328,20 @@ TEST_CASE("an empty AnyDevice is a device that is gone: the loop stops at once w
   auto push = [](const TickInput&) noexcept { return glm::dvec3{1.0, 0.0, 0.0}; };
   CHECK(loop.run(push, {.max_ticks = 100}) == StopReason::disconnected);
   CHECK(loop.last_command() == glm::dvec3{0.0});
+}
+
+TEST_CASE("the tools' --device help names every family's device strings, in lines of at most 100 characters") {
+  const std::string help = cli::device_help();
+  for (const DeviceFamily& family : device_families) {
+    CAPTURE(family.name);
+    CHECK(help.find(std::string(family.syntax) + ":") != std::string::npos);
+  }
+  std::size_t start = 0, lines = 0;
+  for (std::size_t end = help.find('\n'); end != std::string::npos; start = end + 1, end = help.find('\n', start)) {
+    CAPTURE(help.substr(start, end - start));
+    CHECK(end - start <= 100);
+    ++lines;
+  }
+  CHECK(start == help.size());  // ends with a newline
+  CHECK(lines >= device_families.size() + 2);
 }

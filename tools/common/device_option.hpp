@@ -4,24 +4,47 @@
 /// door (hapticfield/devices/open_device.hpp), and the link counters of
 /// whichever arm was opened.
 
+#include <cstddef>
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 #include "cli.hpp"
 #include "hapticfield/devices/open_device.hpp"
 
 namespace hapticfield::cli {
 
-/// The usage lines of --device and --list-devices (26 columns of option).
-inline constexpr const char* device_help =
-    "  --device D            sim (default), hid, hid:VID:PID (hexadecimal ids) or serial:PATH (a\n"
-    "                        tty such as /dev/ttyACM0): our protocol; woody:GEN[:PRESET][:sim|:PATH]:\n"
-    "                        a WoodenHaptics arm, GEN p1 or p2 (USB HID) or p4 (serial text, on the\n"
-    "                        tty PATH), PRESET woody_v2015 (default), woodenhaptics_v2019,\n"
-    "                        aluhaptics_v2 or vintage; :sim simulates it; inverse3:PATH: a Haply\n"
-    "                        Inverse3 on the tty PATH (never run on a real one: check its frame),\n"
-    "                        inverse3:sim its simulated twin\n"
-    "  --list-devices        one line per arm family: present, or why not; then exit\n";
+/// The usage lines of --device and --list-devices, the options in a column
+/// of `column` characters: every family of the front door (its device
+/// strings and what arm it is), so the help cannot fall behind the table.
+/// Lines are wrapped at 100 characters.
+[[nodiscard]] inline std::string device_help(std::size_t column = 24) {
+  const auto option = [&](const char* name) {
+    std::string line = std::string("  ") + name;
+    line.append(line.size() < column ? column - line.size() : 1, ' ');
+    return line;
+  };
+  std::string text = option("--device D") + "the arm, one of these (default sim):\n";
+  const std::string indent(column + 2, ' '), more(column + 4, ' ');
+  for (const DeviceFamily& family : device_families) {
+    std::string line = indent + std::string(family.syntax) + ":";
+    std::string_view rest = family.summary;
+    while (!rest.empty()) {  // word by word, wrapped at 100 columns
+      const std::size_t space = rest.find(' ');
+      const std::string_view word = rest.substr(0, space);
+      if (line.size() + 1 + word.size() > 100 && line.size() > more.size()) {
+        text += line + "\n";
+        line = more;
+      } else {
+        line += ' ';
+      }
+      line += word;
+      rest = space == std::string_view::npos ? std::string_view{} : rest.substr(space + 1);
+    }
+    text += line + "\n";
+  }
+  return text + option("--list-devices") + "one line per arm family: present, or why not; then exit\n";
+}
 
 /// A --device value checked by the front door; a bad one is a usage error
 /// ("--device: device 'X': what is wrong").
