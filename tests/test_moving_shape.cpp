@@ -304,123 +304,84 @@ TEST_CASE("Moving<S>: a plane moving away leaves the proxy free, and a still sha
   }
 }
 
-TEST_CASE("Moving<S>: a sphere sweeping past at up to 1 m/s never takes the proxy inside", "[invariant]") {
+TEST_CASE(
+    "Moving<S>: a sphere sweeping past at up to 1 m/s never takes the proxy inside, nor a ball-shaped tool's centre "
+    "nearer than its radius",
+    "[invariant][radius]") {
   const unsigned seed = run_seed();
   INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
   std::mt19937_64 rng(seed);
   const double radius = 0.02;  // [m]
   const TriangleMesh ball = test::icosphere(3, radius);
   const MeshChecker checker(ball);
-  int touched = 0;
-  for (int pass = 0; pass < 300; ++pass) {
-    const bool mesh = pass % 2 == 1;
-    const SweepPast past = sweep_past(rng, radius, 0.03, 0.06);
-    const glm::dvec3 hip0 = past.hip0, drift = past.drift;
-    const MovingPose& m = past.shape;
-    const int ticks = past.ticks;
-    INFO("pass " << pass << (mesh ? " (icosphere)" : " (sphere)") << " speed " << past.speed);
-    const auto run = [&](auto& proxy) {
-      bool contact = false;
-      for (int i = 0; i <= ticks; ++i) {
-        const glm::dvec3 hip = hip0 + drift * (i * tick);
-        const Contact c = proxy.contact(probe_at_tick(i, hip, drift));
-        contact = contact || c.touching;
-        const Pose& pose = proxy.shape().pose();
-        const glm::dvec3 local = pose.point_to_local(proxy.proxy());
-        if (mesh) {
-          REQUIRE_FALSE(inside_convex(ball, local, 1e-9));
-          const PathCrossing crossing = checker.check(local_path(proxy.last_path(), pose));
-          REQUIRE_FALSE(crossing.found());
-        } else {
-          REQUIRE(glm::length(local) >= radius * (1.0 - 1e-9));
-        }
-      }
-      if (contact) ++touched;
-    };
-    if (mesh) {
-      ProxyConstraint proxy(Moving<MeshShape>(MeshShape(ball), m), ProxyConfig{.stiffness = 1000.0});
-      run(proxy);
-    } else {
-      ProxyConstraint proxy(Moving<SphereShape>(SphereShape({.radius = radius}), m), ProxyConfig{.stiffness = 1000.0});
-      run(proxy);
-    }
-  }
-  CHECK(touched > 200);  // most passes met the probe
-}
-
-TEST_CASE(
-    "Moving<S> with a ball-shaped tool: a moving plane pushes a still ball with k (r + overlap); a sphere sweeping "
-    "past never brings its centre nearer than r",
-    "[invariant][radius]") {
-  const double k = 1000.0, v = 0.2, r = 0.001;  // [N/m], [m/s], [m]
-  SECTION("a plane rising into a still ball") {
-    ProxyConstraint proxy(Moving<PlaneShape>(PlaneShape({}), sliding({0, 0, -0.004}, {0, 0, v})),
-                          ProxyConfig{.stiffness = k, .radius = r});
-    int pushed = 0;
-    for (int i = 0; i <= 30; ++i) {
-      const Contact c = proxy.contact(probe_at_tick(i, {0.002, -0.001, 0.0}));
-      const double plane = -0.004 + v * i * tick;  // the plane's height [m]; the probe is at z = 0
-      const double overlap = plane + r;            // how far the ball's centre would sink [m]
-      if (overlap <= 1e-9) {
-        CHECK(glm::length(c.force) == 0.0);
-        continue;
-      }
-      ++pushed;
-      REQUIRE(c.touching);
-      CHECK(c.force.z == Approx(k * overlap).margin(1e-6));
-      CHECK(std::fabs(c.force.x) + std::fabs(c.force.y) < 1e-9);
-      CHECK(proxy.proxy().z >= plane + r * (1.0 - 1e-9));  // the centre rides r above the surface
-    }
-    CHECK(pushed == 15);
-  }
-  SECTION("a sphere and an icosphere sweeping past at up to 1 m/s, turning") {
-    const unsigned seed = run_seed();
-    INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
-    std::mt19937_64 rng(seed);
-    const double radius = 0.02;  // [m]
-    const TriangleMesh ball = test::icosphere(3, radius);
-    const MeshChecker checker(ball);
+  for (const double r : {0.0, 0.001}) {  // the tool: a point, a ball [m]
+    INFO("tool radius " << r);
+    const int passes = r > 0.0 ? 120 : 300;
     int touched = 0;
-    double nearest = std::numeric_limits<double>::infinity();  // the centre's least distance to the icosphere / r
-    for (int pass = 0; pass < 120; ++pass) {
+    double nearest = std::numeric_limits<double>::infinity();  // a ball's centre to the icosphere, / r
+    for (int pass = 0; pass < passes; ++pass) {
       const bool mesh = pass % 2 == 1;
-      const SweepPast past = sweep_past(rng, radius, 0.04, 0.08);
-      const glm::dvec3 hip0 = past.hip0, drift = past.drift;
-      const MovingPose& m = past.shape;
-      const int ticks = past.ticks;
+      const SweepPast past = sweep_past(rng, radius, 0.03 + 2 * r, 0.06 + 4 * r);
       INFO("pass " << pass << (mesh ? " (icosphere)" : " (sphere)") << " speed " << past.speed);
       const auto run = [&](auto& proxy) {
         bool contact = false;
-        for (int i = 0; i <= ticks; ++i) {
-          const glm::dvec3 hip = hip0 + drift * (i * tick);
-          const Contact c = proxy.contact(probe_at_tick(i, hip, drift));
+        for (int i = 0; i <= past.ticks; ++i) {
+          const glm::dvec3 hip = past.hip0 + past.drift * (i * tick);
+          const Contact c = proxy.contact(probe_at_tick(i, hip, past.drift));
           contact = contact || c.touching;
           const Pose& pose = proxy.shape().pose();
-          if (mesh) {
-            const ProxyPath local = local_path(proxy.last_path(), pose);
-            for (int q = 0; q + 1 < local.count; ++q)
-              nearest = std::fmin(nearest, checker.entered(local.points[static_cast<std::size_t>(q)],
-                                                           local.points[static_cast<std::size_t>(q + 1)], r) /
-                                               r);
-          } else {
-            REQUIRE(glm::length(pose.point_to_local(proxy.proxy())) >= (radius + r) * (1.0 - 1e-9));
+          const glm::dvec3 local = pose.point_to_local(proxy.proxy());
+          if (!mesh) {
+            REQUIRE(glm::length(local) >= (radius + r) * (1.0 - 1e-9));
+            continue;
           }
+          const ProxyPath path = local_path(proxy.last_path(), pose);
+          if (r == 0.0) {
+            REQUIRE_FALSE(inside_convex(ball, local, 1e-9));
+            REQUIRE_FALSE(checker.check(path).found());
+          }
+          for (int q = 0; r > 0.0 && q + 1 < path.count; ++q)
+            nearest = std::fmin(nearest, checker.entered(path.points[static_cast<std::size_t>(q)],
+                                                         path.points[static_cast<std::size_t>(q + 1)], r) /
+                                             r);
         }
         if (contact) ++touched;
       };
+      const ProxyConfig config{.stiffness = 1000.0, .radius = r};
       if (mesh) {
-        ProxyConstraint proxy(Moving<MeshShape>(MeshShape(ball), m), ProxyConfig{.stiffness = k, .radius = r});
+        ProxyConstraint proxy(Moving<MeshShape>(MeshShape(ball), past.shape), config);
         run(proxy);
       } else {
-        ProxyConstraint proxy(Moving<SphereShape>(SphereShape({.radius = radius}), m),
-                              ProxyConfig{.stiffness = k, .radius = r});
+        ProxyConstraint proxy(Moving<SphereShape>(SphereShape({.radius = radius}), past.shape), config);
         run(proxy);
       }
     }
-    INFO("nearest " << nearest << " r");
-    CHECK(nearest >= 1.0 - 1e-6);
-    CHECK(touched > 60);  // most passes met the ball
+    INFO("a ball's nearest " << nearest << " r");
+    CHECK(nearest >= 1.0 - 1e-6);  // infinity for the point: not measured
+    CHECK(touched > passes / 2);   // most passes met the probe
   }
+}
+
+TEST_CASE("Moving<S> with a ball-shaped tool: a moving plane pushes a still ball with k (r + overlap)", "[radius]") {
+  const double k = 1000.0, v = 0.2, r = 0.001;  // [N/m], [m/s], [m]
+  ProxyConstraint proxy(Moving<PlaneShape>(PlaneShape({}), sliding({0, 0, -0.004}, {0, 0, v})),
+                        ProxyConfig{.stiffness = k, .radius = r});
+  int pushed = 0;
+  for (int i = 0; i <= 30; ++i) {
+    const Contact c = proxy.contact(probe_at_tick(i, {0.002, -0.001, 0.0}));
+    const double plane = -0.004 + v * i * tick;  // the plane's height [m]; the probe is at z = 0
+    const double overlap = plane + r;            // how far the ball's centre would sink [m]
+    if (overlap <= 1e-9) {
+      CHECK(glm::length(c.force) == 0.0);
+      continue;
+    }
+    ++pushed;
+    REQUIRE(c.touching);
+    CHECK(c.force.z == Approx(k * overlap).margin(1e-6));
+    CHECK(std::fabs(c.force.x) + std::fabs(c.force.y) < 1e-9);
+    CHECK(proxy.proxy().z >= plane + r * (1.0 - 1e-9));  // the centre rides r above the surface
+  }
+  CHECK(pushed == 15);
 }
 
 TEST_CASE("Moving<S>: a box turning under the probe") {
