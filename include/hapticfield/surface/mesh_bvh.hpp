@@ -236,8 +236,7 @@ class MeshBvh {
     if (stats) *stats = work;
     if (triangles_.empty() || !is_finite(p) || !(max_distance >= 0.0)) return best;
     double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
-    std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
-    std::size_t top = 0;
+    Stack stack;
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     if (!(box_distance2(root_, p) <= best_d2)) return best;
     for (;;) {
@@ -266,24 +265,14 @@ class MeshBvh {
         const std::array<double, 2> d2 = box_distance2(pair, p);
         const std::size_t near = d2[1] < d2[0] ? 1 : 0, far = 1 - near;
         if (d2[near] <= best_d2) {
-          if (d2[far] <= best_d2) stack[top++] = Pending{pair.index[far], pair.count[far], d2[far]};
+          if (d2[far] <= best_d2) stack.push(Pending{pair.index[far], pair.count[far], d2[far]});
           index = pair.index[near];
           count = pair.count[near];
           continue;
         }
       }
       // pop, skipping boxes farther than the best point so far
-      bool next = false;
-      while (top > 0) {
-        const Pending& candidate = stack[--top];
-        if (candidate.key <= best_d2) {
-          index = candidate.index;
-          count = candidate.count;
-          next = true;
-          break;
-        }
-      }
-      if (!next) break;
+      if (!stack.pop(index, count, [best_d2](double key) { return key <= best_d2; })) break;
     }
     if (best.found()) best.distance = std::sqrt(best_d2);
     if (stats) *stats = work;
@@ -406,8 +395,7 @@ class MeshBvh {
     const glm::dvec3 middle = from + (0.5 * best_t) * d;
     const double reach = grow + 0.5 * best_t * std::sqrt(glm::dot(d, d));
     const double reach2 = reach * reach * (1.0 + 1e-12);
-    std::array<Pending, bvh_max_depth> stack;  // filled before read: no initialisation needed
-    std::size_t top = 0;
+    Stack stack;
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     double entry = 0.0;
     if (!slabs.cross(root_, best_t, entry)) return best;
@@ -434,7 +422,7 @@ class MeshBvh {
         }
         if (hit[0] && hit[1]) {
           const std::size_t near = t[1] < t[0] ? 1 : 0, far = 1 - near;
-          stack[top++] = Pending{pair.index[far], pair.count[far], t[far]};
+          stack.push(Pending{pair.index[far], pair.count[far], t[far]});
           index = pair.index[near];
           count = pair.count[near];
           continue;
@@ -448,17 +436,7 @@ class MeshBvh {
       }
       // pop, skipping boxes the best hit so far has made too far (the box
       // test again: its entry no longer before the segment's end)
-      bool next = false;
-      while (top > 0) {
-        const Pending& candidate = stack[--top];
-        if (Slabs<Grown>::within(candidate.key, best_t)) {
-          index = candidate.index;
-          count = candidate.count;
-          next = true;
-          break;
-        }
-      }
-      if (!next) break;
+      if (!stack.pop(index, count, [best_t](double key) { return Slabs<Grown>::within(key, best_t); })) break;
     }
     if (best.found()) best.point = from + best.t * d;
     if (stats) *stats = work;
@@ -478,6 +456,29 @@ class MeshBvh {
   struct Pending {
     std::uint32_t index, count;  ///< the node's (BvhNode)
     double key;
+  };
+
+  /// The nodes a query has still to visit, nearest last: bvh_max_depth
+  /// deep, which the build's depth cap makes enough.
+  struct Stack {
+    std::array<Pending, bvh_max_depth> pending;  // filled before read: no initialisation needed
+    std::size_t top{0};
+
+    void push(const Pending& p) noexcept { pending[top++] = p; }
+    /// The last node pushed whose key `keep` still accepts, into index and
+    /// count (those it rejects are dropped); false when none is left.
+    template <class Keep>
+    bool pop(std::uint32_t& index, std::uint32_t& count, Keep&& keep) noexcept {
+      while (top > 0) {
+        const Pending& candidate = pending[--top];
+        if (keep(candidate.key)) {
+          index = candidate.index;
+          count = candidate.count;
+          return true;
+        }
+      }
+      return false;
+    }
   };
 
   /// The segment from + t d, t in [0, t_max], against node boxes (slabs),
