@@ -228,6 +228,23 @@ class MeshBvh {
         seed);
   }
 
+  /// The swept ball (centre from + t d, radius r) against the triangle a,
+  /// a + e1, a + e2 (mesh index `id`): when it touches before best_t, best_t
+  /// and best (triangle, t, the touched point and its barycentric weights)
+  /// take that contact and the answer is true. What sweep_sphere() does at
+  /// every triangle; a seed for it is made the same way.
+  static bool touch_triangle(const glm::dvec3& a, const glm::dvec3& e1, const glm::dvec3& e2, std::uint32_t id,
+                             const glm::dvec3& from, const glm::dvec3& d, double r, double& best_t,
+                             BvhHit& best) noexcept {
+    glm::dvec3 contact{0.0};
+    if (!detail::sweep_ball_triangle(a, e1, e2, from, d, r, best_t, contact)) return false;
+    best.triangle = id;
+    best.t = best_t;
+    (void)detail::closest_on_triangle(contact, a, e1, e2, best.b1, best.b2);  // the touched point's weights
+    best.contact_point = contact;
+    return true;
+  }
+
   /// The point of the mesh nearest to p if one is within max_distance [m]
   /// (not found: none). stats, when given, receives the work done.
   [[nodiscard]] BvhHit closest(const glm::dvec3& p, double max_distance, QueryStats* stats = nullptr) const noexcept {
@@ -631,16 +648,7 @@ class MeshBvh {
   void touch(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double r, double& best_t,
              BvhHit& best) const noexcept {
     const Triangle& tri = triangles_[slot];
-    glm::dvec3 contact{0.0};
-    if (!detail::sweep_ball_triangle(tri.a, tri.e1, tri.e2, from, d, r, best_t, contact)) return;
-    best.triangle = tri.id;
-    best.t = best_t;
-    // barycentric weights of the touched point
-    double b1 = 0.0, b2 = 0.0;
-    (void)detail::closest_on_triangle(contact, tri.a, tri.e1, tri.e2, b1, b2);
-    best.b1 = b1;
-    best.b2 = b2;
-    best.contact_point = contact;
+    (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best);
   }
 
   /// The tie rule (file comment) for a segment along d that meets the

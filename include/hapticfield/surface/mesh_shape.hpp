@@ -114,13 +114,7 @@ class MeshShape {
       const TriangleIndices& tri = m.triangles[hint];
       const glm::dvec3 a = m.positions[tri[0]], e1 = m.positions[tri[1]] - a, e2 = m.positions[tri[2]] - a;
       double t = 1.0;
-      glm::dvec3 contact{0.0};
-      if (detail::sweep_ball_triangle(a, e1, e2, from, to - from, radius, t, contact)) {
-        seed.triangle = hint;
-        seed.t = t;
-        seed.contact_point = contact;
-        (void)detail::closest_on_triangle(contact, a, e1, e2, seed.b1, seed.b2);
-      }
+      (void)MeshBvh::touch_triangle(a, e1, e2, hint, from, to - from, radius, t, seed);
     }
     const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats, seed);
     Hit out = describe(h);

@@ -190,20 +190,10 @@ class ProxyConstraint {
     const glm::dvec3 goal = probe.position;
     if (!started_ || !is_finite(proxy_)) {
       started_ = true;
-      proxy_ = goal;
       touching_ = false;
-      embedded_ = overlaps(goal);
-      tick_.embedded = embedded_;
-      visit(goal);
-      return Contact{};
+      return follow_free(goal);
     }
-    if (embedded_) {  // a ball that began in the surface follows the HIP, free, until it is clear of it
-      proxy_ = goal;
-      embedded_ = overlaps(goal);
-      tick_.embedded = embedded_;
-      visit(goal);
-      return Contact{};
-    }
+    if (embedded_) return follow_free(goal);  // a ball that began in the surface, until it is clear of it
     const glm::dvec3 start = proxy_;
     visit(start);
     if (config_.stick_first) {  // 0: the friction cone first
@@ -236,12 +226,9 @@ class ProxyConstraint {
           // a free ball that overlaps the surface where it starts came
           // through it from behind (a ball is stopped r off the front): it
           // passes on, free, until clear, as a ball begun in the surface
-          proxy_ = goal;
-          embedded_ = overlaps(goal);
-          tick_.embedded = true;
-          path_.count = 0;
-          visit(goal);
-          return Contact{};
+          const Contact none = follow_free(goal);
+          tick_.embedded = true;  // it overlapped where it began this tick
+          return none;
         }
         if (!h.found()) {
           x = target;
@@ -554,6 +541,17 @@ class ProxyConstraint {
     if constexpr (advances && !carries) face_ = touched;
     out = respond(goal, relative(velocity, x), planes, x, frictionless, on_surface, depth, touched);
     return true;
+  }
+
+  /// The proxy at the HIP this tick, with no contact: a ball that overlaps
+  /// the surface there stays free (embedded_) until it is clear of it.
+  [[nodiscard]] Contact follow_free(const glm::dvec3& goal) noexcept {
+    proxy_ = goal;
+    embedded_ = overlaps(goal);
+    tick_.embedded = embedded_;
+    path_.count = 0;
+    visit(goal);
+    return Contact{};
   }
 
   /// Appends a point to the tick's path.
