@@ -41,6 +41,12 @@
 using namespace hapticfield;
 using hapticfield::test::probe_at;
 
+// a ball on a moving mesh starts each sweep from the triangle it met last
+// (MeshShape::sweep_sphere's hint, forwarded by PosedQueries)
+static_assert(requires(const Moving<MeshShape>& m, QueryStats* q) {
+  m.sweep_sphere(glm::dvec3{}, glm::dvec3{}, 1.0, q, std::uint32_t{0});
+});
+
 namespace {
 
 /// Catch's --rng-seed when given, else a new seed; printed either way.

@@ -159,6 +159,7 @@ TEST_CASE("random poses: a posed mesh answers like the mesh moved vertex by vert
       const Posed<MeshShape> posed(MeshShape(mesh), pose);
       const MeshShape moved_mesh(moved(mesh, pose));
       static_assert(Posed<MeshShape>::flat_primitives);
+      static_assert(requires(QueryStats * q) { posed.sweep_sphere(glm::dvec3{}, glm::dvec3{}, 1.0, q, 0u); });
       for (int i = 0; i < 200; ++i) {
         const glm::dvec3 p = pose.point_to_world({u(rng), u(rng), u(rng)});
         const glm::dvec3 q = pose.point_to_world({u(rng), u(rng), u(rng)});
@@ -185,6 +186,16 @@ TEST_CASE("random poses: a posed mesh answers like the mesh moved vertex by vert
           CHECK(std::fabs(s.t - t.t) < 1e-9);
           CHECK(distance(s.point, t.point) < 1e-9);
           if (s.primitive == t.primitive) CHECK(distance(s.normal, t.normal) < 1e-9);
+        }
+        // a 1 mm ball, with a random primitive hint (the inner mesh's; the
+        // same t whatever the hint) and without
+        const double r = 0.001;
+        const auto hint = static_cast<std::uint32_t>(rng() % mesh.triangles.size());
+        const Hit w = posed.sweep_sphere(p, q, r, &stats, hint), v = moved_mesh.sweep_sphere(p, q, r);
+        REQUIRE(w.found() == v.found());
+        if (w.found()) {
+          CHECK(std::fabs(w.t - v.t) < 1e-9);
+          if (w.primitive == v.primitive) CHECK(distance(w.point, v.point) < 1e-9);  // else a tie at the same t
         }
       }
       // the proxy on both, along a random stroke across the shape: the same forces

@@ -121,14 +121,11 @@ class PoseFeed {
 };
 
 /// Shape S placed in the world by the newest pose of a PoseFeed, answering
-/// like Posed<S> with the pose of the last advance(). Move-only: one reader.
+/// like Posed<S> (PosedQueries) with the pose of the last advance().
+/// Move-only: one reader.
 template <Shape S>
-class Moving {
+class Moving : public PosedQueries<Moving<S>, S> {
  public:
-  static constexpr bool flat_primitives = requires { requires S::flat_primitives; };
-  /// closest() and the sweeps see the same surface (the inner shape's say).
-  static constexpr bool closest_matches_sweep = !requires { requires !S::closest_matches_sweep; };
-
   /// A shape with its own feed, starting at `initial` (feed() for the writer).
   /// @throws std::invalid_argument as MovingPose::validate().
   Moving(S shape, const MovingPose& initial) : Moving(std::move(shape), std::make_shared<PoseFeed>(initial)) {}
@@ -166,41 +163,6 @@ class Moving {
     return snapshot_.velocity_at(current_, p);
   }
 
-  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance) const noexcept {
-    return world(shape_.closest(local(p), max_distance));
-  }
-  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats) const noexcept requires
-      requires(const S& s) {
-    s.closest(p, max_distance, stats);
-  }
-  { return world(shape_.closest(local(p), max_distance, stats)); }
-
-  [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to) const noexcept {
-    return world(shape_.first_hit(local(from), local(to)));
-  }
-  [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to, QueryStats* stats) const noexcept requires
-      requires(const S& s) {
-    s.first_hit(from, to, stats);
-  }
-  { return world(shape_.first_hit(local(from), local(to), stats)); }
-
-  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius) const noexcept requires
-      requires(const S& s) {
-    s.sweep_sphere(from, to, radius);
-  }
-  { return world(shape_.sweep_sphere(local(from), local(to), radius)); }
-  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
-                                 QueryStats* stats) const noexcept requires requires(const S& s) {
-    s.sweep_sphere(from, to, radius, stats);
-  }
-  { return world(shape_.sweep_sphere(local(from), local(to), radius, stats)); }
-
-  [[nodiscard]] Hit on_primitive(std::uint32_t primitive, const glm::dvec3& p,
-                                 double max_distance) const noexcept requires requires(const S& s) {
-    s.on_primitive(primitive, p, max_distance);
-  }
-  { return world(shape_.on_primitive(primitive, local(p), max_distance)); }
-
   [[nodiscard]] const S& shape() const noexcept { return shape_; }
   /// The pose of the last advance() (the first snapshot's before any).
   [[nodiscard]] const Pose& pose() const noexcept { return current_; }
@@ -210,9 +172,6 @@ class Moving {
   [[nodiscard]] const std::shared_ptr<PoseFeed>& feed() const noexcept { return feed_; }
 
  private:
-  [[nodiscard]] glm::dvec3 local(const glm::dvec3& p) const noexcept { return current_.point_to_local(p); }
-  [[nodiscard]] Hit world(const Hit& h) const noexcept { return current_.hit_to_world(h); }
-
   S shape_;
   std::shared_ptr<PoseFeed> feed_;
   MovingPose snapshot_{};  ///< the newest snapshot at the last advance()

@@ -12,11 +12,13 @@
 /// unchanged (a rigid motion keeps lengths). The proxy's tolerances stay
 /// relative to the primitive's size, so a posed shape feels like the shape.
 ///
-/// Every query of the inner shape is forwarded in the same way: the plain
-/// forms, the QueryStats* forms, on_primitive() and flat_primitives, each
-/// only where the inner shape has it (so the proxy sees the same optional
-/// queries through the wrapper). Another query is one more member written
-/// like on_primitive(): points through local(), the answer through world().
+/// Every query of the inner shape is forwarded in the same way, by
+/// PosedQueries (shared with Moving<S>): the plain forms, the QueryStats*
+/// forms, sweep_sphere's primitive hint, on_primitive() and the traits,
+/// each only where the inner shape has it (so the proxy sees the same
+/// optional queries through the wrapper). Another query is one more member
+/// of PosedQueries written like on_primitive(): points through local(), the
+/// answer through world().
 
 #include <array>
 #include <cmath>
@@ -143,10 +145,17 @@ struct Pose {
   }
 };
 
-/// Shape S placed in the world by a Pose. Queries are const noexcept and
-/// allocate nothing (a few multiply-adds around the inner query).
-template <Shape S>
-class Posed {
+/// Every query of an inner shape S, answered in the world frame of a
+/// placed shape (CRTP: Placed is Posed<S> or Moving<S>, whose shape() is the
+/// inner shape and pose() the pose it is placed by now). The query's points
+/// go into the shape's frame, the inner shape answers, and the Hit comes
+/// back through Pose::hit_to_world. Each query exists only where the inner
+/// shape has it, so the proxy sees the same optional queries through the
+/// wrapper: the QueryStats* forms, sweep_sphere (with the primitive hint
+/// MeshShape takes), on_primitive(), flat_primitives and
+/// closest_matches_sweep.
+template <class Placed, Shape S>
+class PosedQueries {
  public:
   /// The proxy may move over one primitive without a sweep when the inner
   /// shape's primitives are flat: a rigid motion keeps them flat.
@@ -154,38 +163,42 @@ class Posed {
   /// closest() and the sweeps see the same surface (the inner shape's say).
   static constexpr bool closest_matches_sweep = !requires { requires !S::closest_matches_sweep; };
 
-  /// @throws std::invalid_argument for an invalid pose (Pose::validate()).
-  Posed(S shape, const Pose& pose) : shape_(std::move(shape)), pose_(pose) { pose_.validate(); }
-
   [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance) const noexcept {
-    return world(shape_.closest(local(p), max_distance));
+    return world(inner().closest(local(p), max_distance));
   }
   [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats) const noexcept requires
       requires(const S& s) {
     s.closest(p, max_distance, stats);
   }
-  { return world(shape_.closest(local(p), max_distance, stats)); }
+  { return world(inner().closest(local(p), max_distance, stats)); }
 
   [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to) const noexcept {
-    return world(shape_.first_hit(local(from), local(to)));
+    return world(inner().first_hit(local(from), local(to)));
   }
   [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to, QueryStats* stats) const noexcept requires
       requires(const S& s) {
     s.first_hit(from, to, stats);
   }
-  { return world(shape_.first_hit(local(from), local(to), stats)); }
+  { return world(inner().first_hit(local(from), local(to), stats)); }
 
   /// A ball of `radius` [m] swept from -> to, where the inner shape sweeps one.
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius) const noexcept requires
       requires(const S& s) {
     s.sweep_sphere(from, to, radius);
   }
-  { return world(shape_.sweep_sphere(local(from), local(to), radius)); }
+  { return world(inner().sweep_sphere(local(from), local(to), radius)); }
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
                                  QueryStats* stats) const noexcept requires requires(const S& s) {
     s.sweep_sphere(from, to, radius, stats);
   }
-  { return world(shape_.sweep_sphere(local(from), local(to), radius, stats)); }
+  { return world(inner().sweep_sphere(local(from), local(to), radius, stats)); }
+  /// With the primitive the ball likely meets first (a primitive's index is
+  /// the same in every frame).
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius, QueryStats* stats,
+                                 std::uint32_t hint) const noexcept requires requires(const S& s) {
+    s.sweep_sphere(from, to, radius, stats, hint);
+  }
+  { return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint)); }
 
   /// The point of one primitive nearest to p, where the inner shape answers
   /// for one primitive.
@@ -193,17 +206,33 @@ class Posed {
                                  double max_distance) const noexcept requires requires(const S& s) {
     s.on_primitive(primitive, p, max_distance);
   }
-  { return world(shape_.on_primitive(primitive, local(p), max_distance)); }
+  { return world(inner().on_primitive(primitive, local(p), max_distance)); }
+
+ private:
+  [[nodiscard]] const S& inner() const noexcept { return static_cast<const Placed&>(*this).shape(); }
+  /// A query point in the shape's frame.
+  [[nodiscard]] glm::dvec3 local(const glm::dvec3& p) const noexcept {
+    return static_cast<const Placed&>(*this).pose().point_to_local(p);
+  }
+  /// A hit of the inner shape in the world frame.
+  [[nodiscard]] Hit world(const Hit& h) const noexcept {
+    return static_cast<const Placed&>(*this).pose().hit_to_world(h);
+  }
+};
+
+/// Shape S placed in the world by a Pose. Queries (PosedQueries) are const
+/// noexcept and allocate nothing (a few multiply-adds around the inner
+/// query).
+template <Shape S>
+class Posed : public PosedQueries<Posed<S>, S> {
+ public:
+  /// @throws std::invalid_argument for an invalid pose (Pose::validate()).
+  Posed(S shape, const Pose& pose) : shape_(std::move(shape)), pose_(pose) { pose_.validate(); }
 
   [[nodiscard]] const S& shape() const noexcept { return shape_; }
   [[nodiscard]] const Pose& pose() const noexcept { return pose_; }
 
  private:
-  /// A query point in the shape's frame.
-  [[nodiscard]] glm::dvec3 local(const glm::dvec3& p) const noexcept { return pose_.point_to_local(p); }
-  /// A hit of the inner shape in the world frame.
-  [[nodiscard]] Hit world(const Hit& h) const noexcept { return pose_.hit_to_world(h); }
-
   S shape_;
   Pose pose_;
 };
