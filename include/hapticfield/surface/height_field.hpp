@@ -222,40 +222,22 @@ class HeightFieldShape {
     double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
     std::uint32_t best_cell = no_primitive;
     glm::dvec2 best_st{0.0};
-    std::array<NodeRef, stack_size> stack{};
-    std::size_t top = 0;
     const double reach = std::isfinite(max_distance) ? max_distance : 1e300;
-    stack[top++] = smallest_node(g, p - glm::dvec3{reach}, p + glm::dvec3{reach});
-    bool complete = true;
-    while (top > 0) {
-      const NodeRef node = stack[--top];
-      if (!(box_distance2(box_of(g, node), p) <= best_d2)) continue;
-      if (++work.nodes > config_.max_nodes) {
-        complete = false;
-        break;
-      }
-      if (node.level == 0) {
-        ++work.primitives;
-        glm::dvec2 st{0.0};
-        const double d2 = closest_in_cell(g, node.i, node.j, p, st);
-        if (d2 <= best_d2) {
-          best_d2 = d2;
-          best_cell = node.j * (g.width - 1) + node.i;
-          best_st = st;
-        }
-        continue;
-      }
-      Kids kids{};
-      int count = 0;
-      for (std::uint32_t dj = 0; dj < 2; ++dj)
-        for (std::uint32_t di = 0; di < 2; ++di) {
-          const NodeRef child{node.level - 1, 2 * node.i + di, 2 * node.j + dj};
-          if (!exists(g, child)) continue;
-          const double d2 = box_distance2(box_of(g, child), p);
-          if (d2 <= best_d2) kids[static_cast<std::size_t>(count++)] = {d2, child};
-        }
-      push_nearest_last(kids, count, stack, top);
-    }
+    const bool complete = walk(
+        smallest_node(g, p - glm::dvec3{reach}, p + glm::dvec3{reach}), work,
+        [&](const NodeRef& node, Span& span) {
+          span.key = box_distance2(box_of(g, node), p);
+          return span.key <= best_d2;
+        },
+        [&](const NodeRef& node, const Span&) {
+          glm::dvec2 st{0.0};
+          const double d2 = closest_in_cell(g, node.i, node.j, p, st);
+          if (d2 <= best_d2) {
+            best_d2 = d2;
+            best_cell = node.j * (g.width - 1) + node.i;
+            best_st = st;
+          }
+        });
     if (stats) *stats = work;
     if (best_cell == no_primitive) {
       best.complete = complete;
@@ -449,29 +431,47 @@ class HeightFieldShape {
       b.hi += margin;
       return b;
     };
+    return walk(
+        smallest_node(g, glm::min(from, to) - margin, glm::max(from, to) + margin), work,
+        [&](const NodeRef& node, Span& span) { return segment_box(box(node), from, inv, best_t, span.key, span.end); },
+        [&](const NodeRef& node, const Span& span) { cell(node.i, node.j, span.key, span.end); });
+  }
+
+  /// What a node's test gives the walk: the key that orders it (a squared
+  /// distance or an entry parameter) and, for a segment, its exit.
+  struct Span {
+    double key{0.0}, end{0.0};
+  };
+
+  /// The quadtree walk both kinds of query share: from `start`, every node
+  /// that test(node, span) accepts (tested again when popped, as the best
+  /// answer so far may have shrunk), children nearest first (smallest key),
+  /// each cell (level 0) to leaf(node, span). False when the node budget
+  /// ran out.
+  template <class Test, class Leaf>
+  bool walk(const NodeRef& start, QueryStats& work, Test&& test, Leaf&& leaf) const noexcept {
+    const Data& g = *data_;
     std::array<NodeRef, stack_size> stack{};
     std::size_t top = 0;
-    stack[top++] = smallest_node(g, glm::min(from, to) - margin, glm::max(from, to) + margin);
+    stack[top++] = start;
     while (top > 0) {
       const NodeRef node = stack[--top];
-      double entry = 0.0, exit = 0.0;
-      if (!segment_box(box(node), from, inv, best_t, entry, exit)) continue;
+      Span span;
+      if (!test(node, span)) continue;
       if (++work.nodes > config_.max_nodes) return false;
       if (node.level == 0) {
         ++work.primitives;
-        cell(node.i, node.j, entry, exit);
+        leaf(node, span);
         continue;
       }
-      // children in order of entry, nearest on top of the stack
       Kids kids{};
       int count = 0;
       for (std::uint32_t dj = 0; dj < 2; ++dj)
         for (std::uint32_t di = 0; di < 2; ++di) {
           const NodeRef child{node.level - 1, 2 * node.i + di, 2 * node.j + dj};
           if (!exists(g, child)) continue;
-          double t0 = 0.0, t1 = 0.0;
-          if (!segment_box(box(child), from, inv, best_t, t0, t1)) continue;
-          kids[static_cast<std::size_t>(count++)] = {t0, child};
+          Span c;
+          if (test(child, c)) kids[static_cast<std::size_t>(count++)] = {c.key, child};
         }
       push_nearest_last(kids, count, stack, top);
     }
