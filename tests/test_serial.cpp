@@ -1,5 +1,5 @@
 // Tests of SerialTransport through a real pseudo-terminal: the reference
-// firmware core (FirmwareArm) answers on the master side in a thread,
+// firmware core (SimulatedArm, the firmware twin) answers on the master side in a thread,
 // stepped to the servo loop's virtual clock; ForceArm and ServoLoop run on
 // the slave side. Every blocking wait has a hard timeout.
 #include <catch2/catch.hpp>
@@ -42,7 +42,7 @@ using testing::Pty;
 /// host sets from its virtual clock (so the run is repeatable).
 class PtyFirmware {
  public:
-  PtyFirmware(Pty& pty, const SimulatedArmConfig& arm) : pty_(pty), arm_(arm) {
+  PtyFirmware(Pty& pty, const SimulatedArmConfig& arm) : pty_(pty), arm_(arm, 5000) {
     REQUIRE(::pipe(wake_) == 0);
     thread_ = std::thread([this] { run(); });
   }
@@ -78,7 +78,7 @@ class PtyFirmware {
   std::int64_t split_at{-1};    ///< the report of this tick goes out in two writes, one tick apart
   static constexpr std::array<std::uint8_t, 7> garbage{0x01, 0x10, 0xFF, 0x02, 0x00, 0x7E, 0x13};
 
-  FirmwareArm& arm() { return arm_; }  // only once stopped, or between advance_to() calls
+  SimulatedArm& arm() { return arm_; }  // only once stopped, or between advance_to() calls
   const firmware::StreamPort<256>& port() const { return port_; }
 
  private:
@@ -109,7 +109,7 @@ class PtyFirmware {
       }
       port_.service(arm_.core(), [this](std::span<const std::uint8_t> reply) { send(reply); });
       while (arm_.ticks() < target) {
-        arm_.step();
+        arm_.tick();
         const std::int64_t k = arm_.ticks();
         if (rest_size) {
           send(std::span<const std::uint8_t>(rest.data(), rest_size));
@@ -130,7 +130,7 @@ class PtyFirmware {
   }
 
   Pty& pty_;
-  FirmwareArm arm_;
+  SimulatedArm arm_;
   firmware::StreamPort<256> port_;
   int wake_[2]{-1, -1};
   std::atomic<std::int64_t> target_{0};

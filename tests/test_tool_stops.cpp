@@ -42,7 +42,7 @@
 #endif
 
 #include "child_process.hpp"
-#include "hapticfield/arms/force_arm/firmware_loopback.hpp"
+#include "hapticfield/arms/force_arm/simulated_arm.hpp"
 #include "hapticfield/arms/inverse3/simulated_inverse3.hpp"
 #include "hapticfield/arms/woody/simulated_woody.hpp"
 #include "hapticfield/arms/woody/woody_codec.hpp"
@@ -121,7 +121,7 @@ struct OurArm {
     port.service(arm.core(), [master](std::span<const std::uint8_t> r) { send(master, r); });
     while (stepped < arm.core().counters().commands) {
       ++stepped;
-      arm.step();
+      arm.tick();
       send(master, arm.core().report());
     }
     const protocol::CommandReport& c = arm.core().last_command();
@@ -130,7 +130,7 @@ struct OurArm {
                   (c.torque_mnm[0] != 0 || c.torque_mnm[1] != 0 || c.torque_mnm[2] != 0));
     commands.store(arm.core().counters().commands);
   }
-  FirmwareArm arm;
+  SimulatedArm arm;
   firmware::StreamPort<256> port;
   std::uint32_t stepped{0};
   std::atomic<bool> armed{false}, pushing{false};

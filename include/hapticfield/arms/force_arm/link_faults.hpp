@@ -3,7 +3,7 @@
 /// The simulated wire between a host and a device-side model: a schedule of
 /// link faults at chosen device ticks, and the queue of state reports in
 /// flight with those faults applied (drop, duplicate, reorder, corrupt).
-/// SimulatedTransport and FirmwareLoopback share it.
+/// SimulatedTransport uses it.
 
 #include <array>
 #include <cstdint>

@@ -1,25 +1,30 @@
 #pragma once
 /// @file simulated_arm.hpp
-/// A deterministic Phantom-class arm with its firmware, on a virtual clock:
-/// joint dynamics (inertia, viscous and Coulomb friction, joint stops),
-/// encoder and torque quantisation and saturation, the firmware watchdog,
-/// homing before arming, held by the scripted hand
-/// (simulation/scripted_hand.hpp). It speaks the report
-/// protocol through SimulatedTransport (simulated_transport.hpp).
+/// A deterministic Phantom-class arm on a virtual clock, the firmware twin:
+/// joint dynamics (inertia, viscous and Coulomb friction, joint stops) held
+/// by the scripted hand (simulation/scripted_hand.hpp), encoders and
+/// motors, and the reference firmware core (firmware/core.hpp) that runs
+/// the protocol, the watchdog, homing, fault latching and the limits. It
+/// speaks the report protocol through SimulatedTransport
+/// (simulated_transport.hpp).
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <numbers>
 #include <span>
 #include <stdexcept>
+#include <string>
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 #include "hapticfield/arms/force_arm/kinematics.hpp"
 #include "hapticfield/device/state.hpp"
+#include "hapticfield/device/status.hpp"
+#include "hapticfield/firmware/core.hpp"
 #include "hapticfield/protocol/reports.hpp"
 #include "hapticfield/simulation/joint_dynamics.hpp"
 #include "hapticfield/simulation/scripted_hand.hpp"
@@ -74,8 +79,7 @@ struct SimulatedArmConfig {
 
 /// The arm's mechanics alone: joint dynamics (inertia, viscous and Coulomb
 /// friction, joint stops) under applied torques and the scripted hand.
-/// SimulatedArm runs its own firmware model on it; FirmwareLoopback
-/// (firmware_loopback.hpp) runs the reference firmware core on it.
+/// SimulatedArm runs the reference firmware core on it.
 class ArmPlant {
  public:
   /// @throws std::invalid_argument when the configuration makes no sense.
@@ -134,136 +138,108 @@ class ArmPlant {
   glm::dvec3 hand_force_{0.0};
 };
 
-/// The simulated arm and its firmware. tick() runs one firmware period.
+/// The firmware configuration that describes a simulated arm (geometry,
+/// limits, rate, homing), with the given watchdog [us]. The current limit
+/// is set so that it never cuts below the joint saturation.
+/// @throws std::invalid_argument when the result fails FirmwareConfig::check().
+[[nodiscard]] inline firmware::FirmwareConfig firmware_config_for(const SimulatedArmConfig& arm,
+                                                                  std::uint16_t watchdog_us = 5000) {
+  arm.validate();
+  firmware::FirmwareConfig f;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const int k = static_cast<int>(i);
+    f.counts_per_rev[i] = static_cast<std::uint32_t>(arm.kinematics.counts_per_rev[i]);
+    f.max_torque_mnm[i] =
+        static_cast<std::uint16_t>(std::clamp(std::lround(arm.kinematics.max_torque[k] * 1e3), 1L, 65535L));
+    f.q_min_mrad[i] = static_cast<std::int16_t>(std::lround(arm.kinematics.q_min[k] * 1e3));
+    f.q_max_mrad[i] = static_cast<std::int16_t>(std::lround(arm.kinematics.q_max[k] * 1e3));
+    // current [mA] = torque [uN m] / torque_constant [uN m/mA]; keep it within 16 bits
+    const std::uint32_t saturation_unm = f.max_torque_mnm[i] * 1000u;
+    const std::uint32_t constant = std::max<std::uint32_t>(100u, (saturation_unm + 32766u) / 32767u);
+    f.torque_constant[i] = static_cast<std::uint16_t>(constant);
+    f.max_current_ma[i] = static_cast<std::uint16_t>((saturation_unm + constant - 1u) / constant);
+  }
+  f.torque_unit_unm = static_cast<std::uint16_t>(std::clamp(std::lround(arm.torque_unit * 1e6), 0L, 65535L));
+  f.l1_um = static_cast<std::uint32_t>(std::lround(arm.kinematics.l1 * 1e6));
+  f.l2_um = static_cast<std::uint32_t>(std::lround(arm.kinematics.l2 * 1e6));
+  f.max_force_mn = static_cast<std::uint16_t>(std::clamp(std::lround(arm.max_force * 1e3), 0L, 65535L));
+  f.continuous_force_mn = static_cast<std::uint16_t>(std::clamp(std::lround(arm.continuous_force * 1e3), 0L, 65535L));
+  f.period_us = static_cast<std::uint32_t>(std::lround(1e6 / arm.rate));
+  f.watchdog_us = watchdog_us;
+  f.homing_ticks = static_cast<std::uint16_t>(std::min(arm.homing_ticks, 65535));
+  if (const char* e = f.check()) throw std::invalid_argument(std::string("FirmwareConfig: ") + e);
+  return f;
+}
+
+/// The arm's firmware twin: the reference firmware core
+/// (firmware/core.hpp) on the arm's mechanics (ArmPlant), one firmware
+/// period per tick(), in the order a real board runs it (firmware/board.hpp,
+/// step_hid): the commands received since the last period are decoded, the
+/// board's inputs are read (encoders at the start of the period), the core
+/// ticks, the limited torques drive the mechanics for one period, and the
+/// state report carries the encoders read at its start. A command computed
+/// from that report therefore acts one period later, as on the board
+/// (docs/firmware.md, "The twin's delay").
 class SimulatedArm {
  public:
+  static constexpr double home_tolerance = 0.02;  ///< the dock sensor sees the arm at home within this [rad]
+
+  /// The firmware watchdog is config.watchdog.
   /// @throws std::invalid_argument when the configuration makes no sense.
-  explicit SimulatedArm(SimulatedArmConfig config = {}) : config_(std::move(config)), plant_(config_) {
-    watchdog_ticks_ = static_cast<std::int64_t>(std::ceil(config_.watchdog * config_.rate - 1e-9));
+  explicit SimulatedArm(const SimulatedArmConfig& config = {})
+      : SimulatedArm(config, firmware_config_for(config, watchdog_us(config))) {}
+  /// @throws std::invalid_argument when the configuration makes no sense.
+  SimulatedArm(const SimulatedArmConfig& config, std::uint16_t watchdog_us)
+      : SimulatedArm(config, firmware_config_for(config, watchdog_us)) {}
+  /// Any firmware configuration (limits, current, homing) on these mechanics.
+  /// @throws std::invalid_argument when either configuration makes no sense.
+  SimulatedArm(const SimulatedArmConfig& config, const firmware::FirmwareConfig& firmware)
+      : config_(config), plant_(config), core_(firmware) {
+    if (const char* e = firmware.check()) throw std::invalid_argument(std::string("FirmwareConfig: ") + e);
+    period_us_ = firmware.period_us;
+  }
+
+  /// One firmware period: board inputs from the mechanics, core tick, the
+  /// limited torques drive the mechanics.
+  void tick() noexcept {
+    ++ticks_;
+    firmware::BoardInputs in;
+    in.now_us = static_cast<std::uint32_t>((static_cast<std::uint64_t>(ticks_) * period_us_) & 0xFFFFFFFFu);
+    const auto counts = plant_.kinematics().counts(plant_.q());
+    for (std::size_t i = 0; i < 3; ++i)  // incremental counters start at an arbitrary value
+      in.encoder[i] = static_cast<std::int32_t>(static_cast<std::uint32_t>(counts[i]) +
+                                                static_cast<std::uint32_t>(config_.unhomed_offset[i]));
+    in.at_home = true;  // no dock sensor: homing takes the pose it finds as home
+    for (int i = 0; i < 3 && dock_sensor_; ++i)
+      if (std::fabs(plant_.q()[i] - config_.initial_q[i]) > home_tolerance) in.at_home = false;
+    in.buttons = buttons_;
+    in.estop = estop_;
+    in.over_current = over_current_;
+    in.over_temperature = over_temperature_;
+    over_current_ = over_temperature_ = false;  // the driver pulses its flag; the core latches it
+    const firmware::MotorOutputs& out = core_.tick(in);
+    const double unit = core_.config().torque_unit_unm * 1e-6;  // [N m]
+    applied_ = glm::dvec3{out.torque[0] * unit, out.torque[1] * unit, out.torque[2] * unit};
+    plant_.period(applied_, time());
   }
 
   /// Handles an output (command) report; invalid ones are counted and ignored.
-  void receive(std::span<const std::uint8_t> bytes) noexcept {
-    protocol::CommandReport cmd;
-    if (protocol::decode(bytes, cmd) != Status::ok) {
-      ++rejected_;
-      return;
-    }
-    ++accepted_;
-    last_command_ = cmd;
-    last_valid_tick_ = tick_;
-    if ((cmd.flags & protocol::command_flags::home) && !homed_ && homing_left_ < 0) homing_left_ = config_.homing_ticks;
-    if (cmd.flags & protocol::command_flags::arm) {
-      if (homed_ && !(faults_ & status_bits::any_fault)) armed_ = true;
-    } else {
-      armed_ = false;
-    }
-    for (std::size_t i = 0; i < 3; ++i)
-      command_torque_[static_cast<int>(i)] = cmd.torque_mnm[i] * config_.torque_unit;
-  }
-
+  void receive(std::span<const std::uint8_t> bytes) noexcept { core_.receive(bytes); }
   /// Gets a feature report (device info or configuration); buffer[0] is the id.
-  Status get_feature(std::span<std::uint8_t> buffer, std::size_t& size) const noexcept {
+  Status get_feature(std::span<std::uint8_t> buffer, std::size_t& size) noexcept {
+    size = 0;
     if (buffer.empty()) return Status::short_report;
-    if (buffer[0] == static_cast<std::uint8_t>(protocol::ReportId::device_info)) {
-      protocol::DeviceInfoReport r;
-      for (std::size_t i = 0; i < 3; ++i) {
-        const int k = static_cast<int>(i);
-        r.counts_per_rev[i] = static_cast<std::uint32_t>(config_.kinematics.counts_per_rev[i]);
-        r.max_torque_mnm[i] = static_cast<std::uint16_t>(std::lround(config_.kinematics.max_torque[k] * 1e3));
-        r.q_min_mrad[i] = static_cast<std::int16_t>(std::lround(config_.kinematics.q_min[k] * 1e3));
-        r.q_max_mrad[i] = static_cast<std::int16_t>(std::lround(config_.kinematics.q_max[k] * 1e3));
-      }
-      r.torque_unit_unm = static_cast<std::uint16_t>(std::lround(config_.torque_unit * 1e6));
-      r.l1_um = static_cast<std::uint32_t>(std::lround(config_.kinematics.l1 * 1e6));
-      r.l2_um = static_cast<std::uint32_t>(std::lround(config_.kinematics.l2 * 1e6));
-      r.max_force_mn = static_cast<std::uint16_t>(std::lround(config_.max_force * 1e3));
-      r.continuous_force_mn = static_cast<std::uint16_t>(std::lround(config_.continuous_force * 1e3));
-      r.rate_hz = static_cast<std::uint16_t>(std::lround(config_.rate));
-      size = protocol::encode(r, buffer);
-      return size ? Status::ok : Status::short_report;
-    }
-    if (buffer[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
-      protocol::ConfigurationReport r;
-      r.watchdog_us =
-          static_cast<std::uint16_t>(std::lround(static_cast<double>(watchdog_ticks_) / config_.rate * 1e6));
-      size = protocol::encode(r, buffer);
-      return size ? Status::ok : Status::short_report;
-    }
-    return Status::unknown_report;
+    return core_.get_feature(buffer[0], buffer, size);
   }
-
   /// Sends a feature report (configuration or control).
-  Status send_feature(std::span<const std::uint8_t> bytes) noexcept {
-    if (bytes.empty()) return Status::short_report;
-    if (bytes[0] == static_cast<std::uint8_t>(protocol::ReportId::configuration)) {
-      protocol::ConfigurationReport r;
-      if (const Status s = protocol::decode(bytes, r); s != Status::ok) return s;
-      watchdog_ticks_ = std::max<std::int64_t>(1, std::llround(r.watchdog_us * 1e-6 * config_.rate));
-      return Status::ok;
-    }
-    protocol::ControlOp op;
-    if (const Status s = protocol::decode(bytes, op); s != Status::ok) return s;
-    switch (op) {
-      case protocol::ControlOp::arm:
-        if (!homed_) return Status::not_homed;
-        if (faults_ & status_bits::any_fault) return Status::fault;
-        armed_ = true;
-        last_valid_tick_ = tick_;
-        return Status::ok;
-      case protocol::ControlOp::disarm:
-        armed_ = false;
-        return Status::ok;
-      case protocol::ControlOp::clear_fault:
-        if (armed_) return Status::bad_value;  // only while disarmed
-        faults_ &= static_cast<std::uint16_t>(
-            ~(status_bits::watchdog_tripped | status_bits::over_current | status_bits::over_temperature));
-        return Status::ok;
-      case protocol::ControlOp::home:
-        if (!homed_ && homing_left_ < 0) homing_left_ = config_.homing_ticks;
-        return Status::ok;
-    }
-    return Status::bad_value;
-  }
+  Status send_feature(std::span<const std::uint8_t> bytes) noexcept { return core_.set_feature(bytes); }
 
-  /// Runs one firmware period: watchdog, homing, torque output, dynamics.
-  void tick() noexcept {
-    ++tick_;
-    if (homing_left_ >= 0 && homing_left_-- == 0) homed_ = true;
-    if (armed_ && tick_ - last_valid_tick_ > watchdog_ticks_) {
-      armed_ = false;
-      faults_ |= status_bits::watchdog_tripped;
-    }
-    if (faults_ & status_bits::any_fault) armed_ = false;
-    glm::dvec3 tau{0.0};
-    if (armed_) {
-      for (int i = 0; i < 3; ++i) {
-        const double limit = config_.kinematics.max_torque[i];
-        tau[i] = std::round(std::clamp(command_torque_[i], -limit, limit) / config_.torque_unit) * config_.torque_unit;
-      }
-    }
-    applied_torque_ = tau;
-    plant_.period(tau, time());
-  }
-
-  /// The state report for the current tick (sequence increments each call).
-  [[nodiscard]] protocol::StateReport report() noexcept {
+  /// The state report encoded by the last tick(), as on the wire.
+  [[nodiscard]] std::span<const std::uint8_t> report_bytes() const noexcept { return core_.report(); }
+  /// The state report of the last tick(), decoded.
+  [[nodiscard]] protocol::StateReport report() const noexcept {
     protocol::StateReport r;
-    r.sequence = ++sequence_;
-    r.command_echo = last_command_.sequence;
-    const double since_boot = static_cast<double>(tick_ - boot_tick_) / config_.rate;  // [s]
-    r.timestamp_us =
-        static_cast<std::uint32_t>(static_cast<std::uint64_t>(std::llround(since_boot * 1e6)) & 0xFFFFFFFFu);
-    r.encoder = plant_.kinematics().counts(plant_.q());
-    if (!homed_)
-      for (std::size_t i = 0; i < 3; ++i)
-        r.encoder[i] += config_.unhomed_offset[i];
-    r.status =
-        static_cast<std::uint16_t>(faults_ | (homed_ ? status_bits::homed : 0) | (armed_ ? status_bits::armed : 0));
-    r.buttons = buttons_;
-    for (std::size_t i = 0; i < 3; ++i)
-      r.torque_mnm[i] =
-          static_cast<std::int16_t>(std::lround(applied_torque_[static_cast<int>(i)] / config_.torque_unit));
+    if (protocol::decode(core_.report(), r) != Status::ok) return {};
     return r;
   }
 
@@ -271,66 +247,83 @@ class SimulatedArm {
   /// and the timestamp start again from zero, the arm is unhomed and
   /// disarmed, latched faults are gone; the mechanics keep moving.
   void reboot() noexcept {
-    sequence_ = 0;
-    boot_tick_ = tick_;
-    homed_ = false;
-    homing_left_ = -1;
-    armed_ = false;
-    faults_ &= status_bits::estop;
-    last_command_ = {};
-    last_valid_tick_ = tick_;
+    core_.reset();
     ++boots_;
   }
   [[nodiscard]] int boots() const noexcept { return boots_; }
 
-  /// Latches a fault bit (over-current, over-temperature) or holds e-stop.
-  void inject_fault(std::uint16_t bits) noexcept { faults_ |= bits; }
-  void release_estop() noexcept { faults_ &= static_cast<std::uint16_t>(~status_bits::estop); }
+  /// Board inputs. E-stop holds while pressed; a driver flag latches in
+  /// the core at the next tick.
+  void set_estop(bool pressed) noexcept { estop_ = pressed; }
+  void flag_over_current() noexcept { over_current_ = true; }
+  void flag_over_temperature() noexcept { over_temperature_ = true; }
+  /// e-stop (held until release_estop()), over-current, over-temperature
+  /// (latched) as board inputs at the next tick; other bits are ignored.
+  void inject_fault(std::uint16_t bits) noexcept {
+    if (bits & status_bits::estop) estop_ = true;
+    if (bits & status_bits::over_current) over_current_ = true;
+    if (bits & status_bits::over_temperature) over_temperature_ = true;
+  }
+  void release_estop() noexcept { estop_ = false; }
   void set_buttons(std::uint8_t b) noexcept { buttons_ = b; }
+  /// With a dock sensor, homing completes only while the arm rests within
+  /// home_tolerance of its home pose; without one (the default) the board
+  /// reports at home always, as a board whose user docks it before homing.
+  void set_dock_sensor(bool on) noexcept { dock_sensor_ = on; }
   void set_hand(const Hand& hand) {
     plant_.set_hand(hand);
     config_.hand = hand;
   }
 
-  [[nodiscard]] double time() const noexcept { return static_cast<double>(tick_) / config_.rate; }
-  [[nodiscard]] std::int64_t ticks() const noexcept { return tick_; }
+  /// Time of the last tick on the firmware clock [s].
+  [[nodiscard]] double time() const noexcept { return static_cast<double>(ticks_) * period_us_ * 1e-6; }
+  [[nodiscard]] std::int64_t ticks() const noexcept { return ticks_; }
+  [[nodiscard]] std::uint32_t period_us() const noexcept { return period_us_; }
   [[nodiscard]] glm::dvec3 q() const noexcept { return plant_.q(); }
   [[nodiscard]] glm::dvec3 qdot() const noexcept { return plant_.qdot(); }
   [[nodiscard]] glm::dvec3 position() const noexcept { return plant_.position(); }
   [[nodiscard]] glm::dvec3 velocity() const noexcept { return plant_.velocity(); }
-  [[nodiscard]] glm::dvec3 applied_torque() const noexcept { return applied_torque_; }
+  /// Joint torques the core let through in the last tick [N m].
+  [[nodiscard]] glm::dvec3 applied_torque() const noexcept { return applied_; }
   /// Force the scripted hand applies to the handle in the last substep [N].
   [[nodiscard]] glm::dvec3 hand_force() const noexcept { return plant_.hand_force(); }
   [[nodiscard]] double kinetic_energy() const noexcept { return plant_.kinetic_energy(); }
-  [[nodiscard]] bool armed() const noexcept { return armed_; }
-  [[nodiscard]] bool homed() const noexcept { return homed_; }
-  [[nodiscard]] std::uint16_t faults() const noexcept { return faults_; }
-  [[nodiscard]] const protocol::CommandReport& last_command() const noexcept { return last_command_; }
-  [[nodiscard]] std::uint64_t commands_accepted() const noexcept { return accepted_; }
-  [[nodiscard]] std::uint64_t commands_rejected() const noexcept { return rejected_; }
+  [[nodiscard]] bool armed() const noexcept { return core_.armed(); }
+  [[nodiscard]] bool homed() const noexcept { return core_.homed(); }
+  [[nodiscard]] std::uint16_t faults() const noexcept { return core_.faults(); }
+  [[nodiscard]] const protocol::CommandReport& last_command() const noexcept { return core_.last_command(); }
+  [[nodiscard]] std::uint64_t commands_accepted() const noexcept { return core_.counters().commands; }
+  /// Reports the core refused (bad CRC, short, unknown, wrong version, bad value).
+  [[nodiscard]] std::uint64_t commands_rejected() const noexcept {
+    const firmware::FirmwareCounters& c = core_.counters();
+    return std::uint64_t{c.bad_crc} + c.short_report + c.unknown + c.bad_version + c.bad_value;
+  }
   [[nodiscard]] const SimulatedArmConfig& config() const noexcept { return config_; }
   [[nodiscard]] const PhantomKinematics& kinematics() const noexcept { return plant_.kinematics(); }
+  [[nodiscard]] ArmPlant& plant() noexcept { return plant_; }
   [[nodiscard]] const ArmPlant& plant() const noexcept { return plant_; }
+  [[nodiscard]] firmware::FirmwareCore& core() noexcept { return core_; }
+  [[nodiscard]] const firmware::FirmwareCore& core() const noexcept { return core_; }
 
  private:
+  /// config.watchdog in whole microseconds (validated first: (0, 0.065] s).
+  static std::uint16_t watchdog_us(const SimulatedArmConfig& config) {
+    config.validate();
+    return static_cast<std::uint16_t>(std::lround(config.watchdog * 1e6));
+  }
+
   SimulatedArmConfig config_;
   ArmPlant plant_;
-  glm::dvec3 command_torque_{0.0};
-  glm::dvec3 applied_torque_{0.0};
-  protocol::CommandReport last_command_{};
-  std::int64_t tick_{0};
-  std::int64_t last_valid_tick_{0};
-  std::int64_t watchdog_ticks_{20};
-  std::uint64_t accepted_{0};
-  std::uint64_t rejected_{0};
-  int homing_left_{-1};
-  std::uint16_t sequence_{0};
-  std::int64_t boot_tick_{0};
+  firmware::FirmwareCore core_;
+  glm::dvec3 applied_{0.0};
+  std::int64_t ticks_{0};
+  std::uint32_t period_us_{1000};
   int boots_{0};
-  std::uint16_t faults_{0};
   std::uint8_t buttons_{0};
-  bool homed_{false};
-  bool armed_{false};
+  bool dock_sensor_{false};
+  bool estop_{false};
+  bool over_current_{false};
+  bool over_temperature_{false};
 };
 
 }  // namespace hapticfield
