@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "arm_rig.hpp"
 #include "hapticfield/arms.hpp"
 #include "hapticfield/firmware/board.hpp"
 #include "hapticfield/servo.hpp"
@@ -300,25 +301,13 @@ TEST_CASE("firmware: a tick does not allocate") {
 namespace {
 
 SimulatedArmConfig free_arm() {
-  SimulatedArmConfig c;
-  c.hand.holding = false;
-  return c;
+  return testing::ArmRig::free_arm();
 }
 
-/// ForceArm -> SimulatedTransport -> FirmwareCore on ArmPlant, ServoLoop on one virtual clock.
-struct Rig {
-  VirtualClock clock;
-  SimulatedArm arm;
-  SimulatedTransport link;
-  ForceArm device;
-  ServoLoop<ForceArm, VirtualClock> loop;
-  static LoopConfig quiet() {
-    LoopConfig c;
-    c.realtime = RealTime::off;
-    return c;
-  }
-  explicit Rig(SimulatedArmConfig a = free_arm())
-      : arm(a, 5000), link(arm, [this] { return clock.now(); }), device(link), loop(device, clock, quiet()) {}
+/// ForceArm -> SimulatedTransport -> FirmwareCore on ArmPlant, ServoLoop on
+/// one virtual clock, with the firmware's own 5 ms watchdog.
+struct Rig : testing::ArmRig {
+  explicit Rig(const SimulatedArmConfig& a = free_arm()) : ArmRig(a, 5000) {}
 };
 
 }  // namespace

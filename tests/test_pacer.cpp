@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "arm_rig.hpp"
 #include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/servo.hpp"
@@ -41,25 +42,8 @@ std::vector<std::int64_t> run(Pacer& pacer, VirtualClock& clock, int n, std::int
 }
 
 /// A simulated arm and a loop on one virtual clock.
-struct Rig {
-  VirtualClock clock;
-  SimulatedArm arm;
-  SimulatedTransport link;
-  ForceArm device;
-  ServoLoop<ForceArm, VirtualClock> loop;
-  static SimulatedArmConfig free_arm() {
-    SimulatedArmConfig c;
-    c.hand.holding = false;
-    return c;
-  }
-  static LoopConfig config(PacingConfig pacing) {
-    LoopConfig c;
-    c.realtime = RealTime::off;
-    c.pacing = pacing;
-    return c;
-  }
-  explicit Rig(PacingConfig pacing)
-      : arm(free_arm()), link(arm, [this] { return clock.now(); }), device(link), loop(device, clock, config(pacing)) {}
+struct Rig : testing::ArmRig {
+  explicit Rig(PacingConfig pacing) : ArmRig(free_arm(), LoopConfig{.pacing = pacing}) {}
 };
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "arm_rig.hpp"
 #include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/servo.hpp"
@@ -43,24 +44,9 @@ std::uint32_t property_seed() {
 }
 
 /// Simulated arm, link, ForceArm and loop on one virtual clock.
-struct Rig {
-  VirtualClock clock;
-  SimulatedArm arm;
-  SimulatedTransport link;
-  ForceArm device;
-  ServoLoop<ForceArm, VirtualClock> loop;
-  static LoopConfig quiet(LoopConfig c) {
-    c.realtime = RealTime::off;
-    return c;
-  }
-  explicit Rig(SimulatedArmConfig a = {}, LoopConfig c = {})
-      : arm(a), link(arm, [this] { return clock.now(); }), device(link), loop(device, clock, quiet(c)) {}
-};
-
+using Rig = testing::ArmRig;
 SimulatedArmConfig free_arm() {
-  SimulatedArmConfig c;
-  c.hand.holding = false;
-  return c;
+  return Rig::free_arm();
 }
 
 }  // namespace
