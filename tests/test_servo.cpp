@@ -531,16 +531,28 @@ TEST_CASE("a throwing callback: zero force first, then ServoError with the last 
   CHECK_FALSE(rig.arm.last_command().flags & protocol::command_flags::arm);
 }
 
+namespace {
+
+/// The hand starts at the home pose and presses 1 cm into a wall 5 mm below
+/// it, then comes back out, over and over (2 cm/s).
+SimulatedArmConfig pressing_hand() {
+  SimulatedArmConfig a;
+  a.hand.path = HandPath::line({0.0, 0.0, 0.0}, {0.0, -0.015, 0.0}, 0.02);
+  return a;
+}
+/// The loop for the wall tests: passivity controller on or off, no slew limit to speak of.
+LoopConfig wall_loop(bool passivity) {
+  LoopConfig c;
+  c.safety.passivity_enabled = passivity;
+  c.safety.slew_rate = 1e5;
+  return c;
+}
+
+}  // namespace
+
 TEST_CASE("closed loop: the hand presses a stiff wall; stable, energy bounded with passivity on") {
   for (const bool passivity : {false, true}) {
-    SimulatedArmConfig a;
-    // The hand starts at the home pose and presses 1 cm into a wall 5 mm
-    // below it, then comes back out, over and over.
-    a.hand.path = HandPath::line({0.0, 0.0, 0.0}, {0.0, -0.015, 0.0}, 0.02);
-    LoopConfig c;
-    c.safety.passivity_enabled = passivity;
-    c.safety.slew_rate = 1e5;
-    Rig rig(a, c);
+    Rig rig(pressing_hand(), wall_loop(passivity));
     // 2000 N/m: the stiffest wall this arm renders passively. The board
     // acts on a state one period old (t_d = T = 1 ms) and holds it for a
     // period, so passivity needs b > K (T/2 + t_d) (Colgate & Schenkel
@@ -592,12 +604,7 @@ struct DelayedWall {
 TEST_CASE("closed loop: a delayed wall oscillates; the passivity controller damps it") {
   double mean_ke[2] = {0.0, 0.0}, min_energy = 0.0;
   for (const bool passivity : {false, true}) {
-    SimulatedArmConfig a;
-    a.hand.path = HandPath::line({0.0, 0.0, 0.0}, {0.0, -0.015, 0.0}, 0.02);
-    LoopConfig c;
-    c.safety.passivity_enabled = passivity;
-    c.safety.slew_rate = 1e5;
-    Rig rig(a, c);
+    Rig rig(pressing_hand(), wall_loop(passivity));
     DelayedWall wall;
     double sum = 0.0;
     int n = 0;
