@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -443,6 +444,46 @@ TEST_CASE("a stiff mesh surface at 1 kHz stays passive over 10 s of tapping and 
 }
 
 // --- node ceiling per tick ---------------------------------------------------------
+
+TEST_CASE("the tick's own node budget bounds every tick, and a tick cut short never lets the tool through") {
+  // a wavy sheet of 0.2 mm triangles, each query's budget 256 nodes, the
+  // tick's 120: a random walk at up to 2 m/s, into the sheet and along it
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  const TriangleMesh sheet = test::wavy_sheet(0.04, 200, 0.002, 0.01);
+  const MeshChecker checker(sheet);
+  constexpr std::uint32_t query_budget = 256, tick_budget = 120;
+  for (const double r : {0.0, 0.0005, 0.002}) {
+    INFO("radius " << r << " m");
+    ProxyConfig config{.stiffness = 1500.0, .static_friction = 0.4, .dynamic_friction = 0.3, .radius = r};
+    config.tick_node_budget = tick_budget;
+    ProxyConstraint proxy(MeshShape(sheet, MeshShapeConfig{true, query_budget}), config);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> step(-2e-3, 2e-3);
+    glm::dvec3 hip{0.0, 0.0, 0.004};
+    int cut = 0;
+    for (int i = 0; i < 3000; ++i) {
+      hip = glm::clamp(hip + glm::dvec3{step(rng), step(rng), step(rng)}, glm::dvec3{-0.015, -0.015, -0.004},
+                       glm::dvec3{0.015, 0.015, 0.005});
+      const Contact c = proxy.contact(probe_at(hip));
+      INFO("tick " << i);
+      REQUIRE(is_finite(c.force));
+      // past the budget: at most the query that crossed it and one closest()
+      REQUIRE(proxy.last_tick().nodes <= tick_budget + 2 * query_budget);
+      cut += proxy.last_tick().blocked ? 1 : 0;
+      const ProxyPath& path = proxy.last_path();
+      if (r == 0.0) {
+        REQUIRE_FALSE(checker.check(path).found());
+      } else {
+        for (int q = 0; q + 1 < path.count; ++q)
+          REQUIRE(checker.entered(path.points[static_cast<std::size_t>(q)],
+                                  path.points[static_cast<std::size_t>(q + 1)], r) >= r * (1.0 - 1e-6));
+      }
+    }
+    std::printf("tick node budget: radius %g m, %d of 3000 ticks cut short\n", r, cut);
+    CHECK(cut > 0);  // the budget was met, on some ticks at least
+  }
+}
 
 TEST_CASE("a proxy tick visits a bounded number of tree nodes on hostile meshes") {
   constexpr std::uint32_t ceiling = 600;  // nodes in a whole tick (all its queries), a few microseconds

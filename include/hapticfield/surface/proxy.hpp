@@ -109,6 +109,11 @@ struct ProxyPath {
   int count{0};
 };
 
+/// ProxyConfig::tick_node_budget's default: twice a mesh query's own
+/// budget (bvh_default_max_nodes), about 8x the 99th percentile of a 2 mm
+/// ball's tick on bench_surface's million-triangle sheet.
+inline constexpr std::uint32_t proxy_default_tick_node_budget = 8192;
+
 struct ProxyConfig {
   double stiffness{1500.0};      ///< k [N/m]
   double damping{0.0};           ///< b on the normal velocity while touching [N s/m]
@@ -127,6 +132,15 @@ struct ProxyConfig {
   /// balls), so it rests r above a plane and never enters a crack narrower
   /// than 2 r. The shape must answer sweep_sphere() for a radius > 0.
   double radius{0.0};
+  /// Most tree nodes (or grid cells) all the queries of one tick may visit
+  /// together, where the shape counts them: once past it the tick makes no
+  /// further move, and the proxy stays where it has got to, every piece of
+  /// its path swept (ProxyTick::blocked). The worst tick then visits at most
+  /// this plus the budget of the one query that crossed it (a mesh's
+  /// MeshShapeConfig::max_nodes) and of the closest() queries that follow
+  /// (one per pass); without it, up to proxy_max_passes x proxy_max_moves + 1
+  /// queries of a full budget each.
+  std::uint32_t tick_node_budget{proxy_default_tick_node_budget};
 };
 
 /// Largest tool radius a proxy takes [m].
@@ -138,7 +152,7 @@ struct ProxyTick {
   int planes{0};  ///< constraint planes at the end of the tick (0..3)
   std::uint32_t nodes{
       0};               ///< tree nodes (or grid cells) visited by all the tick's queries, where the shape counts them
-  bool blocked{false};  ///< a query ran out of its budget: the proxy stayed
+  bool blocked{false};  ///< a query ran out of its budget, or the tick of its own: the proxy stayed
   bool sliding{false};  ///< friction: the proxy slides (else sticks)
   /// A ball that began overlapping the surface (at the first tick, after
   /// reset(), or come through it from behind): it follows the HIP with no
@@ -216,6 +230,10 @@ class ProxyConstraint {
         const glm::dvec3 d = target - x;
         const double length = glm::length(d);
         if (!(length > planes.tolerance)) break;
+        if (tick_.nodes >= config_.tick_node_budget) {  // the tick's budget is spent: no further move
+          blocked = true;
+          break;
+        }
         const Hit h = sweep(x, target);
         ++tick_.moves;
         if (!h.complete) {
@@ -285,7 +303,7 @@ class ProxyConstraint {
           x = candidate;  // both ends over one flat face: nothing can lie between them
           visit(x);
           touched = same;
-        } else {
+        } else if (tick_.nodes < config_.tick_node_budget) {  // (else the tick's budget is spent: frictionless)
           const Hit h = sweep(frictionless, candidate);
           ++tick_.moves;
           if (h.complete && !h.found()) {
