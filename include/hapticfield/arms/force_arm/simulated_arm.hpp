@@ -179,7 +179,7 @@ class ArmPlant {
 /// ticks, the limited torques drive the mechanics for one period, and the
 /// state report carries the encoders read at its start. A command computed
 /// from that report therefore acts one period later, as on the board
-/// (docs/firmware.md, "The twin's delay").
+/// (docs/firmware.md, "The firmware twin").
 class SimulatedArm {
  public:
   static constexpr double home_tolerance = 0.02;  ///< the dock sensor sees the arm at home within this [rad]
