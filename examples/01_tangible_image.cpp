@@ -34,6 +34,7 @@
 
 #include "common/cli.hpp"
 #include "common/csv.hpp"
+#include "common/mask_options.hpp"
 #include "common/plots.hpp"
 #include "common/simple_plot.hpp"
 
@@ -66,7 +67,6 @@ constexpr const char* usage =
 struct Arguments {
   std::string image;
   hf::TangibleConfig options;
-  bool size_given = false;
   hf::GrayWeights gray = hf::GrayWeights::paper;
   std::uint64_t max_pixels = hf::default_max_pixels;  ///< largest picture loaded [px]
   std::optional<std::string> maps;
@@ -77,21 +77,17 @@ struct Arguments {
 
 Arguments parse(hf::cli::Parser& p) {
   Arguments a;
+  hf::cli::Input image("IMAGE");
+  hf::cli::MaskOptions mask;
   while (p.next()) {
-    if (p.is("--mask")) {
-      a.options.mask = p.named("mask", hf::mask_kinds);
-    } else if (p.is("--size")) {
-      a.options.size = static_cast<int>(p.integer(1, 1000));
-      a.size_given = true;
-    } else if (p.is("--sigma")) {
+    if (mask.take(p)) continue;  // --mask, --size, --border
+    if (p.is("--sigma")) {
       a.options.sigma = p.real(hf::cli::open_closed(0.0, 1000.0));
-    } else if (p.is("--border")) {
-      a.options.border = p.named("border", hf::border_kinds);
     } else if (p.is("--gray")) {
       a.gray = p.choice<hf::GrayWeights>("gray weights",
                                          {{"paper", hf::GrayWeights::paper}, {"bt601", hf::GrayWeights::bt601}});
     } else if (p.is("--max-mpx")) {
-      a.max_pixels = static_cast<std::uint64_t>(p.real(hf::cli::open_closed(0.0, 1e6)) * 1e6);
+      a.max_pixels = p.megapixels();
     } else if (p.is("--full-scale")) {
       a.full_scale = p.real(hf::cli::open_closed(0.0, 1e6));
     } else if (p.is("--maps")) {
@@ -100,24 +96,14 @@ Arguments parse(hf::cli::Parser& p) {
       a.probes = p.value();
     } else if (p.is("--forces")) {
       a.forces = p.output_file();
-    } else if (p.positional() && a.image.empty()) {
-      a.image = p.token();
-    } else if (p.positional()) {
-      throw hf::cli::UsageError("more than one IMAGE given ('" + a.image + "', '" + p.token() + "')");
     } else {
-      p.unknown();
+      p.input_or_unknown(image);
     }
   }
-  if (a.image.empty()) throw hf::cli::UsageError("no IMAGE given");
+  a.image = image.required();
   if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
   if (a.full_scale > 0.0 && !a.maps) throw hf::cli::UsageError("--full-scale needs --maps");
-  // Without --size each mask takes its own default (a fixed-size mask its only size).
-  if (!a.size_given) a.options.size = hf::default_mask_size(a.options.mask);
-  try {
-    hf::validate_mask_size(a.options.mask, a.options.size);
-  } catch (const std::invalid_argument& e) {
-    throw hf::cli::UsageError(std::string("--size: ") + e.what());
-  }
+  a.options = mask.apply(a.options);
   p.finish();
   return a;
 }

@@ -33,6 +33,7 @@
 #include "common/device_option.hpp"
 #include "common/loop_thread.hpp"
 #include "common/plots.hpp"
+#include "common/servo_options.hpp"
 #include "common/share.hpp"
 #include "common/stop_signal.hpp"
 
@@ -44,6 +45,7 @@
 #if HAPTICFIELD_EXAMPLE_SHAPES
 #include "view/scene3d.hpp"
 #include "view/shape_scene.hpp"
+#include "view/view_options.hpp"
 #endif
 
 using namespace hapticfield;
@@ -66,8 +68,7 @@ struct Arguments {
   std::string shape;
   double height_mm{4.0};
   std::string snapshot;
-  double view_yaw{25.0}, view_pitch{30.0};  ///< [degrees]
-  double distance_mm{0.0};                  ///< 0: the shape fills about 70 % of the view
+  view::ViewOptions view;  ///< the snapshot's camera; no distance: the shape fills about 70 % of the view
 };
 
 /// The usage up to the device's options.
@@ -112,8 +113,9 @@ constexpr const char* usage_tail =
 
 Arguments parse(cli::Parser& p) {
   Arguments o;
-  bool image_given = false;
+  cli::Input image("IMAGE");
   while (p.next()) {
+    if (o.view.take(p)) continue;  // --view, --distance
     if (p.is("--field")) {
       o.field = p.choice<const char*>(
           "field", {{"tangible", "tangible"}, {"wall", "wall"}, {"spring", "spring"}, {"none", "none"}});
@@ -124,23 +126,14 @@ Arguments parse(cli::Parser& p) {
       o.height_mm = p.real(cli::open_closed(0.0, 100.0));
     } else if (p.is("--snapshot")) {
       o.snapshot = p.output_file();
-    } else if (p.is("--view")) {
-      const auto [yaw, pitch] = p.pair(cli::closed(-180.0, 180.0));
-      if (pitch < -89.0 || pitch > 89.0) usage("--view pitch must be in [-89, 89] degrees");
-      o.view_yaw = yaw;
-      o.view_pitch = pitch;
-    } else if (p.is("--distance")) {
-      o.distance_mm = p.real(cli::closed(1.0, 1e5));
     } else if (p.is("--seconds")) {
       o.seconds = p.real(cli::open_closed(0.0, 3600.0));
     } else if (p.is("--rate")) {
       o.rate = p.real(cli::closed(min_servo_rate, max_servo_rate));
     } else if (p.is("--realtime")) {
-      o.realtime = p.choice<RealTime>(
-          "real-time mode",
-          {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
+      o.realtime = cli::realtime_option(p);
     } else if (p.is("--clock")) {
-      o.virtual_clock = p.choice<bool>("clock", {{"wall", false}, {"virtual", true}});
+      o.virtual_clock = cli::virtual_clock_option(p);
     } else if (p.is("--trace")) {
       o.trace = p.output_file();
     } else if (p.is("--plots")) {
@@ -149,31 +142,20 @@ Arguments parse(cli::Parser& p) {
       o.device = cli::device_option(p.value());
     } else if (p.is("--list-devices")) {
       o.list_devices = true;
-    } else if (p.positional() && !image_given) {
-      o.image = p.token();
-      image_given = true;
     } else {
-      p.unknown();
+      p.input_or_unknown(image);
     }
   }
+  o.image = image.value();
   if (o.list_devices) {
     p.finish();
     return o;
   }
-  if (!o.shape.empty() && (o.field_given || image_given))
+  if (!o.shape.empty() && (o.field_given || image.given()))
     usage("--shape is felt through its proxy: give no IMAGE or --field with it");
   if (!o.snapshot.empty() && o.shape.empty()) usage("--snapshot draws the 3D view of --shape FILE: give --shape");
-  if (o.virtual_clock && !o.device.simulated)
-    usage(
-        "--clock virtual needs a simulated arm (--device sim, woody:GEN[:PRESET]:sim or inverse3:sim); a real arm "
-        "runs on the wall clock");
-  // 0 ticks would mean "no limit" to the loop: insist on at least one.
-  if (std::llround(o.seconds * o.rate) < 1) {
-    char text[160];
-    std::snprintf(text, sizeof text, "--seconds %g is less than one tick at %g Hz; the minimum is %g s", o.seconds,
-                  o.rate, 0.5 / o.rate);
-    usage(text);
-  }
+  cli::check_clock_fits_arm(o.virtual_clock, o.device);
+  cli::check_at_least_one_tick(o.seconds, o.rate);
   p.finish();  // the trace and plot paths, before the run
   if (o.shape.empty() && o.image.empty()) {
     o.image = share::example_picture();
@@ -384,9 +366,7 @@ std::unique_ptr<ShapeRun> load_shape(const Arguments& o, Felt& felt) {
     felt.at_end = [&o, shape = run.get()](const glm::dvec3& hip, const glm::dvec3& force) {
       view::OrbitCamera camera;
       camera.frame(shape->scene.centre, shape->scene.radius);
-      if (o.distance_mm > 0.0) camera.distance = o.distance_mm * 1e-3;
-      camera.yaw = o.view_yaw * std::numbers::pi / 180.0;
-      camera.pitch = o.view_pitch * std::numbers::pi / 180.0;
+      o.view.aim(camera);
       view::Sample3d now;
       now.hip = hip;
       now.proxy = shape->proxy();

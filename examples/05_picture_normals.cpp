@@ -115,6 +115,7 @@ std::vector<glm::dvec2> parse_face(const std::string& raw) {
 
 Args parse(cli::Parser& p) {
   Args a;
+  cli::Input image("IMAGE");
   while (p.next()) {
     if (p.is("--face")) {
       a.faces.push_back(parse_face(p.value()));
@@ -124,7 +125,7 @@ Args parse(cli::Parser& p) {
     } else if (p.is("--intrinsics")) {
       a.intrinsics = p.value();
     } else if (p.is("--max-mpx")) {
-      a.max_pixels = static_cast<std::uint64_t>(p.real(cli::open_closed(0.0, 1e6)) * 1e6);
+      a.max_pixels = p.megapixels();
     } else if (p.is("--focal")) {
       a.focal = p.real(cli::closed(1.0, 1e6));
     } else if (p.is("--center") || p.is("--centre")) {
@@ -144,15 +145,11 @@ Args parse(cli::Parser& p) {
       a.shading = p.real(cli::closed(1.0, 1e4));
     } else if (p.is("--verbose")) {
       a.verbose = true;
-    } else if (p.positional() && a.image.empty()) {
-      a.image = p.token();
-    } else if (p.positional()) {
-      throw cli::UsageError("unexpected argument '" + p.token() + "' (one IMAGE only)");
     } else {
-      p.unknown();
+      p.input_or_unknown(image);
     }
   }
-  if (a.image.empty()) throw cli::UsageError("no IMAGE given");
+  a.image = image.required();
   if (a.faces.empty()) throw cli::UsageError("no --face given");
   if (a.sizes.size() > 1 && a.sizes.size() != a.faces.size())
     throw cli::UsageError("give one --size for all faces or one per --face");

@@ -220,7 +220,7 @@ int run(const std::string& image_path, const fs::path& out, int levels, std::uin
 int main(int argc, char** argv) {
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);  // errors are reported once, by us
   return cli::main("false_texture", usage, argc, argv, [](cli::Parser& p) {
-    std::string image;
+    cli::Input image("IMAGE");
     std::string out = "out/false_texture";
     bool out_given = false;
     int levels = 4;
@@ -231,15 +231,13 @@ int main(int argc, char** argv) {
       else if (p.is("--levels"))
         levels = static_cast<int>(p.integer(2, 8));  // 8 colours in the legend
       else if (p.is("--max-mpx"))
-        max_pixels = static_cast<std::uint64_t>(p.real(cli::open_closed(0.0, 1e6)) * 1e6);
-      else if (p.positional() && image.empty())
-        image = p.token();
+        max_pixels = p.megapixels();
       else
-        p.unknown();
+        p.input_or_unknown(image);
     }
-    if (image.empty()) throw cli::UsageError("no IMAGE given");
+    const std::string& image_path = image.required();
     if (!out_given) p.default_output_dir("--out", out);
     p.finish();
-    return run(image, out, levels, max_pixels);
+    return run(image_path, out, levels, max_pixels);
   });
 }

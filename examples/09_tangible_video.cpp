@@ -43,7 +43,9 @@
 #include "common/csv.hpp"
 #include "common/device_option.hpp"
 #include "common/loop_thread.hpp"
+#include "common/mask_options.hpp"
 #include "common/plots.hpp"
+#include "common/servo_options.hpp"
 #include "common/simple_plot.hpp"
 #include "common/stop_signal.hpp"
 
@@ -94,28 +96,23 @@ constexpr const char* usage =
 struct Arguments {
   std::string video;
   hf::TangibleConfig options;
-  bool size_given = false;
   hf::DenoiseMode denoise = hf::DenoiseMode::temporal;
   double fade_s = hf::default_cut_fade;
   std::optional<std::string> cuts, probes, forces, trace, plots;
   std::optional<double> seconds;
   hf::DeviceSpec device{hf::parse_device_spec("sim")};
-  std::optional<std::string> clock;                   ///< "wall" or "virtual"; given or not
+  std::optional<bool> virtual_clock;                  ///< --clock virtual (true) or wall; given or not
   std::uint64_t max_pixels = hf::default_max_pixels;  ///< largest frame decoded [px]
   bool verbose = false;
 };
 
 Arguments parse(hf::cli::Parser& p) {
   Arguments a;
+  hf::cli::Input video("VIDEO");
+  hf::cli::MaskOptions mask;
   while (p.next()) {
-    if (p.is("--mask")) {
-      a.options.mask = p.named("mask", hf::mask_kinds);
-    } else if (p.is("--size")) {
-      a.options.size = static_cast<int>(p.integer(1, 1000));
-      a.size_given = true;
-    } else if (p.is("--border")) {
-      a.options.border = p.named("border", hf::border_kinds);
-    } else if (p.is("--denoise")) {
+    if (mask.take(p)) continue;  // --mask, --size, --border
+    if (p.is("--denoise")) {
       a.denoise = p.choice<hf::DenoiseMode>("denoise mode", {{"none", hf::DenoiseMode::none},
                                                              {"temporal", hf::DenoiseMode::temporal},
                                                              {"spatial", hf::DenoiseMode::spatial},
@@ -133,37 +130,25 @@ Arguments parse(hf::cli::Parser& p) {
     } else if (p.is("--device")) {
       a.device = hf::cli::device_option(p.value());
     } else if (p.is("--clock")) {
-      a.clock = p.choice<std::string>("clock", {{"wall", "wall"}, {"virtual", "virtual"}});
+      a.virtual_clock = hf::cli::virtual_clock_option(p);
     } else if (p.is("--trace")) {
       a.trace = p.output_file();
     } else if (p.is("--plots")) {
       a.plots = p.output_dir();
     } else if (p.is("--max-mpx")) {
-      a.max_pixels = static_cast<std::uint64_t>(p.real(hf::cli::open_closed(0.0, 1e6)) * 1e6);
+      a.max_pixels = p.megapixels();
     } else if (p.is("--verbose")) {
       a.verbose = true;
-    } else if (p.positional() && a.video.empty()) {
-      a.video = p.token();
-    } else if (p.positional()) {
-      throw hf::cli::UsageError("more than one VIDEO given ('" + a.video + "', '" + p.token() + "')");
     } else {
-      p.unknown();
+      p.input_or_unknown(video);
     }
   }
-  if (a.video.empty()) throw hf::cli::UsageError("no VIDEO given");
+  a.video = video.required();
   if (a.probes.has_value() != a.forces.has_value()) throw hf::cli::UsageError("--probes and --forces go together");
-  if (a.probes && (a.trace || a.seconds || a.clock))
+  if (a.probes && (a.trace || a.seconds || a.virtual_clock))
     throw hf::cli::UsageError("--trace, --seconds and --clock are for play mode, not --probes");
-  if (a.clock == "virtual" && !a.device.simulated)
-    throw hf::cli::UsageError(
-        "--clock virtual is for the simulated arms (--device sim, woody:GEN[:PRESET]:sim or inverse3:sim): a real arm "
-        "runs on the wall clock");
-  if (!a.size_given) a.options.size = hf::default_mask_size(a.options.mask);
-  try {
-    hf::validate_mask_size(a.options.mask, a.options.size);
-  } catch (const std::invalid_argument& e) {
-    throw hf::cli::UsageError(std::string("--size: ") + e.what());
-  }
+  hf::cli::check_clock_fits_arm(a.virtual_clock.value_or(false), a.device);
+  a.options = mask.apply(a.options);
   if (a.video.rfind("camera:", 0) == 0) (void)hf::cli::parse_integer(a.video.substr(7), "camera:N", 0, 99);
   p.finish();
   return a;
@@ -449,7 +434,7 @@ int run_play(const Arguments& a) {
 }
 
 int play(const Arguments& a) {
-  return a.clock == "virtual" ? run_play<hf::VirtualClock>(a) : run_play<hf::SteadyClock>(a);
+  return a.virtual_clock.value_or(false) ? run_play<hf::VirtualClock>(a) : run_play<hf::SteadyClock>(a);
 }
 
 int run(const Arguments& a) {

@@ -44,6 +44,7 @@
 #include "common/device_option.hpp"
 #include "common/loop_thread.hpp"
 #include "common/picture.hpp"
+#include "common/servo_options.hpp"
 #include "common/stop_signal.hpp"
 #include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
@@ -61,6 +62,7 @@
 #include "view/scope.hpp"
 #include "view/video_player.hpp"
 #include "view/view_frame.hpp"
+#include "view/view_options.hpp"
 #include "view/view_sample.hpp"
 #include "view/window.hpp"
 #if HAPTICFIELD_EXAMPLE_SHAPES
@@ -159,9 +161,8 @@ struct Arguments {
   std::size_t max_triangles{io::default_max_mesh_triangles};  ///< a mesh's most triangles
   std::vector<std::string> shape_only;                        ///< the shape-only options given
   double height_mm{4.0};
-  double radius_mm{0.0};            ///< the tool's radius [mm]
-  glm::dvec2 view_deg{25.0, 30.0};  ///< yaw, pitch [degrees]
-  std::optional<double> distance_mm;
+  double radius_mm{0.0};  ///< the tool's radius [mm]
+  ViewOptions view;       ///< the camera's start (r in the window returns to it)
 };
 
 [[noreturn]] void usage(const std::string& error) {
@@ -212,7 +213,9 @@ std::vector<glm::dvec2> parse_face(const std::string& text) {
 Arguments parse(cli::Parser& p) {
   Arguments o;
   bool size_given = false;
+  cli::Input source("SOURCE");
   while (p.next()) {
+    if (o.view.take(p)) continue;  // --view, --distance
     if (p.is("--field")) {
       o.scene.kind = p.choice<FieldKind>("field", {{"tangible", FieldKind::tangible},
                                                    {"video", FieldKind::video},
@@ -255,7 +258,7 @@ Arguments parse(cli::Parser& p) {
       o.video.fade = p.real(cli::closed(0.0, 10000.0)) * 1e-3;
       o.video_only.emplace_back("--fade-ms");
     } else if (p.is("--max-mpx")) {
-      o.max_pixels = static_cast<std::uint64_t>(p.real(cli::open_closed(0.0, 1e6)) * 1e6);
+      o.max_pixels = p.megapixels();
       o.video.max_pixels = o.max_pixels;
     } else if (p.is("--gain")) {
       o.scene.gain = p.real(cli::closed(0.0, 10.0));
@@ -279,9 +282,7 @@ Arguments parse(cli::Parser& p) {
     } else if (p.is("--rate")) {
       o.rate = p.real(cli::closed(min_servo_rate, max_servo_rate));
     } else if (p.is("--realtime")) {
-      o.realtime = p.choice<RealTime>(
-          "real-time mode",
-          {{"off", RealTime::off}, {"best_effort", RealTime::best_effort}, {"enforce", RealTime::enforce}});
+      o.realtime = cli::realtime_option(p);
     } else if (p.is("--seconds")) {
       o.seconds = p.real(cli::open_closed(0.0, 3600.0));
     } else if (p.is("--screenshot")) {
@@ -298,19 +299,11 @@ Arguments parse(cli::Parser& p) {
       o.shape_only.push_back("--radius");
     } else if (p.is("--height-mm")) {
       o.height_mm = p.real(cli::open_closed(0.0, 100.0));
-    } else if (p.is("--view")) {
-      const auto [yaw, pitch] = p.pair(cli::closed(-180.0, 180.0));
-      if (pitch < -89.0 || pitch > 89.0)
-        usage("--view pitch must be in [-89, 89] degrees, got " + cli::detail::number_text(pitch));
-      o.view_deg = glm::dvec2{yaw, pitch};
-    } else if (p.is("--distance")) {
-      o.distance_mm = p.real(cli::closed(1.0, 1e5));
-    } else if (p.positional() && o.source.empty()) {
-      o.source = p.token();
     } else {
-      p.unknown();
+      p.input_or_unknown(source);
     }
   }
+  o.source = source.value();
   if (o.list_devices) {
     p.finish();
     return o;
@@ -324,12 +317,7 @@ Arguments parse(cli::Parser& p) {
   if (o.source.empty() && o.shape.empty()) usage("missing SOURCE (a picture or a video file) or --shape FILE");
   if (o.shape.empty() && !o.shape_only.empty()) usage(o.shape_only.front() + " is for --shape FILE (a mesh)");
   if (!o.screenshot.empty() && !o.seconds) usage("--screenshot needs --seconds (how long the loop runs first)");
-  if (o.seconds && std::llround(*o.seconds * o.rate) < 1) {
-    char text[160];
-    std::snprintf(text, sizeof text, "--seconds %g is less than one tick at %g Hz; the minimum is %g s", *o.seconds,
-                  o.rate, 0.5 / o.rate);
-    usage(text);
-  }
+  if (o.seconds) cli::check_at_least_one_tick(*o.seconds, o.rate);
   const SizeRange r = size_range(o.scene.mask);
   if (!size_given)
     o.scene.size = std::clamp(o.scene.size, r.lo, r.hi);
@@ -384,6 +372,28 @@ bool report_run(StopReason outcome, const cli::StopOnSignal& stop, const LoopSna
       static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_deadlines),
       static_cast<unsigned long long>(s.safety_events), static_cast<unsigned long long>(s.latches));
   return disconnected;
+}
+
+/// The end of a run in the window: the loop stopped and its thread joined,
+/// the last samples taken (drain()), the window closed, the run reported
+/// (from `figures`, which drain() brings up to date). Returns whether the
+/// device disconnected.
+template <class Loop, class Drain>
+bool end_run(Loop& loop, cli::LoopThread& servo, Drain& drain, bool window, const cli::StopOnSignal& stop,
+             const LoopSnapshot& figures) {
+  loop.request_stop();
+  servo.join();
+  drain();
+  if (window) cv::destroyAllWindows();
+  return report_run(servo.outcome(), stop, figures);
+}
+
+/// 's' in the window: the picture shown, saved as DIR/hapticfield_view_N.png.
+/// Returns the line that tells the user.
+std::string save_shot(const std::string& dir, int number, const cv::Mat& canvas) {
+  const std::string path =
+      (std::filesystem::path(dir) / ("hapticfield_view_" + std::to_string(number) + ".png")).string();
+  return cv::imwrite(path, canvas) ? "saved " + path : "cannot write " + path;
 }
 
 template <Device D, HapticField F>
@@ -547,20 +557,14 @@ int run_view(const Arguments& o, D& device, F& field, LiveField<AnyField>& live,
         }
         break;
       case 's': {
-        const std::string path =
-            (std::filesystem::path(o.shots) / ("hapticfield_view_" + std::to_string(++shot) + ".png")).string();
-        say(cv::imwrite(path, canvas) ? "saved " + path : "cannot write " + path);
+        say(save_shot(o.shots, ++shot, canvas));
         break;
       }
       default:
         break;
     }
   }
-  loop.request_stop();
-  servo.join();
-  drain();
-  if (window) cv::destroyAllWindows();
-  const bool disconnected = report_run(servo.outcome(), stop, status.loop);
+  const bool disconnected = end_run(loop, servo, drain, window, stop, status.loop);
   if (video) {
     if (video->playing()) (void)video->settle(std::chrono::milliseconds(1000));  // the last tick's frame
     drain();
@@ -670,9 +674,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
   OrbitCamera camera;
   const auto reset_view = [&] {
     camera.frame(scene.centre, scene.radius);
-    if (o.distance_mm) camera.distance = *o.distance_mm * 1e-3;
-    camera.yaw = o.view_deg.x * degree;
-    camera.pitch = o.view_deg.y * degree;
+    o.view.aim(camera);
   };
   reset_view();
   const ViewLayout layout = ViewLayout::for_picture(camera.width, camera.height);
@@ -765,9 +767,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
         reset_view();
         break;
       case 's': {
-        const std::string path =
-            (std::filesystem::path(o.shots) / ("hapticfield_view_" + std::to_string(++shot) + ".png")).string();
-        status.note = cv::imwrite(path, canvas) ? "saved " + path : "cannot write " + path;
+        status.note = save_shot(o.shots, ++shot, canvas);
         note_until = now.t + 3.0;
         break;
       }
@@ -775,11 +775,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
         break;
     }
   }
-  loop.request_stop();
-  servo.join();
-  drain();
-  if (window) cv::destroyAllWindows();
-  const bool disconnected = report_run(servo.outcome(), stop, status.loop);
+  const bool disconnected = end_run(loop, servo, drain, window, stop, status.loop);
   if (!o.screenshot.empty()) {
     draw_frame();  // once to time it, then with the time shown
     drain();

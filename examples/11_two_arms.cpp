@@ -15,6 +15,7 @@
 #include "common/cli.hpp"
 #include "common/device_option.hpp"
 #include "common/loop_thread.hpp"
+#include "common/servo_options.hpp"
 #include "common/stop_signal.hpp"
 #include "hapticfield/arms.hpp"
 #include "hapticfield/core.hpp"
@@ -196,7 +197,7 @@ int main(int argc, char** argv) {
       else if (p.is("--fault"))
         o.fault = true;
       else if (p.is("--clock"))
-        o.virtual_clock = p.choice<bool>("clock", {{"wall", false}, {"virtual", true}});
+        o.virtual_clock = cli::virtual_clock_option(p);
       else if (p.is("--teacher"))
         o.teacher = cli::device_option(p.value());
       else if (p.is("--student"))
@@ -208,8 +209,8 @@ int main(int argc, char** argv) {
     }
     if (o.fault && o.student)
       throw cli::UsageError("--fault stalls the simulated student's own link: give no --student with it");
-    if (o.virtual_clock && ((o.teacher && !o.teacher->simulated) || (o.student && !o.student->simulated)))
-      throw cli::UsageError("--clock virtual needs simulated arms; a real arm runs on the wall clock");
+    if (o.teacher) cli::check_clock_fits_arm(o.virtual_clock, *o.teacher, "--teacher");
+    if (o.student) cli::check_clock_fits_arm(o.virtual_clock, *o.student, "--student");
     p.finish();
     return run(o);
   });

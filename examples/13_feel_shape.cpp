@@ -154,6 +154,7 @@ std::pair<double, double> parse_friction(const std::string& text) {
 Arguments parse(hf::cli::Parser& p) {
   Arguments a;
   bool probes_given = false;
+  hf::cli::Input shape("SHAPE");
   while (p.next()) {
     if (p.is("--probes")) {
       a.probes = p.value();
@@ -201,15 +202,11 @@ Arguments parse(hf::cli::Parser& p) {
     } else if (p.is("--spacing")) {
       a.spacing = p.real(hf::cli::open_closed(0.0, 1e3));
       a.spacing_given = true;
-    } else if (p.positional() && a.shape.empty()) {
-      a.shape = p.token();
-    } else if (p.positional()) {
-      throw hf::cli::UsageError("more than one SHAPE given ('" + a.shape + "', '" + p.token() + "')");
     } else {
-      p.unknown();
+      p.input_or_unknown(shape);
     }
   }
-  if (a.shape.empty()) throw hf::cli::UsageError("no SHAPE given");
+  a.shape = shape.required();
   if (!probes_given) throw hf::cli::UsageError("no --probes given");
   if (a.smooth && a.facets) throw hf::cli::UsageError("--smooth and --facets: give one shading");
   p.finish();

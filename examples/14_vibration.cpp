@@ -256,11 +256,9 @@ int main(int argc, char** argv) {
         a.spectrum = p.output_file();
       else if (p.is("--seconds"))
         a.seconds = p.real(cli::closed(0.5, 600.0));
-      else if (p.is("--rate")) {
-        a.rate = p.real(cli::closed(8000.0, 192000.0));
-        if (a.rate != std::floor(a.rate))  // a WAV header and ALSA hold a whole rate: no silent rounding
-          throw cli::UsageError("--rate must be a whole number of Hz, got '" + p.token() + "'");
-      } else if (p.is("--block"))
+      else if (p.is("--rate"))
+        a.rate = p.whole(cli::closed(8000.0, 192000.0), "Hz");
+      else if (p.is("--block"))
         a.block = p.integer(16, 8192);
       else if (p.is("--periods"))
         a.periods = p.integer(2, 16);

@@ -118,21 +118,18 @@ int run(const Args& a) {
 int main(int argc, char** argv) {
   return cli::main("hjif_render", usage_text, argc, argv, [](cli::Parser& p) {
     Args a;
+    cli::Input input("FILE.hjif");
     while (p.next()) {
       if (p.is("--wav"))
         a.wav = p.output_file();
       else if (p.is("--info"))
         a.info = true;
-      else if (p.is("--rate")) {
-        a.rate = p.real(cli::closed(100.0, 384000.0));
-        if (a.rate != std::floor(a.rate))
-          throw cli::UsageError("--rate must be a whole number of Hz, got '" + p.token() + "'");
-      } else if (p.positional() && a.input.empty())
-        a.input = p.token();
+      else if (p.is("--rate"))
+        a.rate = p.whole(cli::closed(100.0, 384000.0), "Hz");
       else
-        p.unknown();
+        p.input_or_unknown(input);
     }
-    if (a.input.empty()) throw cli::UsageError("FILE.hjif is required");
+    a.input = input.required();
     if (a.wav.empty() && !a.info) throw cli::UsageError("--wav OUT.wav or --info is required");
     p.finish();
     return run(a);

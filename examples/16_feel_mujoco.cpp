@@ -26,6 +26,7 @@
 #include "hapticfield/arms/force_arm/simulated_arm.hpp"
 #include "hapticfield/physics/mujoco_bridge.hpp"
 #include "view/scene3d.hpp"
+#include "view/view_options.hpp"
 
 using namespace hapticfield;
 
@@ -69,7 +70,7 @@ struct Arguments {
   glm::dvec3 to{-0.07, -0.02, 0.01};
   double speed{0.05};
   std::string trace, snapshot;
-  double yaw{25.0}, pitch{30.0}, distance_mm{300.0};
+  view::ViewOptions view{.distance_mm = 300.0};  ///< the snapshot's camera
 };
 
 glm::dvec3 parse_point(const std::string& text) {
@@ -89,7 +90,9 @@ glm::dvec3 parse_point(const std::string& text) {
 
 Arguments parse(cli::Parser& p) {
   Arguments o;
+  cli::Input scene("scene (MJCF .xml)");
   while (p.next()) {
+    if (o.view.take(p)) continue;  // --view, --distance
     if (p.is("--seconds")) {
       o.seconds = p.real(cli::open_closed(0.0, 600.0));
     } else if (p.is("--rate")) {
@@ -109,20 +112,11 @@ Arguments parse(cli::Parser& p) {
       o.trace = p.output_file();
     } else if (p.is("--snapshot")) {
       o.snapshot = p.output_file();
-    } else if (p.is("--view")) {
-      const auto [yaw, pitch] = p.pair(cli::closed(-180.0, 180.0));
-      if (pitch < -89.0 || pitch > 89.0) throw cli::UsageError("--view pitch must be in [-89, 89] degrees");
-      o.yaw = yaw;
-      o.pitch = pitch;
-    } else if (p.is("--distance")) {
-      o.distance_mm = p.real(cli::closed(1.0, 1e5));
-    } else if (p.positional() && o.scene.empty()) {
-      o.scene = p.token();
     } else {
-      p.unknown();
+      p.input_or_unknown(scene);
     }
   }
-  if (o.scene.empty()) throw cli::UsageError("give a scene (MJCF .xml)");
+  o.scene = scene.required();
   p.finish();
   return o;
 }
@@ -282,9 +276,7 @@ int run(const Arguments& o) {
     const view::DisplayMesh mesh = scene_mesh(bridge);
     view::OrbitCamera camera;
     camera.target = glm::dvec3{0.0, -0.02, 0.0};
-    camera.distance = o.distance_mm * 1e-3;
-    camera.yaw = o.yaw * std::numbers::pi / 180.0;
-    camera.pitch = o.pitch * std::numbers::pi / 180.0;
+    o.view.aim(camera);
     view::Sample3d now;
     now.hip = now.proxy = plant.position();
     now.force = force;

@@ -121,6 +121,7 @@ int author(const Args& a) {
 int main(int argc, char** argv) {
   return cli::main("haptic_material", usage_text, argc, argv, [](cli::Parser& p) {
     Args a;
+    cli::Input model("MODEL.gltf");
     while (p.next()) {
       if (p.is("--out"))
         a.out = p.output_file();
@@ -140,12 +141,10 @@ int main(int argc, char** argv) {
         a.any = true;
       } else if (p.is("--name"))
         a.pictures.name = p.value();
-      else if (p.positional() && a.model.empty())
-        a.model = p.token();
       else
-        p.unknown();
+        p.input_or_unknown(model);
     }
-    if (a.model.empty()) throw cli::UsageError("MODEL.gltf is required");
+    a.model = model.required();
     if (a.info == !a.out.empty()) throw cli::UsageError("one of --out PATH or --info is required");
     if (!a.out.empty() && !a.any)
       throw cli::UsageError("--out needs at least one of --stiffness, --friction, --texture, --vibration");

@@ -262,7 +262,8 @@ TEST_CASE("unknown flags, flags without a value, stray arguments: exit 2") {
       {"two_arms", {"--bogus"}, usage, "unknown option"},
       {"two_arms", {"--policy", "panic"}, usage, "fault policy"},
       {"two_arms", {"--seconds"}, usage, "needs a value"},
-      {"servo_demo", {picture, picture}, usage, "unexpected argument"},
+      {"two_arms", {"--clock", "virtual", "--student", "hid"}, usage, "--student 'hid' is a real arm"},
+      {"servo_demo", {picture, picture}, usage, "more than one IMAGE given"},
       {"servo_callback", {"--bogus"}, usage, "unknown option"},
       {"servo_callback", {"stray"}, usage, "unexpected argument"},
       {"picture_normals", {picture}, usage, "no --face"},
@@ -271,6 +272,7 @@ TEST_CASE("unknown flags, flags without a value, stray arguments: exit 2") {
       {"picture_normals", {picture, "--face", "1,2 3,4"}, usage, "4 corners"},
       {"picture_normals", {picture, "--face", face, "--center", "1,2"}, usage, "--center needs --focal"},
       {"picture_normals", {picture, "--face", face, "--forces", "f.csv"}, usage, "go together"},
+      {"picture_normals", {picture, picture, "--face", face}, usage, "more than one IMAGE given"},
       {"box_demo", {"--bogus"}, usage, "unknown option"},
       {"box_demo", {"--trials"}, usage, "needs a value"},
       {"box_demo", {"--check", "x.txt"}, usage, "--check needs --rotation"},
@@ -279,6 +281,7 @@ TEST_CASE("unknown flags, flags without a value, stray arguments: exit 2") {
       {"false_texture", {}, usage, "no IMAGE"},
       {"false_texture", {picture, "--levels"}, usage, "needs a value"},
       {"false_texture", {picture, "--bogus"}, usage, "unknown option"},
+      {"false_texture", {picture, picture}, usage, "more than one IMAGE given"},
   };
   for (const Case& c : cases)
     check_error(c);
@@ -486,7 +489,7 @@ TEST_CASE("hapticfield_view: bad command lines exit 2, bad pictures and paths ex
       {"hapticfield_view", {picture, "--realtime", "sometimes"}, usage, "unknown real-time mode"},
       {"hapticfield_view", {picture, "--device", "usb"}, usage, "--device"},
       {"hapticfield_view", {picture, "--device", "hid:12345:1"}, usage, "--device"},
-      {"hapticfield_view", {picture, picture}, usage, "unexpected argument"},
+      {"hapticfield_view", {picture, picture}, usage, "more than one SOURCE given"},
       {"hapticfield_view", {picture, "--screenshot", shot}, usage, "--screenshot needs --seconds"},
       {"hapticfield_view", {picture, "--field", "normals"}, usage, "needs at least one --face"},
       {"hapticfield_view", {picture, "--face", "1,2 3,4"}, usage, "4 corners"},
@@ -662,7 +665,8 @@ TEST_CASE("tangible_video: bad values, bad files and bad outputs end in one line
       {"tangible_video",
        {clip, "--clock", "virtual", "--device", "hid"},
        usage,
-       "--clock virtual is for the simulated"},
+       "--clock virtual needs a simulated arm (--device sim, woody:GEN[:PRESET]:sim or inverse3:sim); --device 'hid' "
+       "is a real arm"},
       {"tangible_video", {clip, "--clock", "wall", "--probes", probes, "--forces", forces}, usage, "play mode"},
   };
   add_numeric(cases, "tangible_video", {clip}, "--size");
@@ -838,12 +842,12 @@ TEST_CASE("hjif_render: bad command lines and numbers exit 2, bad files exit 1")
   const BadFiles b = make_bad_files();
   const std::string wav = in_tmp("hjif_render.wav");
   std::vector<Case> cases = {
-      {"hjif_render", {}, usage, "FILE.hjif is required"},
+      {"hjif_render", {}, usage, "no FILE.hjif given"},
       {"hjif_render", {"x.hjif"}, usage, "--wav OUT.wav or --info is required"},
       {"hjif_render", {"x.hjif", "--info", "--bogus"}, usage, "unknown option '--bogus'"},
       {"hjif_render", {"x.hjif", "--wav"}, usage, "--wav needs a value"},
       {"hjif_render", {"x.hjif", "--info", "--rate"}, usage, "--rate needs a value"},
-      {"hjif_render", {"x.hjif", "y.hjif", "--info"}, usage},
+      {"hjif_render", {"x.hjif", "y.hjif", "--info"}, usage, "more than one FILE.hjif given ('x.hjif', 'y.hjif')"},
       {"hjif_render", {"x.hjif", "--info", "--rate", "8000.5"}, usage, "whole number"},
       {"hjif_render", {"x.hjif", "--info", "--rate", "99"}, usage, "--rate"},
       {"hjif_render", {"x.hjif", "--info", "--rate", "384001"}, usage, "--rate"},
@@ -866,11 +870,11 @@ TEST_CASE("feel_mujoco: bad command lines and numbers exit 2, bad scenes exit 1"
   const std::string scene = (fs::path(HAPTICFIELD_SOURCE_DIR) / "examples/data/mujoco_ball.xml").string();
   // the command line is read before the scene: a bad number is named even with no scene there
   std::vector<Case> cases = {
-      {"feel_mujoco", {}, usage, "give a scene"},
+      {"feel_mujoco", {}, usage, "no scene (MJCF .xml) given"},
       {"feel_mujoco", {scene, "--bogus"}, usage, "unknown option '--bogus'"},
       {"feel_mujoco", {scene, "--seconds"}, usage, "--seconds needs a value"},
       {"feel_mujoco", {scene, "--trace"}, usage, "--trace needs a value"},
-      {"feel_mujoco", {scene, scene}, usage},
+      {"feel_mujoco", {scene, scene}, usage, "more than one scene (MJCF .xml) given"},
       {"feel_mujoco", {scene, "--mode", "glue"}, usage, "glue"},
       {"feel_mujoco", {scene, "--view", "0,90"}, usage, "pitch"},
   };

@@ -5,16 +5,23 @@
 /// A tool's main() is one call:
 ///
 ///   int main(int argc, char** argv) {
-///     return cli::main("box_demo", usage, argc, argv, [](cli::Parser& p) {
+///     return cli::main("my_tool", usage, argc, argv, [](cli::Parser& p) {
 ///       Args a;
+///       cli::Input image("IMAGE");  // the one positional argument, if any
 ///       while (p.next()) {
 ///         if (p.is("--trials")) a.trials = static_cast<int>(p.integer(1, 100000));
-///         else p.unknown();
+///         else p.input_or_unknown(image);  // or p.unknown() with no input
 ///       }
+///       a.image = image.required();  // "no IMAGE given"
 ///       p.finish();       // checks the output paths before any work
 ///       return run(a);
 ///     });
 ///   }
+///
+/// Options several tools share live beside it: mask_options.hpp (--mask,
+/// --size, --border), servo_options.hpp (--realtime, --clock),
+/// device_option.hpp (--device, --list-devices) and view/view_options.hpp
+/// (--view, --distance).
 ///
 /// Exit status: 0 success (and --help / -h, usage on stdout), 2 a usage error
 /// (unknown or missing flag, a value that is not a whole number in range),
@@ -24,6 +31,7 @@
 #include <array>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -216,6 +224,42 @@ inline void check_output_dir(const std::string& path, const std::string& what) {
     throw FileError(head + "folder " + detail::quoted(ancestor.string()) + " is not writable");
 }
 
+/// A tool's one positional argument, its input (a file), named in messages
+/// as the usage names it ("IMAGE"). Parser::input_or_unknown() fills it.
+class Input {
+ public:
+  explicit Input(std::string name) : name_(std::move(name)) {}
+
+  /// The name in messages ("IMAGE").
+  [[nodiscard]] const std::string& name() const noexcept { return name_; }
+  /// An input was given (it may be "").
+  [[nodiscard]] bool given() const noexcept { return given_; }
+  /// The input given; empty when none was.
+  [[nodiscard]] const std::string& value() const noexcept { return value_; }
+
+  /// The input, which the tool cannot do without.
+  /// @throws UsageError "no IMAGE given".
+  [[nodiscard]] const std::string& required() const {
+    if (!given_) throw UsageError("no " + name_ + " given");
+    return value_;
+  }
+
+  /// Takes `token` as the input.
+  /// @throws UsageError "more than one IMAGE given ('a.png', 'b.png')".
+  void take(const std::string& token) {
+    if (given_)
+      throw UsageError("more than one " + name_ + " given (" + detail::quoted(value_) + ", " + detail::quoted(token) +
+                       ")");
+    value_ = token;
+    given_ = true;
+  }
+
+ private:
+  std::string name_;
+  std::string value_;
+  bool given_{false};
+};
+
 /// Walks the arguments one token at a time.
 class Parser {
  public:
@@ -264,6 +308,20 @@ class Parser {
   std::pair<double, double> pair(Interval range) {
     const std::string& v = value();
     return parse_pair(v, flag_, range);
+  }
+
+  /// The value in millions of pixels, in (0, 1e6], as a count of pixels: a
+  /// tool's --max-mpx, the largest picture or frame it decodes.
+  std::uint64_t megapixels() { return static_cast<std::uint64_t>(real(open_closed(0.0, 1e6)) * 1e6); }
+
+  /// The value as a whole number of `unit` in `range`, written as a real
+  /// number ("44100", "4.41e4"): a WAV header or a sound card holds a whole
+  /// rate, so 8000.5 Hz is refused rather than silently rounded.
+  double whole(Interval range, std::string_view unit) {
+    const double x = real(range);
+    if (x != std::floor(x))
+      throw UsageError(flag_ + " must be a whole number of " + std::string(unit) + ", got " + detail::quoted(token()));
+    return x;
   }
 
   /// The value as one of the named choices; `noun` names them in the
@@ -315,6 +373,15 @@ class Parser {
   [[noreturn]] void unknown() const {
     if (positional()) throw UsageError("unexpected argument " + detail::quoted(token()));
     throw UsageError("unknown option " + detail::quoted(token()));
+  }
+
+  /// The current token is none of the tool's flags: a value is the tool's
+  /// input, a flag an unknown option.
+  /// @throws UsageError "unknown option '--x'" or "more than one IMAGE given
+  ///         ('a.png', 'b.png')".
+  void input_or_unknown(Input& input) const {
+    if (!positional()) unknown();
+    input.take(token());
   }
 
   /// Checks every output path given (before any work is done).
