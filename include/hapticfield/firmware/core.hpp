@@ -298,6 +298,8 @@ class FirmwareCore {
   [[nodiscard]] const char* config_error() const noexcept { return config_error_; }
   [[nodiscard]] bool armed() const noexcept { return armed_; }
   [[nodiscard]] bool homed() const noexcept { return homed_; }
+  /// Homing started and not yet complete.
+  [[nodiscard]] bool homing() const noexcept { return homing_left_ >= 0; }
   [[nodiscard]] std::uint16_t faults() const noexcept { return faults_; }
   [[nodiscard]] std::uint16_t watchdog_us() const noexcept { return watchdog_us_; }
   [[nodiscard]] const protocol::CommandReport& last_command() const noexcept { return command_; }

@@ -87,6 +87,7 @@ class ArmPlant {
     config_.validate();
     kin_ = PhantomKinematics(config_.kinematics);
     q_ = config_.initial_q;
+    home_ = kin_.forward(q_);
   }
 
   /// Integrates one firmware period (config().substeps steps) under the
@@ -101,6 +102,10 @@ class ArmPlant {
     hand.path.validate();
     config_.hand = hand;
   }
+  /// Docked, the hand (when it holds the handle) holds it at the home pose
+  /// instead of following its path: the user docks the arm while it homes.
+  /// Its path starts again from its beginning when it leaves the dock.
+  void set_docked(bool docked) noexcept { docked_ = docked; }
 
   [[nodiscard]] glm::dvec3 q() const noexcept { return q_; }
   [[nodiscard]] glm::dvec3 qdot() const noexcept { return qd_; }
@@ -122,8 +127,10 @@ class ArmPlant {
     glm::dvec3 tau_hand{0.0};
     hand_force_ = glm::dvec3{0.0};
     if (config_.hand.holding) {
-      const glm::dvec3 target = config_.hand.path.at(t);
-      const glm::dvec3 target_v = (config_.hand.path.at(t + 1e-4) - target) / 1e-4;
+      if (docked_) path_start_ = t + h;  // the path's clock starts when the hand leaves the dock
+      const double s = t - path_start_;  // [s] along the path
+      const glm::dvec3 target = docked_ ? home_ : config_.hand.path.at(s);
+      const glm::dvec3 target_v = docked_ ? glm::dvec3{0.0} : (config_.hand.path.at(s + 1e-4) - target) / 1e-4;
       hand_force_ = config_.hand.stiffness * (target - p) + config_.hand.damping * (target_v - v);
       tau_hand = kin_.torques(q_, hand_force_);
     }
@@ -136,6 +143,9 @@ class ArmPlant {
   glm::dvec3 q_{0.0};
   glm::dvec3 qd_{0.0};
   glm::dvec3 hand_force_{0.0};
+  glm::dvec3 home_{0.0};    ///< handle position at the home pose [m]
+  double path_start_{0.0};  ///< when the hand left the dock [s]
+  bool docked_{false};
 };
 
 /// The firmware configuration that describes a simulated arm (geometry,
@@ -220,6 +230,7 @@ class SimulatedArm {
     const firmware::MotorOutputs& out = core_.tick(in);
     const double unit = core_.config().torque_unit_unm * 1e-6;  // [N m]
     applied_ = glm::dvec3{out.torque[0] * unit, out.torque[1] * unit, out.torque[2] * unit};
+    plant_.set_docked(core_.homing());  // the hand docks the arm while it homes, then follows its path
     plant_.period(applied_, time());
   }
 
