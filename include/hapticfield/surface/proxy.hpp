@@ -110,7 +110,7 @@ struct ProxyPath {
 };
 
 /// ProxyConfig::tick_node_budget's default: twice a mesh query's own
-/// budget (bvh_default_max_nodes), about 8x the 99th percentile of a 2 mm
+/// budget (bvh_default_max_nodes), about 4x the 99th percentile of a 2 mm
 /// ball's tick on bench_surface's million-triangle sheet.
 inline constexpr std::uint32_t proxy_default_tick_node_budget = 8192;
 
