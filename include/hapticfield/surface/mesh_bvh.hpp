@@ -182,6 +182,39 @@ class MeshBvh {
  public:
   MeshBvh() = default;
 
+  /// What a query needs to pass a triangle by without its full test: its
+  /// plane (unit normal, through the centroid) and its bounding circle
+  /// (one cache line a triangle, kept beside the triangles in slot order).
+  struct TriangleBounds {
+    glm::dvec3 normal{0.0};  ///< unit, toward the front
+    glm::dvec3 middle{0.0};  ///< the centroid, on the plane [m]
+    double reach{0.0};       ///< the farthest corner from the centroid [m]
+    double slack{0.0};       ///< the test's allowance for rounding against the full test's [m]
+
+    /// False only when a ball of radius r whose centre moves from + t d,
+    /// t in [0, t_max], cannot touch the triangle (sweep_ball_triangle's own
+    /// first tests): it stays r or more in front of the plane or wholly
+    /// behind it, or its cut with the plane (a disk of radius
+    /// sqrt(r^2 - h^2) at its least height h in front) never reaches the
+    /// bounding circle.
+    [[nodiscard]] bool may_touch(const glm::dvec3& from, const glm::dvec3& d, double r, double t_max) const noexcept {
+      const double h0 = glm::dot(normal, from - middle);  // [m]
+      const double dn = glm::dot(normal, d);              // [m] per unit t
+      const double h1 = h0 + t_max * dn;
+      if ((h0 > r + slack && h1 > r + slack) || (h0 < -slack && h1 < -slack)) return false;
+      const double low = h0 > 0.0 && h1 > 0.0 ? detail::smaller(h0, h1) : 0.0;  // [m]
+      const double disk2 = r * r - low * low;                                   // the cut's radius, squared [m^2]
+      const glm::dvec3 to_middle = middle - from + h0 * normal;                 // from the centre's projection
+      const glm::dvec3 slide = d - dn * normal;                                 // the projected move
+      const double slide2 = glm::dot(slide, slide);
+      const double along =
+          slide2 > 0.0 ? detail::larger(0.0, detail::smaller(t_max, glm::dot(to_middle, slide) / slide2)) : 0.0;
+      const glm::dvec3 gap = to_middle - along * slide;
+      const double within = std::sqrt(detail::larger(0.0, disk2)) + reach + 2.0 * slack;  // [m]
+      return glm::dot(gap, gap) <= within * within;
+    }
+  };
+
   /// Builds the hierarchy over `mesh` (validated first).
   /// @throws std::invalid_argument for an invalid mesh or a zero budget.
   [[nodiscard]] static MeshBvh build(const TriangleMesh& mesh, const MeshBvhConfig& config = {}) {
@@ -331,6 +364,7 @@ class MeshBvh {
       tri.e1 = mesh.positions[t[1]] - a;
       tri.e2 = mesh.positions[t[2]] - a;
     }
+    bound_all();
     // a node's box: its triangles' corners as the queries see them (a leaf,
     // contiguous in tree order) or its children's boxes
     const auto box = [&](std::uint32_t index, std::uint32_t count, std::array<float, 3>& lo,
@@ -577,6 +611,26 @@ class MeshBvh {
     std::array<bool, 3> still_{};
   };
 
+  /// Every triangle's TriangleBounds, from the triangles as the queries see them.
+  void bound_all() noexcept {
+    for (std::size_t i = 0; i < triangles_.size(); ++i) {
+      const Triangle& tri = triangles_[i];
+      const glm::dvec3 b = tri.a + tri.e1, c = tri.a + tri.e2;
+      const glm::dvec3 cross = glm::cross(tri.e1, tri.e2);
+      const double area2 = glm::length(cross);  // twice the area [m^2]
+      TriangleBounds& out = bounds_[i];
+      out.normal = area2 > 0.0 ? cross / area2 : glm::dvec3{0.0};
+      out.middle = (tri.a + b + c) / 3.0;
+      out.reach = std::sqrt(detail::larger(
+          glm::dot(tri.a - out.middle, tri.a - out.middle),
+          detail::larger(glm::dot(b - out.middle, b - out.middle), glm::dot(c - out.middle, c - out.middle))));
+      const double coordinate =
+          detail::larger(std::fabs(out.middle.x), detail::larger(std::fabs(out.middle.y), std::fabs(out.middle.z)));
+      // rounding, relative to the coordinates and the triangle
+      out.slack = 1e-9 * (coordinate + out.reach);
+    }
+  }
+
   /// Squared distances from p to both boxes of a pair [m^2].
   static std::array<double, 2> box_distance2(const BvhNodePair& pair, const glm::dvec3& p) noexcept {
     std::array<double, 2> d2{0.0, 0.0};
@@ -647,6 +701,7 @@ class MeshBvh {
   /// corners, kept when t < best_t (sweep_sphere()).
   void touch(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double r, double& best_t,
              BvhHit& best) const noexcept {
+    if (!bounds_[slot].may_touch(from, d, r, best_t)) return;  // its plane and circle, first
     const Triangle& tri = triangles_[slot];
     (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best);
   }
@@ -781,6 +836,8 @@ class MeshBvh {
         const glm::dvec3 a = mesh_.positions[t[0]];
         out_.triangles_.push_back(Triangle{a, mesh_.positions[t[1]] - a, mesh_.positions[t[2]] - a, i});
       }
+      out_.bounds_.resize(out_.triangles_.size());
+      out_.bound_all();
       connect();
     }
 
@@ -1031,7 +1088,8 @@ class MeshBvh {
   BvhNode root_{};
   std::vector<BvhNodePair> pairs_;
   std::vector<Triangle> triangles_;
-  std::vector<Adjacency> adjacency_;  ///< parallel to triangles_
+  std::vector<Adjacency> adjacency_;    ///< parallel to triangles_
+  std::vector<TriangleBounds> bounds_;  ///< parallel to triangles_
   std::size_t depth_{0};
   MeshBvhConfig config_{};
 };
