@@ -390,7 +390,11 @@ TEST_CASE(
 /// distance / r (infinity: none)}.
 std::array<double, 2> ball_slides(const TriangleMesh& mesh, std::mt19937& rng, int count, double r) {
   const MeshChecker checker(mesh);
-  ProxyConstraint proxy(MeshShape(mesh), ProxyConfig{.stiffness = k, .radius = r});
+  // half the slides with friction: a proxy that sticks, or slides and settles, first (ProxyConfig::stick_first)
+  const MeshShape shape(mesh);
+  ProxyConstraint smooth(shape, ProxyConfig{.stiffness = k, .radius = r});
+  ProxyConstraint rough(shape,
+                        ProxyConfig{.stiffness = k, .static_friction = 0.6, .dynamic_friction = 0.45, .radius = r});
   double nearest = std::numeric_limits<double>::infinity();
   double touching = 0.0;
   for (int s = 0; s < count; ++s) {
@@ -399,6 +403,7 @@ std::array<double, 2> ball_slides(const TriangleMesh& mesh, std::mt19937& rng, i
     const Triangle& t = start.t;
     const glm::dvec3 point = start.point, dir = start.dir;
     const double speed = s % 2 ? 2.0 : 0.026;
+    auto& proxy = s % 4 < 2 ? smooth : rough;
     proxy.reset();
     for (int j = 0; j < 110; ++j) {  // from r + 2 mm out to 1 mm deep over 10 ticks, then along
       const double press = std::fmin(1.0, j / 10.0);

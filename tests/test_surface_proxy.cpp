@@ -369,6 +369,101 @@ TEST_CASE("stick_first: a proxy stuck or sliding on its face makes no sweep and 
   CHECK(quick.last_tick().moves > 0);
 }
 
+TEST_CASE(
+    "stick_first with a ball: stuck or sliding on a flat face it feels as the full tick does; stuck, it sweeps "
+    "nothing") {
+  const double k = 1000.0, mu_s = 0.6, mu_k = 0.4, r = 0.001;
+  ProxyConfig first{.stiffness = k, .static_friction = mu_s, .dynamic_friction = mu_k, .radius = r};
+  ProxyConfig whole = first;
+  whole.stick_first = false;
+  ProxyConstraint quick(MeshShape(test::flat_sheet(0.1, 10)), first);
+  ProxyConstraint full(MeshShape(test::flat_sheet(0.1, 10)), whole);
+  std::vector<glm::dvec3> path{{0.0, 0.0, r + 0.001}, {0.0, 0.0, r - 0.002}};
+  for (int i = 1; i <= 10; ++i)  // inside the cone (offsets up to 1.12 mm < mu_s depth = 1.2 mm)
+    path.push_back({0.0001 * i, 0.00005 * i, r - 0.002});
+  for (int i = 1; i <= 20; ++i)  // past it: slides
+    path.push_back({0.0011 + 0.001 * i, 0.00055, r - 0.002});
+  int stuck = 0, slid_first = 0;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const Contact a = quick.contact(probe_at(path[i]));
+    const Contact b = full.contact(probe_at(path[i]));
+    CHECK(a.touching == b.touching);
+    CHECK(glm::length(a.force - b.force) < 1e-9);
+    CHECK(glm::length(quick.proxy() - full.proxy()) < 1e-12);
+    CHECK(quick.last_tick().sliding == full.last_tick().sliding);
+    if (i >= 2 && i < 12) {  // stuck: no move, no sweep, k (proxy - HIP)
+      CHECK(quick.last_tick().held_first);
+      CHECK(quick.last_tick().moves == 0);
+      ++stuck;
+      CHECK_THAT(a.force.x, WithinAbs(-k * path[i].x, 1e-6));
+    }
+    slid_first += quick.last_tick().held_first && quick.last_tick().sliding && quick.last_tick().moves == 1;
+  }
+  CHECK(stuck == 10);
+  CHECK(slid_first > 0);  // a ball's slide is one sweep over a flat face
+}
+
+TEST_CASE("friction first on a curved sheet: the force stays in the friction cone and the proxy on the surface") {
+  // random walks over a wavy sheet, pressed up to 3 mm, at up to 0.3 m/s,
+  // for a point and 0.5 and 2 mm balls; with friction the proxy sticks,
+  // slides, settles where the sheet curves away, or hands the slide to the
+  // constrained motion where it curves up (ProxyConfig::stick_first)
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  const double mu_s = 0.5, mu_k = 0.4;
+  const MeshShape sheet(test::wavy_sheet(0.1, 60, 0.003, 0.03));
+  const double lift = 8.0 * 1e-6 * 0.1 / 60.0 * std::sqrt(2.0);  // a few offsets of the longest edge [m]
+  for (const double r : {0.0, 0.0005, 0.002}) {
+    INFO("radius " << r);
+    ProxyConstraint proxy(
+        sheet, ProxyConfig{.stiffness = 1500.0, .static_friction = mu_s, .dynamic_friction = mu_k, .radius = r});
+    int stuck = 0, slid = 0, settled = 0, touching = 0;
+    double worst_cone = 0.0, worst_gap = -1.0, worst_overlap = -1.0;
+    for (int run = 0; run < 12; ++run) {
+      proxy.reset();
+      glm::dvec3 p{0.015 * g(rng), 0.015 * g(rng), 0.005}, v{0.0};
+      for (int i = 0; i < 1500; ++i) {
+        v = glm::clamp(v + glm::dvec3{0.02 * g(rng), 0.02 * g(rng), 0.0}, glm::dvec3{-0.3}, glm::dvec3{0.3});
+        p = glm::clamp(p + 1e-3 * v, glm::dvec3{-0.04}, glm::dvec3{0.04});
+        p.z = 0.002 * std::sin(0.005 * i + run) - 0.001;  // taps, up to 3 mm deep into the sheet's crests
+        const Contact c = proxy.contact(probe_at(p, v));
+        if (!c.touching) continue;
+        ++touching;
+        const ProxyTick& t = proxy.last_tick();
+        stuck += t.held_first && t.moves == 0;
+        slid += t.held_first && t.moves == 1;
+        settled += t.held_first && t.moves == 2;
+        const double fn = glm::dot(c.force, c.normal);
+        if (fn > 1e-3) worst_cone = std::fmax(worst_cone, glm::length(c.force - fn * c.normal) / fn);
+        const double distance = sheet.closest(proxy.proxy(), 1.0).distance;
+        worst_gap = std::fmax(worst_gap, distance - r);
+        worst_overlap = std::fmax(worst_overlap, r - distance);
+      }
+    }
+    INFO(touching << " ticks touching: " << stuck << " stuck, " << slid << " slid, " << settled
+                  << " settled without the constrained motion; worst |Ft| / Fn " << worst_cone << ", gap " << worst_gap
+                  << " m, overlap " << worst_overlap << " m");
+    CHECK(touching > 5000);
+    CHECK(stuck > 0);
+    CHECK(slid > 0);
+    CHECK(settled > 0);
+    CHECK(worst_cone <= 1.1 * mu_s);  // the full tick's own reach past mu_s on a curved mesh is a few %
+    CHECK(worst_gap <= lift);
+    CHECK(worst_overlap <= 1e-9 * r);
+  }
+}
+
+TEST_CASE("a ball with friction stays passive on a wavy mesh at 1 kHz over 10 s of tapping and sliding") {
+  const TriangleMesh m = with_vertex_normals(test::wavy_sheet(0.1, 60, 0.001, 0.03));
+  ProxyConstraint ball(
+      MeshShape(m), ProxyConfig{.stiffness = 1500.0, .static_friction = 0.5, .dynamic_friction = 0.4, .radius = 0.001});
+  const test::EnergyRun run = test::tap_and_slide(ball, 1000.0, 10.0);
+  CHECK(run.max_force > 1.5);
+  CHECK(run.excess <= 1e-9 * run.dissipated + 1e-12);
+}
+
 TEST_CASE("stick_first stays passive on a wavy mesh at 1 kHz over 10 s of tapping and sliding") {
   const TriangleMesh m = with_vertex_normals(test::wavy_sheet(0.1, 60, 0.001, 0.03));
   ProxyConfig config{1500.0, 0.0, 0.5, 0.4};

@@ -28,9 +28,15 @@
 ///   (ProxyTick::embedded), as one begun in the surface does; not on a
 ///   shape whose closest() sees another surface than its sweeps (a height
 ///   field: S::closest_matches_sweep false), where overlap is not exact.
-///   0. With ProxyConfig::stick_first, the friction cone is tested first on
-///      last tick's planes: a proxy that sticks, or slides and stays over
-///      its face, needs no sweep; else steps 1-4.
+///   0. With ProxyConfig::stick_first (the default) and friction, the
+///      friction cone is tested first, on last tick's planes (step 3's
+///      rule): a proxy that sticks stays where it is, with no sweep; one
+///      that slides goes mu_k d behind the HIP's point on them, over its
+///      face with no sweep (a point on one flat face) or in one swept move,
+///      settled onto the surface by a second where it curves away below.
+///      Where that move meets the surface (it curves up ahead), steps 1-2
+///      take it on toward the HIP moved by the slide's lag, with no step 3
+///      (unless they end past the cone: then the full tick). Else 1-4.
 ///   3. Friction (the friction cone of Salisbury et al. 1995 and of Ruspini
 ///      1997): with d the depth and s the distance the proxy would slide from
 ///      where it was, it stays where it was (sticks) while s <= mu_s d, and
@@ -120,12 +126,15 @@ struct ProxyConfig {
   double static_friction{0.0};   ///< mu_s [-]: the proxy sticks while the HIP is inside this cone
   double dynamic_friction{0.0};  ///< mu_k [-] <= mu_s: the cone while sliding
   double offset{1e-6};           ///< the proxy's height above the surface, relative to the primitive's size [-]
-  /// Test the friction cone first, on last tick's planes at the held point:
-  /// a proxy that sticks, or slides without leaving its face, makes no
-  /// swept query. Off: the cone is tested against the frictionless proxy,
-  /// found by sweeping over the surface; on a flat face the two agree, on a
-  /// curved mesh they differ a little (stick or slide near the cone's edge).
-  bool stick_first{false};
+  /// Test the friction cone first, on last tick's planes at the held point
+  /// (step 0 in the file comment): a stuck proxy makes no swept query, a
+  /// sliding one one or two. Off: the cone is tested against the
+  /// frictionless proxy, found by sweeping over the surface (on a curved
+  /// mesh, several moves up to mu d away, then the friction move back). On
+  /// a flat face the two agree; on a curved mesh they differ a little
+  /// (stick or slide near the cone's edge), both keeping the force within
+  /// a few % of the cone.
+  bool stick_first{true};
   /// The tool's radius [m], 0..proxy_max_radius: 0, a point (the god-object
   /// proper); > 0, a ball centred on the HIP whose moves are swept spheres
   /// against the shape (its Minkowski sum: faces, edge cylinders, corner
@@ -154,6 +163,9 @@ struct ProxyTick {
       0};               ///< tree nodes (or grid cells) visited by all the tick's queries, where the shape counts them
   bool blocked{false};  ///< a query ran out of its budget, or the tick of its own: the proxy stayed
   bool sliding{false};  ///< friction: the proxy slides (else sticks)
+  /// Step 0 (ProxyConfig::stick_first) held the proxy: stuck, or slid (and
+  /// settled) on the planes of the tick before, with no constrained motion.
+  bool held_first{false};
   /// A ball that began overlapping the surface (at the first tick, after
   /// reset(), or come through it from behind): it follows the HIP with no
   /// force until it is clear of it.
@@ -210,72 +222,45 @@ class ProxyConstraint {
     if (embedded_) return follow_free(goal);  // a ball that began in the surface, until it is clear of it
     const glm::dvec3 start = proxy_;
     visit(start);
+    // where the constrained motion heads: the HIP, or, when step 0 has
+    // decided the friction but could not finish the move, the HIP moved by
+    // the friction's lag (its point on the planes is where the proxy holds)
+    glm::dvec3 aim = goal;
+    bool friction_decided = false;
+    Motion m{start};
     if (config_.stick_first) {  // 0: the friction cone first
       Contact held;
-      if (stick(probe.position, velocity, held)) return held;
+      const FrictionFirst first = stick(probe.position, velocity, held, aim, m);
+      if (first == FrictionFirst::held) return held;
+      friction_decided = first == FrictionFirst::aimed;  // (from where its slide met the surface)
+      if (!friction_decided) path_.count = 1;
     }
-
-    // 1-2: frictionless constrained motion toward the HIP; a second pass
-    // when the first left the proxy off every face (past a convex edge)
-    Planes planes;
-    Hit last_hit;
-    Hit touched;
-    glm::dvec3 x = start;
-    glm::dvec3 anchor = start;  // where the proxy last stopped against a face: on the surface
-    int anchor_point = 0;       // its index in the path
-    bool blocked = false;
-    for (int pass = 0; pass < proxy_max_passes; ++pass) {
-      for (int move = 0; move < proxy_max_moves; ++move) {
-        const glm::dvec3 target = planes.project(goal);
-        const glm::dvec3 d = target - x;
-        const double length = glm::length(d);
-        if (!(length > planes.tolerance)) break;
-        if (tick_.nodes >= config_.tick_node_budget) {  // the tick's budget is spent: no further move
-          blocked = true;
-          break;
-        }
-        const Hit h = sweep(x, target);
-        ++tick_.moves;
-        if (!h.complete) {
-          blocked = true;
-          break;
-        }
-        if (closest_matches_sweep && h.found() && !touching_ && tick_.moves == 1 && overlaps(start)) {
-          // a free ball that overlaps the surface where it starts came
-          // through it from behind (a ball is stopped r off the front): it
-          // passes on, free, until clear, as a ball begun in the surface
-          const Contact none = follow_free(goal);
-          tick_.embedded = true;  // it overlapped where it began this tick
-          return none;
-        }
-        if (!h.found()) {
-          x = target;
-          visit(x);
-          break;
-        }
-        const double eps = offset_for(h);
-        const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
-        const double back = facing > 1e-6 ? eps / facing : length;
-        x += (std::fmax(0.0, h.t * length - back) / length) * d;
-        visit(x);
-        anchor = x;
-        anchor_point = path_.count - 1;
-        last_hit = h;
-        if (!planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + eps, eps)) break;
-      }
-      planes.project(goal);  // the final active set (releases planes the HIP has left)
-      if (blocked || planes.count == 0) break;
-      touched = nearest(x, reach(planes), last_hit);
-      if (touched.found() || !touched.complete) break;
-      if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
-        x = anchor;                        // (back along the path it came: the pieces after it are undone)
-        path_.count = anchor_point + 1;
-        touched = last_hit;
-        break;
-      }
-      planes = Planes{};  // slid past the end of its faces: sweep on from here toward the HIP
+    // 1-2: constrained motion toward the aim
+    move_toward(aim, start, m);
+    if (friction_decided && !m.embedded && !m.blocked && !in_cone(goal, m)) {
+      // the lag step 0 chose on last tick's planes is past the cone on the
+      // ones the proxy came to (it went over a crest): the full tick
+      path_.count = 1;
+      m = Motion{start};
+      friction_decided = false;
+      move_toward(goal, start, m);
     }
-    const glm::dvec3 frictionless = x;
+    if (m.embedded) {
+      // a free ball that overlaps the surface where it starts came through
+      // it from behind (a ball is stopped r off the front): it passes on,
+      // free, until clear, as a ball begun in the surface
+      const Contact none = follow_free(goal);
+      tick_.embedded = true;  // it overlapped where it began this tick
+      return none;
+    }
+    glm::dvec3 x = m.x;
+    const Planes& planes = m.planes;
+    const Hit& last_hit = m.last_hit;
+    Hit touched = m.touched;
+    const bool blocked = m.blocked;
+    // the frictionless proxy: where the motion ended, or, aimed, the HIP's
+    // point on its planes
+    const glm::dvec3 frictionless = friction_decided ? planes.project_equal(goal) : x;
     tick_.planes = planes.count;
 
     // the surface point the HIP is pushed toward: the nearest point to the
@@ -285,7 +270,9 @@ class ProxyConstraint {
     const double depth = glm::length(on_surface - goal);  // [m]
 
     // 3: friction cone
-    if (planes.count > 0 && touching_ && !blocked && config_.static_friction > 0.0 && depth > 0.0) {
+    if (friction_decided) {  // step 0 decided it (sliding_)
+      if (planes.count == 0) sliding_ = false;
+    } else if (planes.count > 0 && touching_ && !blocked && config_.static_friction > 0.0 && depth > 0.0) {
       const glm::dvec3 held = planes.project_equal(start);  // where the proxy was, on this tick's constraints
       const glm::dvec3 slide = held - frictionless;
       const double s = glm::length(slide);
@@ -493,6 +480,16 @@ class ProxyConstraint {
     }
   };
 
+  /// Where the constrained motion (steps 1-2) has the proxy.
+  struct Motion {
+    glm::dvec3 x{0.0};     ///< where it is [m]
+    Planes planes{};       ///< the planes it is held to
+    Hit last_hit{};        ///< the face it met last
+    Hit touched{};         ///< the face it ends on (found: on the surface)
+    bool blocked{false};   ///< a query, or the tick, ran out of its budget
+    bool embedded{false};  ///< a free ball met the surface it overlaps where it started
+  };
+
   /// 4: the force and what the parts see, for the proxy at x on `planes`
   /// (the HIP's surface point on_surface, depth [m], the touched face).
   [[nodiscard]] Contact respond(const glm::dvec3& goal, const glm::dvec3& velocity, const Planes& planes,
@@ -526,38 +523,186 @@ class ProxyConstraint {
     return c;
   }
 
+  /// What step 0 (stick()) did: held the proxy (the tick is done), decided
+  /// the friction and left the move to the constrained motion toward an
+  /// aim, or nothing (the full tick).
+  enum class FrictionFirst { held, aimed, full };
+
   /// The friction cone first (Salisbury et al. 1995), on last tick's
   /// planes at the point the proxy holds: while the HIP presses on every
   /// one of them, the proxy sticks inside the cone, or slides mu_k d behind
-  /// the HIP's point on them outside it, as steps 1-3 would on a flat face;
-  /// when it ends over the face it touched, nothing lies between (one flat,
-  /// convex face) and no sweep is needed. Anything else (false) takes the
-  /// full tick.
-  [[nodiscard]] bool stick(const glm::dvec3& goal, const glm::dvec3& velocity, Contact& out) noexcept {
+  /// the HIP's point on them outside it, as steps 1-3 would on a flat face.
+  /// A stuck proxy does not move. A sliding one ends over the face it
+  /// touched (a point on one flat, convex face: nothing lies between, no
+  /// sweep), or its move is swept and held where the surface still is
+  /// within reach, or settled onto it where it curved away below (held).
+  /// A move that meets the surface (it curves up ahead) stops there with
+  /// the friction decided (aimed): the constrained motion goes on from
+  /// there (`from`: the point, the plane met) toward `aim`, the HIP moved
+  /// by the slide's lag. Anything else takes the full tick.
+  [[nodiscard]] FrictionFirst stick(const glm::dvec3& goal, const glm::dvec3& velocity, Contact& out, glm::dvec3& aim,
+                                    Motion& from) noexcept {
     if (!config_.stick_first || !touching_ || !(config_.static_friction > 0.0) || held_planes_.count == 0 ||
         !held_face_.found())
-      return false;
+      return FrictionFirst::full;
     Planes planes = held_planes_;
-    const glm::dvec3 frictionless = planes.project(goal);
-    if (planes.count != held_planes_.count) return false;  // the HIP has left a plane
-    const glm::dvec3 on_surface = planes.project_equal(goal, false);
-    const double depth = glm::length(on_surface - goal);
-    if (!(depth > 0.0)) return false;
+    glm::dvec3 frictionless = planes.project(goal);
+    if (planes.count != held_planes_.count) return FrictionFirst::full;  // the HIP has left a plane
+    glm::dvec3 on_surface = planes.project_equal(goal, false);
+    double depth = glm::length(on_surface - goal);
+    if (!(depth > 0.0)) return FrictionFirst::full;
     const glm::dvec3 held = planes.project_equal(proxy_);
     const glm::dvec3 slide = held - frictionless;
     const double s = glm::length(slide);
     const bool sliding = s > (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth;
-    const glm::dvec3 x = sliding ? frictionless + (config_.dynamic_friction * depth / s) * slide : held;
-    const Hit touched = on_same_face(x, reach(planes), held_face_);
-    if (planes.count != 1 || !over_face(touched, x) || !is_finite(x)) return false;
+    glm::dvec3 x = sliding ? frictionless + (config_.dynamic_friction * depth / s) * slide : held;
+    if (!is_finite(x)) return FrictionFirst::full;
+    const double within = reach(planes);  // [m]
+    Hit touched = on_same_face(x, within, held_face_);
+    if (planes.count != 1 || !over_face(touched, x)) {
+      // not one flat face under both ends (a ball, a crease, past an edge)
+      const double length = glm::length(x - proxy_);  // [m]
+      if (length > planes.tolerance) {
+        const Hit h = sweep(proxy_, x);
+        ++tick_.moves;
+        if (!h.complete) return FrictionFirst::full;
+        if (h.found()) {  // the surface rises ahead: the constrained motion goes on from where it met it
+          sliding_ = sliding;
+          aim = goal + (x - frictionless);
+          from = Motion{proxy_};  // with the planes this tick meets (the held one may end where it met this)
+          (void)stop_at(h, x - proxy_, length, from.x, from.planes);
+          from.last_hit = h;
+          return FrictionFirst::aimed;
+        }
+        touched = nearest(x, within, held_face_);
+        if (!touched.found() && !settle(goal, length, planes, x, frictionless, on_surface, depth, touched))
+          return FrictionFirst::full;
+      } else if (!touched.found()) {
+        touched = nearest(x, within, held_face_);
+      }
+      if (!touched.found()) return FrictionFirst::full;
+    }
     tick_.planes = planes.count;
     sliding_ = sliding;
     tick_.sliding = sliding;
+    tick_.held_first = true;
     proxy_ = x;
     visit(x);
+    held_planes_ = planes;
     held_face_ = touched;
     if constexpr (advances && !carries) face_ = touched;
     out = respond(goal, relative(velocity, x), planes, x, frictionless, on_surface, depth, touched);
+    return FrictionFirst::held;
+  }
+
+  /// Steps 1-2 from where m has the proxy toward `aim` (the HIP, or the
+  /// HIP moved by a friction lag decided in step 0): swept moves, each
+  /// surface met adding its plane, up to proxy_max_moves a pass, and a new
+  /// pass from wherever a pass leaves the proxy off every face, up to
+  /// proxy_max_passes (then back to where it last met a face).
+  void move_toward(const glm::dvec3& aim, const glm::dvec3& start, Motion& m) noexcept {
+    glm::dvec3 anchor = m.x;             // where the proxy last stopped against a face: on the surface
+    int anchor_point = path_.count - 1;  // its index in the path
+    for (int pass = 0; pass < proxy_max_passes; ++pass) {
+      for (int move = 0; move < proxy_max_moves; ++move) {
+        const glm::dvec3 target = m.planes.project(aim);
+        const glm::dvec3 d = target - m.x;
+        const double length = glm::length(d);
+        if (!(length > m.planes.tolerance)) break;
+        if (tick_.nodes >= config_.tick_node_budget) {  // the tick's budget is spent: no further move
+          m.blocked = true;
+          break;
+        }
+        const Hit h = sweep(m.x, target);
+        ++tick_.moves;
+        if (!h.complete) {
+          m.blocked = true;
+          break;
+        }
+        if (closest_matches_sweep && h.found() && !touching_ && tick_.moves == 1 && overlaps(start)) {
+          m.embedded = true;
+          return;
+        }
+        if (!h.found()) {
+          m.x = target;
+          visit(m.x);
+          break;
+        }
+        const bool added = stop_at(h, d, length, m.x, m.planes);
+        anchor = m.x;
+        anchor_point = path_.count - 1;
+        m.last_hit = h;
+        if (!added) break;
+      }
+      m.planes.project(aim);  // the final active set (releases planes the aim has left)
+      if (m.blocked || m.planes.count == 0) return;
+      m.touched = nearest(m.x, reach(m.planes), m.last_hit);
+      if (m.touched.found() || !m.touched.complete) return;
+      if (pass + 1 == proxy_max_passes) {  // still off every face: back to where it last met one
+        m.x = anchor;                      // (back along the path it came: the pieces after it are undone)
+        path_.count = anchor_point + 1;
+        m.touched = m.last_hit;
+        return;
+      }
+      m.planes = Planes{};  // slid past the end of its faces: sweep on from here toward the aim
+    }
+  }
+
+  /// True when the proxy where m has it lies inside the static friction
+  /// cone about the HIP's point on its planes (or touches nothing).
+  [[nodiscard]] bool in_cone(const glm::dvec3& goal, const Motion& m) const noexcept {
+    if (m.planes.count == 0) return true;
+    const double depth = glm::length(m.planes.project_equal(goal, false) - goal);  // [m]
+    return glm::length(m.x - m.planes.project_equal(goal)) <= config_.static_friction * depth * (1.0 + 1e-9);
+  }
+
+  /// The proxy moving from x by d (of `length` [m]) stops at hit h, backed
+  /// off along the move by the offset (its path takes the point), and h's
+  /// plane, lifted by the radius and the offset, joins `planes` (false when
+  /// three are held already).
+  bool stop_at(const Hit& h, const glm::dvec3& d, double length, glm::dvec3& x, Planes& planes) noexcept {
+    const double eps = offset_for(h);
+    const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
+    const double back = facing > 1e-6 ? eps / facing : length;
+    x += (std::fmax(0.0, h.t * length - back) / length) * d;
+    visit(x);
+    return planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + eps, eps);
+  }
+
+  /// A proxy that slid `length` [m] along its one held plane to x and found
+  /// the surface gone from under it (curved away past the face it held):
+  /// swept down the plane's normal by as much, onto the surface (x, planes,
+  /// the frictionless point, the surface point under the HIP, the depth and
+  /// the touched face then describe where it settled). False when nothing
+  /// is met within that, the HIP does not press on the new plane, or the
+  /// tick's budget is spent: the full tick takes over.
+  [[nodiscard]] bool settle(const glm::dvec3& goal, double length, Planes& planes, glm::dvec3& x,
+                            glm::dvec3& frictionless, glm::dvec3& on_surface, double& depth, Hit& touched) noexcept {
+    if (planes.count != 1 || tick_.nodes >= config_.tick_node_budget) return false;
+    const glm::dvec3 down = -length * planes.normal[0];
+    const Hit h = sweep(x, x + down);
+    ++tick_.moves;
+    if (!h.complete || !h.found()) return false;
+    visit(x);  // the slide's end, then down from it
+    const double eps = offset_for(h);
+    const double facing = -glm::dot(down, h.face_normal) / length;  // cos of the angle of incidence
+    if (!(facing > 1e-6)) return false;
+    Planes onto;
+    (void)onto.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + eps, eps);
+    const glm::dvec3 free = onto.project(goal);
+    if (onto.count != 1) return false;  // the HIP is off the new plane
+    const glm::dvec3 under = onto.project_equal(goal, false);
+    const double pressed = glm::length(under - goal);  // [m]
+    if (!(pressed > 0.0)) return false;
+    const glm::dvec3 settled = x + std::fmax(0.0, h.t - eps / (facing * length)) * down;
+    // held only inside the static cone on the new plane (else the full tick)
+    if (glm::length(onto.project_equal(settled) - free) > config_.static_friction * pressed) return false;
+    x = settled;
+    planes = onto;
+    frictionless = free;
+    on_surface = under;
+    depth = pressed;
+    touched = h;
     return true;
   }
 
