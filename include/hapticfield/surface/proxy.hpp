@@ -562,6 +562,9 @@ class ProxyConstraint {
     if (planes.count != 1 || !over_face(touched, x)) {
       // not one flat face under both ends (a ball, a crease, past an edge)
       const double length = glm::length(x - proxy_);  // [m]
+      // a slide longer than the depth (and the radius) is no small step
+      // along the surface (a flick, a jump of the HIP): the full tick
+      if (length > std::fmax(depth, config_.radius)) return FrictionFirst::full;
       if (length > planes.tolerance) {
         const Hit h = sweep(proxy_, x);
         ++tick_.moves;
