@@ -19,6 +19,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../tests/surface_energy.hpp"
@@ -111,16 +112,28 @@ class BruteShape {
 template <class Proxy>
 hf::bench::Cost tick_cost(Proxy& proxy, const std::vector<hf::Probe>& path, double& mean_nodes,
                           std::uint32_t& worst_nodes) {
+  // one pass first, so that every proxy is timed with the tree as warm as
+  // the last one's (the first pass after a build runs cold); each pass
+  // starts afresh (reset(): no jump from the path's end to its start)
   glm::dvec3 sink{0.0};
+  for (const hf::Probe& p : path)
+    sink += proxy.contact(p).force;
   double node_sum = 0.0;
   worst_nodes = 0;
-  auto tick = [&](const hf::Probe& p) noexcept {
-    const glm::dvec3 f = proxy.contact(p).force;
-    sink += f;
-    node_sum += proxy.last_tick().nodes;
-    worst_nodes = std::max(worst_nodes, proxy.last_tick().nodes);
-    return f;
-  };
+  struct Tick {
+    Proxy& proxy;
+    glm::dvec3& sink;
+    double& node_sum;
+    std::uint32_t& worst_nodes;
+    glm::dvec3 force(const hf::Probe& p) noexcept {
+      const glm::dvec3 f = proxy.contact(p).force;
+      sink += f;
+      node_sum += proxy.last_tick().nodes;
+      worst_nodes = std::max(worst_nodes, proxy.last_tick().nodes);
+      return f;
+    }
+    void reset() noexcept { proxy.reset(); }
+  } tick{proxy, sink, node_sum, worst_nodes};
   const hf::bench::Cost c = hf::offline::measure_tick_budget(tick, path, hf::bench::thread_cpu_budget());
   mean_nodes = node_sum / (2.0 * static_cast<double>(path.size()));  // two passes
   if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
@@ -179,11 +192,13 @@ int main(int argc, char** argv) {
               base.p99_ns, base.worst_ns);
   std::printf(
       "| triangles | build [ms] | build [s per M] | depth | mean [ns] | p99 [ns] | worst [ns] | "
-      "mean / plane | p99 / plane | nodes mean | nodes worst | brute mean / tree mean | stick_first mean [ns] | "
-      "stick_first p99 [ns] | stick_first worst [ns] | ball 0.5 mm mean [ns] | ball 0.5 mm p99 [ns] | "
+      "mean / plane | p99 / plane | nodes mean | nodes worst | brute mean / tree mean | full tick mean [ns] | "
+      "full tick p99 [ns] | full tick worst [ns] | ball 0.5 mm mean [ns] | ball 0.5 mm p99 [ns] | "
       "ball 0.5 mm worst [ns] | ball 2 mm mean [ns] | ball 2 mm p99 [ns] | ball 2 mm worst [ns] |\n");
   std::printf(
       "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  // per size: the 0.5 and 2 mm balls by default, then with the full tick
+  std::vector<std::pair<std::size_t, std::array<hf::bench::Cost, 4>>> balls;
   for (const std::size_t target : {1'000ul, 16'000ul, 250'000ul, 1'000'000ul, 4'000'000ul}) {
     if (target > max_triangles) break;
     const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0)));
@@ -204,23 +219,27 @@ int main(int argc, char** argv) {
       const hf::bench::Cost b = tick_cost(slow, few, unused, unused_worst);
       brute = std::to_string(static_cast<int>(std::lround(b.mean_ns / c.mean_ns))) + " x";
     }
-    // the same proxy testing the static friction cone first (ProxyConfig::stick_first)
-    hf::ProxyConfig first{1500.0, 1.0, 0.5, 0.4};
-    first.stick_first = true;
-    hf::ProxyConstraint quick(shape, first);
-    double quick_nodes = 0.0;
-    std::uint32_t quick_worst_nodes = 0;
-    const hf::bench::Cost q = tick_cost(quick, path, quick_nodes, quick_worst_nodes);
-    // a ball-shaped tool (ProxyConfig::radius) of 0.5 and 2 mm on the same path
-    std::array<hf::bench::Cost, 2> ball{};
-    for (std::size_t b = 0; b < 2; ++b) {
+    // the same proxy with the full tick (ProxyConfig::stick_first off: the
+    // frictionless proxy first, then the friction move back)
+    hf::ProxyConfig whole{1500.0, 1.0, 0.5, 0.4};
+    whole.stick_first = false;
+    hf::ProxyConstraint full(shape, whole);
+    double full_nodes = 0.0;
+    std::uint32_t full_worst_nodes = 0;
+    const hf::bench::Cost q = tick_cost(full, path, full_nodes, full_worst_nodes);
+    // a ball-shaped tool (ProxyConfig::radius) of 0.5 and 2 mm on the same
+    // path, by default and with the full tick
+    std::array<hf::bench::Cost, 4> ball{};
+    for (std::size_t b = 0; b < 4; ++b) {
       hf::ProxyConfig round{1500.0, 1.0, 0.5, 0.4};
-      round.radius = b == 0 ? 0.0005 : 0.002;
+      round.radius = b % 2 == 0 ? 0.0005 : 0.002;
+      round.stick_first = b < 2;
       hf::ProxyConstraint tool(shape, round);
       double ball_nodes = 0.0;
       std::uint32_t ball_worst_nodes = 0;
       ball[b] = tick_cost(tool, path, ball_nodes, ball_worst_nodes);
     }
+    balls.emplace_back(mesh.triangles.size(), ball);
     const double mtri = static_cast<double>(mesh.triangles.size()) / 1e6;
     std::printf(
         "| %zu | %.1f | %.2f | %zu | %.0f | %.0f | %.0f | %.1f | %.1f | %.1f | %u | %s | %.0f | %.0f | %.0f | %.0f | "
@@ -231,6 +250,19 @@ int main(int argc, char** argv) {
         q.worst_ns, ball[0].mean_ns, ball[0].p99_ns, ball[0].worst_ns, ball[1].mean_ns, ball[1].p99_ns,
         ball[1].worst_ns);
   }
+  std::printf(
+      "\n## Ball-shaped tools: the friction cone first (the default) against the full tick\n\n"
+      "| triangles | radius [mm] | mean [ns] | p99 [ns] | worst [ns] | full tick mean [ns] | full tick p99 [ns] | "
+      "full tick worst [ns] | full / default mean | full / default p99 |\n"
+      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const auto& [triangles, ball] : balls)
+    for (std::size_t b = 0; b < 2; ++b) {
+      const hf::bench::Cost& d = ball[b];
+      const hf::bench::Cost& f = ball[b + 2];
+      std::printf("| %zu | %.1f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.1f | %.1f |\n", triangles,
+                  b == 0 ? 0.5 : 2.0, d.mean_ns, d.p99_ns, d.worst_ns, f.mean_ns, f.p99_ns, f.worst_ns,
+                  f.mean_ns / d.mean_ns, f.p99_ns / d.p99_ns);
+    }
 
   // --- height field vs tangible image, on a picture-sized grid ---
   {
