@@ -336,71 +336,46 @@ TEST_CASE("friction: the proxy sticks inside the cone and slides with |Ft| = mu_
   CHECK_THAT(c.force.z, WithinAbs(2.0, 1e-6));
 }
 
-TEST_CASE("stick_first: a proxy stuck or sliding on its face makes no sweep and feels as the full tick does") {
-  const double k = 1000.0, mu_s = 0.6, mu_k = 0.4;
-  ProxyConfig first{k, 0.0, mu_s, mu_k};
-  first.stick_first = true;
-  ProxyConstraint quick(MeshShape(test::flat_sheet(0.1, 10)), first);
-  ProxyConstraint full(MeshShape(test::flat_sheet(0.1, 10)), ProxyConfig{k, 0.0, mu_s, mu_k});
-  std::vector<glm::dvec3> path{{0.0, 0.0, 0.001}, {0.0, 0.0, -0.002}};
-  for (int i = 1; i <= 10; ++i)  // inside the cone (offsets up to 1.12 mm < mu_s depth = 1.2 mm)
-    path.push_back({0.0001 * i, 0.00005 * i, -0.002});
-  for (int i = 1; i <= 20; ++i)  // past it: slides
-    path.push_back({0.0011 + 0.001 * i, 0.00055, -0.002});
-  int stuck_without_sweep = 0, slid_without_sweep = 0;
-  for (std::size_t i = 0; i < path.size(); ++i) {
-    const Contact a = quick.contact(probe_at(path[i]));
-    const Contact b = full.contact(probe_at(path[i]));
-    CHECK(a.touching == b.touching);
-    CHECK(glm::length(a.force - b.force) < 1e-9);
-    CHECK(glm::length(quick.proxy() - full.proxy()) < 1e-12);
-    CHECK(quick.last_tick().sliding == full.last_tick().sliding);
-    if (i >= 2 && i < 12) {  // stuck after the first pressed tick: k (proxy - HIP)
-      CHECK(quick.last_tick().moves == 0);
-      ++stuck_without_sweep;
-      CHECK_THAT(a.force.x, WithinAbs(-k * path[i].x, 1e-6));
-      CHECK_THAT(a.force.y, WithinAbs(-k * path[i].y, 1e-6));
-    }
-    slid_without_sweep += quick.last_tick().sliding && quick.last_tick().moves == 0;
-  }
-  CHECK(stuck_without_sweep == 10);
-  CHECK(slid_without_sweep > 0);
-  CHECK(quick.last_tick().sliding);
-  CHECK(quick.last_tick().moves > 0);
-}
-
 TEST_CASE(
-    "stick_first with a ball: stuck or sliding on a flat face it feels as the full tick does; stuck, it sweeps "
-    "nothing") {
-  const double k = 1000.0, mu_s = 0.6, mu_k = 0.4, r = 0.001;
-  ProxyConfig first{.stiffness = k, .static_friction = mu_s, .dynamic_friction = mu_k, .radius = r};
-  ProxyConfig whole = first;
-  whole.stick_first = false;
-  ProxyConstraint quick(MeshShape(test::flat_sheet(0.1, 10)), first);
-  ProxyConstraint full(MeshShape(test::flat_sheet(0.1, 10)), whole);
-  std::vector<glm::dvec3> path{{0.0, 0.0, r + 0.001}, {0.0, 0.0, r - 0.002}};
-  for (int i = 1; i <= 10; ++i)  // inside the cone (offsets up to 1.12 mm < mu_s depth = 1.2 mm)
-    path.push_back({0.0001 * i, 0.00005 * i, r - 0.002});
-  for (int i = 1; i <= 20; ++i)  // past it: slides
-    path.push_back({0.0011 + 0.001 * i, 0.00055, r - 0.002});
-  int stuck = 0, slid_first = 0;
-  for (std::size_t i = 0; i < path.size(); ++i) {
-    const Contact a = quick.contact(probe_at(path[i]));
-    const Contact b = full.contact(probe_at(path[i]));
-    CHECK(a.touching == b.touching);
-    CHECK(glm::length(a.force - b.force) < 1e-9);
-    CHECK(glm::length(quick.proxy() - full.proxy()) < 1e-12);
-    CHECK(quick.last_tick().sliding == full.last_tick().sliding);
-    if (i >= 2 && i < 12) {  // stuck: no move, no sweep, k (proxy - HIP)
-      CHECK(quick.last_tick().held_first);
-      CHECK(quick.last_tick().moves == 0);
-      ++stuck;
-      CHECK_THAT(a.force.x, WithinAbs(-k * path[i].x, 1e-6));
+    "stick_first: a proxy (a point, a ball) stuck or sliding on a flat face feels as the full tick does; stuck, it "
+    "sweeps nothing") {
+  const double k = 1000.0, mu_s = 0.6, mu_k = 0.4;
+  for (const double r : {0.0, 0.001}) {
+    INFO("radius " << r);
+    const ProxyConfig first{.stiffness = k, .static_friction = mu_s, .dynamic_friction = mu_k, .radius = r};
+    ProxyConfig whole = first;
+    whole.stick_first = false;
+    ProxyConstraint quick(MeshShape(test::flat_sheet(0.1, 10)), first);
+    ProxyConstraint full(MeshShape(test::flat_sheet(0.1, 10)), whole);
+    std::vector<glm::dvec3> path{{0.0, 0.0, r + 0.001}, {0.0, 0.0, r - 0.002}};
+    for (int i = 1; i <= 10; ++i)  // inside the cone (offsets up to 1.12 mm < mu_s depth = 1.2 mm)
+      path.push_back({0.0001 * i, 0.00005 * i, r - 0.002});
+    for (int i = 1; i <= 20; ++i)  // past it: slides
+      path.push_back({0.0011 + 0.001 * i, 0.00055, r - 0.002});
+    int stuck = 0, slid_first = 0;
+    for (std::size_t i = 0; i < path.size(); ++i) {
+      const Contact a = quick.contact(probe_at(path[i]));
+      const Contact b = full.contact(probe_at(path[i]));
+      CHECK(a.touching == b.touching);
+      CHECK(glm::length(a.force - b.force) < 1e-9);
+      CHECK(glm::length(quick.proxy() - full.proxy()) < 1e-12);
+      CHECK(quick.last_tick().sliding == full.last_tick().sliding);
+      if (i >= 2 && i < 12) {  // stuck after the first pressed tick: no move, no sweep, k (proxy - HIP)
+        CHECK(quick.last_tick().held_first);
+        CHECK(quick.last_tick().moves == 0);
+        ++stuck;
+        CHECK_THAT(a.force.x, WithinAbs(-k * path[i].x, 1e-6));
+        CHECK_THAT(a.force.y, WithinAbs(-k * path[i].y, 1e-6));
+      }
+      // a point slides over one flat face with no sweep; a ball's slide is one sweep
+      slid_first +=
+          quick.last_tick().held_first && quick.last_tick().sliding && quick.last_tick().moves == (r > 0.0 ? 1 : 0);
     }
-    slid_first += quick.last_tick().held_first && quick.last_tick().sliding && quick.last_tick().moves == 1;
+    CHECK(stuck == 10);
+    CHECK(slid_first > 0);
+    CHECK(quick.last_tick().sliding);
+    CHECK(full.last_tick().moves > 0);  // the full tick sweeps
   }
-  CHECK(stuck == 10);
-  CHECK(slid_first > 0);  // a ball's slide is one sweep over a flat face
 }
 
 TEST_CASE("friction first on a curved sheet: the force stays in the friction cone and the proxy on the surface") {
