@@ -395,7 +395,7 @@ TEST_CASE("friction first on a curved sheet: the force stays in the friction con
     ProxyConstraint proxy(
         sheet, ProxyConfig{.stiffness = 1500.0, .static_friction = mu_s, .dynamic_friction = mu_k, .radius = r});
     int stuck = 0, slid = 0, settled = 0, touching = 0;
-    double worst_cone = 0.0, worst_gap = -1.0, worst_overlap = -1.0;
+    double worst_cone = 0.0, worst_gap = -1.0, worst_overlap = -1.0, worst_free = 0.0;
     for (int run = 0; run < 12; ++run) {
       proxy.reset();
       glm::dvec3 p{0.015 * g(rng), 0.015 * g(rng), 0.005}, v{0.0};
@@ -404,7 +404,10 @@ TEST_CASE("friction first on a curved sheet: the force stays in the friction con
         p = glm::clamp(p + 1e-3 * v, glm::dvec3{-0.04}, glm::dvec3{0.04});
         p.z = 0.002 * std::sin(0.005 * i + run) - 0.001;  // taps, up to 3 mm deep into the sheet's crests
         const Contact c = proxy.contact(probe_at(p, v));
-        if (!c.touching) continue;
+        if (!c.touching) {  // free: the proxy is at the HIP
+          if (!proxy.last_tick().blocked) worst_free = std::fmax(worst_free, glm::length(proxy.proxy() - p));
+          continue;
+        }
         ++touching;
         const ProxyTick& t = proxy.last_tick();
         stuck += t.held_first && t.moves == 0;
@@ -419,7 +422,7 @@ TEST_CASE("friction first on a curved sheet: the force stays in the friction con
     }
     INFO(touching << " ticks touching: " << stuck << " stuck, " << slid << " slid, " << settled
                   << " settled without the constrained motion; worst |Ft| / Fn " << worst_cone << ", gap " << worst_gap
-                  << " m, overlap " << worst_overlap << " m");
+                  << " m, overlap " << worst_overlap << " m, a free proxy " << worst_free << " m from the HIP");
     CHECK(touching > 5000);
     CHECK(stuck > 0);
     CHECK(slid > 0);
@@ -427,6 +430,7 @@ TEST_CASE("friction first on a curved sheet: the force stays in the friction con
     CHECK(worst_cone <= 1.1 * mu_s);  // the full tick's own reach past mu_s on a curved mesh is a few %
     CHECK(worst_gap <= lift);
     CHECK(worst_overlap <= 1e-9 * r);
+    CHECK(worst_free == 0.0);
   }
 }
 

@@ -185,7 +185,9 @@ class MeshBvh {
   /// What a query needs to pass a triangle by without its full test: its
   /// plane (unit normal, through the centroid) and its bounding circle
   /// (one cache line a triangle, kept beside the triangles in slot order).
-  struct TriangleBounds {
+  /// A sliver (height under 1e-3 of its longest edge, whose computed normal
+  /// is too rough for the test) is never passed by: its slack is infinite.
+  struct alignas(64) TriangleBounds {
     glm::dvec3 normal{0.0};  ///< unit, toward the front
     glm::dvec3 middle{0.0};  ///< the centroid, on the plane [m]
     double reach{0.0};       ///< the farthest corner from the centroid [m]
@@ -626,8 +628,11 @@ class MeshBvh {
           detail::larger(glm::dot(b - out.middle, b - out.middle), glm::dot(c - out.middle, c - out.middle))));
       const double coordinate =
           detail::larger(std::fabs(out.middle.x), detail::larger(std::fabs(out.middle.y), std::fabs(out.middle.z)));
-      // rounding, relative to the coordinates and the triangle
-      out.slack = 1e-9 * (coordinate + out.reach);
+      // rounding, relative to the coordinates and the triangle; a sliver's
+      // normal is off by about eps |e|^2 / area2, too much to rely on
+      const double longest2 =
+          detail::larger(glm::dot(tri.e1, tri.e1), detail::larger(glm::dot(tri.e2, tri.e2), glm::dot(c - b, c - b)));
+      out.slack = area2 > 1e-3 * longest2 ? 1e-9 * (coordinate + out.reach) : std::numeric_limits<double>::infinity();
     }
   }
 

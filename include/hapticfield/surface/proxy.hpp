@@ -97,9 +97,11 @@ namespace hapticfield {
 /// Most proxy moves (swept queries) in one pass of a tick.
 inline constexpr int proxy_max_moves = 6;
 /// Most passes in one tick: a pass that leaves the proxy off every face (it
-/// slid past a convex edge) is followed by another from there; a tick makes
-/// at most proxy_max_passes x proxy_max_moves swept queries, a closest()
-/// after each pass and one friction move.
+/// slid past a convex edge) is followed by another from there; the passes
+/// make at most proxy_max_passes x proxy_max_moves swept queries, with a
+/// closest() after each pass. Besides: one friction move, or step 0's slide
+/// and settling sweeps (ProxyConfig::stick_first) and, when the motion it
+/// hands on ends past the cone, the passes once more from the start.
 inline constexpr int proxy_max_passes = 4;
 /// Most points of the path the proxy takes in one tick (its start, the end
 /// of every swept move and the friction move): last_path().
@@ -147,8 +149,8 @@ struct ProxyConfig {
   /// its path swept (ProxyTick::blocked). The worst tick then visits at most
   /// this plus the budget of the one query that crossed it (a mesh's
   /// MeshShapeConfig::max_nodes) and of the closest() queries that follow
-  /// (one per pass); without it, up to proxy_max_passes x proxy_max_moves + 1
-  /// queries of a full budget each.
+  /// (one per pass); without it, up to 2 x proxy_max_passes x
+  /// proxy_max_moves + 2 queries of a full budget each.
   std::uint32_t tick_node_budget{proxy_default_tick_node_budget};
 };
 
@@ -163,8 +165,9 @@ struct ProxyTick {
       0};               ///< tree nodes (or grid cells) visited by all the tick's queries, where the shape counts them
   bool blocked{false};  ///< a query ran out of its budget, or the tick of its own: the proxy stayed
   bool sliding{false};  ///< friction: the proxy slides (else sticks)
-  /// Step 0 (ProxyConfig::stick_first) held the proxy: stuck, or slid (and
-  /// settled) on the planes of the tick before, with no constrained motion.
+  /// Step 0 (ProxyConfig::stick_first) finished the tick: the proxy stuck,
+  /// or slid along the planes of the tick before (and settled onto the
+  /// surface below), with no constrained motion.
   bool held_first{false};
   /// A ball that began overlapping the surface (at the first tick, after
   /// reset(), or come through it from behind): it follows the HIP with no
@@ -228,6 +231,7 @@ class ProxyConstraint {
     glm::dvec3 aim = goal;
     bool friction_decided = false;
     Motion m{start};
+    const bool was_sliding = sliding_;
     if (config_.stick_first) {  // 0: the friction cone first
       Contact held;
       const FrictionFirst first = stick(probe.position, velocity, held, aim, m);
@@ -238,12 +242,18 @@ class ProxyConstraint {
     // 1-2: constrained motion toward the aim
     move_toward(aim, start, m);
     if (friction_decided && !m.embedded && !m.blocked && !in_cone(goal, m)) {
-      // the lag step 0 chose on last tick's planes is past the cone on the
-      // ones the proxy came to (it went over a crest): the full tick
+      // the lag step 0 chose on last tick's planes does not hold where the
+      // proxy came to (over a crest: past the cone, off the surface, or on
+      // a plane the HIP does not press on): the full tick, as if step 0 had
+      // not run; with the tick's budget spent, the proxy stays (blocked)
       path_.count = 1;
       m = Motion{start};
       friction_decided = false;
-      move_toward(goal, start, m);
+      sliding_ = was_sliding;
+      if (tick_.nodes < config_.tick_node_budget)
+        move_toward(goal, start, m);
+      else
+        m.blocked = true;
     }
     if (m.embedded) {
       // a free ball that overlaps the surface where it starts came through
@@ -651,10 +661,14 @@ class ProxyConstraint {
     }
   }
 
-  /// True when the proxy where m has it lies inside the static friction
-  /// cone about the HIP's point on its planes (or touches nothing).
+  /// True when the proxy where m has it is on the surface, the HIP presses
+  /// on every plane it is held to, and it lies inside the static friction
+  /// cone about the HIP's point on them.
   [[nodiscard]] bool in_cone(const glm::dvec3& goal, const Motion& m) const noexcept {
-    if (m.planes.count == 0) return true;
+    if (m.planes.count == 0) return false;  // off the surface
+    Planes pressed = m.planes;
+    (void)pressed.project(goal);
+    if (pressed.count != m.planes.count) return false;                             // the HIP has left a plane
     const double depth = glm::length(m.planes.project_equal(goal, false) - goal);  // [m]
     return glm::length(m.x - m.planes.project_equal(goal)) <= config_.static_friction * depth * (1.0 + 1e-9);
   }
