@@ -667,10 +667,10 @@ class ProxyConstraint {
   [[nodiscard]] bool in_cone(const glm::dvec3& goal, const Motion& m) const noexcept {
     if (m.planes.count == 0) return false;  // off the surface
     Planes pressed = m.planes;
-    (void)pressed.project(goal);
-    if (pressed.count != m.planes.count) return false;                             // the HIP has left a plane
+    const glm::dvec3 free = pressed.project(goal);      // the HIP's point on the planes, all binding
+    if (pressed.count != m.planes.count) return false;  // the HIP has left a plane
     const double depth = glm::length(m.planes.project_equal(goal, false) - goal);  // [m]
-    return glm::length(m.x - m.planes.project_equal(goal)) <= config_.static_friction * depth * (1.0 + 1e-9);
+    return glm::length(m.x - free) <= config_.static_friction * depth * (1.0 + 1e-9);
   }
 
   /// The proxy moving from x by d (of `length` [m]) stops at hit h, backed
@@ -678,12 +678,18 @@ class ProxyConstraint {
   /// plane, lifted by the radius and the offset, joins `planes` (false when
   /// three are held already).
   bool stop_at(const Hit& h, const glm::dvec3& d, double length, glm::dvec3& x, Planes& planes) noexcept {
-    const double eps = offset_for(h);
-    const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
-    const double back = facing > 1e-6 ? eps / facing : length;
-    x += (std::fmax(0.0, h.t * length - back) / length) * d;
+    x = stopped(h, d, length, x);
     visit(x);
-    return planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + eps, eps);
+    return planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + offset_for(h), offset_for(h));
+  }
+
+  /// Where a move from x by d (of `length` [m]) stops at hit h: backed off
+  /// along the move so as to stay the hit primitive's offset in front of it.
+  [[nodiscard]] glm::dvec3 stopped(const Hit& h, const glm::dvec3& d, double length,
+                                   const glm::dvec3& x) const noexcept {
+    const double facing = -glm::dot(d, h.face_normal) / length;  // cos of the angle of incidence, > 0
+    const double back = facing > 1e-6 ? offset_for(h) / facing : length;
+    return x + (std::fmax(0.0, h.t * length - back) / length) * d;
   }
 
   /// A proxy that slid `length` [m] along its one held plane to x and found
@@ -700,18 +706,16 @@ class ProxyConstraint {
     const Hit h = sweep(x, x + down);
     ++tick_.moves;
     if (!h.complete || !h.found()) return false;
-    visit(x);  // the slide's end, then down from it
-    const double eps = offset_for(h);
-    const double facing = -glm::dot(down, h.face_normal) / length;  // cos of the angle of incidence
-    if (!(facing > 1e-6)) return false;
+    visit(x);                                                             // the slide's end, then down from it
+    if (!(-glm::dot(down, h.face_normal) / length > 1e-6)) return false;  // it grazes the face it met
     Planes onto;
-    (void)onto.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + eps, eps);
+    (void)onto.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + offset_for(h), offset_for(h));
     const glm::dvec3 free = onto.project(goal);
     if (onto.count != 1) return false;  // the HIP is off the new plane
     const glm::dvec3 under = onto.project_equal(goal, false);
     const double pressed = glm::length(under - goal);  // [m]
     if (!(pressed > 0.0)) return false;
-    const glm::dvec3 settled = x + std::fmax(0.0, h.t - eps / (facing * length)) * down;
+    const glm::dvec3 settled = stopped(h, down, length, x);
     // held only inside the static cone on the new plane (else the full tick)
     if (glm::length(onto.project_equal(settled) - free) > config_.static_friction * pressed) return false;
     x = settled;
