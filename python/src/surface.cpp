@@ -488,10 +488,15 @@ void check_radius(double radius) {
 
 SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& parts, double stiffness, double damping,
                              double static_friction, double dynamic_friction, double offset, double radius,
-                             const std::optional<Material>& material) {
+                             const std::optional<Material>& material, bool stick_first, std::int64_t tick_node_budget) {
   check_radius(radius);
+  if (tick_node_budget < 0 || tick_node_budget > std::numeric_limits<std::uint32_t>::max())
+    throw py::value_error("tick_node_budget: must be in [0, 4294967295] tree nodes, got " +
+                          std::to_string(tick_node_budget));
   ProxyConfig config{stiffness, damping, static_friction, dynamic_friction, offset};
   config.radius = radius;
+  config.stick_first = stick_first;
+  config.tick_node_budget = static_cast<std::uint32_t>(tick_node_budget);
   FieldSum sum;
   std::string d = "surface(" + surface.description;
   std::vector<const Field*> shared;
@@ -944,7 +949,8 @@ void bind_surface(py::module_& m) {
   m.def("surface_contact", &surface_contact, py::arg("surface"), py::arg("parts") = std::vector<Field>{},
         py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0, py::arg("static_friction") = 0.0,
         py::arg("dynamic_friction") = 0.0, py::arg("offset") = 1e-6, py::arg("radius") = 0.0,
-        py::arg("material") = py::none(),
+        py::arg("material") = py::none(), py::arg("stick_first") = true,
+        py::arg("tick_node_budget") = static_cast<std::int64_t>(proxy_default_tick_node_budget),
         "F = Fc + parts on a surface, felt through a proxy (god-object, Zilles & Salisbury 1995): Fc = max(0, k d "
         "- b v.n) n + friction, stiffness k [N/m], damping b [N s/m] on the normal velocity, the friction cone "
         "static_friction >= dynamic_friction >= 0; offset: the proxy's lift relative to a primitive's size. "
@@ -955,7 +961,12 @@ void bind_surface(py::module_& m) {
         "touching, the parts see |Fc| [N], the normal, and the touched point's uv and tangent frame: lay a field "
         "on the surface with on_surface(). material (a Material: material(), load_haptic_material()): the stiffness, "
         "damping and friction read at the touched uv every tick instead of the numbers, the parts scaled by its "
-        "texture gain there. Returns a SurfaceField (contacts() tells where the proxy is).");
+        "texture gain there. stick_first (default True): with friction, the friction cone is tested first on last "
+        "tick's planes, so a stuck proxy makes no swept query (False: the full tick, the frictionless proxy found "
+        "first; the two agree on a flat face and differ a little near the cone's edge on a curved one). "
+        "tick_node_budget: the most tree nodes all of one tick's queries may visit together; past it the proxy "
+        "stays where it has got to that tick (0: it never moves, so it never touches). Returns a SurfaceField "
+        "(contacts() tells where the proxy is).");
   m.def(
       "picture_relief", &picture_relief_of, py::arg("image"), py::arg("mm_per_level") = 0.01, py::arg("width_m") = 0.1,
       py::arg("blur") = 0.0, py::arg("dark_is_high") = false, py::arg("stiffness") = 1500.0, py::arg("damping") = 0.0,

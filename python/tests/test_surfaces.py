@@ -233,6 +233,39 @@ def test_an_icosphere_mesh_pushes_along_the_radius_through_force_shading(tmp_pat
         assert np.linalg.norm(f) == pytest.approx(K * 0.002, abs=K * 3e-4)
 
 
+def test_stick_first_and_the_tick_node_budget_reach_the_proxy():
+    """stick_first=False is the full tick: on a flat face it feels the same; on a curved mesh it differs a little,
+    both keeping the friction force within the static cone. tick_node_budget=0 lets the proxy make no move: it
+    never touches."""
+    mu_s, mu_k = 0.5, 0.4
+    slide = np.column_stack([np.linspace(-0.01, 0.01, 400), np.full(400, 0.003), np.full(400, -0.002)])
+    slide = np.vstack([press((-0.01, 0.003, 0.005), slide[0]), slide])  # pressed in from above, then slid
+    grid = np.array([(x, y, 0.0) for y in (-0.05, 0.05) for x in (-0.05, 0.05)])
+    square = hf.mesh_surface_from_arrays(grid, np.array([[0, 1, 3], [0, 3, 2]]))
+    flat = [hf.surface_contact(square, stiffness=K, static_friction=mu_s, dynamic_friction=mu_k,
+                               stick_first=first).forces(slide) for first in (True, False)]
+    assert np.abs(flat[0][:, 0]).max() > 0.5 * mu_k * K * 0.002  # it slides, with friction
+    np.testing.assert_allclose(flat[0], flat[1], atol=1e-9)
+    v, f = icosphere(3)
+    ball = hf.mesh_surface_from_arrays(v * 0.03, f, origin=(0.0, 0.0, -0.03))
+    # around the top of a 30 mm ball, 2 mm deep
+    arc = np.array([(0.02 * np.sin(a), 0.003, -0.002 + 0.03 * (np.cos(a) - 1.0)) for a in np.linspace(-0.6, 0.6, 600)])
+    arc = np.vstack([press(arc[0] + (0.0, 0.0, 0.01), arc[0]), arc])
+    curved = []
+    for first in (True, False):
+        c = hf.surface_contact(ball, stiffness=K, static_friction=mu_s, dynamic_friction=mu_k,
+                               stick_first=first).contacts(arc)
+        assert c["touching"][40:].all()
+        normal = np.einsum("ij,ij->i", c["force"], c["normal"])
+        tangential = np.linalg.norm(c["force"] - normal[:, None] * c["normal"], axis=1)
+        assert (tangential <= 1.1 * mu_s * normal + 1e-9).all()
+        curved.append(c["force"])
+    assert np.abs(curved[0] - curved[1]).max() > 1e-6
+    press_in = press((0.0, 0.0, 0.01), (0.0, 0.0, -0.002))
+    assert np.linalg.norm(hf.surface_contact(square, stiffness=K).forces(press_in)[-1]) == pytest.approx(K * 0.002)
+    assert not hf.surface_contact(square, stiffness=K, tick_node_budget=0).forces(press_in).any()
+
+
 def real_meshes():
     names = ["meshes/spot.obj", "meshes/stanford-bunny.obj", "meshes/fandisk.obj", "gltf/Duck.gltf",
              "gltf/BoxTextured.gltf"]
@@ -424,6 +457,8 @@ def test_a_part_of_a_running_surface_is_refused_to_other_threads():
     (lambda: hf.surface_contact(hf.sphere_surface(), damping=-1.0), ValueError, "damping"),
     (lambda: hf.surface_contact(hf.sphere_surface(), static_friction=0.2, dynamic_friction=0.3), ValueError,
      "dynamic_friction"),
+    (lambda: hf.surface_contact(hf.sphere_surface(), tick_node_budget=-1), ValueError, "tick_node_budget"),
+    (lambda: hf.surface_contact(hf.sphere_surface(), tick_node_budget=1 << 32), ValueError, "tick_node_budget"),
     (lambda: hf.on_surface(hf.zero(), scale=(np.nan, 1.0)), ValueError, "finite"),
     (lambda: hf.surface_contact(hf.sphere_surface()).contacts(np.zeros((3, 2))), ValueError, "N x 3"),
     (lambda: hf.surface_contact(hf.sphere_surface()).contacts(np.zeros((3, 3)), period=0.0), ValueError,
