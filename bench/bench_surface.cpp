@@ -199,6 +199,8 @@ int main(int argc, char** argv) {
       "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   // per size: the 0.5 and 2 mm balls by default, then with the full tick
   std::vector<std::pair<std::size_t, std::array<hf::bench::Cost, 4>>> balls;
+  // per size: the 0.5 and 2 mm balls on the tree without its nodes' slabs
+  std::vector<std::pair<std::size_t, std::array<hf::bench::Cost, 2>>> slabs;
   for (const std::size_t target : {1'000ul, 16'000ul, 250'000ul, 1'000'000ul, 4'000'000ul}) {
     if (target > max_triangles) break;
     const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0)));
@@ -240,6 +242,21 @@ int main(int argc, char** argv) {
       ball[b] = tick_cost(tool, path, ball_nodes, ball_worst_nodes);
     }
     balls.emplace_back(mesh.triangles.size(), ball);
+    // the same balls on the same tree without its nodes' slabs
+    // (MeshBvh::NodeBounds): a second build, refit to the same vertices,
+    // which drops them
+    hf::MeshShape plain(mesh);
+    (void)plain.refit(mesh.positions);
+    std::array<hf::bench::Cost, 2> boxes_only{};
+    for (std::size_t b = 0; b < 2; ++b) {
+      hf::ProxyConfig round{1500.0, 1.0, 0.5, 0.4};
+      round.radius = b == 0 ? 0.0005 : 0.002;
+      hf::ProxyConstraint tool(plain, round);
+      double ball_nodes = 0.0;
+      std::uint32_t ball_worst_nodes = 0;
+      boxes_only[b] = tick_cost(tool, path, ball_nodes, ball_worst_nodes);
+    }
+    slabs.emplace_back(mesh.triangles.size(), boxes_only);
     const double mtri = static_cast<double>(mesh.triangles.size()) / 1e6;
     std::printf(
         "| %zu | %.1f | %.2f | %zu | %.0f | %.0f | %.0f | %.1f | %.1f | %.1f | %u | %s | %.0f | %.0f | %.0f | %.0f | "
@@ -262,6 +279,20 @@ int main(int argc, char** argv) {
       std::printf("| %zu | %.1f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.1f | %.1f |\n", triangles,
                   b == 0 ? 0.5 : 2.0, d.mean_ns, d.p99_ns, d.worst_ns, f.mean_ns, f.p99_ns, f.worst_ns,
                   f.mean_ns / d.mean_ns, f.p99_ns / d.p99_ns);
+    }
+  std::printf(
+      "\n## Ball-shaped tools: each node's slab kept (MeshBvh::NodeBounds, built by default) against the same "
+      "tree without them (refit, which drops them)\n\n"
+      "| triangles | radius [mm] | mean [ns] | p99 [ns] | worst [ns] | boxes only mean [ns] | boxes only p99 [ns] | "
+      "boxes only worst [ns] | boxes / slabs mean | boxes / slabs p99 | boxes / slabs worst |\n"
+      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (std::size_t i = 0; i < slabs.size(); ++i)
+    for (std::size_t b = 0; b < 2; ++b) {
+      const hf::bench::Cost& d = balls[i].second[b];
+      const hf::bench::Cost& o = slabs[i].second[b];
+      std::printf("| %zu | %.1f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f |\n", slabs[i].first,
+                  b == 0 ? 0.5 : 2.0, d.mean_ns, d.p99_ns, d.worst_ns, o.mean_ns, o.p99_ns, o.worst_ns,
+                  o.mean_ns / d.mean_ns, o.p99_ns / d.p99_ns, o.worst_ns / d.worst_ns);
     }
 
   // --- height field vs tangible image, on a picture-sized grid ---

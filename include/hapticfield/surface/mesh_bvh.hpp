@@ -15,7 +15,9 @@
 ///
 /// Layout: the root, then the other nodes as sibling pairs, one 64-byte
 /// cache line each, depth first; the triangles (corner, two edges, double)
-/// in leaf order, so a leaf's triangles are contiguous.
+/// in leaf order, so a leaf's triangles are contiguous. Beside them, for a
+/// ball's sweep: each triangle's plane and bounding circle (TriangleBounds)
+/// and each node's slab (NodeBounds), a cache line each.
 ///
 /// Queries (const, noexcept, no allocation): first_hit(from, to), the
 /// first front-facing triangle a segment crosses (Moller & Trumbore, "Fast,
@@ -217,6 +219,44 @@ class MeshBvh {
     }
   };
 
+  /// What a ball's sweep needs to pass a whole node by (its subtree)
+  /// without visiting it: a slab, every corner of the node's triangles
+  /// within `thickness` of the plane through `middle` along `normal` (their
+  /// area-weighted mean normal), and within `reach` of `middle`. Where the
+  /// surface under a ball is smooth, the nodes beside the one it rests on
+  /// are thin slabs the ball stays clear of; their boxes alone would let
+  /// it in (one cache line a node, kept beside the node pairs).
+  struct alignas(64) NodeBounds {
+    glm::dvec3 normal{0.0, 0.0, 1.0};                           ///< unit
+    glm::dvec3 middle{0.0};                                     ///< [m]
+    double reach{std::numeric_limits<double>::infinity()};      ///< [m]
+    double thickness{std::numeric_limits<double>::infinity()};  ///< half the slab's, with the rounding allowance [m]
+
+    /// False only when a ball of radius r whose centre moves from + t d,
+    /// t in [0, t_max], meets no point of the slab within reach of middle:
+    /// it stays more than r beyond either face of the slab, or the disks it
+    /// cuts from the slab (radius sqrt(r^2 - h^2) at its least height h
+    /// beyond it) stay farther than reach from middle.
+    [[nodiscard]] bool may_touch(const glm::dvec3& from, const glm::dvec3& d, double r, double t_max) const noexcept {
+      const double h0 = glm::dot(normal, from - middle);  // [m]
+      const double dn = glm::dot(normal, d);              // [m] per unit t
+      const double h1 = h0 + t_max * dn;
+      const double above = detail::smaller(h0, h1) - thickness;  // beyond the front face [m]
+      const double below = -detail::larger(h0, h1) - thickness;  // beyond the back face [m]
+      if (above > r || below > r) return false;
+      const double low = detail::larger(0.0, detail::larger(above, below));  // [m]
+      const double disk2 = r * r - low * low;
+      const glm::dvec3 to_middle = middle - from + h0 * normal;  // in the plane, from the centre's projection
+      const glm::dvec3 slide = d - dn * normal;
+      const double slide2 = glm::dot(slide, slide);
+      const double along =
+          slide2 > 0.0 ? detail::larger(0.0, detail::smaller(t_max, glm::dot(to_middle, slide) / slide2)) : 0.0;
+      const glm::dvec3 gap = to_middle - along * slide;
+      const double within = std::sqrt(detail::larger(0.0, disk2)) + reach;  // [m]
+      return glm::dot(gap, gap) <= within * within;
+    }
+  };
+
   /// Builds the hierarchy over `mesh` (validated first).
   /// @throws std::invalid_argument for an invalid mesh or a zero budget.
   [[nodiscard]] static MeshBvh build(const TriangleMesh& mesh, const MeshBvhConfig& config = {}) {
@@ -344,7 +384,9 @@ class MeshBvh {
   /// triangle's area (a triangle left out at build stays out, one that loses
   /// its area keeps its slot) and moves vertices of equal positions alike
   /// (the tie rule's welds stay). Boxes overlap more after large motions:
-  /// queries visit more nodes than on a rebuilt tree.
+  /// queries visit more nodes than on a rebuilt tree; and the nodes' slabs
+  /// (NodeBounds) are dropped, so a ball's sweeps visit every node its box
+  /// test lets in, as they do on a tree without them.
   /// @throws std::invalid_argument for a mesh without the tree's triangles
   ///         (too few, an index out of range) or with a non-finite position;
   ///         the tree is unchanged then.
@@ -409,6 +451,9 @@ class MeshBvh {
       }
     }
     if (!triangles_.empty()) box(root_.index, root_.count, root_.lo, root_.hi);
+    // the nodes' slabs are the build's: dropped (no memory freed), so a
+    // refit tree's ball sweeps visit every node its boxes let in
+    node_bounds_.clear();
   }
 
   /// Nodes in the tree (the root and the pairs below it; 0: empty).
@@ -448,6 +493,7 @@ class MeshBvh {
     const glm::dvec3 middle = from + (0.5 * best_t) * d;
     const double reach = grow + 0.5 * best_t * std::sqrt(glm::dot(d, d));
     const double reach2 = reach * reach * (1.0 + 1e-12);
+    const bool no_slabs = node_bounds_.empty();  // (a refit tree has no NodeBounds: its boxes alone decide)
     Stack stack;
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     double entry = 0.0;
@@ -470,8 +516,10 @@ class MeshBvh {
         std::array<bool, 2> hit = slabs.cross(pair, best_t, t);
         if constexpr (Grown) {
           const std::array<double, 2> d2 = box_distance2(pair, middle);
-          hit[0] = hit[0] && d2[0] <= reach2;
-          hit[1] = hit[1] && d2[1] <= reach2;
+          for (std::size_t c = 0; c < 2; ++c)
+            hit[c] = hit[c] && d2[c] <= reach2 &&
+                     (no_slabs || !worth_slab(pair, c, grow) ||
+                      node_bounds_[2 * index + c].may_touch(from, d, grow, best_t));
         }
         if (hit[0] && hit[1]) {
           const std::size_t near = t[1] < t[0] ? 1 : 0, far = 1 - near;
@@ -612,6 +660,97 @@ class MeshBvh {
     glm::dvec3 inv_{0.0};
     std::array<bool, 3> still_{};
   };
+
+  /// True when a ball of radius r is worth testing against a child's
+  /// NodeBounds besides its box: a leaf (the test stands for its
+  /// triangles'), or a node less than 4 r across (a larger one's slab is
+  /// seldom thin enough to pass the ball by; on bench_surface's sheet its
+  /// test costs the 0.5 mm ball more than it saves).
+  [[nodiscard]] static bool worth_slab(const BvhNodePair& pair, std::size_t side, double r) noexcept {
+    if (pair.count[side] > 0) return true;
+    const float across = std::max({pair.hi[0][side] - pair.lo[0][side], pair.hi[1][side] - pair.lo[1][side],
+                                   pair.hi[2][side] - pair.lo[2][side]});
+    return static_cast<double>(across) < 4.0 * r;
+  }
+
+  /// Every node's NodeBounds (node_bounds_[2 p + side]: pair p's child),
+  /// bottom up (children are stored after their parent): a leaf's from its
+  /// triangles as the queries see them, an inner node's from its children's
+  /// (merge()). Linear time, no allocation.
+  void bound_nodes() noexcept {
+    for (std::size_t p = pairs_.size(); p-- > 0;)
+      for (std::size_t side = 0; side < 2; ++side) {
+        const std::uint32_t index = pairs_[p].index[side], count = pairs_[p].count[side];
+        node_bounds_[2 * p + side] =
+            count > 0 ? bound_slots(index, index + count) : merge(node_bounds_[2 * index], node_bounds_[2 * index + 1]);
+      }
+  }
+
+  /// Bounds holding both children's: about a mean of their normals (each
+  /// weighted by its reach squared, for its area), each child's slab and
+  /// disk bounded in that frame (a point of a child's is within its
+  /// thickness along its normal and its reach across it, so within
+  /// |h| + thickness cos + reach sin along the new normal, at angle acos(cos)
+  /// to the child's, and within the offset of the middles across it plus
+  /// reach + thickness sin across it).
+  [[nodiscard]] static NodeBounds merge(const NodeBounds& a, const NodeBounds& b) noexcept {
+    NodeBounds out;
+    if (!std::isfinite(a.reach + a.thickness + b.reach + b.thickness)) return out;  // never passed by
+    const double wa = a.reach * a.reach + 1e-300, wb = b.reach * b.reach + 1e-300;
+    const glm::dvec3 sum = wa * a.normal + wb * b.normal;
+    const double length = glm::length(sum);
+    if (!(length > 0.0) || !std::isfinite(length)) return out;
+    out.normal = sum / length;
+    out.middle = (wa * a.middle + wb * b.middle) / (wa + wb);
+    double thickness = 0.0, reach = 0.0, coordinate = 0.0;
+    for (const NodeBounds* child : {&a, &b}) {
+      const double cosine = std::fabs(glm::dot(out.normal, child->normal));
+      const double sine = std::sqrt(detail::larger(0.0, 1.0 - cosine * cosine));
+      const glm::dvec3 offset = child->middle - out.middle;
+      const double h = glm::dot(offset, out.normal);
+      thickness = detail::larger(thickness, std::fabs(h) + child->thickness * cosine + child->reach * sine);
+      reach = detail::larger(reach, glm::length(offset - h * out.normal) + child->reach + child->thickness * sine);
+      const glm::dvec3& m = child->middle;
+      coordinate =
+          detail::larger(coordinate, detail::larger(std::fabs(m.x), detail::larger(std::fabs(m.y), std::fabs(m.z))));
+    }
+    const double slack = 1e-9 * (coordinate + reach + thickness);  // rounding [m]
+    out.reach = reach + slack;
+    out.thickness = thickness + slack;
+    return out;
+  }
+
+  /// The NodeBounds of the triangles in slots [begin, end).
+  [[nodiscard]] NodeBounds bound_slots(std::uint32_t begin, std::uint32_t end) const noexcept {
+    NodeBounds out;
+    glm::dvec3 area{0.0}, sum{0.0};
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const Triangle& tri = triangles_[i];
+      area += glm::cross(tri.e1, tri.e2);
+      sum += 3.0 * tri.a + tri.e1 + tri.e2;
+    }
+    const double length = glm::length(area);
+    if (!(length > 0.0) || !std::isfinite(length)) return out;  // never passed by
+    out.normal = area / length;
+    out.middle = sum / (3.0 * static_cast<double>(end - begin));
+    double thickness = 0.0, reach2 = 0.0, coordinate = 0.0;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const Triangle& tri = triangles_[i];
+      for (const glm::dvec3& corner : {tri.a, tri.a + tri.e1, tri.a + tri.e2}) {
+        const glm::dvec3 r = corner - out.middle;
+        const double h = glm::dot(r, out.normal);
+        thickness = detail::larger(thickness, std::fabs(h));
+        reach2 = detail::larger(reach2, glm::dot(r, r) - h * h);
+        coordinate = detail::larger(
+            coordinate, detail::larger(std::fabs(corner.x), detail::larger(std::fabs(corner.y), std::fabs(corner.z))));
+      }
+    }
+    // rounding, relative to the coordinates and the node's size
+    const double slack = 1e-9 * (coordinate + std::sqrt(reach2) + thickness);
+    out.reach = std::sqrt(reach2) + slack;
+    out.thickness = thickness + slack;
+    return out;
+  }
 
   /// Every triangle's TriangleBounds, from the triangles as the queries see them.
   void bound_all() noexcept {
@@ -843,6 +982,8 @@ class MeshBvh {
       }
       out_.bounds_.resize(out_.triangles_.size());
       out_.bound_all();
+      out_.node_bounds_.resize(2 * out_.pairs_.size());
+      out_.bound_nodes();
       connect();
     }
 
@@ -1093,8 +1234,9 @@ class MeshBvh {
   BvhNode root_{};
   std::vector<BvhNodePair> pairs_;
   std::vector<Triangle> triangles_;
-  std::vector<Adjacency> adjacency_;    ///< parallel to triangles_
-  std::vector<TriangleBounds> bounds_;  ///< parallel to triangles_
+  std::vector<Adjacency> adjacency_;     ///< parallel to triangles_
+  std::vector<TriangleBounds> bounds_;   ///< parallel to triangles_
+  std::vector<NodeBounds> node_bounds_;  ///< two a pair: node_bounds_[2 p + side], pair p's child
   std::size_t depth_{0};
   MeshBvhConfig config_{};
 };
