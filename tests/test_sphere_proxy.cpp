@@ -444,105 +444,226 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "a node's bounds never pass by a contact: a ball's sweep through the tree meets what a brute-force sweep over "
-    "every triangle meets, on smooth and sharp meshes, built and refit",
+    "a node's slab never passes by a contact: a ball's sweep answers exactly as through the same tree without "
+    "the slabs, and meets what a brute-force sweep over every triangle meets",
     "[radius][invariant]") {
   // MeshBvh::NodeBounds::may_touch skips a whole subtree where the ball
-  // stays clear of its slab: on wavy sheets (the smooth surfaces where it
-  // skips most), spheres and boxes, of 1 mm to 1 m, up to 10 m from the
-  // origin, balls resting on the surface (at r, within rounding of it, a
-  // little nearer or farther), moved along it, into it, away or anywhere,
-  // must meet what the brute force meets (every triangle's own first
-  // contact, the earliest), or differ only where the ball grazes a face (its
-  // distance r within rounding all along, the time of contact
-  // ill-conditioned); and again after the tree is refit to the mesh deformed
+  // stays clear of its slab. A second build of the same mesh refit to the
+  // same vertices has no slabs (refit drops them) and is otherwise the same
+  // tree, so every sweep must answer the same bit for bit: on wavy sheets
+  // (where the slabs skip most), sheets flat to 1e-12 of their size or but
+  // for rounding to float, spheres, boxes and sheets with slivers lying in
+  // their plane, of 1 mm to 1 m, turned at random, near the origin or up to
+  // 10 m from it; balls resting on a face, an edge or a corner (at r, within
+  // rounding of it, a little nearer or farther), moved along the face,
+  // grazing into it, into it, away, far or anywhere, some seeded with a
+  // triangle's own contact. Besides, the tree meets what a brute force over
+  // every triangle meets (each triangle's own first contact, the earliest),
+  // or differs only where the ball grazes a face (its distance r within
+  // rounding all along, the time of contact ill-conditioned).
   const std::uint32_t seed = run_seed();
   INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const auto unit = [&] { return 0.5 + 0.5 * u(rng); };
-  int contacts = 0, same = 0, grazing = 0;
-  for (int m = 0; m < 16; ++m) {
+  int compared = 0, contacts = 0, same = 0, grazing = 0;
+  std::uint64_t nodes_with = 0, nodes_without = 0;
+  for (int m = 0; m < 24; ++m) {
     const double size = std::pow(10.0, -3.0 + 3.0 * unit());  // [m]
+    const int kind = m % 6;
     TriangleMesh mesh;
-    if (m % 4 == 0 || m % 4 == 1)
+    if (kind == 0)
       mesh = test::wavy_sheet(size, 12 + static_cast<int>(20 * unit()), size * 0.1 * unit(), size * (0.2 + unit()));
-    else if (m % 4 == 2)
+    else if (kind == 1)  // all but flat: sibling nodes' normals a few 1e-9 rad apart
+      mesh = test::wavy_sheet(size, 30, size * std::pow(10.0, -12.0 + 6.0 * unit()), size * (0.2 + unit()));
+    else if (kind == 2)
       mesh = test::icosphere(2 + m % 2, 0.5 * size);
-    else
+    else if (kind == 3)
       mesh = test::box(glm::dvec3{0.0}, size * glm::dvec3{1.0, 0.5 + unit(), 0.2 + unit()}, 2 + m % 5);
-    const glm::dvec3 shift = (m % 3 == 0 ? 10.0 * unit() : 0.0) * glm::dvec3{u(rng), u(rng), u(rng)};
-    for (glm::dvec3& p : mesh.positions)
-      p += shift;
-    const double rounding = 64.0 * std::numeric_limits<double>::epsilon() * (glm::length(shift) + size);  // [m]
-    MeshBvh bvh = MeshBvh::build(mesh);
-    for (int pass = 0; pass < 2; ++pass) {
-      if (pass == 1) {  // deformed smoothly, the tree refit
-        for (glm::dvec3& p : mesh.positions)
-          p += 0.02 * size *
-               glm::dvec3{std::sin(7.0 * p.y / size), std::cos(5.0 * p.x / size), std::sin(3.0 * p.x / size)};
-        bvh.refit(mesh);
-      }
-      for (int i = 0; i < 150; ++i) {
-        const auto& tri = mesh.triangles[static_cast<std::size_t>(rng() % mesh.triangles.size())];
-        const glm::dvec3 a = mesh.positions[tri[0]], e1 = mesh.positions[tri[1]] - a, e2 = mesh.positions[tri[2]] - a;
-        const glm::dvec3 n = glm::normalize(glm::cross(e1, e2));
-        double b1 = unit(), b2 = unit();
-        if (b1 + b2 > 1.0) {
-          b1 = 1.0 - b1;
-          b2 = 1.0 - b2;
-        }
-        const double r = size * std::pow(10.0, -3.0 + 2.5 * unit());
-        const double heights[] = {r, r * (1.0 + 1e-12), r * (1.0 - 1e-9), 0.5 * r, 2.0 * r, r * (1.0 + 1e-6 * unit())};
-        const double height = heights[i % 6];
-        const glm::dvec3 from = a + b1 * e1 + b2 * e2 + height * n;
-        glm::dvec3 d = 3.0 * r * glm::dvec3{u(rng), u(rng), u(rng)};
-        if (i % 4 == 0) d -= glm::dot(d, n) * n;                 // along the face
-        if (i % 4 == 1) d -= (std::fabs(u(rng)) * 2.0 * r) * n;  // into it
-        if (i % 4 == 2) d += (std::fabs(u(rng)) * r) * n;        // away
-        const glm::dvec3 to = from + d;
-        d = to - from;  // the move as the tree sees it
-        // the oracle: every triangle's own first contact (each with the whole move), the earliest
-        double first = 1.0;
-        std::size_t met = mesh.triangles.size();
-        for (std::size_t j = 0; j < mesh.triangles.size(); ++j) {
-          double t = 1.0;
-          glm::dvec3 contact{0.0};
-          if (detail::sweep_ball_triangle(corner(mesh, j, 0), corner(mesh, j, 1) - corner(mesh, j, 0),
-                                          corner(mesh, j, 2) - corner(mesh, j, 0), from, d, r, t, contact) &&
-              (met == mesh.triangles.size() || t < first)) {
-            first = t;
-            met = j;
-          }
-        }
-        const BvhHit tree = bvh.sweep_sphere(from, to, r);
-        const double until = tree.found() ? tree.t : 1.0;
-        INFO("mesh " << m << " pass " << pass << " case " << i << ": size " << size << ", r " << r << ", height "
-                     << height / r << " r; tree t " << until << " (found " << tree.found() << "), oracle t " << first
-                     << " (found " << (met < mesh.triangles.size()) << ")");
-        if (met < mesh.triangles.size()) ++contacts;
-        if (tree.found() == (met < mesh.triangles.size()) && (!tree.found() || tree.t == first)) {
-          ++same;
-          continue;
-        }
-        // they differ only where the ball grazes (its distance r within rounding, the contact's time
-        // ill-conditioned): a contact the oracle meets first is never entered up to where the tree stops,
-        // and one the tree meets first is a real contact
-        if (met < mesh.triangles.size() && until > first) {
-          for (int k = 0; k <= 32; ++k)
-            CHECK(distance_to(mesh, met, from + (first + (until - first) * k / 32.0) * d) >=
-                  r * (1.0 - 1e-9) - rounding);
-        } else {
-          REQUIRE(tree.found());
-          CHECK(distance_to(mesh, tree.triangle, from + tree.t * d) <= r * (1.0 + 1e-9) + rounding);
-        }
-        ++grazing;
+    else
+      mesh = test::flat_sheet(size, 4 + static_cast<int>(12 * unit()));
+    mesh.uvs.clear();
+    mesh.normals.clear();
+    if (kind == 4) {  // slivers 1e-11.5 to 1e-3 of their length across, in the sheet's plane
+      for (int k = 0; k < 24; ++k) {
+        const double along = 3.14159 * u(rng), length = size * (0.05 + 0.5 * unit());
+        const double across = std::pow(10.0, -11.5 + 8.5 * unit());
+        const glm::dvec3 centre{0.45 * size * u(rng), 0.45 * size * u(rng), 0.0};
+        const glm::dvec3 dir{std::cos(along), std::sin(along), 0.0}, normal{-dir.y, dir.x, 0.0};
+        const auto first = static_cast<std::uint32_t>(mesh.positions.size());
+        mesh.positions.push_back(centre - 0.5 * length * dir);
+        mesh.positions.push_back(centre + 0.5 * length * dir);
+        mesh.positions.push_back(centre + 0.5 * u(rng) * length * dir + across * length * normal);
+        mesh.triangles.push_back({first, first + 1, first + 2});
       }
     }
+    if (kind == 5)  // a sheet flat but for rounding to float
+      for (glm::dvec3& p : mesh.positions)
+        p.z = static_cast<double>(static_cast<float>(p.z + size * 1e-6 * u(rng)));
+    // turned about a random axis, then moved
+    const glm::dvec3 axis = glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
+    const double angle = 3.0 * u(rng);
+    const glm::dvec3 shift = (m % 3 == 0 ? 10.0 * unit() : 0.0) * glm::dvec3{u(rng), u(rng), u(rng)};
+    for (glm::dvec3& p : mesh.positions)
+      p = p * std::cos(angle) + glm::cross(axis, p) * std::sin(angle) +
+          axis * glm::dot(axis, p) * (1.0 - std::cos(angle)) + shift;
+    const double rounding = 64.0 * std::numeric_limits<double>::epsilon() * (glm::length(shift) + size);  // [m]
+    const MeshBvh bvh = MeshBvh::build(mesh);
+    MeshBvh boxes_only = MeshBvh::build(mesh);
+    boxes_only.refit(mesh);
+    for (int i = 0; i < 1500; ++i) {
+      const std::size_t start =
+          kind == 4 && i % 2 == 0 ? mesh.triangles.size() - 1 - rng() % 24 : rng() % mesh.triangles.size();
+      const glm::dvec3 a = corner(mesh, start, 0), e1 = corner(mesh, start, 1) - a, e2 = corner(mesh, start, 2) - a;
+      if (!(glm::length(glm::cross(e1, e2)) > 0.0)) continue;
+      const glm::dvec3 n = glm::normalize(glm::cross(e1, e2));
+      double b1 = unit(), b2 = unit();
+      if (b1 + b2 > 1.0) {
+        b1 = 1.0 - b1;
+        b2 = 1.0 - b2;
+      }
+      if (i % 7 == 0) b2 = 0.0;  // on an edge
+      if (i % 11 == 0) {         // on a corner
+        b1 = 1.0;
+        b2 = 0.0;
+      }
+      const double r = size * std::pow(10.0, -3.5 + 3.0 * unit());
+      const double heights[] = {r,
+                                r * (1.0 + 1e-12),
+                                r * (1.0 - 1e-12),
+                                r * (1.0 - 1e-9),
+                                0.5 * r,
+                                r + size * 1e-9 * u(rng),
+                                r + size * 1e-12 * u(rng),
+                                2.0 * r,
+                                r * (1.0 + 1e-6 * unit())};
+      const double height = heights[i % 9];
+      const glm::dvec3 from = a + b1 * e1 + b2 * e2 + height * n;
+      const double reach = r * std::pow(10.0, -4.0 + 4.5 * unit());  // [m]
+      glm::dvec3 d = reach * glm::dvec3{u(rng), u(rng), u(rng)};
+      const int move = (i / 9) % 6;
+      if (move == 0) d -= glm::dot(d, n) * n;                                                      // along the face
+      if (move == 1) d -= (std::fabs(u(rng)) * 2.0 * reach) * n;                                   // into it
+      if (move == 2) d += (std::fabs(u(rng)) * reach) * n;                                         // away
+      if (move == 3) d -= glm::dot(d, n) * n + reach * std::pow(10.0, -12.0 + 10.0 * unit()) * n;  // grazing, in
+      if (move == 4) d = 2.0 * size * glm::dvec3{u(rng), u(rng), u(rng)};                          // far
+      const glm::dvec3 to = from + d;
+      d = to - from;  // the move as the tree sees it
+      BvhHit seeded;  // every fifth sweep seeded with a triangle's own contact, as the proxy's are
+      if (i % 5 == 0) {
+        const std::size_t other = i % 2 == 0 ? start : rng() % mesh.triangles.size();
+        const glm::dvec3 p = corner(mesh, other, 0);
+        double t = 1.0;
+        (void)MeshBvh::touch_triangle(p, corner(mesh, other, 1) - p, corner(mesh, other, 2) - p,
+                                      static_cast<std::uint32_t>(other), from, d, r, t, seeded);
+      }
+      QueryStats with, without;
+      const BvhHit tree = bvh.sweep_sphere(from, to, r, &with, seeded);
+      const BvhHit plain = boxes_only.sweep_sphere(from, to, r, &without, seeded);
+      nodes_with += with.nodes;
+      nodes_without += without.nodes;
+      INFO("mesh " << m << " (kind " << kind << ") case " << i << ": size " << size << ", r " << r << ", height "
+                   << height / r << " r; tree t " << tree.t << " (found " << tree.found() << "), without slabs t "
+                   << plain.t << " (found " << plain.found() << ")");
+      REQUIRE(tree.found() == plain.found());
+      REQUIRE(tree.complete == plain.complete);
+      if (tree.found()) {
+        REQUIRE(tree.triangle == plain.triangle);
+        REQUIRE(tree.t == plain.t);
+      }
+      ++compared;
+      if (i % 15 != 2 || seeded.found()) continue;
+      // the brute force: every triangle's own first contact (each with the whole move), the earliest; of
+      // the triangles the tree holds (not those under 1e-12 of their longest edge across: no area)
+      double first = 1.0;
+      std::size_t met = mesh.triangles.size();
+      for (std::size_t j = 0; j < mesh.triangles.size(); ++j) {
+        const glm::dvec3 p = corner(mesh, j, 0), q = corner(mesh, j, 1), w = corner(mesh, j, 2);
+        const double longest = std::fmax(glm::length(q - p), std::fmax(glm::length(w - q), glm::length(p - w)));
+        if (!(glm::length(glm::cross(q - p, w - p)) > 1e-12 * longest * longest)) continue;
+        double t = 1.0;
+        glm::dvec3 contact{0.0};
+        if (detail::sweep_ball_triangle(corner(mesh, j, 0), corner(mesh, j, 1) - corner(mesh, j, 0),
+                                        corner(mesh, j, 2) - corner(mesh, j, 0), from, d, r, t, contact) &&
+            (met == mesh.triangles.size() || t < first)) {
+          first = t;
+          met = j;
+        }
+      }
+      const double until = tree.found() ? tree.t : 1.0;
+      INFO("brute force t " << first << " (found " << (met < mesh.triangles.size()) << ")");
+      if (met < mesh.triangles.size()) ++contacts;
+      if (tree.found() == (met < mesh.triangles.size()) && (!tree.found() || tree.t == first)) {
+        ++same;
+        continue;
+      }
+      // a graze: a contact the brute force meets first is never entered up to where the tree stops, and
+      // one the tree meets first is a real contact
+      if (met < mesh.triangles.size() && until > first) {
+        for (int k = 0; k <= 32; ++k)
+          CHECK(distance_to(mesh, met, from + (first + (until - first) * k / 32.0) * d) >= r * (1.0 - 1e-9) - rounding);
+      } else {
+        REQUIRE(tree.found());
+        CHECK(distance_to(mesh, tree.triangle, from + tree.t * d) <= r * (1.0 + 1e-9) + rounding);
+      }
+      ++grazing;
+    }
   }
-  INFO(contacts << " contacts; the tree and the oracle equal in " << same << " cases, a graze in " << grazing);
-  CHECK(contacts > 1500);
-  CHECK(grazing < same / 50);
+  INFO(compared << " sweeps compared, tree nodes " << nodes_with << " with the slabs, " << nodes_without
+                << " without; against the brute force " << contacts << " contacts, equal in " << same << ", a graze in "
+                << grazing);
+  CHECK(compared > 30000);
+  CHECK(static_cast<double>(nodes_with) < 0.9 * static_cast<double>(nodes_without));  // the slabs skip nodes
+  CHECK(contacts > 400);
+  CHECK(grazing < same / 20);
+}
+
+TEST_CASE("a node's slab never passes by a contact: two cases at the edge of rounding", "[radius]") {
+  // a sliver 1e-9 of its length across lying in a turned sheet, in a leaf
+  // with the sheet's triangles: the full test's face contact is off the
+  // corners' plane by the sliver's rough normal (NodeBounds' tilt
+  // allowance); and a sheet curved by 1e-10 of its size, whose sibling
+  // nodes' normals are a few 1e-9 rad apart (merge()'s sine); each swept as
+  // through the same tree without the slabs
+  const auto same_without_slabs = [](const TriangleMesh& mesh, const glm::dvec3& from, const glm::dvec3& to, double r) {
+    const MeshBvh bvh = MeshBvh::build(mesh);
+    MeshBvh boxes_only = MeshBvh::build(mesh);
+    boxes_only.refit(mesh);
+    const BvhHit a = bvh.sweep_sphere(from, to, r), b = boxes_only.sweep_sphere(from, to, r);
+    REQUIRE(b.found());
+    CHECK(a.found());
+    CHECK(a.triangle == b.triangle);
+    CHECK(a.t == b.t);
+  };
+  {
+    TriangleMesh mesh;
+    mesh.positions = {{-0x1.7bbf50463bb2ep-10, -0x1.9ae0cff22786ep-9, -0x1.94637bb3f73p-8},
+                      {0x1.fad4bf88fa38ap-10, -0x1.f7102675853cep-9, -0x1.4ef84b3c11c9fp-9},
+                      {0x1.5c5a33d60c09p-8, -0x1.299fbe7c71797p-8, 0x1.15acc1df95984p-10},
+                      {-0x1.bb4a07e79af5cp-9, 0x1.70bd5a0d76d7ep-11, -0x1.d9ceac2bdc961p-9},
+                      {0x0p+0, 0x0p+0, 0x0p+0},
+                      {0x1.bb4a07e79af5cp-9, -0x1.70bd5a0d76d7ep-11, 0x1.d9ceac2bdc961p-9},
+                      {-0x1.5c5a33d60c09p-8, 0x1.299fbe7c71797p-8, -0x1.15acc1df95984p-10},
+                      {-0x1.fad4bf88fa38ap-10, 0x1.f7102675853cep-9, 0x1.4ef84b3c11c9fp-9},
+                      {0x1.7bbf50463bb2ep-10, 0x1.9ae0cff22786ep-9, 0x1.94637bb3f73p-8},
+                      {-0x1.6f56f7d98f053p-10, 0x1.0089434aa0b8cp-10, -0x1.2c97c59e2dac2p-11},
+                      {0x1.4936f01255dd2p-11, 0x1.23d41d59fa232p-11, 0x1.a245b898beaadp-10},
+                      {-0x1.815f3f81cc578p-13, 0x1.7c537ab924feap-11, 0x1.7db08e8582934p-11}};
+    mesh.triangles = {{0, 1, 4}, {0, 4, 3}, {1, 2, 5}, {1, 5, 4},  {3, 4, 7},
+                      {3, 7, 6}, {4, 5, 8}, {4, 8, 7}, {9, 10, 11}};  // the sheet, then the sliver
+    same_without_slabs(mesh, {0x1.bbc0c47973c3fp-12, 0x1.128856e0e44bfp-11, 0x1.86a85dde4c32bp-10},
+                       {0x1.bbc0c700a4f27p-12, 0x1.12885823ad0cap-11, 0x1.86a85d6652665p-10}, 0x1.a36e2eb1c432dp-14);
+  }
+  {
+    TriangleMesh mesh = test::wavy_sheet(0x1.fa9b6889276e7p-7, 45, 0x1.803656b3083f2p-35, 0x1.78a16d751deebp-8);
+    const glm::dvec3 x{0x1.146a2547d1945p-1, -0x1.21ec799c7b799p-1, 0x1.3ee0c4ed31bb1p-1},
+        y{-0x1.7bf2e37c9114bp-1, 0x1.dbd8545db22dfp-6, 0x1.56df73f3af975p-1},
+        z{-0x1.96d4bee73705ap-2, -0x1.a5be316c80d9p-1, -0x1.9e3dd6f8c5bb9p-2};
+    for (glm::dvec3& p : mesh.positions)
+      p = p.x * x + p.y * y + p.z * z;  // turned
+    same_without_slabs(mesh, {-0x1.5bcf079988a52p-14, -0x1.a9a10ba20979dp-11, 0x1.75bf70fd62793p-11},
+                       {-0x1.a425305e88248p-15, -0x1.85eed4407f59ap-11, 0x1.874747df219a8p-11}, 0x1.5aaf1p-12);
+  }
 }
 
 TEST_CASE("a triangle's bounds never pass by a contact: the tree's sweep of one triangle equals the bare test",

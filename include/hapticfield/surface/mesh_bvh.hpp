@@ -245,14 +245,15 @@ class MeshBvh {
       const double below = -detail::larger(h0, h1) - thickness;  // beyond the back face [m]
       if (above > r || below > r) return false;
       const double low = detail::larger(0.0, detail::larger(above, below));  // [m]
-      const double disk2 = r * r - low * low;
+      const double disk2 = (r - low) * (r + low);                // the cut's radius, squared [m^2] (no cancellation)
       const glm::dvec3 to_middle = middle - from + h0 * normal;  // in the plane, from the centre's projection
       const glm::dvec3 slide = d - dn * normal;
       const double slide2 = glm::dot(slide, slide);
       const double along =
           slide2 > 0.0 ? detail::larger(0.0, detail::smaller(t_max, glm::dot(to_middle, slide) / slide2)) : 0.0;
       const glm::dvec3 gap = to_middle - along * slide;
-      const double within = std::sqrt(detail::larger(0.0, disk2)) + reach;  // [m]
+      // (the full test takes the cut's radius as sqrt(r^2 - h^2), off by up to sqrt(eps) r at a graze)
+      const double within = std::sqrt(detail::larger(0.0, disk2)) + reach + 4e-8 * r;  // [m]
       return glm::dot(gap, gap) <= within * within;
     }
   };
@@ -704,8 +705,9 @@ class MeshBvh {
     out.middle = (wa * a.middle + wb * b.middle) / (wa + wb);
     double thickness = 0.0, reach = 0.0, coordinate = 0.0;
     for (const NodeBounds* child : {&a, &b}) {
-      const double cosine = std::fabs(glm::dot(out.normal, child->normal));
-      const double sine = std::sqrt(detail::larger(0.0, 1.0 - cosine * cosine));
+      const double cosine = detail::smaller(1.0, std::fabs(glm::dot(out.normal, child->normal)));
+      // (from the cross product: sqrt(1 - cos^2) loses angles under about 1e-8 rad)
+      const double sine = detail::smaller(1.0, glm::length(glm::cross(out.normal, child->normal)));
       const glm::dvec3 offset = child->middle - out.middle;
       const double h = glm::dot(offset, out.normal);
       thickness = detail::larger(thickness, std::fabs(h) + child->thickness * cosine + child->reach * sine);
@@ -734,19 +736,28 @@ class MeshBvh {
     out.normal = area / length;
     out.middle = sum / (3.0 * static_cast<double>(end - begin));
     double thickness = 0.0, reach2 = 0.0, coordinate = 0.0;
+    double tilt = 0.0;  // how far a triangle's computed normal leans off its corners' plane [m]
     for (std::uint32_t i = begin; i < end; ++i) {
       const Triangle& tri = triangles_[i];
+      // the full test (sweep_ball_triangle) puts a face contact on the plane of the triangle's computed
+      // normal, off its corners' plane by up to |e . n| for an edge e: far off for a sliver
+      const glm::dvec3 cross = glm::cross(tri.e1, tri.e2);
+      const double area2 = glm::length(cross);
+      if (area2 > 0.0)
+        tilt = detail::larger(tilt, detail::larger(std::fabs(glm::dot(tri.e1, cross / area2)),
+                                                   std::fabs(glm::dot(tri.e2, cross / area2))));
       for (const glm::dvec3& corner : {tri.a, tri.a + tri.e1, tri.a + tri.e2}) {
         const glm::dvec3 r = corner - out.middle;
         const double h = glm::dot(r, out.normal);
         thickness = detail::larger(thickness, std::fabs(h));
-        reach2 = detail::larger(reach2, glm::dot(r, r) - h * h);
+        const glm::dvec3 across = r - h * out.normal;
+        reach2 = detail::larger(reach2, glm::dot(across, across));
         coordinate = detail::larger(
             coordinate, detail::larger(std::fabs(corner.x), detail::larger(std::fabs(corner.y), std::fabs(corner.z))));
       }
     }
-    // rounding, relative to the coordinates and the node's size
-    const double slack = 1e-9 * (coordinate + std::sqrt(reach2) + thickness);
+    // rounding, relative to the coordinates and the node's size, and the normals' lean
+    const double slack = 1e-9 * (coordinate + std::sqrt(reach2) + thickness) + 2.0 * tilt;
     out.reach = std::sqrt(reach2) + slack;
     out.thickness = thickness + slack;
     return out;
