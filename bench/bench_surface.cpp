@@ -231,31 +231,25 @@ int main(int argc, char** argv) {
     const hf::bench::Cost q = tick_cost(full, path, full_nodes, full_worst_nodes);
     // a ball-shaped tool (ProxyConfig::radius) of 0.5 and 2 mm on the same
     // path, by default and with the full tick
-    std::array<hf::bench::Cost, 4> ball{};
-    for (std::size_t b = 0; b < 4; ++b) {
+    const auto ball_cost = [&](const hf::MeshShape& on, double radius, bool stick_first) {
       hf::ProxyConfig round{1500.0, 1.0, 0.5, 0.4};
-      round.radius = b % 2 == 0 ? 0.0005 : 0.002;
-      round.stick_first = b < 2;
-      hf::ProxyConstraint tool(shape, round);
+      round.radius = radius;
+      round.stick_first = stick_first;
+      hf::ProxyConstraint tool(on, round);
       double ball_nodes = 0.0;
       std::uint32_t ball_worst_nodes = 0;
-      ball[b] = tick_cost(tool, path, ball_nodes, ball_worst_nodes);
-    }
+      return tick_cost(tool, path, ball_nodes, ball_worst_nodes);
+    };
+    std::array<hf::bench::Cost, 4> ball{};
+    for (std::size_t b = 0; b < 4; ++b)
+      ball[b] = ball_cost(shape, b % 2 == 0 ? 0.0005 : 0.002, b < 2);
     balls.emplace_back(mesh.triangles.size(), ball);
     // the same balls on the same tree without its nodes' slabs
     // (MeshBvh::NodeBounds): a second build, refit to the same vertices,
     // which drops them
     hf::MeshShape plain(mesh);
     (void)plain.refit(mesh.positions);
-    std::array<hf::bench::Cost, 2> boxes_only{};
-    for (std::size_t b = 0; b < 2; ++b) {
-      hf::ProxyConfig round{1500.0, 1.0, 0.5, 0.4};
-      round.radius = b == 0 ? 0.0005 : 0.002;
-      hf::ProxyConstraint tool(plain, round);
-      double ball_nodes = 0.0;
-      std::uint32_t ball_worst_nodes = 0;
-      boxes_only[b] = tick_cost(tool, path, ball_nodes, ball_worst_nodes);
-    }
+    const std::array<hf::bench::Cost, 2> boxes_only{ball_cost(plain, 0.0005, true), ball_cost(plain, 0.002, true)};
     slabs.emplace_back(mesh.triangles.size(), boxes_only);
     const double mtri = static_cast<double>(mesh.triangles.size()) / 1e6;
     std::printf(

@@ -60,6 +60,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/core/vector_math.hpp"
 #include "hapticfield/surface/ball_sweep.hpp"
 #include "hapticfield/surface/shape.hpp"
 #include "hapticfield/surface/triangle_mesh.hpp"
@@ -116,6 +117,21 @@ namespace detail {
   b1 = vb * denominator;
   b2 = vc * denominator;
   return a + b1 * e1 + b2 * e2;
+}
+
+/// The squared distance [m^2] from `middle` to the nearest point of the
+/// path of a centre moving from + t d, t in [0, t_max], both projected on
+/// the plane through middle along the unit `normal` (h0: from's height over
+/// it, dn: d's component along it): how near a ball's cut with that plane
+/// comes to a bounding circle about middle.
+[[nodiscard]] inline double projected_gap2(const glm::dvec3& from, const glm::dvec3& d, const glm::dvec3& normal,
+                                           const glm::dvec3& middle, double h0, double dn, double t_max) noexcept {
+  const glm::dvec3 to_middle = middle - from + h0 * normal;  // from the centre's projection
+  const glm::dvec3 slide = d - dn * normal;                  // the projected move
+  const double slide2 = glm::dot(slide, slide);
+  const double along = slide2 > 0.0 ? larger(0.0, smaller(t_max, glm::dot(to_middle, slide) / slide2)) : 0.0;
+  const glm::dvec3 gap = to_middle - along * slide;
+  return glm::dot(gap, gap);
 }
 
 }  // namespace detail
@@ -208,14 +224,8 @@ class MeshBvh {
       if ((h0 > r + slack && h1 > r + slack) || (h0 < -slack && h1 < -slack)) return false;
       const double low = h0 > 0.0 && h1 > 0.0 ? detail::smaller(h0, h1) : 0.0;  // [m]
       const double disk2 = r * r - low * low;                                   // the cut's radius, squared [m^2]
-      const glm::dvec3 to_middle = middle - from + h0 * normal;                 // from the centre's projection
-      const glm::dvec3 slide = d - dn * normal;                                 // the projected move
-      const double slide2 = glm::dot(slide, slide);
-      const double along =
-          slide2 > 0.0 ? detail::larger(0.0, detail::smaller(t_max, glm::dot(to_middle, slide) / slide2)) : 0.0;
-      const glm::dvec3 gap = to_middle - along * slide;
       const double within = std::sqrt(detail::larger(0.0, disk2)) + reach + 2.0 * slack;  // [m]
-      return glm::dot(gap, gap) <= within * within;
+      return detail::projected_gap2(from, d, normal, middle, h0, dn, t_max) <= within * within;
     }
   };
 
@@ -245,16 +255,10 @@ class MeshBvh {
       const double below = -detail::larger(h0, h1) - thickness;  // beyond the back face [m]
       if (above > r || below > r) return false;
       const double low = detail::larger(0.0, detail::larger(above, below));  // [m]
-      const double disk2 = (r - low) * (r + low);                // the cut's radius, squared [m^2] (no cancellation)
-      const glm::dvec3 to_middle = middle - from + h0 * normal;  // in the plane, from the centre's projection
-      const glm::dvec3 slide = d - dn * normal;
-      const double slide2 = glm::dot(slide, slide);
-      const double along =
-          slide2 > 0.0 ? detail::larger(0.0, detail::smaller(t_max, glm::dot(to_middle, slide) / slide2)) : 0.0;
-      const glm::dvec3 gap = to_middle - along * slide;
+      const double disk2 = (r - low) * (r + low);  // the cut's radius, squared [m^2] (no cancellation)
       // (the full test takes the cut's radius as sqrt(r^2 - h^2), off by up to sqrt(eps) r at a graze)
       const double within = std::sqrt(detail::larger(0.0, disk2)) + reach + 4e-8 * r;  // [m]
-      return glm::dot(gap, gap) <= within * within;
+      return detail::projected_gap2(from, d, normal, middle, h0, dn, t_max) <= within * within;
     }
   };
 
@@ -712,9 +716,7 @@ class MeshBvh {
       const double h = glm::dot(offset, out.normal);
       thickness = detail::larger(thickness, std::fabs(h) + child->thickness * cosine + child->reach * sine);
       reach = detail::larger(reach, glm::length(offset - h * out.normal) + child->reach + child->thickness * sine);
-      const glm::dvec3& m = child->middle;
-      coordinate =
-          detail::larger(coordinate, detail::larger(std::fabs(m.x), detail::larger(std::fabs(m.y), std::fabs(m.z))));
+      coordinate = detail::larger(coordinate, largest_component(child->middle));
     }
     const double slack = 1e-9 * (coordinate + reach + thickness);  // rounding [m]
     out.reach = reach + slack;
@@ -726,34 +728,33 @@ class MeshBvh {
   [[nodiscard]] NodeBounds bound_slots(std::uint32_t begin, std::uint32_t end) const noexcept {
     NodeBounds out;
     glm::dvec3 area{0.0}, sum{0.0};
+    double tilt = 0.0;  // how far a triangle's computed normal leans off its corners' plane [m]
     for (std::uint32_t i = begin; i < end; ++i) {
       const Triangle& tri = triangles_[i];
-      area += glm::cross(tri.e1, tri.e2);
+      const glm::dvec3 cross = glm::cross(tri.e1, tri.e2);
+      area += cross;
       sum += 3.0 * tri.a + tri.e1 + tri.e2;
+      // the full test (sweep_ball_triangle) puts a face contact on the plane of the triangle's computed
+      // normal, off its corners' plane by up to |e . n| for an edge e: far off for a sliver
+      const double area2 = glm::length(cross);
+      if (area2 > 0.0)
+        tilt = detail::larger(tilt, detail::larger(std::fabs(glm::dot(tri.e1, cross / area2)),
+                                                   std::fabs(glm::dot(tri.e2, cross / area2))));
     }
     const double length = glm::length(area);
     if (!(length > 0.0) || !std::isfinite(length)) return out;  // never passed by
     out.normal = area / length;
     out.middle = sum / (3.0 * static_cast<double>(end - begin));
     double thickness = 0.0, reach2 = 0.0, coordinate = 0.0;
-    double tilt = 0.0;  // how far a triangle's computed normal leans off its corners' plane [m]
     for (std::uint32_t i = begin; i < end; ++i) {
       const Triangle& tri = triangles_[i];
-      // the full test (sweep_ball_triangle) puts a face contact on the plane of the triangle's computed
-      // normal, off its corners' plane by up to |e . n| for an edge e: far off for a sliver
-      const glm::dvec3 cross = glm::cross(tri.e1, tri.e2);
-      const double area2 = glm::length(cross);
-      if (area2 > 0.0)
-        tilt = detail::larger(tilt, detail::larger(std::fabs(glm::dot(tri.e1, cross / area2)),
-                                                   std::fabs(glm::dot(tri.e2, cross / area2))));
       for (const glm::dvec3& corner : {tri.a, tri.a + tri.e1, tri.a + tri.e2}) {
         const glm::dvec3 r = corner - out.middle;
         const double h = glm::dot(r, out.normal);
         thickness = detail::larger(thickness, std::fabs(h));
         const glm::dvec3 across = r - h * out.normal;
         reach2 = detail::larger(reach2, glm::dot(across, across));
-        coordinate = detail::larger(
-            coordinate, detail::larger(std::fabs(corner.x), detail::larger(std::fabs(corner.y), std::fabs(corner.z))));
+        coordinate = detail::larger(coordinate, largest_component(corner));
       }
     }
     // rounding, relative to the coordinates and the node's size, and the normals' lean
@@ -776,8 +777,7 @@ class MeshBvh {
       out.reach = std::sqrt(detail::larger(
           glm::dot(tri.a - out.middle, tri.a - out.middle),
           detail::larger(glm::dot(b - out.middle, b - out.middle), glm::dot(c - out.middle, c - out.middle))));
-      const double coordinate =
-          detail::larger(std::fabs(out.middle.x), detail::larger(std::fabs(out.middle.y), std::fabs(out.middle.z)));
+      const double coordinate = largest_component(out.middle);
       // rounding, relative to the coordinates and the triangle; a sliver's
       // normal is off by about eps |e|^2 / area2, too much to rely on
       const double longest2 =

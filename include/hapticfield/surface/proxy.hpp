@@ -883,7 +883,7 @@ class ProxyConstraint {
 
   /// The proxy's height above the primitive of a hit [m].
   [[nodiscard]] double offset_for(const Hit& h) const noexcept {
-    const double coordinate = std::fmax(std::fabs(h.point.x), std::fmax(std::fabs(h.point.y), std::fabs(h.point.z)));
+    const double coordinate = largest_component(h.point);
     return config_.offset * h.size + 64.0 * std::numeric_limits<double>::epsilon() * coordinate;
   }
 

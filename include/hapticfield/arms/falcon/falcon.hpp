@@ -32,6 +32,7 @@
 #include "hapticfield/arms/falcon/falcon_kinematics.hpp"
 #include "hapticfield/arms/falcon/falcon_usb.hpp"
 #include "hapticfield/core/error.hpp"
+#include "hapticfield/core/vector_math.hpp"
 #include "hapticfield/device/device_error.hpp"
 #include "hapticfield/device/state.hpp"
 #include "hapticfield/device/transport.hpp"
@@ -197,7 +198,7 @@ class Falcon {
     glm::dvec3 tau{0.0};
     if (on && kin_.torques(position_, force, tau)) {
       glm::dvec3 c = -config_.counts_per_newton_metre * tau;
-      const double worst = std::fmax(std::fabs(c.x), std::fmax(std::fabs(c.y), std::fabs(c.z)));
+      const double worst = largest_component(c);
       const double limit = static_cast<double>(config_.max_motor_count);
       if (worst > limit) c *= limit / worst;
       if (std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z)) {
@@ -364,8 +365,7 @@ class Falcon {
     if (!fk.converged && have_state_) fk = kin_.forward(theta, glm::dvec3{0.0}, config_.newton_iterations);
     counters_.newton_iterations += static_cast<std::uint64_t>(fk.iterations);
     if (fk.iterations > counters_.newton_worst) counters_.newton_worst = fk.iterations;
-    const double far =
-        std::fmax(std::fabs(fk.position.x), std::fmax(std::fabs(fk.position.y), std::fabs(fk.position.z)));
+    const double far = largest_component(fk.position);
     if (!fk.converged || !(far <= config_.reach)) {
       ++counters_.impossible;
       return false;

@@ -37,6 +37,8 @@
 #include <glm/matrix.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/core/vector_math.hpp"
+
 namespace hapticfield {
 
 /// Published dimensions (libnifalcon FalconGeometry.h; Stamper's figure).
@@ -214,7 +216,7 @@ class FalconKinematics {
     glm::dvec3 p = guess;
     for (int it = 0; it < max_iterations; ++it) {
       const glm::dvec3 err = theta - t;
-      if (std::fmax(std::fabs(err.x), std::fmax(std::fabs(err.y), std::fabs(err.z))) < angle_tolerance) {
+      if (largest_component(err) < angle_tolerance) {
         out.position = p;
         out.iterations = it;
         out.converged = true;
@@ -242,7 +244,7 @@ class FalconKinematics {
     }
     const glm::dvec3 err = theta - t;
     out.position = p;
-    out.converged = std::fmax(std::fabs(err.x), std::fmax(std::fabs(err.y), std::fabs(err.z))) < angle_tolerance;
+    out.converged = largest_component(err) < angle_tolerance;
     return out;
   }
 
