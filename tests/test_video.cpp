@@ -404,6 +404,77 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
   field.stop();
 }
 
+TEST_CASE("after a seek, no window of the old timeline is felt while the worker catches up", "[video]") {
+  // Frame k: a horizontal ramp whose slope grows with k (as above).
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 40; ++k) {
+    cv::Mat m(48, 64, CV_8UC3);
+    for (int x = 0; x < 64; ++x) {
+      const auto v = cv::saturate_cast<unsigned char>(128.0 - (0.5 + 0.05 * k) * (x - 32));
+      m.col(x).setTo(cv::Scalar(v, v, v));
+    }
+    frames.push_back(m);
+  }
+  const std::string seq = write_sequence("stale", frames);
+  std::atomic<bool> hold{false};
+  std::atomic<bool> holding{false};
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.before_prepare = [&](long) {
+    while (hold.load()) {
+      holding.store(true);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    holding.store(false);
+  };
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});  // 1 px/mm, centred
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
+  field.set_lockstep(true);  // plays to 0.42 s with every window felt
+  Probe probe;
+  probe.position = {0.0, 0.0, 0.0};
+  double t = 0.0;
+  for (; t < 0.42; t += 1e-3) {
+    probe.time = t;
+    (void)field.force(probe);
+  }
+  probe.time = t;
+  const double before = field.force(probe).x;
+  REQUIRE(before != 0.0);  // frames 10 and 11 blended
+  // The worker is stopped before its next frame; the loop seeks ahead to
+  // 0.5 s, inside the reach of the window still published (frames 10-11,
+  // held up to 0.5 s past 0.44 s).
+  field.set_lockstep(false);
+  hold.store(true);
+  field.playback().seek(0.5);
+  long stale = 0;
+  long ticks = 0;
+  for (long quiet = 0; quiet < 50 && ticks < 5000; ++ticks) {
+    probe.time = (t += 1e-3);
+    if (field.force(probe).x != 0.0) ++stale;
+    if (holding.load()) ++quiet;  // the worker waits before its first frame of the new timeline
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  REQUIRE(holding.load());
+  CHECK(field.statistics().video_time > 0.5);
+  CHECK(stale == 0);  // nothing until the worker has prepared frame 12, then a fade in from zero
+  // Released, the worker starts again at 0.5 s: the force fades in from zero
+  // and never goes back.
+  hold.store(false);
+  field.set_lockstep(true);
+  double last = 0.0;
+  bool rising = true;
+  long felt = 0;
+  for (int i = 0; i < 400; ++i) {
+    probe.time = (t += 1e-3);
+    const double fx = field.force(probe).x;
+    if (fx < last - 1e-12) rising = false;
+    if (fx != 0.0) ++felt;
+    last = fx;
+  }
+  CHECK(rising);
+  CHECK(felt > 300);
+  field.stop();
+}
 TEST_CASE("lockstep: a simulated run feels the same forces with a slow and a fast worker, and drops nothing",
           "[video][lockstep]") {
   // 30 frames at 25 fps: a bar moving right, a cut to a disc at frame 15.

@@ -10,7 +10,9 @@
 /// allocates. A file decodes one frame ahead; when preparation lags, frames
 /// whose successor is already due are dropped and counted, and windows are
 /// published in order only, so the rendered field never goes back in time
-/// (except by an explicit seek or loop). A live camera blends the previous
+/// (except by an explicit seek or loop, after which nothing is felt until
+/// the worker publishes the new timeline's first window, which fades in
+/// from zero: no frame of the old timeline). A live camera blends the previous
 /// and the newest frame, one frame late.
 ///
 /// Lockstep (set_lockstep(true)) is for loops on a simulated clock
@@ -146,8 +148,10 @@ class VideoField {
         std::this_thread::yield();
         w = s.windows.acquire();
       }
-      if (w && w->epoch != epoch) w = nullptr;  // nothing for this epoch: the stream ended before t
     }
+    // a file's window from before a seek or a loop belongs to the old
+    // timeline: nothing is felt until the worker publishes the new one
+    if (w && !s.live_source && w->epoch != epoch) w = nullptr;
     if (!w) return glm::dvec3{0.0};
     Probe on = probe;
     on.time = t;
