@@ -2,7 +2,8 @@
 // baselines measured in the same run: the proxy on an analytic plane, and a
 // brute-force scan of every triangle (where it finishes); MeshBvh build time
 // per million triangles; the height-field tick against a tangible-image
-// tick; and the highest stiffness that stays passive at each servo rate.
+// tick; a mesh's first pass on 2 MB against 4 KB pages; and the highest
+// stiffness that stays passive at each servo rate.
 //
 //   bench_surface [--ticks N] [--max-triangles N] [--no-passivity]
 #include <hapticfield/kernels.hpp>
@@ -144,6 +145,95 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+/// Mean, p99, p99.9 and worst of per-tick times [ns].
+hf::bench::Cost summary(std::vector<double> ns) {
+  hf::bench::Cost c;
+  if (ns.empty()) return c;
+  std::sort(ns.begin(), ns.end());
+  double sum = 0.0;
+  for (const double v : ns)
+    sum += v;
+  const auto at = [&](double q) { return ns[std::min(ns.size() - 1, static_cast<std::size_t>(q * ns.size()))]; };
+  c.ticks = ns.size();
+  c.mean_ns = sum / static_cast<double>(ns.size());
+  c.p50_ns = at(0.5);
+  c.p99_ns = at(0.99);
+  c.p999_ns = at(0.999);
+  c.worst_ns = ns.back();
+  return c;
+}
+
+/// The monotonic clock [ns]: read without a system call (the thread's CPU
+/// clock is one, which costs more than a point's tick and disturbs the
+/// caches it measures).
+double monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return 1e9 * static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec);
+}
+
+/// One pass over the path by two proxies on equal meshes built apart, their
+/// ticks alternated (the one that goes first swaps every tick), each timed
+/// on the monotonic clock (a preempted tick counts, as likely for either):
+/// the first pass after the builds, both cold, as a hand's first pass over
+/// a part of a large mesh is.
+template <class A, class B>
+std::array<hf::bench::Cost, 2> first_pass_pair(A& a, B& b, const std::vector<hf::Probe>& path) {
+  std::vector<double> ta(path.size()), tb(path.size());
+  glm::dvec3 sink{0.0};
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    for (int k = 0; k < 2; ++k) {
+      const bool a_now = (k == 0) == (i % 2 == 0);
+      const double t0 = monotonic_ns();
+      sink += a_now ? a.contact(path[i]).force : b.contact(path[i]).force;
+      (a_now ? ta : tb)[i] = monotonic_ns() - t0;
+    }
+  }
+  if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
+  return {summary(std::move(ta)), summary(std::move(tb))};
+}
+
+/// The first pass over a large mesh on 2 MB pages (the default) against
+/// 4 KB pages, for a point and two balls. Every pair of meshes is built
+/// before any pass and kept to the end: the page hint stays on an address
+/// range after it is freed (rt/huge_pages.hpp), so a 4 KB mesh built where
+/// a freed 2 MB one was would get huge pages too.
+void first_pass_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles) {
+  std::printf(
+      "## The first pass over a large mesh: its tree and arrays on 2 MB pages (MeshShapeConfig::huge_pages, "
+      "the default) against 4 KB pages\n\n"
+      "Each pair of meshes built apart, then one pass with their ticks alternated (wall time per tick on the "
+      "monotonic clock, read without a system call).\n\n"
+      "| triangles | radius [mm] | mean [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | 4 KB mean [ns] | 4 KB p99 [ns] | "
+      "4 KB p99.9 [ns] | 4 KB worst [ns] | 4 KB / 2 MB mean | 4 KB / 2 MB p99 | 4 KB / 2 MB p99.9 |\n"
+      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  struct Pair {
+    std::size_t triangles;
+    double radius;  // [m]
+    hf::MeshShape huge, plain;
+  };
+  std::vector<Pair> pairs;
+  hf::MeshShapeConfig small_pages;
+  small_pages.huge_pages = false;
+  for (const std::size_t target : {250'000ul, 1'000'000ul}) {
+    if (target > max_triangles) break;
+    const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0)));
+    const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+    for (const double radius : {0.0, 0.0005, 0.002})
+      pairs.push_back(Pair{mesh.triangles.size(), radius, hf::MeshShape(mesh), hf::MeshShape(mesh, small_pages)});
+  }
+  for (const Pair& pair : pairs) {
+    hf::ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+    config.radius = pair.radius;
+    hf::ProxyConstraint on_huge(pair.huge, config), on_plain(pair.plain, config);
+    const auto [h, p] = first_pass_pair(on_huge, on_plain, path);
+    std::printf("| %zu | %.1f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f |\n",
+                pair.triangles, pair.radius * 1e3, h.mean_ns, h.p99_ns, h.p999_ns, h.worst_ns, p.mean_ns, p.p99_ns,
+                p.p999_ns, p.worst_ns, p.mean_ns / h.mean_ns, p.p99_ns / h.p99_ns, p.p999_ns / h.p999_ns);
+  }
+  std::printf("\n");
+}
+
 /// The highest stiffness [N/m] that stays passive at `rate` [Hz] (bisection
 /// on the energy check of tests/surface_energy.hpp), on a mesh surface.
 double highest_passive(const hf::TriangleMesh& mesh, double rate) {
@@ -170,13 +260,19 @@ int main(int argc, char** argv) {
       max_triangles = static_cast<std::size_t>(std::atoll(argv[++a]));
     else if (!std::strcmp(argv[a], "--no-passivity"))
       passivity = false;
-    else {
+    else if (!std::strcmp(argv[a], "--help")) {
+      std::printf("usage: bench_surface [--ticks N] [--max-triangles N] [--no-passivity]\n");
+      return 0;
+    } else {
       std::fprintf(stderr, "usage: bench_surface [--ticks N] [--max-triangles N] [--no-passivity]\n");
       return 2;
     }
   }
   const double side = 0.1;  // [m]
   const std::vector<hf::Probe> path = hf::bench::sliding_path(ticks, side / 2);
+
+  // --- first, before any mesh is freed: 2 MB pages against 4 KB pages ---
+  first_pass_section(side, path, max_triangles);
 
   // --- baseline: the proxy on an analytic plane ---
   hf::ProxyConstraint plane(hf::PlaneShape(hf::PlaneShapeConfig{}), hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});

@@ -4,14 +4,18 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
+#include "hapticfield/rt/huge_pages.hpp"
 #include "hapticfield/rt/latest_value.hpp"
 #include "hapticfield/rt/spsc_ring.hpp"
+#include "page_flags.hpp"
 
 using namespace hapticfield;
 using Catch::Matchers::WithinAbs;
@@ -294,4 +298,39 @@ TEST_CASE("SpscRing: in order, a full ring refuses and counts, two threads") {
   }
   producer.join();
   CHECK(in_order);
+}
+
+TEST_CASE("reserve_on_huge_pages: a large reservation's whole 2 MB pages are marked for huge pages", "[rt]") {
+  if (!test::kernel_has_huge_pages()) {
+    WARN("skipped: this kernel has no transparent huge pages");
+    return;
+  }
+  std::vector<double> big;
+  reserve_on_huge_pages(big, (std::size_t{16} << 20) / sizeof(double));  // 16 MB
+  REQUIRE(big.capacity() >= (std::size_t{16} << 20) / sizeof(double));
+  const auto begin = reinterpret_cast<std::uintptr_t>(big.data());
+  const std::uintptr_t first = (begin + huge_page_bytes - 1) & ~(huge_page_bytes - 1);
+  CHECK(test::marked_for_huge_pages(reinterpret_cast<const void*>(first)));
+  CHECK(test::marked_for_huge_pages(reinterpret_cast<const void*>(first + 5 * huge_page_bytes)));
+  big.resize(big.capacity(), 1.5);  // written after the hint: still the same storage
+  CHECK(reinterpret_cast<std::uintptr_t>(big.data()) == begin);
+  CHECK(big.back() == 1.5);
+
+  // a filled vector is moved there whole, its elements unchanged
+  std::vector<std::uint32_t> filled((std::size_t{6} << 20) / sizeof(std::uint32_t));
+  for (std::size_t i = 0; i < filled.size(); ++i)
+    filled[i] = static_cast<std::uint32_t>(i * 2654435761u);
+  const std::vector<std::uint32_t> copy = filled;
+  move_to_huge_pages(filled);
+  CHECK(filled == copy);
+  const auto moved = reinterpret_cast<std::uintptr_t>(filled.data());
+  CHECK(test::marked_for_huge_pages(
+      reinterpret_cast<const void*>((moved + huge_page_bytes - 1) & ~(huge_page_bytes - 1))));
+
+  // under 4 MB: left where it is
+  std::vector<std::uint32_t> small(1000, 7u);
+  const std::uint32_t* before = small.data();
+  move_to_huge_pages(small);
+  CHECK(small.data() == before);
+  CHECK(small.size() == 1000);
 }

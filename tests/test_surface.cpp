@@ -12,6 +12,8 @@
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/surface.hpp"
+#include "page_flags.hpp"
+#include "run_seed.hpp"
 #include "surface_meshes.hpp"
 
 using namespace hapticfield;
@@ -69,6 +71,52 @@ TEST_CASE("a plane shape answers closest and first_hit with the closed forms") {
 }
 
 // --- MeshBvh -----------------------------------------------------------------------
+
+TEST_CASE("a large mesh's tree and arrays are asked onto 2 MB pages, and answer as on 4 KB pages", "[rt]") {
+  // 450 x 450 cells: 203k vertices (4.9 MB of positions), 405k triangles
+  TriangleMesh mesh = test::wavy_sheet(0.1, 450, 0.002, 0.03);
+  TriangleMesh copy = mesh;
+  const glm::dvec3* given = copy.positions.data();
+  const MeshShape huge(std::move(mesh));
+  MeshShapeConfig small_pages;
+  small_pages.huge_pages = false;
+  const MeshShape plain(std::move(copy), small_pages);
+  CHECK(plain.mesh().positions.data() == given);  // moved in, not copied
+  CHECK(huge.config().huge_pages);
+  CHECK_FALSE(plain.config().huge_pages);
+  CHECK(huge.bvh().config().huge_pages);
+  CHECK_FALSE(plain.bvh().config().huge_pages);
+  if (test::kernel_has_huge_pages()) {
+    const auto first_whole_page = [](const void* p) {
+      const auto at = reinterpret_cast<std::uintptr_t>(p);
+      return reinterpret_cast<const void*>((at + huge_page_bytes - 1) & ~(huge_page_bytes - 1));
+    };
+    CHECK(test::marked_for_huge_pages(first_whole_page(huge.mesh().positions.data())));
+    CHECK(test::marked_for_huge_pages(first_whole_page(huge.mesh().triangles.data())));
+    CHECK(test::marked_for_huge_pages(first_whole_page(huge.bvh().pairs().data())));
+  } else {
+    WARN("the page marks are not checked: this kernel has no transparent huge pages");
+  }
+  // the same answers, bit for bit
+  REQUIRE(huge.mesh().positions == plain.mesh().positions);
+  const std::uint32_t seed = test::run_seed();
+  INFO("seed " << seed);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> across(-0.05, 0.05), up(-0.004, 0.004);
+  for (int i = 0; i < 3000; ++i) {
+    const glm::dvec3 p{across(rng), across(rng), up(rng)};
+    const glm::dvec3 q = p + glm::dvec3{0.2 * up(rng), 0.2 * up(rng), 2.0 * up(rng)};
+    const Hit a = huge.first_hit(p, q), b = plain.first_hit(p, q);
+    REQUIRE(a.primitive == b.primitive);
+    REQUIRE(a.t == b.t);
+    const Hit c = huge.closest(p, 0.003), d = plain.closest(p, 0.003);
+    REQUIRE(c.primitive == d.primitive);
+    REQUIRE(c.point == d.point);
+    const Hit e = huge.sweep_sphere(p, q, 0.0005), f = plain.sweep_sphere(p, q, 0.0005);
+    REQUIRE(e.primitive == f.primitive);
+    REQUIRE(e.t == f.t);
+  }
+}
 
 TEST_CASE("MeshBvh closest agrees with a brute-force scan on a wavy sheet") {
   const TriangleMesh m = test::wavy_sheet(0.1, 24, 0.005, 0.03);

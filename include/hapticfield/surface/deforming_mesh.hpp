@@ -60,7 +60,7 @@ class DeformingMeshFeed {
   /// @throws std::invalid_argument as MeshShape.
   explicit DeformingMeshFeed(TriangleMesh mesh, const MeshShapeConfig& config = {})
       : mesh_(std::move(mesh)),
-        bvh_(MeshBvh::build(mesh_, MeshBvhConfig{config.max_nodes})),
+        bvh_(MeshBvh::build(mesh_, MeshBvhConfig{config.max_nodes, config.huge_pages})),
         shade_normals_(config.shade_normals),
         buffer_(std::make_unique<DeformedFrame>(DeformedFrame{MeshShape(mesh_, bvh_, shade_normals_), 0})) {}
   DeformingMeshFeed(const DeformingMeshFeed&) = delete;

@@ -61,6 +61,7 @@
 #include <glm/vec3.hpp>
 
 #include "hapticfield/core/vector_math.hpp"
+#include "hapticfield/rt/huge_pages.hpp"
 #include "hapticfield/surface/ball_sweep.hpp"
 #include "hapticfield/surface/shape.hpp"
 #include "hapticfield/surface/triangle_mesh.hpp"
@@ -194,6 +195,10 @@ struct BvhHit {
 
 struct MeshBvhConfig {
   std::uint32_t max_nodes{bvh_default_max_nodes};  ///< node budget of one query
+  /// The tree's arrays on 2 MB pages where the kernel allows
+  /// (rt/huge_pages.hpp): a tick's first pass over a part of a large mesh
+  /// then misses the TLB far less (docs/surfaces.md).
+  bool huge_pages{true};
 };
 
 class MeshBvh {
@@ -983,16 +988,18 @@ class MeshBvh {
         centre_.push_back((a + b + c) / 3.0);
       }
       if (order_.empty()) return;
-      out_.pairs_.reserve(order_.size());  // at most n - 1 inner nodes: never reallocated while building
+      reserve(out_.pairs_, order_.size());  // at most n - 1 inner nodes: never reallocated while building
       split(root_ref, 0, static_cast<std::uint32_t>(order_.size()), 1);
-      out_.triangles_.reserve(order_.size());
+      reserve(out_.triangles_, order_.size());
       for (const std::uint32_t i : order_) {
         const auto& t = mesh_.triangles[i];
         const glm::dvec3 a = mesh_.positions[t[0]];
         out_.triangles_.push_back(Triangle{a, mesh_.positions[t[1]] - a, mesh_.positions[t[2]] - a, i});
       }
+      reserve(out_.bounds_, out_.triangles_.size());
       out_.bounds_.resize(out_.triangles_.size());
       out_.bound_all();
+      reserve(out_.node_bounds_, 2 * out_.pairs_.size());
       out_.node_bounds_.resize(2 * out_.pairs_.size());
       out_.bound_nodes();
       connect();
@@ -1019,6 +1026,7 @@ class MeshBvh {
         if (i > 0 && key(by_position[i]) != key(by_position[i - 1])) ++id;
         weld[by_position[i]] = id;
       }
+      reserve(out_.adjacency_, n);
       out_.adjacency_.assign(n, Adjacency{});
       struct Edge {
         std::uint64_t key;   ///< lower welded id << 32 | higher
@@ -1105,6 +1113,16 @@ class MeshBvh {
           out_.pairs_[ref / 2].hi[axis][ref % 2] = hi;
         }
       }
+    }
+
+    /// Room for n elements in one of the arrays a tick reads, on 2 MB pages
+    /// unless the config says otherwise.
+    template <class T>
+    void reserve(std::vector<T>& v, std::size_t n) const {
+      if (out_.config_.huge_pages)
+        reserve_on_huge_pages(v, n);
+      else
+        v.reserve(n);
     }
 
     void split(std::uint32_t node, std::uint32_t begin, std::uint32_t end, std::size_t depth) {

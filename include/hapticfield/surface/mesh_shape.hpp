@@ -30,6 +30,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/rt/huge_pages.hpp"
 #include "hapticfield/surface/mesh_bvh.hpp"
 #include "hapticfield/surface/shape.hpp"
 #include "hapticfield/surface/triangle_mesh.hpp"
@@ -39,6 +40,10 @@ namespace hapticfield {
 struct MeshShapeConfig {
   bool shade_normals{true};                        ///< use the mesh's vertex normals (force shading) when it has them
   std::uint32_t max_nodes{bvh_default_max_nodes};  ///< node budget of one query
+  /// The tree's and the mesh's arrays on 2 MB pages where the kernel allows
+  /// (MeshBvhConfig::huge_pages; the mesh's arrays of 4 MB or more are
+  /// copied there once, at construction).
+  bool huge_pages{true};
 };
 
 class MeshShape {
@@ -53,18 +58,20 @@ class MeshShape {
   ///         or a zero budget.
   explicit MeshShape(TriangleMesh mesh, const MeshShapeConfig& config = {}) : config_(config) {
     auto data = std::make_shared<Data>();
-    data->bvh = MeshBvh::build(mesh, MeshBvhConfig{config.max_nodes});
+    data->bvh = MeshBvh::build(mesh, MeshBvhConfig{config.max_nodes, config.huge_pages});
     data->mesh = std::move(mesh);
+    if (config.huge_pages) on_huge_pages(data->mesh);
     data_ = std::move(data);
   }
 
   /// Takes the mesh and a tree over it, built (MeshBvh::build) or refit
   /// (MeshBvh::refit) to this mesh: no build here (a deforming mesh's
-  /// frames, surface/deforming_mesh.hpp). The node budget is the tree's.
+  /// frames, surface/deforming_mesh.hpp). The node budget and the page
+  /// hint are the tree's; the mesh's arrays are not copied.
   /// @throws std::invalid_argument for an invalid mesh or a tree with more
   ///         triangles than the mesh.
   MeshShape(TriangleMesh mesh, MeshBvh bvh, bool shade_normals = true)
-      : config_{shade_normals, bvh.config().max_nodes} {
+      : config_{shade_normals, bvh.config().max_nodes, bvh.config().huge_pages} {
     mesh.validate();
     if (bvh.triangle_count() > mesh.triangles.size())
       throw std::invalid_argument("MeshShape: the tree has more triangles than the mesh");
@@ -180,6 +187,16 @@ class MeshShape {
     TriangleMesh mesh;
     MeshBvh bvh;
   };
+
+  /// The mesh's arrays, which ticks read beside the tree, on 2 MB pages
+  /// where the kernel allows (rt/huge_pages.hpp).
+  static void on_huge_pages(TriangleMesh& mesh) {
+    move_to_huge_pages(mesh.positions);
+    move_to_huge_pages(mesh.normals);
+    move_to_huge_pages(mesh.uvs);
+    move_to_huge_pages(mesh.triangles);
+    move_to_huge_pages(mesh.materials);
+  }
 
   [[nodiscard]] Hit describe(const BvhHit& h) const noexcept {
     Hit out;
