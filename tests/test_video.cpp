@@ -51,6 +51,21 @@ cv::Mat scene_frame(int scene, int k, int w = 96, int h = 64, double speed = 2.0
   return m;
 }
 
+/// `count` frames of 64 x 48 px, frame k a horizontal ramp whose slope
+/// grows with k: the felt force grows with video time, blends included.
+std::vector<cv::Mat> ramp_frames(int count) {
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < count; ++k) {
+    cv::Mat m(48, 64, CV_8UC3);
+    for (int x = 0; x < 64; ++x) {
+      const auto v = cv::saturate_cast<unsigned char>(128.0 - (0.5 + 0.05 * k) * (x - 32));
+      m.col(x).setTo(cv::Scalar(v, v, v));
+    }
+    frames.push_back(m);
+  }
+  return frames;
+}
+
 /// Writes frames as a PNG sequence; returns the printf pattern.
 std::string write_sequence(const std::string& name, const std::vector<cv::Mat>& frames) {
   const fs::path dir = tmp / name;
@@ -319,18 +334,7 @@ TEST_CASE("the playback clock follows the loop's clock, pauses, seeks, changes r
 }
 
 TEST_CASE("the field's servo path never waits for, locks against or allocates with a slow worker", "[video][alloc]") {
-  // Frame k: a horizontal ramp whose slope grows with k, so the felt force
-  // grows with video time, blends included.
-  std::vector<cv::Mat> frames;
-  for (int k = 0; k < 60; ++k) {
-    cv::Mat m(48, 64, CV_8UC3);
-    for (int x = 0; x < 64; ++x) {
-      const auto v = cv::saturate_cast<unsigned char>(128.0 - (0.5 + 0.05 * k) * (x - 32));
-      m.col(x).setTo(cv::Scalar(v, v, v));
-    }
-    frames.push_back(m);
-  }
-  const std::string seq = write_sequence("ramp", frames);
+  const std::string seq = write_sequence("ramp", ramp_frames(60));
   std::atomic<bool> hold{false};
   std::atomic<bool> holding{false};
   std::atomic<int> delay_ms{0};
@@ -405,17 +409,7 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
 }
 
 TEST_CASE("after a seek, no window of the old timeline is felt while the worker catches up", "[video]") {
-  // Frame k: a horizontal ramp whose slope grows with k (as above).
-  std::vector<cv::Mat> frames;
-  for (int k = 0; k < 40; ++k) {
-    cv::Mat m(48, 64, CV_8UC3);
-    for (int x = 0; x < 64; ++x) {
-      const auto v = cv::saturate_cast<unsigned char>(128.0 - (0.5 + 0.05 * k) * (x - 32));
-      m.col(x).setTo(cv::Scalar(v, v, v));
-    }
-    frames.push_back(m);
-  }
-  const std::string seq = write_sequence("stale", frames);
+  const std::string seq = write_sequence("stale", ramp_frames(40));
   std::atomic<bool> hold{false};
   std::atomic<bool> holding{false};
   VideoFieldConfig config;
