@@ -94,6 +94,13 @@ TEST_CASE("a large mesh's tree and arrays are asked onto 2 MB pages, and answer 
     CHECK(test::marked_for_huge_pages(first_whole_page(huge.mesh().positions.data())));
     CHECK(test::marked_for_huge_pages(first_whole_page(huge.mesh().triangles.data())));
     CHECK(test::marked_for_huge_pages(first_whole_page(huge.bvh().pairs().data())));
+    // a copy of the tree keeps the hint, and so does a shape made from a
+    // mesh and a tree (a deforming mesh's frames)
+    const MeshBvh tree = huge.bvh();
+    CHECK(test::marked_for_huge_pages(first_whole_page(tree.pairs().data())));
+    const MeshShape framed(huge.mesh(), tree);
+    CHECK(test::marked_for_huge_pages(first_whole_page(framed.bvh().pairs().data())));
+    CHECK(test::marked_for_huge_pages(first_whole_page(framed.mesh().positions.data())));
   } else {
     WARN("the page marks are not checked: this kernel has no transparent huge pages");
   }

@@ -66,6 +66,14 @@ std::vector<cv::Mat> ramp_frames(int count) {
   return frames;
 }
 
+/// Lets a held worker go when a test ends on any path (a failed REQUIRE
+/// throws): declared after the field, it goes before the field, whose
+/// destructor joins the worker.
+struct Release {
+  std::atomic<bool>& hold;
+  ~Release() { hold.store(false); }
+};
+
 /// Writes frames as a PNG sequence; returns the printf pattern.
 std::string write_sequence(const std::string& name, const std::vector<cv::Mat>& frames) {
   const fs::path dir = tmp / name;
@@ -353,6 +361,7 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
   const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});  // 1 px/mm, centred
   hold.store(true);
   VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
+  const Release release{hold};
   Probe probe;
   probe.position = {0.0, 0.0, 0.0};
   double t = 0.0;
@@ -409,7 +418,7 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
 }
 
 TEST_CASE("after a seek, no window of the old timeline is felt while the worker catches up", "[video]") {
-  const std::string seq = write_sequence("stale", ramp_frames(40));
+  const std::string seq = write_sequence("stale", ramp_frames(100));  // 4 s: a slow worker's seek stays inside
   std::atomic<bool> hold{false};
   std::atomic<bool> holding{false};
   VideoFieldConfig config;
@@ -423,6 +432,7 @@ TEST_CASE("after a seek, no window of the old timeline is felt while the worker 
   };
   const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});  // 1 px/mm, centred
   VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
+  const Release release{hold};
   field.set_lockstep(true);  // plays to 0.42 s with every window felt
   Probe probe;
   probe.position = {0.0, 0.0, 0.0};
@@ -469,6 +479,29 @@ TEST_CASE("after a seek, no window of the old timeline is felt while the worker 
   CHECK(felt > 300);
   field.stop();
 }
+TEST_CASE("a seek made before the worker has started is sought, not decoded up to", "[video]") {
+  const std::string seq = write_sequence("early", ramp_frames(60));
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});  // 1 px/mm, centred
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
+  field.set_lockstep(true);    // every window felt, none dropped for lateness
+  field.playback().seek(1.2);  // frame 30, most likely before the worker runs
+  Probe probe;
+  probe.position = {0.0, 0.0, 0.0};
+  double fx = 0.0;
+  for (int i = 0; i < 100; ++i) {
+    probe.time = i * 1e-3;
+    fx = field.force(probe).x;
+  }
+  const VideoStatistics s = field.statistics();
+  CAPTURE(s.prepared, s.dropped, s.video_time);
+  CHECK(s.video_time == Approx(1.299));
+  CHECK(s.prepared <= 6);  // frames 30-32 (and 0-1 if it began before the seek), not 0-32
+  CHECK(fx != 0.0);        // faded in by 1.3 s
+  field.stop();
+}
+
 TEST_CASE("lockstep: a simulated run feels the same forces with a slow and a fast worker, and drops nothing",
           "[video][lockstep]") {
   // 30 frames at 25 fps: a bar moving right, a cut to a disc at frame 15.

@@ -204,6 +204,22 @@ struct MeshBvhConfig {
 class MeshBvh {
  public:
   MeshBvh() = default;
+  /// A copy's arrays are reserved afresh, on 2 MB pages when the config
+  /// asks for them (a vector's own copy would drop the hint).
+  MeshBvh(const MeshBvh& other) : root_(other.root_), depth_(other.depth_), config_(other.config_) {
+    copy_array(pairs_, other.pairs_);
+    copy_array(triangles_, other.triangles_);
+    copy_array(adjacency_, other.adjacency_);
+    copy_array(bounds_, other.bounds_);
+    copy_array(node_bounds_, other.node_bounds_);
+  }
+  MeshBvh& operator=(const MeshBvh& other) {
+    if (this != &other) *this = MeshBvh(other);
+    return *this;
+  }
+  MeshBvh(MeshBvh&&) noexcept = default;
+  MeshBvh& operator=(MeshBvh&&) noexcept = default;
+  ~MeshBvh() = default;
 
   /// What a query needs to pass a triangle by without its full test: its
   /// plane (unit normal, through the centroid) and its bounding circle
@@ -1259,6 +1275,17 @@ class MeshBvh {
     std::array<std::uint32_t, 3> neighbour{no_primitive, no_primitive, no_primitive};
     std::array<std::uint32_t, 3> vertex{};
   };
+
+  /// `from`'s elements into the empty `to`, on 2 MB pages when the config
+  /// asks for them.
+  template <class T>
+  void copy_array(std::vector<T>& to, const std::vector<T>& from) const {
+    if (config_.huge_pages)
+      reserve_on_huge_pages(to, from.size());
+    else
+      to.reserve(from.size());
+    to.assign(from.begin(), from.end());
+  }
 
   BvhNode root_{};
   std::vector<BvhNodePair> pairs_;

@@ -67,7 +67,8 @@ class MeshShape {
   /// Takes the mesh and a tree over it, built (MeshBvh::build) or refit
   /// (MeshBvh::refit) to this mesh: no build here (a deforming mesh's
   /// frames, surface/deforming_mesh.hpp). The node budget and the page
-  /// hint are the tree's; the mesh's arrays are not copied.
+  /// hint are the tree's: with the hint, the mesh's arrays of 4 MB or more
+  /// are copied onto 2 MB pages, as by the constructor above.
   /// @throws std::invalid_argument for an invalid mesh or a tree with more
   ///         triangles than the mesh.
   MeshShape(TriangleMesh mesh, MeshBvh bvh, bool shade_normals = true)
@@ -78,6 +79,7 @@ class MeshShape {
     auto data = std::make_shared<Data>();
     data->bvh = std::move(bvh);
     data->mesh = std::move(mesh);
+    if (config_.huge_pages) on_huge_pages(data->mesh);
     data_ = std::move(data);
   }
 

@@ -306,8 +306,10 @@ class VideoField {
     void run_file() {
       std::optional<FrameWindow> pending;
       // The servo thread stores a tick's video time, then its epoch: once
-      // the worker sees an epoch, video_time is at least that tick's.
-      std::uint32_t epoch = tick_epoch.load(std::memory_order_acquire);
+      // the worker sees an epoch, video_time is at least that tick's. It
+      // starts from the clock's first epoch (0), so a seek made before it
+      // runs is seen as one (and sought), not taken as where it began.
+      std::uint32_t epoch = 0;
       bool end = false;
       bool have_frame = false;
       cv::Mat image;
