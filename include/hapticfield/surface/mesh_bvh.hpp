@@ -1004,18 +1004,18 @@ class MeshBvh {
         centre_.push_back((a + b + c) / 3.0);
       }
       if (order_.empty()) return;
-      reserve(out_.pairs_, order_.size());  // at most n - 1 inner nodes: never reallocated while building
+      out_.reserve_array(out_.pairs_, order_.size());  // at most n - 1 inner nodes: never reallocated while building
       split(root_ref, 0, static_cast<std::uint32_t>(order_.size()), 1);
-      reserve(out_.triangles_, order_.size());
+      out_.reserve_array(out_.triangles_, order_.size());
       for (const std::uint32_t i : order_) {
         const auto& t = mesh_.triangles[i];
         const glm::dvec3 a = mesh_.positions[t[0]];
         out_.triangles_.push_back(Triangle{a, mesh_.positions[t[1]] - a, mesh_.positions[t[2]] - a, i});
       }
-      reserve(out_.bounds_, out_.triangles_.size());
+      out_.reserve_array(out_.bounds_, out_.triangles_.size());
       out_.bounds_.resize(out_.triangles_.size());
       out_.bound_all();
-      reserve(out_.node_bounds_, 2 * out_.pairs_.size());
+      out_.reserve_array(out_.node_bounds_, 2 * out_.pairs_.size());
       out_.node_bounds_.resize(2 * out_.pairs_.size());
       out_.bound_nodes();
       connect();
@@ -1042,7 +1042,7 @@ class MeshBvh {
         if (i > 0 && key(by_position[i]) != key(by_position[i - 1])) ++id;
         weld[by_position[i]] = id;
       }
-      reserve(out_.adjacency_, n);
+      out_.reserve_array(out_.adjacency_, n);
       out_.adjacency_.assign(n, Adjacency{});
       struct Edge {
         std::uint64_t key;   ///< lower welded id << 32 | higher
@@ -1129,16 +1129,6 @@ class MeshBvh {
           out_.pairs_[ref / 2].hi[axis][ref % 2] = hi;
         }
       }
-    }
-
-    /// Room for n elements in one of the arrays a tick reads, on 2 MB pages
-    /// unless the config says otherwise.
-    template <class T>
-    void reserve(std::vector<T>& v, std::size_t n) const {
-      if (out_.config_.huge_pages)
-        reserve_on_huge_pages(v, n);
-      else
-        v.reserve(n);
     }
 
     void split(std::uint32_t node, std::uint32_t begin, std::uint32_t end, std::size_t depth) {
@@ -1276,14 +1266,20 @@ class MeshBvh {
     std::array<std::uint32_t, 3> vertex{};
   };
 
-  /// `from`'s elements into the empty `to`, on 2 MB pages when the config
-  /// asks for them.
+  /// Room for n elements in one of the arrays a tick reads, on 2 MB pages
+  /// unless the config says otherwise.
+  template <class T>
+  void reserve_array(std::vector<T>& v, std::size_t n) const {
+    if (config_.huge_pages)
+      reserve_on_huge_pages(v, n);
+    else
+      v.reserve(n);
+  }
+
+  /// `from`'s elements into the empty `to`, where reserve_array() puts them.
   template <class T>
   void copy_array(std::vector<T>& to, const std::vector<T>& from) const {
-    if (config_.huge_pages)
-      reserve_on_huge_pages(to, from.size());
-    else
-      to.reserve(from.size());
+    reserve_array(to, from.size());
     to.assign(from.begin(), from.end());
   }
 
