@@ -28,6 +28,7 @@
 #include "alloc_counter.hpp"
 #include "hapticfield/core.hpp"
 #include "hapticfield/video.hpp"
+#include "run_seed.hpp"
 
 using namespace hapticfield;
 namespace fs = std::filesystem;
@@ -1292,4 +1293,357 @@ TEST_CASE("a live source blends the previous and the newest frame one frame late
   CHECK(w2.at(1.325, 26.0, 30.0).x == Approx(0.5 * fb.at(26.0, 30.0).x).margin(1e-9));
   CHECK(w2.at(1.375, 48.0, 14.0).y == Approx(0.5 * fc.at(48.0, 14.0).y).margin(1e-9));
   CHECK(w2.at(1.5, 48.0, 14.0).y == Approx(fc.at(48.0, 14.0).y).margin(1e-9));
+}
+
+namespace {
+
+/// The unfaded force of ramp_frames at video time t [s] for a probe, from
+/// the still-picture fields of the frames (the oracle): the blend of the
+/// two frames that bracket t, the last frame held from its time on.
+struct RampOracle {
+  std::vector<TangibleImage> stills;
+  double fps = 25.0;
+  PlaneMapping mapping;
+
+  RampOracle(const std::vector<cv::Mat>& frames, double frame_rate, const PlaneMapping& m, const TangibleConfig& c)
+      : fps(frame_rate), mapping(m) {
+    for (const cv::Mat& f : frames)
+      stills.push_back(still(f, c));
+  }
+
+  [[nodiscard]] glm::dvec3 at(double t, const glm::dvec3& position) const {
+    const auto last = static_cast<long>(stills.size()) - 1;
+    const long k = std::clamp(static_cast<long>(std::floor(t * fps + 1e-9)), 0L, last);
+    const glm::dvec2 px = mapping.to_image(position);
+    glm::dvec2 f = stills[static_cast<std::size_t>(k)].at(px.x, px.y);
+    if (k < last) {
+      const double a = std::clamp(t * fps - static_cast<double>(k), 0.0, 1.0);
+      f = (1.0 - a) * f + a * stills[static_cast<std::size_t>(k + 1)].at(px.x, px.y);
+    }
+    return mapping.vector_to_device(f);
+  }
+};
+
+/// What one seek felt, tick by tick, against the unfaded oracle G: the force
+/// at the seek's tick (nothing of the old timeline), the worst per-tick
+/// change beyond what a linear fade-in allows (its ramp spans the second
+/// half of the fade time T: a slope of |G| / (T / 2) per second, plus the
+/// picture's own change |G_i - G_(i-1)|), the worst excess over |G|, and the
+/// worst |F - G| once T of loop time has passed since the seek.
+struct FadeRecord {
+  double at_seek = 0.0;       ///< |F| at the seek's tick [N]
+  double worst_jump = 0.0;    ///< largest |F_i - F_(i-1)| minus its bound [N]
+  double worst_excess = 0.0;  ///< largest |F| - |G| [N]
+  double worst_after = 0.0;   ///< largest |F - G| after the fade time [N]
+  double felt_full = -1.0;    ///< loop time after the seek when |F - G| first fell below 1e-9 [s]
+
+  void add(long i, double dt, double fade, const glm::dvec3& f, const glm::dvec3& g, const glm::dvec3& f_before,
+           const glm::dvec3& g_before) {
+    if (i == 0) {
+      at_seek = glm::length(f);
+    } else {
+      const double bound = 2.0 * dt / fade * glm::length(g) + glm::length(g - g_before) + 1e-12;
+      worst_jump = std::max(worst_jump, glm::length(f - f_before) - bound);
+    }
+    worst_excess = std::max(worst_excess, glm::length(f) - glm::length(g));
+    const double s = static_cast<double>(i) * dt;
+    if (s >= fade + 1e-9) worst_after = std::max(worst_after, glm::length(f - g));
+    if (felt_full < 0.0 && glm::length(f - g) <= 1e-9 && glm::length(g) > 0.0) felt_full = s;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("paused, a seek fades in on the loop's clock to the frame's full force, allocating nothing",
+          "[video][fade]") {
+  const double fps = 25.0, fade = 0.1, dt = 1e-3;
+  const std::vector<cv::Mat> frames = ramp_frames(30);  // 1.2 s
+  const std::string seq = write_sequence("fade_paused", frames);
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = fade;
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});  // 1 px/mm, centred
+  const RampOracle oracle(frames, fps, mapping, config.prepare.tangible);
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
+  field.set_lockstep(true);
+  Probe probe;
+  probe.position = {3e-3, -2e-3, 0.0};
+  double t = 0.0;
+  for (int i = 0; i < 200; ++i, t += dt) {  // plays to 0.2 s
+    probe.time = t;
+    (void)field.force(probe);
+  }
+  field.playback().pause();
+  for (int i = 0; i < 50; ++i, t += dt) {
+    probe.time = t;
+    (void)field.force(probe);
+  }
+  // Paused, a seek to 0.7 s (frames 17 and 18, half way): video time stays
+  // there, the fade runs on loop time.
+  field.playback().seek(0.7);
+  const glm::dvec3 full = oracle.at(0.7, probe.position);
+  REQUIRE(glm::length(full) > 1e-3);
+  FadeRecord r;
+  glm::dvec3 before{0.0};
+  long allocations = 0;
+  for (long i = 0; i < 300; ++i, t += dt) {
+    probe.time = t;
+    glm::dvec3 f{0.0};
+    if (i == 20) std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the worker, read ahead, idles
+    if (i >= 20)
+      allocations += test::count_allocations([&] { f = field.force(probe); });
+    else
+      f = field.force(probe);
+    r.add(i, dt, fade, f, full, before, full);
+    before = f;
+  }
+  CAPTURE(r.at_seek, r.worst_jump, r.worst_excess, r.worst_after, r.felt_full);
+  CHECK(field.statistics().video_time == Approx(0.7));
+  CHECK(r.at_seek == 0.0);            // nothing of the old timeline at the seek's tick
+  CHECK(r.worst_jump <= 0.0);         // then a fade-in no steeper than its ramp
+  CHECK(r.worst_excess <= 1e-12);     // never more than the frame's force
+  CHECK(r.worst_after <= 1e-9);       // the full force within the fade time of loop time
+  CHECK(r.felt_full <= fade + 1e-9);  // (and felt at all while paused)
+  CHECK(r.felt_full >= 0.0);
+  if (test::allocations_counted) CHECK(allocations == 0);
+  // Resumed: the video plays on from 0.7 s at its full force, no second fade.
+  field.playback().resume();
+  double worst = 0.0;
+  for (long i = 0; i < 200; ++i, t += dt) {
+    probe.time = t;
+    worst =
+        std::max(worst, glm::length(field.force(probe) - oracle.at(0.7 + static_cast<double>(i) * dt, probe.position)));
+  }
+  CHECK(worst <= 1e-9);
+  field.stop();
+}
+
+TEST_CASE("a seek into a file's last half fade, or to its end, feels the last frame after the fade", "[video][fade]") {
+  const double fps = 25.0, fade = 0.1, dt = 1e-3;
+  const std::vector<cv::Mat> frames = ramp_frames(20);  // 0.8 s, the last frame at 0.76 s
+  const double end = 20.0 / fps;
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = fade;
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});
+  Probe probe;
+  probe.position = {-4e-3, 3e-3, 0.0};
+  // A lossless sequence against the still picture of frame 19; an MJPG file
+  // (the container's frame count) against the offline timeline's held last frame.
+  const std::string seq = write_sequence("fade_end", frames);
+  const std::string clip = write_mjpg("fade_end", frames, fps, 90);
+  const glm::dvec2 px = mapping.to_image(probe.position);
+  glm::dvec3 last_of_clip{0.0};
+  {
+    VideoSource source(clip);
+    VideoTimeline timeline(source, config.prepare, fade);
+    last_of_clip = mapping.vector_to_device(timeline.at(100.0, px.x, px.y));
+  }
+  const glm::dvec3 last_of_seq = mapping.vector_to_device(still(frames.back(), config.prepare.tangible).at(px.x, px.y));
+  REQUIRE(glm::length(last_of_seq) > 1e-3);
+  REQUIRE(glm::length(last_of_clip) > 1e-3);
+  for (const bool file : {false, true}) {
+    for (const double target : {end - 0.03, end - 0.001, end, 5.0}) {  // 5 s: past the end, clamped to it
+      CAPTURE(file, target);
+      VideoField field(file ? std::make_unique<VideoSource>(clip)
+                            : std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}),
+                       mapping, config);
+      field.set_lockstep(true);
+      double t = 0.0;
+      for (int i = 0; i < 100; ++i, t += dt) {
+        probe.time = t;
+        (void)field.force(probe);
+      }
+      field.playback().seek(target);
+      const glm::dvec3 full = file ? last_of_clip : last_of_seq;
+      FadeRecord r;
+      glm::dvec3 before{0.0};
+      for (long i = 0; i < 300; ++i, t += dt) {
+        probe.time = t;
+        const glm::dvec3 f = field.force(probe);
+        r.add(i, dt, fade, f, full, before, full);
+        before = f;
+      }
+      CAPTURE(r.at_seek, r.worst_jump, r.worst_excess, r.worst_after, r.felt_full);
+      CHECK(field.statistics().video_time == Approx(end));
+      CHECK(field.statistics().ended);
+      CHECK(r.at_seek == 0.0);
+      CHECK(r.worst_jump <= 0.0);
+      CHECK(r.worst_excess <= 1e-12);
+      CHECK(r.worst_after <= 1e-9);  // the last frame, whole, once the fade is over
+      CHECK(r.felt_full >= 0.0);
+      CHECK(field.error().empty());
+      field.stop();
+    }
+  }
+}
+
+TEST_CASE("a seek's fade-in never jumps: random targets, rates and pauses against the unfaded oracle",
+          "[video][fade]") {
+  const std::uint32_t seed = test::run_seed();
+  INFO("seed " << seed << " (repeat with --rng-seed " << seed << ")");
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double fade = 0.1, dt = 1e-3;
+  const std::vector<cv::Mat> frames = ramp_frames(30);
+  const std::string seq = write_sequence("fade_random", frames);
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = fade;
+  long seeks = 0;
+  for (const double fps : {25.0, 10.0}) {  // at 10 fps a seek may land late in a frame's slot
+    const double end = static_cast<double>(frames.size()) / fps;
+    const RampOracle oracle(frames, fps, mapping, config.prepare.tangible);
+    VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
+    field.set_lockstep(true);
+    Probe probe;
+    double t = 0.0;
+    for (int i = 0; i < 50; ++i, t += dt) {
+      probe.time = t;
+      (void)field.force(probe);
+    }
+    for (int n = 0; n < 5; ++n, ++seeks) {
+      // a target anywhere, or within the last half fade; a rate in [0.25, 4]; paused one time in three
+      const double target = u(rng) < 0.25 ? end - 0.5 * fade * u(rng) : end * u(rng);
+      const double rate = 0.25 + 3.75 * u(rng);
+      const bool paused = u(rng) < 1.0 / 3.0;
+      probe.position = {(-20.0 + 40.0 * u(rng)) * 1e-3, (-14.0 + 28.0 * u(rng)) * 1e-3, 0.0};
+      CAPTURE(fps, n, target, rate, paused, probe.position.x, probe.position.y);
+      field.playback().set_rate(rate);
+      if (paused)
+        field.playback().pause();
+      else
+        field.playback().resume();
+      field.playback().seek(target);
+      const double t_seek = t;
+      FadeRecord r;
+      glm::dvec3 f_before{0.0}, g_before{0.0};
+      double video = target;
+      for (long i = 0; i < 250; ++i, t += dt) {
+        probe.time = t;
+        video = paused ? target : std::min(target + rate * (t - t_seek), end);
+        const glm::dvec3 f = field.force(probe);
+        const glm::dvec3 g = oracle.at(video, probe.position);
+        r.add(i, dt, fade, f, g, f_before, i == 0 ? g : g_before);
+        f_before = f;
+        g_before = g;
+      }
+      CAPTURE(r.at_seek, r.worst_jump, r.worst_excess, r.worst_after, r.felt_full);
+      CHECK(field.statistics().video_time == Approx(video).margin(1e-9));
+      CHECK(r.at_seek == 0.0);
+      CHECK(r.worst_jump <= 0.0);
+      CHECK(r.worst_excess <= 1e-12);
+      CHECK(r.worst_after <= 1e-9);
+    }
+    CHECK(field.error().empty());
+    field.stop();
+  }
+  CHECK(seeks == 10);
+}
+
+TEST_CASE("a scene cut's fade completes on the loop's clock: paused in it, or at a file's end", "[video][fade]") {
+  const double fps = 25.0, fade = 0.1, dt = 1e-3;
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = fade;
+  const PlaneMapping mapping(1.0, glm::dvec2{48.0, 32.0});
+  Probe probe;
+  probe.position = mapping.to_device(glm::dvec2{36.0, 18.0});  // on frame 9's bar edge and on the disc's edge
+  const glm::dvec2 px = mapping.to_image(probe.position);
+  const glm::dvec3 old_scene =
+      mapping.vector_to_device(still(scene_frame(0, 9), config.prepare.tangible).at(px.x, px.y));
+  const glm::dvec3 new_scene =
+      mapping.vector_to_device(still(scene_frame(1, 0), config.prepare.tangible).at(px.x, px.y));
+  REQUIRE(glm::length(old_scene) > 1e-3);
+  REQUIRE(glm::length(new_scene) > 1e-3);
+  const long cut_tick = 400;  // frame 10, the disc, at 0.4 s
+  for (const bool pause_in_fade : {false, true}) {
+    CAPTURE(pause_in_fade);
+    // 10 frames of the bar, then the disc: 2 frames (a cut 0.08 s before the
+    // end, inside the last fade time) or 10 frames (paused 20 ms into the cut).
+    std::vector<cv::Mat> frames;
+    for (int k = 0; k < 10; ++k)
+      frames.push_back(scene_frame(0, k));
+    for (int k = 0; k < (pause_in_fade ? 10 : 2); ++k)
+      frames.push_back(scene_frame(1, k));
+    const std::string seq = write_sequence(pause_in_fade ? "fade_cut_paused" : "fade_cut_end", frames);
+    VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
+    field.set_lockstep(true);
+    double worst_jump = 0.0, worst_after = 0.0, worst_excess = 0.0;
+    glm::dvec3 before{0.0};
+    for (long i = 300; i < 700; ++i) {  // from 0.3 s: the bar's frames 7 to 9 held, then the cut
+      if (pause_in_fade && i == cut_tick + 20) field.playback().pause();
+      probe.time = static_cast<double>(i) * dt;
+      if (i == 300) field.playback().seek(0.3);
+      const glm::dvec3 f = field.force(probe);
+      if (i >= cut_tick) {  // the old scene fades out, the new one in: never steeper than the ramps
+        const double bound = 2.0 * dt / fade * std::max(glm::length(old_scene), glm::length(new_scene)) + 1e-12;
+        worst_jump = std::max(worst_jump, glm::length(f - before) - bound);
+        worst_excess =
+            std::max(worst_excess, glm::length(f) - std::max(glm::length(old_scene), glm::length(new_scene)));
+      }
+      if (i > cut_tick + 100) worst_after = std::max(worst_after, glm::length(f - new_scene));
+      before = f;
+    }
+    CAPTURE(worst_jump, worst_after, worst_excess, field.statistics().video_time);
+    REQUIRE(field.cuts().size() == 1);
+    CHECK(field.cuts()[0].frame == 10);
+    CHECK(field.statistics().video_time == Approx(pause_in_fade ? 0.419 : 0.48));
+    CHECK(worst_jump <= 0.0);
+    CHECK(worst_excess <= 1e-12);
+    CHECK(worst_after <= 1e-9);  // the new scene, whole, T of loop time after the cut was first felt
+    field.stop();
+  }
+}
+
+TEST_CASE("two cuts closer than a fade (at 4x): the second fade enters where the first left the force",
+          "[video][fade]") {
+  const double fps = 25.0, fade = 0.1, dt = 1e-3, rate = 4.0;
+  // Three still scenes: the bar (frames 0-9), the disc (10-15), the bar
+  // further right (16-25). At 4x the disc lasts 60 ms of loop time: its
+  // fade-in (50 to 100 ms after the first cut) is still running at the second.
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 26; ++k)
+    frames.push_back(k < 10 ? scene_frame(0, 5) : k < 16 ? scene_frame(1, 0) : scene_frame(0, 25));
+  const std::string seq = write_sequence("fade_two_cuts", frames);
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = fade;
+  config.playback.rate = rate;
+  const PlaneMapping mapping(1.0, glm::dvec2{48.0, 32.0});
+  Probe probe;
+  probe.position = mapping.to_device(glm::dvec2{36.0, 18.0});  // on the disc's edge
+  const glm::dvec2 px = mapping.to_image(probe.position);
+  double largest = 0.0;
+  glm::dvec3 scene_c{0.0};
+  for (const int k : {0, 10, 16}) {
+    const glm::dvec3 f =
+        mapping.vector_to_device(still(frames[static_cast<std::size_t>(k)], config.prepare.tangible).at(px.x, px.y));
+    largest = std::max(largest, glm::length(f));
+    if (k == 10) REQUIRE(glm::length(f) > 1e-3);
+    if (k == 16) scene_c = f;
+  }
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
+  field.set_lockstep(true);
+  double worst_jump = 0.0;
+  glm::dvec3 before{0.0};
+  std::vector<double> felt;
+  for (long i = 0; i < 300; ++i) {  // the cuts at 0.4 and 0.64 s of video: 100 and 160 ms of loop time
+    probe.time = static_cast<double>(i) * dt;
+    const glm::dvec3 f = field.force(probe);
+    if (i > 0) worst_jump = std::max(worst_jump, glm::length(f - before) - (2.0 * dt / fade * largest + 1e-12));
+    felt.push_back(glm::length(f));
+    before = f;
+  }
+  std::vector<long> cut_frames;
+  for (const SceneCut& c : field.cuts())
+    cut_frames.push_back(c.frame);
+  CAPTURE(worst_jump, felt[159], felt[160], felt[161]);
+  CHECK(cut_frames == std::vector<long>{10, 16});
+  CHECK(worst_jump <= 0.0);                      // no step, up or down
+  CHECK(glm::length(before - scene_c) <= 1e-9);  // the third scene, whole, in the end
+  CHECK(felt[160] ==
+        Approx(felt[159]).epsilon(0.05).margin(largest * 2.0 * dt / fade));  // the disc's weight carried on
+  field.stop();
 }

@@ -11,9 +11,18 @@
 /// out linearly over [t_c, t_c + T/2] and fades the new scene in over
 /// [t_c + T/2, t_c + T] (T = the fade time). The first frame after the start
 /// or a seek fades in the same way from zero.
+///
+/// Which clock a fade runs on is the caller's: at(t, x, y) runs it on video
+/// time (the offline VideoTimeline, where video time is the only clock);
+/// at(t, since_fade, x, y) takes the time since the fade began on another
+/// clock. VideoField passes its loop time, so that a fade always completes
+/// in T of loop time: while playback is paused, at a file's end, at any rate.
+/// Each fade carries a serial number (FrameWindow::fade_serial) so a caller
+/// can tell when a new one begins.
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -23,6 +32,7 @@
 #include <glm/vec2.hpp>
 
 #include "hapticfield/kernels/tangible_image.hpp"
+#include "hapticfield/video/playback_clock.hpp"
 
 namespace hapticfield {
 
@@ -48,20 +58,28 @@ struct FrameWindow {
   double t1 = std::numeric_limits<double>::infinity();         ///< when next is fully felt [s]
   double cut_time = -std::numeric_limits<double>::infinity();  ///< start of the last fade [s]
   double fade = default_cut_fade;                              ///< fade time T [s]
-  double max_hold = 0.5;  ///< past t1 + max_hold (a stalled source) the force is zero [s]
+  double max_hold = 0.5;          ///< past t1 + max_hold (a stalled source) the force is zero [s]
+  std::uint32_t fade_serial = 0;  ///< the fade that began at cut_time: a new number for each start, seek or cut
 
-  /// Normalised force at image position (x, y) [px] at video time t [s].
-  [[nodiscard]] glm::dvec2 at(double t, double x, double y) const noexcept {
-    if (!current || !std::isfinite(t)) return glm::dvec2{0.0};
+  /// Normalised force at image position (x, y) [px] at video time t [s],
+  /// the fade on video time (since_fade = t - cut_time).
+  [[nodiscard]] glm::dvec2 at(double t, double x, double y) const noexcept { return at(t, t - cut_time, x, y); }
+
+  /// Normalised force at image position (x, y) [px] at video time t [s],
+  /// `since_fade` [s] after the last fade began on the caller's clock
+  /// (negative counts as 0; infinite: no fade; NaN: zero force).
+  [[nodiscard]] glm::dvec2 at(double t, double since_fade, double x, double y) const noexcept {
+    if (!current || !std::isfinite(t) || std::isnan(since_fade)) return glm::dvec2{0.0};
     if (t < t0 - 1e-9 || t > t1 + max_hold) return glm::dvec2{0.0};  // a seek away, or a stalled source
     const double half = 0.5 * fade;
-    if (half > 0.0 && t < cut_time + fade) {
-      if (t < cut_time + half) {
+    const double s = std::max(since_fade, 0.0);
+    if (half > 0.0 && s < fade) {
+      if (s < half) {
         if (!before_cut) return glm::dvec2{0.0};
-        const double w = std::clamp(1.0 - (t - cut_time) / half, 0.0, 1.0);
+        const double w = std::clamp(1.0 - s / half, 0.0, 1.0);
         return w * before_cut->image.at(x, y);
       }
-      return std::clamp((t - cut_time - half) / half, 0.0, 1.0) * blended(t, x, y);
+      return std::clamp((s - half) / half, 0.0, 1.0) * blended(t, x, y);
     }
     return blended(t, x, y);
   }
@@ -116,6 +134,7 @@ class WindowBuilder {
         before_cut_ = current_;
         cut_time_ = now;
         started_ = true;
+        ++fade_serial_;
       }
       previous_ = std::exchange(current_, std::move(frame));
       return window(current_, nullptr, now, forever, true);
@@ -143,11 +162,15 @@ class WindowBuilder {
       started_ = true;
       before_cut_ = nullptr;
       cut_time_ = t0;
+      ++fade_serial_;
     } else if (!live && current->cut && previous_) {
       before_cut_ = previous_;
       cut_time_ = t0;
+      ++fade_serial_;
     }
-    if (t0 >= cut_time_ + fade_) before_cut_ = nullptr;  // fade over: let the old scene go
+    // Fade over on any clock: a fade of T s of loop time spans at most
+    // max_playback_rate T s of video time; then let the old scene go.
+    if (t0 >= cut_time_ + max_playback_rate * fade_) before_cut_ = nullptr;
     FrameWindow w;
     w.current = current;
     w.next = std::move(next);
@@ -156,6 +179,7 @@ class WindowBuilder {
     w.t1 = t1;
     w.cut_time = cut_time_;
     w.fade = fade_;
+    w.fade_serial = fade_serial_;
     return w;
   }
 
@@ -164,6 +188,7 @@ class WindowBuilder {
   std::shared_ptr<const VideoFrame> current_;
   std::shared_ptr<const VideoFrame> before_cut_;
   double cut_time_ = -std::numeric_limits<double>::infinity();
+  std::uint32_t fade_serial_ = 0;
   bool started_ = false;
 };
 

@@ -15,6 +15,13 @@
 /// from zero: no frame of the old timeline). A live camera blends the previous
 /// and the newest frame, one frame late.
 ///
+/// Fades (the fade-in after a start, seek or loop, and the fade across a
+/// scene cut) run on the loop's clock, not on video time: each begins at the
+/// first tick that feels it and is over after the fade time T of loop time,
+/// whether playback is paused, at a file's end or at any rate. A seek to or
+/// past the last frame's time feels the last frame (when the source's frame
+/// count is right: a variable-rate file's is an estimate).
+///
 /// Lockstep (set_lockstep(true)) is for loops on a simulated clock
 /// (VirtualClock, offline evaluation): force() then waits, spinning with
 /// yield, until the worker has published the window that covers the tick's
@@ -35,6 +42,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -84,10 +92,12 @@ struct WindowField {
     return epoch == e && t >= window.t0 - 1e-9 && t < window.t1 - 1e-9;
   }
 
-  [[nodiscard]] glm::dvec3 force(const Probe& probe) const noexcept {
+  /// Force [N] at video time probe.time [s], `since_fade` [s] after the
+  /// window's fade began (see FrameWindow::at).
+  [[nodiscard]] glm::dvec3 force(const Probe& probe, double since_fade) const noexcept {
     if (!is_finite(probe.position)) return glm::dvec3{0.0};
     const glm::dvec2 px = mapping.to_image(probe.position);
-    return gain * mapping.vector_to_device(window.at(probe.time, px.x, px.y));
+    return gain * mapping.vector_to_device(window.at(probe.time, since_fade, px.x, px.y));
   }
 };
 
@@ -152,10 +162,28 @@ class VideoField {
     // a file's window from before a seek or a loop belongs to the old
     // timeline: nothing is felt until the worker publishes the new one
     if (w && !s.live_source && w->epoch != epoch) w = nullptr;
+    // The fade's own clock: loop time since the first tick that felt it
+    // (a loop clock that goes back adds nothing).
+    const double step = probe.time - s.last_tick_time;
+    if (std::isfinite(probe.time)) s.last_tick_time = probe.time;
+    if (w && (!s.felt_a_fade || w->window.fade_serial != s.felt_fade_serial)) {
+      // A fade that begins while the last one still runs (cuts closer than
+      // the fade time, as at a rate above 1) enters where that one left the
+      // force: from its fade-in at weight e, the old scene fades out from e;
+      // from its first half, at the silent middle.
+      const double fade = w->window.fade, half = 0.5 * fade;
+      double enter = 0.0;
+      if (s.felt_a_fade && s.since_fade < fade) enter = s.since_fade < half ? half : fade - s.since_fade;
+      s.felt_a_fade = true;
+      s.felt_fade_serial = w->window.fade_serial;
+      s.since_fade = enter;
+    } else if (step > 0.0) {
+      s.since_fade += step;
+    }
     if (!w) return glm::dvec3{0.0};
     Probe on = probe;
     on.time = t;
-    return w->force(on);
+    return w->force(on, s.since_fade);
   }
 
   /// Lockstep with a simulated clock, from any thread: while on, force()
@@ -242,6 +270,14 @@ class VideoField {
       video_time.store(config.playback.start);
     }
 
+    /// The frame to seek to for video time t [s]: its slot's, or the last
+    /// frame for a time at or past it (the end of a file).
+    [[nodiscard]] long frame_at(double t) const noexcept {
+      const auto index = static_cast<long>(std::floor(t * fps + 1e-9));
+      const long count = source->frame_count();
+      return count > 0 ? std::min(index, count - 1) : index;
+    }
+
     static PlaybackConfig playback_config(const VideoSource& source, PlaybackConfig p) {
       if (!std::isfinite(p.duration) && !source.live()) p.duration = source.duration();
       if (source.live()) p.loop = false;
@@ -313,12 +349,12 @@ class VideoField {
       bool end = false;
       bool have_frame = false;
       cv::Mat image;
-      if (config.playback.start > 0.0) source->seek(static_cast<long>(std::floor(config.playback.start * fps + 1e-9)));
+      if (config.playback.start > 0.0) source->seek(frame_at(config.playback.start));
       while (!stop.load()) {
         if (const std::uint32_t e = tick_epoch.load(std::memory_order_acquire); e != epoch) {  // a seek or a loop
           epoch = e;
           const double t = video_time.load(std::memory_order_acquire);
-          source->seek(static_cast<long>(std::floor(t * fps + 1e-9)));
+          source->seek(frame_at(t));
           preparer.restart();
           builder.reset();
           pending.reset();
@@ -400,6 +436,11 @@ class VideoField {
     std::atomic<bool> stop{false};
     std::atomic<bool> ended{false};
     std::atomic<long> prepared{0}, dropped{0}, bad{0}, published{0}, cut_count{0};
+    // servo-thread state: the fade being felt
+    bool felt_a_fade = false;
+    std::uint32_t felt_fade_serial = 0;  ///< FrameWindow::fade_serial of the fade felt last
+    double since_fade = 0.0;             ///< loop time since the first tick that felt it [s]
+    double last_tick_time = std::numeric_limits<double>::quiet_NaN();  ///< the last finite loop time [s]
     mutable std::mutex cuts_mutex;
     std::vector<SceneCut> cuts;
     std::string error;
