@@ -64,7 +64,7 @@ const std::map<std::string, std::string> tools = {
 constexpr int ok = 0;
 constexpr int bad_input = 1;
 constexpr int usage = 2;
-constexpr auto time_limit = std::chrono::seconds(20);  // a hung tool is killed and fails
+constexpr auto time_limit = std::chrono::seconds(60);  // a hung tool is killed and fails (--plots took 11 s under load)
 
 // one folder per process: ctest runs parts of this program side by side
 const fs::path tmp = fs::path(HAPTICFIELD_TEST_TMP) / ("cli_bad_input_" + std::to_string(::getpid()));

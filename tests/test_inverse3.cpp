@@ -452,7 +452,7 @@ TEST_CASE("inverse3: a device that never answers the wake-up is a clear error wi
   CHECK(what.find("no reply to the wake-up (0x0A)") != std::string::npos);
   CHECK(what.find(pty.path) != std::string::npos);  // names the port
   CHECK(took >= 100ms);
-  CHECK(took < 2s);
+  CHECK(took < 10s);  // a hang guard
   // The device wrote 0x0A twice and nothing else.
   std::array<std::uint8_t, 16> rx{};
   CHECK(::read(pty.master, rx.data(), rx.size()) == 2);

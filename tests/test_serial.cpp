@@ -385,8 +385,8 @@ TEST_CASE("serial: a WoodenHaptics P4 arm over a pty, through line framing, with
     config.framing = Framing::lines;
     SerialTransport serial(pty.path, config);
     WoodyArmConfig wc = WoodyArmConfig::defaults(woody::Generation::p4_text);
-    wc.wake_timeout_us = 200000;  // the peer thread may be slow to get the processor on a loaded machine
-    WoodyArm arm(serial, wc);     // the wake-up: zero frames until the first reply
+    wc.wake_timeout_us = 1000000;  // the peer thread may be slow to get the processor on a loaded machine
+    WoodyArm arm(serial, wc);      // the wake-up: zero frames until the first reply
     DeviceState s;
     // Lock-step: each command gets one reply; wait for it (bounded), however
     // slowly the peer thread is scheduled.

@@ -472,7 +472,7 @@ TEST_CASE("hostile model files: sizes are checked before anything is converted")
                     tokens);
   CHECK(long_list.size() < 5000);
   double t = seconds([&] { throws_hatt(long_list, "<ARcoeff> holds 2000 values, numARCoeff = 4"); });
-  CHECK(t < 1.0);  // loose bound: the size check converts nothing
+  CHECK(t < 10.0);  // a hang guard, not a speed check: converted first, this took a minute
   // orders, model and triangle counts beyond the caps
   throws_hatt(coeff_only_set(3, 2000, 2000), "<numARCoeff> must be an integer in 0..256");
   std::string many = coeff_only_set(3, 4, 4);
@@ -491,7 +491,7 @@ TEST_CASE("hostile model files: a 1 MB file of order-256 <ARcoeff> lists fails o
   CHECK(doc.size() < 1100000);
   // (256 + 1)^2 = 66049: the second distinct list is over the budget
   const double t = seconds([&] { throws_hatt(doc, "too many <ARcoeff> lists to convert"); });
-  CHECK(t < 1.0);  // loose bound; the budget allows ~0.2 s of conversion
+  CHECK(t < 10.0);  // a hang guard (the budget allows ~0.2 s of conversion; 0.6 s under load, more under ASan)
   // repeated lists (as the toolkit repeats models) are converted once
   const HattModelSet same = parse_hatt_model_set(coeff_only_set(250, 256, 256, false));
   CHECK(same.models.size() == 250);

@@ -10,7 +10,7 @@ file(MAKE_DIRECTORY "${WORK_DIR}")
 function(run)
   cmake_parse_arguments(R "" "OUT" "COMMAND" ${ARGN})
   execute_process(COMMAND ${R_COMMAND} WORKING_DIRECTORY "${WORK_DIR}" RESULT_VARIABLE rc OUTPUT_VARIABLE out
-                  ERROR_VARIABLE err TIMEOUT 120)
+                  ERROR_VARIABLE err TIMEOUT 300)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "failed (${rc}): ${R_COMMAND}\n${out}\n${err}")
   endif()
