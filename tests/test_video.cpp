@@ -1441,6 +1441,83 @@ TEST_CASE("paused, a seek fades in on the loop's clock to the frame's full force
   field.stop();
 }
 
+TEST_CASE("a fade still running when a run ends, a seek or reset() comes: the next fades in from zero as the first did",
+          "[video][fade][rerun]") {
+  const double fps = 25.0, fade = 0.1, dt = 1e-3;
+  const std::string seq = write_sequence("fade_rerun", ramp_frames(30));
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = fade;
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});
+  const auto make_field = [&] {
+    auto f = std::make_unique<VideoField>(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}),
+                                          mapping, config);
+    f->set_lockstep(true);
+    return f;
+  };
+  Probe probe;
+  probe.position = {3e-3, -2e-3, 0.0};
+  // runs of 80 ticks: the start's fade (silent for 50 ms, then a 50 ms ramp) still runs at the end of each
+  const auto run = [&](VideoField& field, double t0) {
+    std::vector<double> f;
+    for (int i = 0; i < 80; ++i) {
+      probe.time = t0 + i * dt;
+      f.push_back(glm::length(field.force(probe)));
+    }
+    return f;
+  };
+  const auto first_felt = [](const std::vector<double>& f) {
+    return std::find_if(f.begin(), f.end(), [](double v) { return v > 0.0; }) - f.begin();
+  };
+  const auto same = [](const std::vector<double>& a, const std::vector<double>& b) {
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (std::abs(a[i] - b[i]) > 1e-12) return false;
+    return a.size() == b.size();
+  };
+  const auto field = make_field();
+  const std::vector<double> first = run(*field, 0.0);
+  CHECK(first_felt(first) >= 49);  // silent for T/2
+  CHECK(first.back() > 0.0);
+  CHECK(same(run(*field, 0.0), first));  // the loop's clock restarts at 0 while the fade runs
+  {
+    const auto other = make_field();
+    (void)run(*other, 0.0);
+    other->reset();
+    CHECK(same(run(*other, 0.08), first));  // reset() while it runs, loop time going on
+  }
+  {
+    // paused, a seek 60 ms into the start's fade: the seek's own fade is silent for T/2 again
+    const auto other = make_field();
+    std::vector<double> before;
+    for (int i = 0; i < 60; ++i) {
+      probe.time = i * dt;
+      before.push_back(glm::length(other->force(probe)));
+    }
+    other->playback().pause();
+    other->playback().seek(0.7);
+    const std::vector<double> after_seek = run(*other, 0.06);
+    CHECK(first_felt(after_seek) >= 49);
+    CHECK(after_seek.back() > 0.0);
+  }
+  // a tick with no finite loop time is zero and leaves the fade's clock as
+  // it was: the ticks around it feel what they would without it
+  for (const double bad : {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN(),
+                           -std::numeric_limits<double>::infinity()}) {
+    CAPTURE(bad);
+    const auto other = make_field();
+    std::vector<double> with_bad;
+    for (int i = 0; i < 80; ++i) {
+      probe.time = i == 30 || i == 60 ? bad : i * dt;
+      with_bad.push_back(glm::length(other->force(probe)));
+    }
+    CHECK(with_bad[30] == 0.0);
+    CHECK(with_bad[60] == 0.0);
+    with_bad[30] = first[30];
+    with_bad[60] = first[60];
+    CHECK(same(with_bad, first));
+  }
+}
+
 TEST_CASE("a seek into a file's last half fade, or to its end, feels the last frame after the fade", "[video][fade]") {
   const double fps = 25.0, fade = 0.1, dt = 1e-3;
   const std::vector<cv::Mat> frames = ramp_frames(20);  // 0.8 s, the last frame at 0.76 s

@@ -32,7 +32,6 @@
 #include <glm/vec2.hpp>
 
 #include "hapticfield/kernels/tangible_image.hpp"
-#include "hapticfield/video/playback_clock.hpp"
 
 namespace hapticfield {
 
@@ -168,9 +167,9 @@ class WindowBuilder {
       cut_time_ = t0;
       ++fade_serial_;
     }
-    // Fade over on any clock: a fade of T s of loop time spans at most
-    // max_playback_rate T s of video time; then let the old scene go.
-    if (t0 >= cut_time_ + max_playback_rate * fade_) before_cut_ = nullptr;
+    // (the old scene is kept until the next cut or reset: a fade runs on
+    // the caller's clock and may begin any video time after the cut, when
+    // the worker lagged)
     FrameWindow w;
     w.current = current;
     w.next = std::move(next);

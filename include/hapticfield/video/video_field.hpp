@@ -146,6 +146,7 @@ class VideoField {
   /// Force on the HIP [N] at the loop time probe.time [s]: servo thread only.
   /// In lockstep it first waits for the worker (see set_lockstep()).
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
+    if (!std::isfinite(probe.time)) return glm::dvec3{0.0};  // no time, no frame: zero, the clocks untouched
     State& s = *state_;
     const double t = s.clock.at(probe.time);
     const std::uint32_t epoch = s.clock.epoch();  // only at() changes it, on this thread
@@ -165,17 +166,22 @@ class VideoField {
     // The fade's own clock: loop time since the first tick that felt it
     // (a loop clock that goes back adds nothing).
     const double step = probe.time - s.last_tick_time;
-    if (std::isfinite(probe.time)) s.last_tick_time = probe.time;
-    if (w && (!s.felt_a_fade || w->window.fade_serial != s.felt_fade_serial)) {
-      // A fade that begins while the last one still runs (cuts closer than
-      // the fade time, as at a rate above 1) enters where that one left the
+    s.last_tick_time = probe.time;
+    // A new fade: a new serial (a start, a seek, a cut), or a new epoch (a
+    // live camera's frames after a seek or a new run fade in again too).
+    if (w && (!s.felt_a_fade || w->window.fade_serial != s.felt_fade_serial || w->epoch != s.felt_epoch)) {
+      // A cut that comes while the last fade still runs (cuts closer than
+      // the fade time, as at a rate above 1) enters where that fade left the
       // force: from its fade-in at weight e, the old scene fades out from e;
-      // from its first half, at the silent middle.
+      // from its first half, at the silent middle. Anything else (a start,
+      // a seek, a loop, a new run) fades in from zero, as on the first run.
       const double fade = w->window.fade, half = 0.5 * fade;
       double enter = 0.0;
-      if (s.felt_a_fade && s.since_fade < fade) enter = s.since_fade < half ? half : fade - s.since_fade;
+      if (s.felt_a_fade && s.since_fade < fade && w->window.before_cut && w->epoch == s.felt_epoch)
+        enter = s.since_fade < half ? half : fade - s.since_fade;
       s.felt_a_fade = true;
       s.felt_fade_serial = w->window.fade_serial;
+      s.felt_epoch = w->epoch;
       s.since_fade = enter;
     } else if (step > 0.0) {
       s.since_fade += step;
@@ -439,6 +445,7 @@ class VideoField {
     // servo-thread state: the fade being felt
     bool felt_a_fade = false;
     std::uint32_t felt_fade_serial = 0;  ///< FrameWindow::fade_serial of the fade felt last
+    std::uint32_t felt_epoch = 0;        ///< the epoch of the window that began it
     double since_fade = 0.0;             ///< loop time since the first tick that felt it [s]
     double last_tick_time = std::numeric_limits<double>::quiet_NaN();  ///< the last finite loop time [s]
     mutable std::mutex cuts_mutex;
