@@ -1518,6 +1518,39 @@ TEST_CASE("a fade still running when a run ends, a seek or reset() comes: the ne
   }
 }
 
+TEST_CASE("a field moved onto a running one: the old worker is stopped and joined, the new one plays on", "[video]") {
+  const std::string seq = write_sequence("move_assign", ramp_frames(30));
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});
+  const auto make_field = [&] {
+    return VideoField(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
+  };
+  Probe probe;
+  probe.position = {3e-3, -2e-3, 0.0};
+  VideoField reference = make_field();
+  reference.set_lockstep(true);
+  std::vector<glm::dvec3> expected;
+  for (int i = 0; i < 300; ++i) {
+    probe.time = i * 1e-3;
+    expected.push_back(reference.force(probe));
+  }
+  VideoField field = make_field();
+  field.set_lockstep(true);
+  for (int i = 0; i < 100; ++i) {  // its worker is running
+    probe.time = i * 1e-3;
+    (void)field.force(probe);
+  }
+  VideoField fresh = make_field();
+  fresh.set_lockstep(true);
+  field = std::move(fresh);  // (a defaulted assignment destroyed a joinable thread: std::terminate)
+  for (int i = 0; i < 300; ++i) {
+    probe.time = i * 1e-3;
+    CHECK(glm::length(field.force(probe) - expected[static_cast<std::size_t>(i)]) < 1e-12);
+  }
+  CHECK(field.error().empty());
+}
+
 TEST_CASE("a seek into a file's last half fade, or to its end, feels the last frame after the fade", "[video][fade]") {
   const double fps = 25.0, fade = 0.1, dt = 1e-3;
   const std::vector<cv::Mat> frames = ramp_frames(20);  // 0.8 s, the last frame at 0.76 s

@@ -138,7 +138,15 @@ class VideoField {
     state_->worker = std::thread([s = state_.get()] { s->run(); });
   }
   VideoField(VideoField&&) noexcept = default;
-  VideoField& operator=(VideoField&&) noexcept = default;
+  /// Stops and joins this field's worker first (a joinable thread must not
+  /// be destroyed), then takes the other's.
+  VideoField& operator=(VideoField&& other) noexcept {
+    if (this != &other) {
+      if (state_) state_->stop_and_join();
+      state_ = std::move(other.state_);
+    }
+    return *this;
+  }
   ~VideoField() {
     if (state_) state_->stop_and_join();
   }
