@@ -52,7 +52,7 @@ struct VideoFrame {
 struct FrameWindow {
   std::shared_ptr<const VideoFrame> current;                   ///< frame k (never null in a published window)
   std::shared_ptr<const VideoFrame> next;                      ///< frame k + 1, or null at the end of the stream
-  std::shared_ptr<const VideoFrame> before_cut;                ///< last frame of the old scene while fading out
+  std::shared_ptr<const VideoFrame> before_cut;                ///< last frame of the old scene (felt while fading out)
   double t0 = 0.0;                                             ///< when current is fully felt [s of video time]
   double t1 = std::numeric_limits<double>::infinity();         ///< when next is fully felt [s]
   double cut_time = -std::numeric_limits<double>::infinity();  ///< start of the last fade [s]

@@ -17,10 +17,11 @@
 ///
 /// Fades (the fade-in after a start, seek or loop, and the fade across a
 /// scene cut) run on the loop's clock, not on video time: each begins at the
-/// first tick that feels it and is over after the fade time T of loop time,
-/// whether playback is paused, at a file's end or at any rate. A seek to or
-/// past the last frame's time feels the last frame (when the source's frame
-/// count is right: a variable-rate file's is an estimate).
+/// first tick that picks up its window and is over after the fade time T of loop time,
+/// whether playback is paused, at a file's end or at any rate. In a file that
+/// does not loop, a seek to or past the last frame's time feels the last
+/// frame (when the source's frame count is right: a variable-rate file's is
+/// an estimate).
 ///
 /// Lockstep (set_lockstep(true)) is for loops on a simulated clock
 /// (VirtualClock, offline evaluation): force() then waits, spinning with
