@@ -151,6 +151,7 @@ py::dict statistics_dict(const VideoStatistics& s) {
   d["bad"] = s.bad;
   d["published"] = s.published;
   d["cuts"] = s.cuts;
+  d["stale_ticks"] = s.stale;
   d["ended"] = s.ended;
   d["video_time_s"] = s.video_time;
   return d;
@@ -194,7 +195,8 @@ void bind_video(py::module_& m) {
           "Video seconds per loop second, in (0, 16].")
       .def(
           "statistics", [](const VideoHandle& h) { return statistics_dict(h.video->statistics()); },
-          "Counters: prepared, dropped (preparation lagged), bad (undecodable), published (windows), cuts, ended, "
+          "Counters: prepared, dropped (preparation lagged), bad (undecodable), published (windows), cuts, "
+          "stale_ticks (ticks whose window was past its 0.5 s hold: the worker late; the force fades out), ended, "
           "video_time_s (the servo thread's latest video time [s]).")
       .def(
           "cuts", [](const VideoHandle& h) { return cut_list(h.video->cuts()); },

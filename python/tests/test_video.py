@@ -125,6 +125,7 @@ def test_run_servo_on_a_video_field_gives_forces_and_statistics(clip):
     assert np.max(tangential) > 0.05  # the video's edges were felt [N]
     s = video.statistics()
     assert s["prepared"] >= 15 and s["published"] >= 14 and s["dropped"] == 0  # every frame of 0.6 s came
+    assert s["stale_ticks"] == 0  # in lockstep no tick feels a window late past its hold
     assert 0.59 < s["video_time_s"] < 0.6  # the last tick's
     assert video.error() == "" and not video.lockstep  # lockstep for the run only
     video.stop()

@@ -122,6 +122,7 @@ struct VideoStatistics {
   long bad = 0;                ///< frames that failed to decode
   long published = 0;          ///< windows handed to the servo thread
   long cuts = 0;               ///< scene cuts detected
+  long stale = 0;              ///< ticks whose window was past its hold (the worker late): faded out, then zero
   bool ended = false;          ///< the stream ended (the last frame is held)
   bool variable_rate = false;  ///< the file's timestamps stray from k / fps (VideoSource::variable_rate())
   double video_time = 0.0;     ///< the servo thread's latest video time [s]
@@ -176,29 +177,62 @@ class VideoField {
     // (a loop clock that goes back adds nothing).
     const double step = probe.time - s.last_tick_time;
     s.last_tick_time = probe.time;
+    if (!w) {  // nothing to feel (a start, a seek, a loop): zero at once, nothing carried over
+      s.presence = 0.0;
+      s.carry_left = 0.0;
+      s.last_force = glm::dvec3{0.0};
+      return s.last_force;
+    }
+    const double fade = w->window.fade, half = 0.5 * fade;  // [s]
     // A new fade: a new serial (a start, a seek, a cut), or a new epoch (a
     // live camera's frames after a seek or a new run fade in again too).
-    if (w && (!s.felt_a_fade || w->window.fade_serial != s.felt_fade_serial || w->epoch != s.felt_epoch)) {
+    if (!s.felt_a_fade || w->window.fade_serial != s.felt_fade_serial || w->epoch != s.felt_epoch) {
       // A cut that comes while the last fade still runs (cuts closer than
       // the fade time, as at a rate above 1) enters where that fade left the
       // force: from its fade-in at weight e, the old scene fades out from e;
-      // from its first half, at the silent middle. Anything else (a start,
+      // from its first half, at the silent middle, and the scene before
+      // last, which this window does not hold, goes on fading out as it
+      // would have (its last felt force, as one vector). A cut that comes
+      // after a silence (a worker late past its hold) enters at the silent
+      // middle too: the old scene is not felt again. Anything else (a start,
       // a seek, a loop, a new run) fades in from zero, as on the first run.
-      const double fade = w->window.fade, half = 0.5 * fade;
+      const bool same_run = s.felt_a_fade && w->window.before_cut && w->epoch == s.felt_epoch;
       double enter = 0.0;
-      if (s.felt_a_fade && s.since_fade < fade && w->window.before_cut && w->epoch == s.felt_epoch)
+      s.carry_left = 0.0;
+      if (same_run && s.presence == 0.0) {
+        enter = half;
+        s.presence = 1.0;  // (its fade-in is the ramp)
+      } else if (same_run && s.since_fade < fade) {
         enter = s.since_fade < half ? half : fade - s.since_fade;
+        if (s.since_fade < half) {
+          s.carry = s.last_force;
+          s.carry_span = s.carry_left = half - s.since_fade;
+        }
+      }
       s.felt_a_fade = true;
       s.felt_fade_serial = w->window.fade_serial;
       s.felt_epoch = w->epoch;
       s.since_fade = enter;
     } else if (step > 0.0) {
       s.since_fade += step;
+      s.carry_left = std::fmax(s.carry_left - step, 0.0);
     }
-    if (!w) return glm::dvec3{0.0};
+    // A window the worker is late with, past its hold, fades out over T/2
+    // of loop time from its held frame (not a step to zero), and the force
+    // comes back over T/2 when a window is due again.
+    const double stale_from = w->window.t1 + w->window.max_hold;  // [s of video time]
+    const bool stale = t > stale_from;
+    if (stale) s.stale_ticks.store(s.stale_ticks.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    if (!(half > 0.0))
+      s.presence = stale ? 0.0 : 1.0;
+    else if (step > 0.0)
+      s.presence = std::clamp(s.presence + (stale ? -step : step) / half, 0.0, 1.0);
     Probe on = probe;
-    on.time = t;
-    return w->force(on, s.since_fade);
+    on.time = stale ? stale_from : t;
+    glm::dvec3 f = s.presence * w->force(on, s.since_fade);
+    if (s.carry_left > 0.0) f += (s.carry_left / s.carry_span) * s.carry;
+    s.last_force = f;
+    return f;
   }
 
   /// Lockstep with a simulated clock, from any thread: while on, force()
@@ -226,6 +260,7 @@ class VideoField {
     v.bad = s.bad.load();
     v.published = s.published.load();
     v.cuts = s.cut_count.load();
+    v.stale = s.stale_ticks.load();
     v.ended = s.ended.load();
     v.variable_rate = s.variable_rate.load();
     v.video_time = s.video_time.load();
@@ -451,12 +486,21 @@ class VideoField {
     std::atomic<bool> stop{false};
     std::atomic<bool> ended{false};
     std::atomic<long> prepared{0}, dropped{0}, bad{0}, published{0}, cut_count{0};
+    std::atomic<long> stale_ticks{0};  ///< written by the servo thread only
     // servo-thread state: the fade being felt
     bool felt_a_fade = false;
     std::uint32_t felt_fade_serial = 0;  ///< FrameWindow::fade_serial of the fade felt last
     std::uint32_t felt_epoch = 0;        ///< the epoch of the window that began it
     double since_fade = 0.0;             ///< loop time since the first tick that felt it [s]
     double last_tick_time = std::numeric_limits<double>::quiet_NaN();  ///< the last finite loop time [s]
+    /// How much of the window's force is felt, 0..1: it ramps over T/2 of
+    /// loop time, down while the window is stale (past its hold), up again
+    /// when one is due.
+    double presence = 0.0;
+    glm::dvec3 last_force{0.0};  ///< the force of the last tick [N]
+    glm::dvec3 carry{0.0};       ///< the scene before last, as felt when a cut came in its fade-out [N]
+    double carry_left = 0.0;     ///< loop time until the carried force is gone [s]
+    double carry_span = 1.0;     ///< loop time it fades over [s]
     mutable std::mutex cuts_mutex;
     std::vector<SceneCut> cuts;
     std::string error;

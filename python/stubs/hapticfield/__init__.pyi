@@ -190,7 +190,7 @@ class VideoField(Field):
     def set_rate(self, rate: float) -> None:
         """Video seconds per loop second, in (0, 16]."""
     def statistics(self) -> Dict[str, Any]:
-        """Counters: prepared, dropped (preparation lagged), bad (undecodable), published (windows), cuts, ended, video_time_s (the servo thread's latest video time [s])."""
+        """Counters: prepared, dropped (preparation lagged), bad (undecodable), published (windows), cuts, stale_ticks (ticks whose window was past its 0.5 s hold: the worker late; the force fades out), ended, video_time_s (the servo thread's latest video time [s])."""
     def stop(self) -> None:
         """Stops the worker thread (the field keeps its last window)."""
     @property
