@@ -431,7 +431,6 @@ TEST_CASE("the field's servo path never waits for, locks against or allocates wi
     if (const long now = field.statistics().stale; now != stale) {
       stale = now;
       settle = 60;
-      last = 0.0;
     }
     if (settle > 0) {
       --settle;
@@ -1819,13 +1818,15 @@ TEST_CASE("a worker late past its hold: the force fades out and back in, never a
       frames.push_back(cut && k >= 20 ? axis_ramp(true, 1.5) : axis_ramp(false, 0.5 + 0.02 * k));
     const std::string seq = write_sequence(cut ? "stall_cut" : "stall", frames);
     const RampOracle oracle(frames, fps, mapping, plain_config(5).tangible);
-    std::atomic<bool> hold{true};
+    std::atomic<bool> hold{true}, holding{false};
     VideoFieldConfig config;
     config.prepare = plain_config(5);
     config.fade = fade;
-    config.before_prepare = [&hold](long k) {
-      while (k == 10 && hold.load())
+    config.before_prepare = [&hold, &holding](long k) {
+      while (k == 10 && hold.load()) {
+        holding.store(true);
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
     };
     VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
     const Release release{hold};
@@ -1848,21 +1849,28 @@ TEST_CASE("a worker late past its hold: the force fades out and back in, never a
       return f;
     };
     const double ramp = dt / half;  // the most a fade moves the weight in one tick
-    for (int i = 0; i < 300; ++i)
+    for (int i = 0; i < 350; ++i)   // up to window (8, 9), [0.32, 0.36) s
       (void)tick(ramp * largest);
-    // The worker stops before frame 10 (0.4 s); played on in real time, the
-    // last window it published goes stale 0.5 s of video after its end.
-    wait_for_idle_worker(field);
+    // The worker stops before frame 10 (0.4 s) and is held there; played on
+    // without lockstep, window (8, 9) goes stale 0.5 s of video after its
+    // end (0.86 s).
+    for (int i = 0; i < 20000 && !holding.load(); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    REQUIRE(holding.load());
     field.set_lockstep(false);
     double felt_before = 0.0, felt_after = 0.0;
-    for (int i = 300; i < 1200; ++i) {
+    long stale_at = -1;
+    for (int i = 350; i < 1200; ++i) {
+      const long stale = field.statistics().stale;
       const glm::dvec3 f = tick(ramp * largest);
-      if (i < 800) felt_before = std::max(felt_before, glm::length(f));
-      if (i >= 950) felt_after = std::max(felt_after, glm::length(f));
+      if (stale_at < 0 && field.statistics().stale > stale) stale_at = i;
+      if (i < 860) felt_before = std::max(felt_before, glm::length(f));
+      if (i >= 860 + 50) felt_after = std::max(felt_after, glm::length(f));
     }
+    CHECK((stale_at == 860 || stale_at == 861));  // the first tick past 0.86 s (t summed tick by tick)
     CHECK(felt_before >= glm::length(oracle.at(0.3, probe.position)));
     CHECK(felt_after == 0.0);  // the stale window has faded out
-    CHECK(field.statistics().stale > 200);
+    CHECK(field.statistics().stale == 1200 - stale_at);
     CHECK(worst_jump <= 0.0);  // down over T/2, not a step
     // Let the worker go; in lockstep the next tick feels the window of its
     // video time (1.2 s): it comes back over T/2, never a step up.
@@ -1889,53 +1897,92 @@ TEST_CASE("a worker late past its hold: the force fades out and back in, never a
   }
 }
 
-TEST_CASE("a cut in the first half of the last fade (a one-frame flash at 4x): the scene before last fades on",
+TEST_CASE("cuts in the first half of the last fade (one- and two-frame flashes at 4x): the scene before fades on",
           "[video][fade]") {
   const double fps = 25.0, fade = 0.1, dt = 1e-3, rate = 4.0, half = 0.5 * fade;
-  // The bar (frames 0-29), one plain gray frame (30, no force anywhere),
-  // the disc (31-45). At 4x the flash lasts 10 ms of loop time: the second
-  // cut comes 10 ms into the first cut's fade-out of the bar.
+  for (const int flashes : {1, 2}) {
+    CAPTURE(flashes);
+    // The bar (frames 0-29), one plain gray frame (30, no force anywhere),
+    // a plain white one (31, with two flashes), then the disc. At 4x a
+    // flash lasts 10 ms of loop time: each cut comes 10 ms after the last,
+    // inside its fade's first half or just past it.
+    std::vector<cv::Mat> frames;
+    for (int k = 0; k < 46; ++k)
+      frames.push_back(k < 30             ? scene_frame(0, 5)
+                       : k < 30 + flashes ? cv::Mat(64, 96, CV_8UC3, cv::Scalar::all(k == 30 ? 128 : 255))
+                                          : scene_frame(1, 0));
+    const std::string seq = write_sequence(flashes == 1 ? "fade_flash" : "fade_flash2", frames);
+    VideoFieldConfig config;
+    config.prepare = plain_config(5);
+    config.fade = fade;
+    config.prepare.cuts.min_scene_frames = 1;  // a one-frame scene is a scene
+    config.playback.rate = rate;
+    const PlaneMapping mapping(1.0, glm::dvec2{48.0, 32.0});
+    Probe probe;
+    probe.position = mapping.to_device(glm::dvec2{30.0, 32.0});  // the bar's left edge and the disc's
+    const glm::dvec2 px = mapping.to_image(probe.position);
+    const glm::dvec3 bar = mapping.vector_to_device(still(frames[0], config.prepare.tangible).at(px.x, px.y));
+    const glm::dvec3 disc = mapping.vector_to_device(still(frames[40], config.prepare.tangible).at(px.x, px.y));
+    REQUIRE(glm::length(bar) > 1e-3);
+    REQUIRE(glm::length(disc) > 1e-3);
+    VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
+    field.set_lockstep(true);
+    // no steeper than the two fades together: the bar's out, the disc's in
+    const double bound = dt / half * (glm::length(bar) + glm::length(disc)) + 1e-12;
+    double worst_jump = 0.0;
+    glm::dvec3 before{0.0};
+    std::vector<glm::dvec3> felt;
+    for (long i = 0; i < 500; ++i) {  // the cuts at 1.2, 1.24 (and 1.28) s of video: 300, 310 (and 320) ms of loop time
+      probe.time = static_cast<double>(i) * dt;
+      const glm::dvec3 f = field.force(probe);
+      if (i > 0) worst_jump = std::max(worst_jump, glm::length(f - before) - bound);
+      felt.push_back(f);
+      before = f;
+    }
+    std::vector<long> cut_frames;
+    for (const SceneCut& c : field.cuts())
+      cut_frames.push_back(c.frame);
+    CAPTURE(worst_jump, felt[309].x, felt[310].x, felt[311].x, felt[319].x, felt[320].x);
+    CHECK(cut_frames == (flashes == 1 ? std::vector<long>{30, 31} : std::vector<long>{30, 31, 32}));
+    CHECK(worst_jump <= 0.0);                            // no step, up or down
+    CHECK(glm::length(felt[310] - felt[309]) <= bound);  // the bar's 80 % carried on at the second cut
+    CHECK(glm::length(felt[320] - felt[319]) <= bound);  // and on at the third
+    CHECK(glm::length(felt[290] - bar) <= 1e-9);         // the bar, whole, before the cuts
+    CHECK(glm::length(before - disc) <= 1e-9);           // the disc, whole, in the end
+    field.stop();
+  }
+}
+
+TEST_CASE("a second run feels what the first did when a cut comes inside the first run's fade-in", "[video][rerun]") {
+  // Playback from 1.19 s, a cut at 1.2 s (frame 30, 10 ms of loop time
+  // on): the cut's fade begins while the start's fade-in runs. Two runs on
+  // the same field (the loop's clock restarted), in lockstep: the same
+  // forces, bit for bit.
   std::vector<cv::Mat> frames;
-  for (int k = 0; k < 46; ++k)
-    frames.push_back(k < 30    ? scene_frame(0, 5)
-                     : k == 30 ? cv::Mat(64, 96, CV_8UC3, cv::Scalar(128, 128, 128))
-                               : scene_frame(1, 0));
-  const std::string seq = write_sequence("fade_flash", frames);
+  for (int k = 0; k < 60; ++k)
+    frames.push_back(k < 30 ? scene_frame(0, 5) : scene_frame(1, 0));
+  const std::string seq = write_sequence("rerun_cut", frames);
   VideoFieldConfig config;
   config.prepare = plain_config(5);
-  config.fade = fade;
-  config.prepare.cuts.min_scene_frames = 1;  // a one-frame scene is a scene
-  config.playback.rate = rate;
+  config.prepare.cuts.min_scene_frames = 1;
+  config.playback.start = 1.19;
   const PlaneMapping mapping(1.0, glm::dvec2{48.0, 32.0});
-  Probe probe;
-  probe.position = mapping.to_device(glm::dvec2{30.0, 32.0});  // the bar's left edge and the disc's
-  const glm::dvec2 px = mapping.to_image(probe.position);
-  const glm::dvec3 bar = mapping.vector_to_device(still(frames[0], config.prepare.tangible).at(px.x, px.y));
-  const glm::dvec3 disc = mapping.vector_to_device(still(frames[31], config.prepare.tangible).at(px.x, px.y));
-  REQUIRE(glm::length(bar) > 1e-3);
-  REQUIRE(glm::length(disc) > 1e-3);
-  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = 25.0}), mapping, config);
   field.set_lockstep(true);
-  // no steeper than the two fades together: the bar's out, the disc's in
-  const double bound = dt / half * (glm::length(bar) + glm::length(disc)) + 1e-12;
-  double worst_jump = 0.0;
-  glm::dvec3 before{0.0};
-  std::vector<glm::dvec3> felt;
-  for (long i = 0; i < 500; ++i) {  // the cuts at 1.2 and 1.24 s of video: 300 and 310 ms of loop time
-    probe.time = static_cast<double>(i) * dt;
-    const glm::dvec3 f = field.force(probe);
-    if (i > 0) worst_jump = std::max(worst_jump, glm::length(f - before) - bound);
-    felt.push_back(f);
-    before = f;
-  }
-  std::vector<long> cut_frames;
-  for (const SceneCut& c : field.cuts())
-    cut_frames.push_back(c.frame);
-  CAPTURE(worst_jump, felt[309].x, felt[310].x, felt[311].x);
-  CHECK(cut_frames == std::vector<long>{30, 31});
-  CHECK(worst_jump <= 0.0);                            // no step, up or down
-  CHECK(glm::length(felt[310] - felt[309]) <= bound);  // the bar's 80 % carried on at the second cut
-  CHECK(glm::length(felt[290] - bar) <= 1e-9);         // the bar, whole, before the cuts
-  CHECK(glm::length(before - disc) <= 1e-9);           // the disc, whole, in the end
+  Probe probe;
+  probe.position = mapping.to_device(glm::dvec2{30.0, 32.0});
+  std::array<std::vector<glm::dvec3>, 2> runs;
+  for (auto& run : runs)
+    for (int i = 0; i < 150; ++i) {
+      probe.time = i * 1e-3;
+      run.push_back(field.force(probe));
+    }
+  REQUIRE(!field.cuts().empty());
+  CHECK(field.cuts()[0].frame == 30);
+  double largest = 0.0;
+  for (const glm::dvec3& f : runs[0])
+    largest = std::max(largest, glm::length(f));
+  CHECK(largest > 1e-3);
+  CHECK(runs[0] == runs[1]);
   field.stop();
 }

@@ -184,6 +184,13 @@ class VideoField {
       return s.last_force;
     }
     const double fade = w->window.fade, half = 0.5 * fade;  // [s]
+    // A window the worker is late with, past its hold, fades out over T/2
+    // of loop time from its held frame (not a step to zero), and the force
+    // comes back over T/2 when a window is due again (presence).
+    const double stale_from = w->window.t1 + w->window.max_hold;  // [s of video time]
+    const bool stale = t > stale_from;
+    if (stale) s.stale_ticks.store(s.stale_ticks.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    if (step > 0.0) s.carry_left = std::fmax(s.carry_left - step, 0.0);
     // A new fade: a new serial (a start, a seek, a cut), or a new epoch (a
     // live camera's frames after a seek or a new run fade in again too).
     if (!s.felt_a_fade || w->window.fade_serial != s.felt_fade_serial || w->epoch != s.felt_epoch) {
@@ -192,17 +199,21 @@ class VideoField {
       // force: from its fade-in at weight e, the old scene fades out from e;
       // from its first half, at the silent middle, and the scene before
       // last, which this window does not hold, goes on fading out as it
-      // would have (its last felt force, as one vector). A cut that comes
-      // after a silence (a worker late past its hold) enters at the silent
-      // middle too: the old scene is not felt again. Anything else (a start,
-      // a seek, a loop, a new run) fades in from zero, as on the first run.
+      // would have (its last felt force, as one vector; a force carried so
+      // from an earlier cut goes on fading too). A cut that comes after a
+      // silence (a window late past its hold, faded out) enters at the
+      // silent middle too: the old scene is not felt again. Anything else
+      // (a start, a seek, a loop, a new run) fades in from zero, as on the
+      // first run: its silent half is the ramp, nothing is carried over.
       const bool same_run = s.felt_a_fade && w->window.before_cut && w->epoch == s.felt_epoch;
       double enter = 0.0;
-      s.carry_left = 0.0;
-      if (same_run && s.presence == 0.0) {
+      if (!same_run) {
+        s.carry_left = 0.0;
+        if (!stale) s.presence = 1.0;
+      } else if (s.presence == 0.0) {
         enter = half;
-        s.presence = 1.0;  // (its fade-in is the ramp)
-      } else if (same_run && s.since_fade < fade) {
+        if (!stale) s.presence = 1.0;
+      } else if (s.since_fade < fade) {
         enter = s.since_fade < half ? half : fade - s.since_fade;
         if (s.since_fade < half) {
           s.carry = s.last_force;
@@ -215,14 +226,7 @@ class VideoField {
       s.since_fade = enter;
     } else if (step > 0.0) {
       s.since_fade += step;
-      s.carry_left = std::fmax(s.carry_left - step, 0.0);
     }
-    // A window the worker is late with, past its hold, fades out over T/2
-    // of loop time from its held frame (not a step to zero), and the force
-    // comes back over T/2 when a window is due again.
-    const double stale_from = w->window.t1 + w->window.max_hold;  // [s of video time]
-    const bool stale = t > stale_from;
-    if (stale) s.stale_ticks.store(s.stale_ticks.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     if (!(half > 0.0))
       s.presence = stale ? 0.0 : 1.0;
     else if (step > 0.0)
