@@ -5,12 +5,15 @@
 #include <catch2/catch.hpp>
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -67,7 +70,7 @@ class Child {
     posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     pid_ = spawn_tool(tool, args, actions);
     ::close(in[0]);
-    if (press_enter) (void)!::write(in[1], "\n", 1);  // Enter at the prompt; the pipe stays open
+    if (press_enter) enter(in[1]);  // Enter at the prompt; the pipe stays open
     stdin_ = in[1];
   }
   Child(const Child&) = delete;
@@ -81,6 +84,22 @@ class Child {
   }
 
   void signal(int s) const { REQUIRE(::kill(pid_, s) == 0); }
+
+  /// Writes one Enter to the child's stdin; a child that has already
+  /// exited (a tool that answers --help at once) has closed its end: the
+  /// write then fails with EPIPE, and the SIGPIPE it raises, held back
+  /// for this thread, is taken off here instead of ending the test.
+  static void enter(int fd) {
+    sigset_t pipe_signal, before;
+    sigemptyset(&pipe_signal);
+    sigaddset(&pipe_signal, SIGPIPE);
+    ::pthread_sigmask(SIG_BLOCK, &pipe_signal, &before);
+    if (::write(fd, "\n", 1) < 0 && errno == EPIPE) {
+      const timespec now{0, 0};
+      (void)::sigtimedwait(&pipe_signal, nullptr, &now);
+    }
+    ::pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  }
 
   /// Waits for the child to end (bounded); false if it had to be killed.
   bool wait(std::chrono::seconds patience = std::chrono::seconds(60)) {
