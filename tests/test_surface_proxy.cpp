@@ -434,6 +434,102 @@ TEST_CASE("friction first on a curved sheet: the force stays in the friction con
   }
 }
 
+TEST_CASE("sliding steadily over a curved mesh, the friction does not drop out: |Ft| stays near mu_k Fn") {
+  // A HIP pressed into a faceted curved surface and slid along it at a
+  // steady depth and speed is past the cone: the proxy slides mu_k d
+  // behind, and |Ft| / Fn stays near mu_k. The oracle is Coulomb's law,
+  // not the proxy: a fall of |Ft| / Fn by more than mu_k / 2 from one tick
+  // to the next (the proxy snapped to the frictionless point, then stuck
+  // while its lag builds up again) is a jolt, felt as a judder. On a convex
+  // icosphere there must be none; on wavy sheets (1.7 and 0.5 mm facets,
+  // concave creases between them) at most one tick in a hundred, pooled
+  // (the proxy this test was written for fell on 3 to 12 in a hundred).
+  // A point and 0.5 and 2 mm balls, random starts, directions (great
+  // circles on the sphere), speeds and depths.
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double k = 1500.0, mu_s = 0.5, mu_k = 0.4, dt = 1e-3;
+  struct Surface {
+    const char* name;
+    MeshShape shape;
+    bool sphere;
+  };
+  const double amplitude = 0.003, wavelength = 0.03, sphere_radius = 0.05;
+  const std::vector<Surface> surfaces{
+      {"wavy sheet, 1.7 mm facets", MeshShape(test::wavy_sheet(0.1, 60, amplitude, wavelength)), false},
+      {"wavy sheet, 0.5 mm facets", MeshShape(test::wavy_sheet(0.1, 200, amplitude, wavelength)), false},
+      {"icosphere, 2.5 mm facets", MeshShape(test::icosphere(5, sphere_radius)), true}};
+  const double wave = 2.0 * 3.14159265358979323846 / wavelength;
+  const auto height = [&](double x, double y) { return amplitude * std::sin(wave * x) * std::sin(wave * y); };
+  long sheet_ticks = 0, sheet_falls = 0;
+  for (const Surface& surface : surfaces) {
+    for (const double r : {0.0, 0.0005, 0.002}) {
+      INFO(surface.name << ", radius " << r);
+      ProxyConstraint proxy(
+          surface.shape, ProxyConfig{.stiffness = k, .static_friction = mu_s, .dynamic_friction = mu_k, .radius = r});
+      long measured = 0, falls = 0;
+      double lowest = 1.0, highest = 0.0;
+      for (int run = 0; run < 8; ++run) {
+        proxy.reset();
+        const double speed = surface.sphere ? 0.02 + 0.18 * u(rng) : 0.02 + 0.03 * u(rng);  // [m/s]
+        const double depth = 0.0005 + 0.0015 * u(rng);                                      // [m]
+        const double angle = 6.283185307179586 * u(rng);
+        // the sheet: a straight line over it (at most 35 mm, from within
+        // 15 mm of its centre); the sphere: a great circle
+        const glm::dvec2 start{0.015 * (2.0 * u(rng) - 1.0), 0.015 * (2.0 * u(rng) - 1.0)};
+        const glm::dvec2 heading{std::cos(angle), std::sin(angle)};
+        const glm::dvec3 pole = glm::normalize(glm::dvec3{u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5});
+        const glm::dvec3 across = glm::normalize(glm::cross(pole, glm::dvec3{0.3, -0.5, 0.8}));
+        double before = -1.0;  // |Ft| / Fn of the tick before (-1: not measured)
+        for (int i = 0; i < 900; ++i) {
+          const double pressed = std::min(1.0, i / 100.0);         // 1 mm above, then pressed over 0.1 s
+          const double along = std::max(0, i - 200) * dt * speed;  // still for 0.1 s, then sliding [m]
+          const double below = (0.001 + depth) * pressed;          // [m]
+          glm::dvec3 hip, velocity{0.0};
+          if (surface.sphere) {
+            const double a = along / sphere_radius;
+            const glm::dvec3 out = std::cos(a) * pole + std::sin(a) * across;
+            hip = (sphere_radius + r + 0.001 - below) * out;
+            if (i >= 200) velocity = speed * (-std::sin(a) * pole + std::cos(a) * across);
+          } else {
+            const glm::dvec2 xy = start + along * heading;
+            hip = {xy.x, xy.y, height(xy.x, xy.y) + r + 0.001 - below};
+            if (i >= 200) velocity = {speed * heading.x, speed * heading.y, 0.0};
+          }
+          const Contact c = proxy.contact(probe_at(hip, velocity));
+          // from 0.3 s of sliding (the lag built), where it presses well
+          const double fn = glm::dot(c.force, c.normal);
+          if (i < 500 || !c.touching || fn < 0.2 * k * depth) {
+            before = -1.0;
+            continue;
+          }
+          const double ratio = glm::length(c.force - fn * c.normal) / fn;
+          ++measured;
+          falls += before >= 0.0 && before - ratio > 0.5 * mu_k;
+          before = ratio;
+          lowest = std::min(lowest, ratio);
+          highest = std::max(highest, ratio);
+        }
+      }
+      INFO(measured << " ticks measured, |Ft| / Fn from " << lowest << " to " << highest << ", " << falls << " falls");
+      CHECK(measured > 400);
+      CHECK(highest <= 1.1 * mu_s);
+      if (surface.sphere) {
+        CHECK(falls == 0);
+        CHECK(lowest >= 0.75 * mu_k);  // sliding all along
+      } else {
+        sheet_ticks += measured;
+        sheet_falls += falls;
+      }
+    }
+  }
+  INFO("wavy sheets: " << sheet_falls << " falls in " << sheet_ticks << " ticks");
+  CHECK(sheet_ticks > 5000);
+  CHECK(sheet_falls * 100 <= sheet_ticks);
+}
+
 TEST_CASE("a ball with friction stays passive on a wavy mesh at 1 kHz over 10 s of tapping and sliding") {
   const TriangleMesh m = with_vertex_normals(test::wavy_sheet(0.1, 60, 0.001, 0.03));
   ProxyConstraint ball(

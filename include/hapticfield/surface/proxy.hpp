@@ -35,14 +35,22 @@
 ///      face with no sweep (a point on one flat face) or in one swept move,
 ///      settled onto the surface by a second where it curves away below.
 ///      Where that move meets the surface (it curves up ahead), steps 1-2
-///      take it on toward the HIP moved by the slide's lag, with no step 3
-///      (unless they end past the cone: then the full tick). Else 1-4.
+///      take it on toward the HIP moved by the slide's lag, with no step 3.
+///      Where they end past the cone (in a crease whose face the HIP does
+///      not press on), the friction is decided once more from there, on the
+///      planes the HIP presses, and only if that fails too the full tick
+///      runs. Else 1-4.
 ///   3. Friction (the friction cone of Salisbury et al. 1995 and of Ruspini
 ///      1997): with d the depth and s the distance the proxy would slide from
 ///      where it was, it stays where it was (sticks) while s <= mu_s d, and
 ///      when it slides it lags mu_k d behind, so the tangential force is mu_k
-///      times the normal one. A held point that is off the surface (a
-///      plane's extension past its face) is not taken: no friction that tick.
+///      times the normal one. In a crease, where it was counts on the faces
+///      the HIP presses on from there (the one it came along), not on the
+///      crease line. A held point off the surface (a plane's extension past
+///      its face, the surface curved away below) or behind it (curved up
+///      between) is reached over the surface instead: steps 1-2 toward the
+///      HIP moved by the lag, kept when they end inside the cone; else no
+///      friction that tick.
 ///   4. The depth d is measured from the surface point nearest the HIP on
 ///      this tick's planes without the lift (the face, the crease line or the
 ///      corner); Fc = max(0, k d - b v.n) n + k (proxy - frictionless proxy):
@@ -99,13 +107,15 @@ inline constexpr int proxy_max_moves = 6;
 /// Most passes in one tick: a pass that leaves the proxy off every face (it
 /// slid past a convex edge) is followed by another from there; the passes
 /// make at most proxy_max_passes x proxy_max_moves swept queries, with a
-/// closest() after each pass. Besides: one friction move, or step 0's slide
-/// and settling sweeps (ProxyConfig::stick_first) and, when the motion it
-/// hands on ends past the cone, the passes once more from the start.
+/// closest() after each pass. Besides: the friction move (one sweep, or,
+/// where the surface curves between, the passes once more over it), or
+/// step 0's slide and settling sweeps (ProxyConfig::stick_first) and, when
+/// the motion it hands on ends past the cone, the passes once more where it
+/// ended and, if that fails too, the full tick from the start.
 inline constexpr int proxy_max_passes = 4;
 /// Most points of the path the proxy takes in one tick (its start, the end
 /// of every swept move and the friction move): last_path().
-inline constexpr int proxy_max_path = proxy_max_passes * proxy_max_moves + 2;
+inline constexpr int proxy_max_path = 2 * proxy_max_passes * proxy_max_moves + 3;
 
 /// The proxy's path in one tick: points[0] is where it started, each next
 /// point the end of one straight piece, the last where it stays. Every
@@ -149,8 +159,8 @@ struct ProxyConfig {
   /// its path swept (ProxyTick::blocked). The worst tick then visits at most
   /// this plus the budget of the one query that crossed it (a mesh's
   /// MeshShapeConfig::max_nodes) and of the closest() queries that follow
-  /// (one per pass); without it, up to 2 x proxy_max_passes x
-  /// proxy_max_moves + 2 queries of a full budget each.
+  /// (one per pass); without it, up to 4 x proxy_max_passes x
+  /// proxy_max_moves + 3 queries of a full budget each.
   std::uint32_t tick_node_budget{proxy_default_tick_node_budget};
 };
 
@@ -241,7 +251,7 @@ class ProxyConstraint {
     }
     // 1-2: constrained motion toward the aim
     move_toward(aim, start, m);
-    if (friction_decided && !m.embedded && !m.blocked && !in_cone(goal, m)) {
+    if (friction_decided && !m.embedded && !m.blocked && !in_cone(goal, m) && !decide_again(goal, m)) {
       // the lag step 0 chose on last tick's planes does not hold where the
       // proxy came to (over a crest: past the cone, off the surface, or on
       // a plane the HIP does not press on): the full tick, as if step 0 had
@@ -264,26 +274,26 @@ class ProxyConstraint {
       return none;
     }
     glm::dvec3 x = m.x;
-    const Planes& planes = m.planes;
+    Planes planes = m.planes;
     const Hit& last_hit = m.last_hit;
     Hit touched = m.touched;
     const bool blocked = m.blocked;
     // the frictionless proxy: where the motion ended, or, aimed, the HIP's
     // point on its planes
-    const glm::dvec3 frictionless = friction_decided ? planes.project_equal(goal) : x;
-    tick_.planes = planes.count;
+    glm::dvec3 frictionless = friction_decided ? planes.project_equal(goal) : x;
 
     // the surface point the HIP is pushed toward: the nearest point to the
     // HIP on this tick's planes without the proxy's lift (the face, the
     // crease line or the corner itself); the depth is measured from it
-    const glm::dvec3 on_surface = planes.project_equal(goal, false);
-    const double depth = glm::length(on_surface - goal);  // [m]
+    glm::dvec3 on_surface = planes.project_equal(goal, false);
+    double depth = glm::length(on_surface - goal);  // [m]
 
     // 3: friction cone
     if (friction_decided) {  // step 0 decided it (sliding_)
       if (planes.count == 0) sliding_ = false;
     } else if (planes.count > 0 && touching_ && !blocked && config_.static_friction > 0.0 && depth > 0.0) {
-      const glm::dvec3 held = planes.project_equal(start);  // where the proxy was, on this tick's constraints
+      // where the proxy was, on this tick's constraints
+      const glm::dvec3 held = held_point(planes, start);
       const glm::dvec3 slide = held - frictionless;
       const double s = glm::length(slide);
       const double mu = sliding_ ? config_.dynamic_friction : config_.static_friction;
@@ -301,23 +311,52 @@ class ProxyConstraint {
           visit(x);
           touched = same;
         } else if (tick_.nodes < config_.tick_node_budget) {  // (else the tick's budget is spent: frictionless)
+          bool replanned = false;  // the proxy ends on other planes than the frictionless motion's
           const Hit h = sweep(frictionless, candidate);
           ++tick_.moves;
           if (h.complete && !h.found()) {
-            // held only where it is still on the surface (a plane's extension
-            // past the end of its face is not): else frictionless this tick
+            // held where it is still on the surface; a plane's extension
+            // past the end of its face is not (the surface curved away below)
             const Hit there = nearest(candidate, within, touched);
             if (there.found()) {
               x = candidate;
               visit(x);
               touched = there;
+            } else {
+              Motion back{candidate};  // off the surface: from there, down onto it
+              visit(candidate);
+              back.last_hit = touched;
+              if (follow_surface(goal, frictionless, candidate, back)) {
+                replanned = true;
+                x = back.x;
+                touched = back.touched;
+                planes = back.planes;
+              }
             }
+          } else if (h.complete) {  // the surface curves up between: from where the move met it
+            Motion back{frictionless};
+            back.planes = planes;
+            back.last_hit = h;
+            if (!stop_at(h, candidate - frictionless, glm::length(candidate - frictionless), back.x, back.planes)) {
+              visit(frictionless);  // (three planes held already: it stays, frictionless)
+            } else if (follow_surface(goal, frictionless, candidate, back)) {
+              replanned = true;
+              x = back.x;
+              touched = back.touched;
+              planes = back.planes;
+            }
+          }
+          if (replanned) {  // held on the planes it came to: the force from those, as step 0's next tick
+            frictionless = planes.project_equal(goal);
+            on_surface = planes.project_equal(goal, false);
+            depth = glm::length(on_surface - goal);
           }
         }
       }
     } else if (planes.count == 0) {
       sliding_ = false;  // a new contact starts stuck
     }
+    tick_.planes = planes.count;
     tick_.sliding = sliding_;
     tick_.blocked = blocked;
 
@@ -380,13 +419,14 @@ class ProxyConstraint {
     std::array<glm::dvec3, 3> normal{};
     std::array<double, 3> c{};
     std::array<double, 3> lift{};  ///< each plane's offset above its surface [m]
+    std::array<std::uint32_t, 3> primitive{no_primitive, no_primitive, no_primitive};  ///< the face each lies on
     int count{0};
     int active{0};           ///< the first `active` planes bind (after release)
     double tolerance{0.0};   ///< smallest offset seen: motions below it are none [m]
     double max_offset{0.0};  ///< largest offset seen [m]
 
-    /// Adds a plane; false when three are held already.
-    bool add(const glm::dvec3& n, double offset_c, double eps) noexcept {
+    /// Adds a plane (of face `face`); false when three are held already.
+    bool add(const glm::dvec3& n, double offset_c, double eps, std::uint32_t face) noexcept {
       tolerance = count == 0 ? 0.01 * eps : std::fmin(tolerance, 0.01 * eps);
       max_offset = std::fmax(max_offset, eps);
       for (int i = 0; i < count; ++i)
@@ -394,6 +434,7 @@ class ProxyConstraint {
           if (offset_c > c[static_cast<std::size_t>(i)]) {
             c[static_cast<std::size_t>(i)] = offset_c;
             lift[static_cast<std::size_t>(i)] = eps;
+            primitive[static_cast<std::size_t>(i)] = face;
           }
           return true;
         }
@@ -401,6 +442,7 @@ class ProxyConstraint {
       normal[static_cast<std::size_t>(count)] = n;
       c[static_cast<std::size_t>(count)] = offset_c;
       lift[static_cast<std::size_t>(count)] = eps;
+      primitive[static_cast<std::size_t>(count)] = face;
       ++count;
       return true;
     }
@@ -453,6 +495,7 @@ class ProxyConstraint {
         normal[static_cast<std::size_t>(k)] = normal[static_cast<std::size_t>(k + 1)];
         c[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k + 1)];
         lift[static_cast<std::size_t>(k)] = lift[static_cast<std::size_t>(k + 1)];
+        primitive[static_cast<std::size_t>(k)] = primitive[static_cast<std::size_t>(k + 1)];
       }
       --count;
     }
@@ -561,7 +604,7 @@ class ProxyConstraint {
     glm::dvec3 on_surface = planes.project_equal(goal, false);
     double depth = glm::length(on_surface - goal);
     if (!(depth > 0.0)) return FrictionFirst::full;
-    const glm::dvec3 held = planes.project_equal(proxy_);
+    const glm::dvec3 held = held_point(planes, proxy_);
     const glm::dvec3 slide = held - frictionless;
     const double s = glm::length(slide);
     const bool sliding = s > (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth;
@@ -661,6 +704,108 @@ class ProxyConstraint {
     }
   }
 
+  /// Step 3's friction move where the frictionless planes do not carry it
+  /// (the surface curves up between, or away below, the frictionless point
+  /// and the held one, `candidate`): the constrained motion from where
+  /// `back` has it toward the HIP moved by the friction's lag, so that the
+  /// proxy lags behind over the surface itself, not along a plane's
+  /// extension. True when it ends on the surface, every move swept, inside
+  /// the static cone on the planes it came to (back then has the proxy);
+  /// else the proxy stays frictionless this tick.
+  [[nodiscard]] bool follow_surface(const glm::dvec3& goal, const glm::dvec3& frictionless, const glm::dvec3& candidate,
+                                    Motion& back) noexcept {
+    const int before = path_.count;
+    move_toward(goal + (candidate - frictionless), frictionless, back);
+    if (back.blocked || back.embedded || !back.touched.found() || !hold_on_pressed(goal, back)) {
+      path_.count = before;  // (the path ends where the proxy stays: the frictionless point)
+      visit(frictionless);
+      return false;
+    }
+    return true;
+  }
+
+  /// Where step 0's aimed motion ended outside the cone (it came into a
+  /// crease and the HIP presses on one of its faces only, or the surface
+  /// curved), the friction decided once more from there, on the planes the
+  /// HIP presses: stuck where it stopped inside the cone, else the
+  /// constrained motion on toward the HIP moved by mu_k d toward where it
+  /// stopped. True (m then has the proxy) when that ends on the surface
+  /// inside the cone; false leaves m as it was (the full tick follows).
+  [[nodiscard]] bool decide_again(const glm::dvec3& goal, Motion& m) noexcept {
+    if (!(config_.static_friction > 0.0) || tick_.nodes >= config_.tick_node_budget) return false;
+    Planes pressed = m.planes;
+    const glm::dvec3 free = pressed.project(goal);  // the HIP's point on the planes it presses
+    if (pressed.count == 0) return false;
+    const double depth = glm::length(pressed.project_equal(goal, false) - goal);  // [m]
+    if (!(depth > 0.0)) return false;
+    const glm::dvec3 slide = m.x - free;
+    const double s = glm::length(slide);
+    if (s <= (sliding_ ? config_.dynamic_friction : config_.static_friction) * depth) {  // stuck where it stopped
+      Motion stuck = m;
+      if (!hold_on_pressed(goal, stuck)) return false;
+      sliding_ = false;
+      m = stuck;
+      return true;
+    }
+    const int before = path_.count;
+    Motion on = m;
+    on.planes = pressed;
+    move_toward(goal + (config_.dynamic_friction * depth / s) * slide, m.x, on);
+    if (on.embedded || on.blocked || !on.touched.found() || !hold_on_pressed(goal, on)) {
+      path_.count = before;
+      return false;
+    }
+    sliding_ = true;
+    m = on;
+    return true;
+  }
+
+  /// Where a proxy that was at p holds on `planes` (step 3's and step 0's
+  /// rule): p on them, but in a crease on those it presses on from p (the
+  /// face it came along), not on the crease line, which would keep only the
+  /// slide along the crease and snap the proxy onto it.
+  /// A plane counts as left when p lies more than the largest offset in
+  /// front of it (a point on two planes, within rounding, keeps both).
+  [[nodiscard]] static glm::dvec3 held_point(const Planes& planes, const glm::dvec3& p) noexcept {
+    Planes from = planes;
+    if (planes.count > 1)
+      for (int i = from.count - 1; i >= 0; --i)
+        if (glm::dot(from.normal[static_cast<std::size_t>(i)], p) - from.c[static_cast<std::size_t>(i)] >
+            planes.max_offset)
+          from.remove(i);
+    return (from.count > 0 ? from : planes).project_equal(p);
+  }
+
+  /// m's planes cut to those the HIP presses on (in a crease, it may have
+  /// left the face the proxy came off), and its touched face one of theirs
+  /// (the force's normal is that face's); true when m then lies on the
+  /// surface inside the static cone about the HIP's point on them (m
+  /// changed), false otherwise (m as it was).
+  [[nodiscard]] bool hold_on_pressed(const glm::dvec3& goal, Motion& m) const noexcept {
+    Motion held = m;
+    (void)held.planes.project(goal);
+    if (held.planes.count == 0) return false;
+    for (int i = 0; i < held.planes.count && !on_planes(held.planes, held.touched); ++i) {
+      Hit face;
+      face.primitive = held.planes.primitive[static_cast<std::size_t>(i)];
+      held.touched = on_same_face(m.x, reach(held.planes), face);
+    }
+    if (!on_planes(held.planes, held.touched) || !in_cone(goal, held)) return false;
+    m = held;
+    return true;
+  }
+
+  /// True when face h was found and holds one of `planes` (a plane of
+  /// its own, or of its edge or corner for a ball), or lies in one.
+  [[nodiscard]] static bool on_planes(const Planes& planes, const Hit& h) noexcept {
+    if (!h.found()) return false;
+    for (int i = 0; i < planes.count; ++i)
+      if (planes.primitive[static_cast<std::size_t>(i)] == h.primitive ||
+          glm::dot(planes.normal[static_cast<std::size_t>(i)], h.face_normal) > 1.0 - 1e-12)
+        return true;
+    return false;
+  }
+
   /// True when the proxy where m has it is on the surface, the HIP presses
   /// on every plane it is held to, and it lies inside the static friction
   /// cone about the HIP's point on them.
@@ -680,7 +825,8 @@ class ProxyConstraint {
   bool stop_at(const Hit& h, const glm::dvec3& d, double length, glm::dvec3& x, Planes& planes) noexcept {
     x = stopped(h, d, length, x);
     visit(x);
-    return planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + offset_for(h), offset_for(h));
+    return planes.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + offset_for(h), offset_for(h),
+                      h.primitive);
   }
 
   /// Where a move from x by d (of `length` [m]) stops at hit h: backed off
@@ -709,7 +855,8 @@ class ProxyConstraint {
     visit(x);                                                             // the slide's end, then down from it
     if (!(-glm::dot(down, h.face_normal) / length > 1e-6)) return false;  // it grazes the face it met
     Planes onto;
-    (void)onto.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + offset_for(h), offset_for(h));
+    (void)onto.add(h.face_normal, glm::dot(h.face_normal, h.point) + config_.radius + offset_for(h), offset_for(h),
+                   h.primitive);
     const glm::dvec3 free = onto.project(goal);
     if (onto.count != 1) return false;  // the HIP is off the new plane
     const glm::dvec3 under = onto.project_equal(goal, false);
