@@ -311,7 +311,8 @@ class ProxyConstraint {
           visit(x);
           touched = same;
         } else if (tick_.nodes < config_.tick_node_budget) {  // (else the tick's budget is spent: frictionless)
-          bool replanned = false;  // the proxy ends on other planes than the frictionless motion's
+          bool replanned = false;  // the proxy ends where `back` has it, on other planes than the frictionless motion's
+          Motion back{frictionless};
           const Hit h = sweep(frictionless, candidate);
           ++tick_.moves;
           if (h.complete && !h.found()) {
@@ -323,30 +324,23 @@ class ProxyConstraint {
               visit(x);
               touched = there;
             } else {
-              Motion back{candidate};  // off the surface: from there, down onto it
+              back.x = candidate;  // off the surface: from there, down onto it
               visit(candidate);
               back.last_hit = touched;
-              if (follow_surface(goal, frictionless, candidate, back)) {
-                replanned = true;
-                x = back.x;
-                touched = back.touched;
-                planes = back.planes;
-              }
+              replanned = follow_surface(goal, frictionless, candidate, back);
             }
           } else if (h.complete) {  // the surface curves up between: from where the move met it
-            Motion back{frictionless};
             back.planes = planes;
             back.last_hit = h;
-            if (!stop_at(h, candidate - frictionless, glm::length(candidate - frictionless), back.x, back.planes)) {
+            if (!stop_at(h, candidate - frictionless, glm::length(candidate - frictionless), back.x, back.planes))
               visit(frictionless);  // (three planes held already: it stays, frictionless)
-            } else if (follow_surface(goal, frictionless, candidate, back)) {
-              replanned = true;
-              x = back.x;
-              touched = back.touched;
-              planes = back.planes;
-            }
+            else
+              replanned = follow_surface(goal, frictionless, candidate, back);
           }
           if (replanned) {  // held on the planes it came to: the force from those, as step 0's next tick
+            x = back.x;
+            touched = back.touched;
+            planes = back.planes;
             frictionless = planes.project_equal(goal);
             on_surface = planes.project_equal(goal, false);
             depth = glm::length(on_surface - goal);
@@ -714,13 +708,25 @@ class ProxyConstraint {
   /// else the proxy stays frictionless this tick.
   [[nodiscard]] bool follow_surface(const glm::dvec3& goal, const glm::dvec3& frictionless, const glm::dvec3& candidate,
                                     Motion& back) noexcept {
+    if (move_and_hold(goal + (candidate - frictionless), frictionless, goal, back)) return true;
+    visit(frictionless);  // (the path ends where the proxy stays: the frictionless point)
+    return false;
+  }
+
+  /// Steps 1-2 from where m has the proxy toward `aim`, kept (m then has
+  /// the proxy) when they end on the surface inside the static cone on the
+  /// planes the HIP presses (hold_on_pressed); else m and the path are as
+  /// they were.
+  [[nodiscard]] bool move_and_hold(const glm::dvec3& aim, const glm::dvec3& start, const glm::dvec3& goal,
+                                   Motion& m) noexcept {
     const int before = path_.count;
-    move_toward(goal + (candidate - frictionless), frictionless, back);
-    if (back.blocked || back.embedded || !back.touched.found() || !hold_on_pressed(goal, back)) {
-      path_.count = before;  // (the path ends where the proxy stays: the frictionless point)
-      visit(frictionless);
+    Motion on = m;
+    move_toward(aim, start, on);
+    if (on.blocked || on.embedded || !on.touched.found() || !hold_on_pressed(goal, on)) {
+      path_.count = before;
       return false;
     }
+    m = on;
     return true;
   }
 
@@ -747,14 +753,9 @@ class ProxyConstraint {
       m = stuck;
       return true;
     }
-    const int before = path_.count;
     Motion on = m;
     on.planes = pressed;
-    move_toward(goal + (config_.dynamic_friction * depth / s) * slide, m.x, on);
-    if (on.embedded || on.blocked || !on.touched.found() || !hold_on_pressed(goal, on)) {
-      path_.count = before;
-      return false;
-    }
+    if (!move_and_hold(goal + (config_.dynamic_friction * depth / s) * slide, m.x, goal, on)) return false;
     sliding_ = true;
     m = on;
     return true;
