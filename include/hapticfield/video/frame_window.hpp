@@ -69,7 +69,7 @@ struct FrameWindow {
   /// (negative counts as 0; infinite: no fade; NaN: zero force).
   [[nodiscard]] glm::dvec2 at(double t, double since_fade, double x, double y) const noexcept {
     if (!current || !std::isfinite(t) || std::isnan(since_fade)) return glm::dvec2{0.0};
-    if (t < t0 - 1e-9 || t > t1 + max_hold) return glm::dvec2{0.0};  // a seek away, or a stalled source
+    if (t < t0 - 1e-9 || t > held_until()) return glm::dvec2{0.0};  // a seek away, or a stalled source
     const double half = 0.5 * fade;
     const double s = std::max(since_fade, 0.0);
     if (half > 0.0 && s < fade) {
@@ -82,6 +82,10 @@ struct FrameWindow {
     }
     return blended(t, x, y);
   }
+
+  /// The last video time this window is felt at: past it the source has
+  /// stalled [s].
+  [[nodiscard]] double held_until() const noexcept { return t1 + max_hold; }
 
   /// The blend weight a of `next` at video time t, in [0, 1].
   [[nodiscard]] double weight(double t) const noexcept {

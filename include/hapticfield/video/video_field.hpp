@@ -187,7 +187,7 @@ class VideoField {
     // A window the worker is late with, past its hold, fades out over T/2
     // of loop time from its held frame (not a step to zero), and the force
     // comes back over T/2 when a window is due again (presence).
-    const double stale_from = w->window.t1 + w->window.max_hold;  // [s of video time]
+    const double stale_from = w->window.held_until();  // [s of video time]
     const bool stale = t > stale_from;
     if (stale) s.stale_ticks.store(s.stale_ticks.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     if (step > 0.0) s.carry_left = std::fmax(s.carry_left - step, 0.0);
