@@ -2,10 +2,12 @@
 // baselines measured in the same run: the proxy on an analytic plane, and a
 // brute-force scan of every triangle (where it finishes); MeshBvh build time
 // per million triangles; the height-field tick against a tangible-image
-// tick; a mesh's first pass on 2 MB against 4 KB pages; and the highest
-// stiffness that stays passive at each servo rate.
+// tick; a mesh's first pass on 2 MB against 4 KB pages; the look-ahead
+// against none, back to back and paced at 1 kHz (--paced-ticks, default
+// 10000: 10 s a row); and the highest stiffness that stays passive at each
+// servo rate.
 //
-//   bench_surface [--ticks N] [--max-triangles N] [--no-passivity]
+//   bench_surface [--ticks N] [--max-triangles N] [--paced-ticks N] [--no-passivity]
 #include <hapticfield/kernels.hpp>
 #include <hapticfield/surface.hpp>
 
@@ -234,6 +236,87 @@ void first_pass_section(double side, const std::vector<hf::Probe>& path, std::si
   std::printf("\n");
 }
 
+/// Sleeps to `deadline` [ns] on the monotonic clock, as the servo loop does.
+void sleep_until_ns(double deadline) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(deadline / 1e9);
+  ts.tv_nsec = static_cast<long>(deadline - 1e9 * static_cast<double>(ts.tv_sec));
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+  }
+}
+
+/// The HIP of tick i as a loop anticipates it after tick i - 1: the last
+/// one moved by the last step (the path's velocity field is a fixed damping
+/// input, not its motion; a device's velocity is the same difference).
+hf::Probe predicted(const std::vector<hf::Probe>& path, std::size_t i) {
+  if (i < 2) return path[i > 0 ? i - 1 : 0];
+  hf::Probe p = path[i - 1];
+  p.position = 2.0 * path[i - 1].position - path[i - 2].position;
+  p.time = path[i].time;
+  return p;
+}
+
+/// The look-ahead (ProxyConstraint::anticipate, called by the servo loop
+/// after each sleep) against none, at 1M triangles: two proxies on meshes
+/// built apart, one pass each way with their ticks alternated, (1) back to
+/// back as the table above times them, and (2) paced at 1 kHz: each tick
+/// after a sleep to its deadline, as in a servo loop, the other proxy's tick
+/// half a period away. Wall time on the monotonic clock; the look-ahead is
+/// not inside the timed tick, its own cost is given apart.
+void anticipation_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles,
+                          long paced_ticks) {
+  if (max_triangles < 1'000'000) return;
+  std::printf(
+      "## The look-ahead (ProxyConstraint::anticipate after each sleep, LoopConfig::anticipate) against none, "
+      "1M triangles\n\n"
+      "Two proxies on equal meshes built apart, ticks alternated; back to back over the whole path, then paced at "
+      "1 kHz (a sleep to each deadline, as the servo loop does) over its first %ld ticks. Wall time of the tick "
+      "alone (monotonic clock); the look-ahead's own time apart.\n\n"
+      "| radius [mm] | timing | mean [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | look-ahead: mean [ns] | p99 [ns] | "
+      "p99.9 [ns] | worst [ns] | none / look-ahead mean | none / look-ahead p99 | none / look-ahead p99.9 | "
+      "look-ahead's own mean [ns] |\n"
+      "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+      paced_ticks);
+  const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
+  const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+  const hf::MeshShape one(mesh), other(mesh);
+  for (const double radius : {0.0, 0.0005}) {
+    hf::ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+    config.radius = radius;
+    for (const bool paced : {false, true}) {
+      hf::ProxyConstraint plain(one, config), ahead(other, config);
+      const std::size_t ticks = paced ? std::min(path.size(), static_cast<std::size_t>(paced_ticks)) : path.size();
+      std::vector<double> tp(ticks), ta(ticks), own(ticks);
+      glm::dvec3 sink{0.0};
+      double deadline = monotonic_ns() + 1e6;
+      for (std::size_t i = 0; i < ticks; ++i) {
+        for (int k = 0; k < 2; ++k) {
+          const bool plain_now = (k == 0) == (i % 2 == 0);
+          if (paced) {
+            sleep_until_ns(deadline);
+            deadline += 5e5;  // [ns] the other proxy's tick half a period on
+          }
+          if (!plain_now) {
+            const double t0 = monotonic_ns();
+            ahead.anticipate(predicted(path, i));
+            own[i] = monotonic_ns() - t0;
+          }
+          const double t0 = monotonic_ns();
+          sink += plain_now ? plain.contact(path[i]).force : ahead.contact(path[i]).force;
+          (plain_now ? tp : ta)[i] = monotonic_ns() - t0;
+        }
+      }
+      if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
+      const hf::bench::Cost p = summary(std::move(tp)), a = summary(std::move(ta)), o = summary(std::move(own));
+      std::printf("| %.1f | %s | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f | %.0f |\n",
+                  radius * 1e3, paced ? "paced at 1 kHz" : "back to back", p.mean_ns, p.p99_ns, p.p999_ns, p.worst_ns,
+                  a.mean_ns, a.p99_ns, a.p999_ns, a.worst_ns, p.mean_ns / a.mean_ns, p.p99_ns / a.p99_ns,
+                  p.p999_ns / a.p999_ns, o.mean_ns);
+    }
+  }
+  std::printf("\n");
+}
+
 /// The highest stiffness [N/m] that stays passive at `rate` [Hz] (bisection
 /// on the energy check of tests/surface_energy.hpp), on a mesh surface.
 double highest_passive(const hf::TriangleMesh& mesh, double rate) {
@@ -253,6 +336,7 @@ int main(int argc, char** argv) {
   long ticks = 20000;
   std::size_t max_triangles = 4'000'000;
   bool passivity = true;
+  long paced_ticks = 10000;
   for (int a = 1; a < argc; ++a) {
     if (!std::strcmp(argv[a], "--ticks") && a + 1 < argc)
       ticks = std::atol(argv[++a]);
@@ -260,11 +344,13 @@ int main(int argc, char** argv) {
       max_triangles = static_cast<std::size_t>(std::atoll(argv[++a]));
     else if (!std::strcmp(argv[a], "--no-passivity"))
       passivity = false;
+    else if (!std::strcmp(argv[a], "--paced-ticks") && a + 1 < argc)
+      paced_ticks = std::atol(argv[++a]);
     else if (!std::strcmp(argv[a], "--help")) {
-      std::printf("usage: bench_surface [--ticks N] [--max-triangles N] [--no-passivity]\n");
+      std::printf("usage: bench_surface [--ticks N] [--max-triangles N] [--paced-ticks N] [--no-passivity]\n");
       return 0;
     } else {
-      std::fprintf(stderr, "usage: bench_surface [--ticks N] [--max-triangles N] [--no-passivity]\n");
+      std::fprintf(stderr, "usage: bench_surface [--ticks N] [--max-triangles N] [--paced-ticks N] [--no-passivity]\n");
       return 2;
     }
   }
@@ -273,6 +359,8 @@ int main(int argc, char** argv) {
 
   // --- first, before any mesh is freed: 2 MB pages against 4 KB pages ---
   first_pass_section(side, path, max_triangles);
+  // --- the look-ahead against none, back to back and paced at 1 kHz ---
+  anticipation_section(side, path, max_triangles, paced_ticks);
 
   // --- baseline: the proxy on an analytic plane ---
   hf::ProxyConstraint plane(hf::PlaneShape(hf::PlaneShapeConfig{}), hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});

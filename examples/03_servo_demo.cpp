@@ -330,6 +330,7 @@ struct FieldRef {
   F* field;
   glm::dvec3 force(const Probe& p) noexcept { return field->force(p); }
   void reset() noexcept { field->reset(); }
+  void anticipate(const Probe& next) const noexcept { anticipate_if_able(*field, next); }
 };
 
 /// --shape: the scene, its proxy field, and the snapshot after the run.
@@ -468,7 +469,8 @@ int run_demo(const Arguments& o, D& device, Felt& felt, C& clock, bool hardware)
     return felt.field.force(in.probe);
   };
 
-  cli::LoopThread servo(loop, callback, {.max_ticks = ticks});
+  auto ahead = with_anticipation(callback, felt.field);  // a shape's proxy looks ahead after each sleep
+  cli::LoopThread servo(loop, ahead, {.max_ticks = ticks});
   const auto t0 = std::chrono::steady_clock::now();
   const std::int64_t loop_start = clock.now();
   std::uint64_t latches_shown = 0;

@@ -152,6 +152,36 @@ TEST_CASE("two friction regions give mu 0.2 and 0.8 on their own sides on the sa
   }
 }
 
+TEST_CASE("MaterialSurface's look-ahead changes nothing: the same forces bit for bit across two friction regions") {
+  const std::uint32_t seed = hapticfield::test::run_seed();
+  INFO("seed " << seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> jitter(-3e-3, 3e-3);
+  MaterialMaps maps;
+  maps.stiffness = 1000.0;
+  maps.static_friction = two_regions(0.3, 0.9);
+  maps.dynamic_friction = two_regions(0.2, 0.8);
+  const TriangleMesh sheet = test::wavy_sheet(1.0, 60, 0.004, 0.1);
+  auto plain = material_surface(MeshShape(sheet), ProxyConfig{}, MaterialMap(maps));
+  auto ahead = material_surface(MeshShape(sheet), ProxyConfig{}, MaterialMap(maps));
+  static_assert(AnticipatingField<decltype(ahead)>);
+  long allocations = 0;
+  int touching = 0;
+  for (int tick = 0; tick < 600; ++tick) {  // across the border at x = 0, 1 mm into the sheet's top
+    Probe p = probe_at({-0.03 + 1e-4 * tick, 0.2, 0.003 - 1e-4 * std::min(tick, 40)});
+    Probe next = p;
+    next.position += glm::dvec3{jitter(rng), jitter(rng), jitter(rng)};
+    allocations += test::count_allocations([&] { ahead.anticipate(next); });
+    const glm::dvec3 a = plain.force(p), b = ahead.force(p);
+    INFO("tick " << tick);
+    REQUIRE(a == b);
+    REQUIRE(plain.constraint().proxy() == ahead.constraint().proxy());
+    touching += plain.last_contact().touching ? 1 : 0;
+  }
+  CHECK(touching > 500);
+  if (test::allocations_counted) CHECK(allocations == 0);
+}
+
 TEST_CASE("a stiffness map changes Fc in proportion to k(uv), the oracle OpenCV's read of the picture") {
   const std::uint32_t seed = hapticfield::test::run_seed();
   INFO("seed " << seed);

@@ -156,6 +156,14 @@ class ShapeProxyField {
     contact_ = proxy_.contact(local);
     return contact_.force;
   }
+  /// The proxy's look-ahead (core/field.hpp) in the shape's frame; none
+  /// before the first tick, which starts the proxy afresh.
+  void anticipate(const Probe& next) const noexcept {
+    if (fresh_) return;
+    Probe local = next;
+    local.position -= shift_;
+    proxy_.anticipate(local);
+  }
   /// The next tick starts the proxy from `outside` again.
   void reset() noexcept {
     fresh_ = true;

@@ -10,8 +10,8 @@
 
 namespace hapticfield {
 
-/// Type-erased HapticField (move-only). Construction allocates once; force()
-/// and reset() are a virtual call each and never allocate. A default
+/// Type-erased HapticField (move-only). Construction allocates once; force(),
+/// reset() and anticipate() are a virtual call each and never allocate. A default
 /// constructed AnyField is the zero field.
 class AnyField {
  public:
@@ -38,6 +38,11 @@ class AnyField {
     if (model_) model_->reset();
   }
 
+  /// The held field's look-ahead (core/field.hpp), where it has one.
+  void anticipate(const Probe& next) const noexcept {
+    if (model_) model_->anticipate(next);
+  }
+
   /// True when a field is held.
   [[nodiscard]] explicit operator bool() const noexcept { return static_cast<bool>(model_); }
 
@@ -53,6 +58,7 @@ class AnyField {
     virtual ~Concept() = default;
     virtual glm::dvec3 force(const Probe& probe) noexcept = 0;
     virtual void reset() noexcept = 0;
+    virtual void anticipate(const Probe& next) const noexcept = 0;
   };
 
   template <class F>
@@ -61,6 +67,7 @@ class AnyField {
     explicit Model(G&& g) : field(std::forward<G>(g)) {}
     glm::dvec3 force(const Probe& probe) noexcept override { return field.force(probe); }
     void reset() noexcept override { reset_if_stateful(field); }
+    void anticipate(const Probe& next) const noexcept override { anticipate_if_able(field, next); }
     F field;
   };
 
@@ -68,5 +75,6 @@ class AnyField {
 };
 
 static_assert(ResettableField<AnyField>);
+static_assert(AnticipatingField<AnyField>);
 
 }  // namespace hapticfield

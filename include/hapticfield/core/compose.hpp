@@ -27,6 +27,11 @@ class SumField {
     std::apply([](auto&... f) { (reset_if_stateful(f), ...); }, fields_);
   }
 
+  /// Each part's look-ahead (core/field.hpp), where it has one.
+  void anticipate(const Probe& next) const noexcept {
+    std::apply([&next](const auto&... f) { (anticipate_if_able(f, next), ...); }, fields_);
+  }
+
   /// The i-th part.
   template <std::size_t I>
   [[nodiscard]] auto& part() noexcept {
@@ -49,6 +54,7 @@ class ScaledField {
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept { return gain_ * glm::dvec3(field_.force(probe)); }
 
   void reset() noexcept { reset_if_stateful(field_); }
+  void anticipate(const Probe& next) const noexcept { anticipate_if_able(field_, next); }
 
   [[nodiscard]] Field& inner() noexcept { return field_; }
 
@@ -73,6 +79,7 @@ class ClampedField {
   }
 
   void reset() noexcept { reset_if_stateful(field_); }
+  void anticipate(const Probe& next) const noexcept { anticipate_if_able(field_, next); }
 
   [[nodiscard]] Field& inner() noexcept { return field_; }
 

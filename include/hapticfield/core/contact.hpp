@@ -93,6 +93,17 @@ class ContactField {
     return is_finite(f) ? f : glm::dvec3{0.0};
   }
 
+  /// The constraint's look-ahead (core/field.hpp) on the probe force() would
+  /// give it; nothing changes. The parts are not run.
+  void anticipate(const Probe& next) const noexcept {
+    if constexpr (requires(const C& c) { c.anticipate(next); }) {
+      if (!is_finite(next.position)) return;
+      Probe on = next;
+      if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
+      constraint_.anticipate(on);
+    }
+  }
+
   void reset() noexcept {
     if constexpr (requires { constraint_.reset(); }) constraint_.reset();
     std::apply([](auto&... part) { (reset_if_stateful(part), ...); }, parts_);

@@ -2,6 +2,7 @@
 /// @file field.hpp
 /// The HapticField concept: anything that turns a Probe into a force.
 
+#include <cmath>
 #include <concepts>
 
 #include <glm/vec3.hpp>
@@ -31,6 +32,37 @@ concept ResettableField = HapticField<F> && requires(F& field) {
 template <HapticField F>
 void reset_if_stateful(F& field) noexcept {
   if constexpr (ResettableField<F>) field.reset();
+}
+
+/// A field that can look ahead: `anticipate(probe)` runs, on a scratch copy
+/// of its state, the tick the probe would make, and changes nothing the
+/// next force() depends on. What it gains is the memory that tick reads,
+/// brought into cache before the tick comes (a proxy on a large mesh: its
+/// tree's nodes and triangles where the HIP is going). The servo loop calls
+/// it after each period's sleep, before the read (LoopConfig::anticipate).
+/// Like force(): no allocation, lock, exception or I/O.
+template <class F>
+concept AnticipatingField = HapticField<F> && requires(const F& field, const Probe& probe) {
+  { field.anticipate(probe) }
+  noexcept;
+};
+
+/// Calls field.anticipate(next) when the field has one; otherwise does
+/// nothing.
+template <HapticField F>
+void anticipate_if_able(const F& field, const Probe& next) noexcept {
+  if constexpr (AnticipatingField<F>) field.anticipate(next);
+}
+
+/// The probe one step of `seconds` after `probe`: its time moved on, its
+/// position moved by its velocity (kept where the velocity is not finite).
+/// What a loop anticipates for its next tick.
+[[nodiscard]] inline Probe predicted_probe(const Probe& probe, double seconds) noexcept {
+  Probe next = probe;
+  next.time += seconds;
+  const glm::dvec3 moved = probe.position + seconds * probe.velocity;
+  if (std::isfinite(moved.x) && std::isfinite(moved.y) && std::isfinite(moved.z)) next.position = moved;
+  return next;
 }
 
 /// The field that is zero everywhere.

@@ -103,6 +103,15 @@ class MaterialSurface {
     return is_finite(f) ? f : glm::dvec3{0.0};
   }
 
+  /// The proxy's look-ahead (core/field.hpp) on the probe force() would
+  /// give it; nothing changes.
+  void anticipate(const Probe& next) const noexcept {
+    if (!is_finite(next.position)) return;
+    Probe on = next;
+    if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
+    proxy_.anticipate(on);
+  }
+
   void reset() noexcept {
     proxy_.reset();
     std::apply([](auto&... part) { (reset_if_stateful(part), ...); }, textures_);

@@ -54,6 +54,14 @@ struct LoopConfig {
   bool auto_home{true};       ///< request homing when the device is not homed
   bool auto_arm{true};        ///< request arming at start (the device arms once homed)
   bool disarm_on_exit{true};  ///< disarm when run() returns
+  /// After each period's sleep, before the read, the field's look-ahead
+  /// (core/field.hpp: anticipate() on the last HIP moved one period by its
+  /// velocity), so the memory the tick reads is in cache when it runs (a
+  /// proxy on a large mesh: docs/surfaces.md). In hybrid pacing it runs
+  /// before the spin; in sleep mode it delays the read by its own cost.
+  /// Fields without one, and callbacks not made by with_anticipation(),
+  /// are not affected.
+  bool anticipate{true};
   /// After a stale-state or missed-deadline latch, clear it and re-arm (with
   /// the soft start) once new states have arrived on time for this long [s];
   /// 0: never (clear_fault() only). Disconnects, impossible states and
@@ -85,6 +93,27 @@ struct TickInput {
   std::uint64_t tick{0};  ///< tick index since run() started
   bool trusted{false};    ///< the state is one to act on (ServoLoop::trusted())
 };
+
+/// A callback for ServoLoop::run() with the field it drives: the loop calls
+/// the field's look-ahead ahead of each tick (LoopConfig::anticipate). Made
+/// by with_anticipation().
+template <class Callback, HapticField F>
+struct AnticipatingCallback {
+  Callback& callback;
+  const F& field;
+  glm::dvec3 operator()(const TickInput& in) noexcept(std::is_nothrow_invocable_v<Callback&, const TickInput&>) {
+    return glm::dvec3(callback(in));
+  }
+  void anticipate(const Probe& next) const noexcept { anticipate_if_able(field, next); }
+};
+
+/// `callback` (glm::dvec3(const TickInput&)) with the field it asks for a
+/// force, whose look-ahead the loop then calls ahead of each tick. Both
+/// must outlive the run.
+template <class Callback, HapticField F>
+[[nodiscard]] AnticipatingCallback<Callback, F> with_anticipation(Callback& callback, const F& field) noexcept {
+  return AnticipatingCallback<Callback, F>{callback, field};
+}
 
 /// Why run() returned.
 enum class StopReason : std::uint8_t { requested, tick_limit, disconnected };
@@ -156,12 +185,15 @@ class ServoLoop {
   template <HapticField F>
   StopReason run(F& field, RunLimits limits = {}) {
     auto compute = [&field](const TickInput& in) noexcept { return glm::dvec3(field.force(in.probe)); };
-    return run_impl(compute, limits);
+    auto ahead = with_anticipation(compute, field);
+    return run_impl(ahead, limits);
   }
 
   /// Runs a callback glm::dvec3(const TickInput&). When it throws, zero force
   /// is commanded and the arm disarmed first, then ServoError (with the
-  /// last states, the callback's exception nested) is thrown.
+  /// last states, the callback's exception nested) is thrown. A callback
+  /// with anticipate(const Probe&) const noexcept (with_anticipation())
+  /// has it called ahead of each tick, as a field's.
   template <class Callback>
   requires(!HapticField<Callback> && std::is_invocable_r_v<glm::dvec3, Callback&, const TickInput&>) StopReason
       run(Callback& callback, RunLimits limits = {}) {
@@ -462,7 +494,10 @@ class ServoLoop {
         return StopReason::tick_limit;
       }
       const std::int64_t deadline = pacer.deadline();
-      const std::int64_t wake = pacer.wait(*clock_);
+      const bool has_last = tick_ > first_tick;  // a HIP to predict from
+      const std::int64_t wake = pacer.wait(*clock_, [&compute, &in, has_last, this]() noexcept {
+        if (has_last) anticipate(compute, in.probe);
+      });
       read_once(in);
       glm::dvec3 f{0.0};
       if constexpr (std::is_nothrow_invocable_v<Compute&, const TickInput&>) {
@@ -491,6 +526,18 @@ class ServoLoop {
         safe_stop();
         return StopReason::disconnected;
       }
+    }
+  }
+
+  /// The look-ahead of a callback that has one (LoopConfig::anticipate) on
+  /// `last` moved one period on.
+  template <class Compute>
+  void anticipate(const Compute& compute, const Probe& last) const noexcept {
+    if constexpr (requires(const Compute& c, const Probe& p) {
+                    { c.anticipate(p) }
+                    noexcept;
+                  }) {
+      if (config_.anticipate) compute.anticipate(predicted_probe(last, period_));
     }
   }
 

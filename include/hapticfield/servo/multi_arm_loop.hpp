@@ -69,7 +69,9 @@ class MultiArmLoop {
       if (stop_.exchange(false, std::memory_order_acq_rel)) return stop_all(StopReason::requested);
       if (tick >= limits.max_ticks) return stop_all(StopReason::tick_limit);
       const std::int64_t deadline = pacer.deadline();
-      const std::int64_t wake = pacer.wait(*clock_);
+      const std::int64_t wake = pacer.wait(*clock_, [this, &in, &field_refs, tick]() noexcept {
+        if (tick > 0) anticipate_arms(in, field_refs, std::make_index_sequence<N>{});
+      });
       tick_arms(in, field_refs, std::make_index_sequence<N>{});
       apply_policy();
       const std::int64_t end = clock_->now();
@@ -107,6 +109,18 @@ class MultiArmLoop {
   template <class Refs, std::size_t... I>
   void tick_arms(std::array<TickInput, N>& in, const Refs& refs, std::index_sequence<I...>) noexcept {
     (tick_arm(*arms_[I], in[I], std::get<I>(refs)), ...);
+  }
+
+  /// Each arm's field's look-ahead on its last HIP moved one period on
+  /// (LoopConfig::anticipate, as ServoLoop).
+  template <class Refs, std::size_t... I>
+  void anticipate_arms(const std::array<TickInput, N>& in, const Refs& refs, std::index_sequence<I...>) const noexcept {
+    (anticipate_arm(*arms_[I], in[I], std::get<I>(refs)), ...);
+  }
+
+  template <class F>
+  static void anticipate_arm(const ServoLoop<D, C>& arm, const TickInput& in, const F& field) noexcept {
+    if (arm.config_.anticipate) anticipate_if_able(field, predicted_probe(in.probe, arm.period_));
   }
 
   template <class F>

@@ -26,6 +26,7 @@
 
 #include <cstdint>
 #include <stdexcept>
+#include <type_traits>
 
 #include "hapticfield/servo/clock.hpp"
 
@@ -81,7 +82,18 @@ class Pacer {
   /// hybrid mode spinning the last stretch) and returns the wake time [ns].
   template <ServoClock C>
   std::int64_t wait(C& clock) noexcept {
+    return wait(clock, []() noexcept {});
+  }
+
+  /// The same, with `ready()` called once when the sleeping is over: in
+  /// hybrid mode before the spin (its time comes out of the margin), in
+  /// sleep mode after the wake (the wake time returned is after it). The
+  /// servo loop's look-ahead (LoopConfig::anticipate) runs there.
+  template <ServoClock C, class Ready>
+  std::int64_t wait(C& clock, Ready&& ready) noexcept {
+    static_assert(std::is_nothrow_invocable_v<Ready&>, "Pacer::wait: ready() must be noexcept");
     std::int64_t now = clock.now();
+    bool readied = false;
     if constexpr (SpinningClock<C>) {
       if (pacing_.mode == PacingMode::hybrid) {
         const std::int64_t sleep_to = deadline_ - pacing_.spin_margin_ns;
@@ -89,6 +101,9 @@ class Pacer {
           clock.sleep_until(sleep_to);
           now = clock.now();
         }
+        ready();
+        readied = true;
+        now = clock.now();
         if (now < deadline_) {
           clock.spin_until(deadline_);
           const std::int64_t after = clock.now();
@@ -100,6 +115,10 @@ class Pacer {
     }
     while (now < deadline_) {
       clock.sleep_until(deadline_);
+      now = clock.now();
+    }
+    if (!readied) {
+      ready();
       now = clock.now();
     }
     previous_wake_ = first_ ? now : wake_;

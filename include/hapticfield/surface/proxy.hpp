@@ -81,6 +81,12 @@
 /// toward the HIP runs, in effect, in the shape's frame, where the shape is
 /// still), and the damping acts on the HIP's velocity relative to the
 /// surface's at the proxy. Static shapes take none of these steps.
+///
+/// anticipate(next) runs the tick `next` would make on a copy of the proxy
+/// and drops it: the servo loop calls it after each period's sleep, so the
+/// tree's nodes and triangles the coming tick reads are in cache when it
+/// runs (after 1 ms asleep a tick otherwise meets many of them in memory:
+/// docs/surfaces.md, Cost). Static shapes only.
 
 #include <algorithm>
 #include <array>
@@ -89,6 +95,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -370,6 +377,18 @@ class ProxyConstraint {
 
   /// Fc alone [N].
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept { return contact(probe).force; }
+
+  /// The tick `next` would make, run on a copy of this proxy and dropped:
+  /// nothing here changes, but the tree nodes and triangles that tick reads
+  /// are in cache when it comes (core/field.hpp, AnticipatingField). A
+  /// shape that moves (advance()) or whose copy may allocate is not copied:
+  /// nothing is done.
+  void anticipate(const Probe& next) const noexcept {
+    if constexpr (anticipates) {
+      ProxyConstraint scratch(*this);
+      (void)scratch.contact(next);
+    }
+  }
 
   /// Forgets the proxy: the next tick starts it at the HIP.
   void reset() noexcept {
@@ -906,6 +925,9 @@ class ProxyConstraint {
     { s.carry(p) } -> std::same_as<glm::dvec3>;
     { s.surface_velocity(p) } -> std::same_as<glm::dvec3>;
   };
+  /// anticipate() runs a copy's tick: the shape stands still and its copy
+  /// cannot allocate (a mesh's shares its tree).
+  static constexpr bool anticipates = !advances && std::is_nothrow_copy_constructible_v<S>;
 
   /// The HIP's velocity the damping acts on: relative to the surface at the
   /// proxy `at` on a moving shape (zero for a non-finite HIP velocity).

@@ -1,0 +1,450 @@
+// The look-ahead (anticipate(), core/field.hpp): a proxy anticipated before
+// every tick makes the same ticks bit for bit as one that is not, whatever
+// it is asked to anticipate (random paths with a new seed each run, printed
+// on failure; constructed meshes, a height field and every real model in
+// ../shared/data), without allocating; every field wrapper passes it on; and
+// the servo loops call it once a tick, after the sleep, on the last HIP
+// moved one period by its velocity.
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "alloc_counter.hpp"
+#include "arm_rig.hpp"
+#include "hapticfield/core/any_field.hpp"
+#include "hapticfield/core/compose.hpp"
+#include "hapticfield/core/contact.hpp"
+#include "hapticfield/core/field.hpp"
+#include "hapticfield/servo/multi_arm_loop.hpp"
+#include "hapticfield/servo/pacer.hpp"
+#include "hapticfield/surface/height_field.hpp"
+#include "hapticfield/surface/mesh_shape.hpp"
+#include "hapticfield/surface/moving_shape.hpp"
+#include "hapticfield/surface/proxy.hpp"
+#include "run_seed.hpp"
+#include "surface_meshes.hpp"
+#if HAPTICFIELD_TEST_HAS_IO
+#include "hapticfield/io/load_mesh.hpp"
+#endif
+
+using namespace hapticfield;
+using test::run_seed;
+
+namespace {
+
+constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
+
+/// Equal bit for bit (NaN equal to NaN): what two identical ticks give.
+bool same(double a, double b) {
+  return a == b || (std::isnan(a) && std::isnan(b));
+}
+bool same(const glm::dvec3& a, const glm::dvec3& b) {
+  return same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z);
+}
+
+TriangleMesh fitted(TriangleMesh m, double diagonal) {
+  glm::dvec3 lo{1e300}, hi{-1e300};
+  for (const auto& p : m.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const double s = diagonal / glm::length(hi - lo);
+  for (auto& p : m.positions)
+    p = (p - 0.5 * (lo + hi)) * s;
+  return m;
+}
+
+struct Named {
+  std::string name;
+  TriangleMesh mesh;
+};
+
+/// Constructed meshes, then every real model in ../shared/data this build
+/// reads (fitted to a 0.2 m diagonal).
+std::vector<Named> meshes() {
+  std::vector<Named> out;
+  out.push_back({"icosphere", test::icosphere(4, 0.05)});
+  out.push_back({"wavy sheet", test::wavy_sheet(0.1, 120, 0.004, 0.03)});
+  out.push_back({"box", test::box(glm::dvec3{-0.02}, glm::dvec3{0.02}, 4)});
+#if HAPTICFIELD_TEST_HAS_IO
+  const std::filesystem::path data = std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / ".." / "shared" / "data";
+  if (std::filesystem::is_directory(data))
+    for (const char* name : {"gltf/Duck.gltf", "meshes/spot.obj", "meshes/teapot.obj", "meshes/fandisk.obj",
+                             "meshes/rocker-arm.obj", "meshes/stanford-bunny.obj"}) {
+      const std::filesystem::path p = data / name;
+      if (std::filesystem::exists(p)) out.push_back({name, fitted(io::load_mesh(p.string()).mesh, 0.2)});
+    }
+  else
+    WARN("real models skipped: " << data << " is absent");
+#endif
+  return out;
+}
+
+/// A press onto a random front-facing triangle and a slide along it, at a
+/// random speed (26 mm/s to 2 m/s) and depth (up to 3 mm), 1 kHz.
+std::vector<Probe> press_and_slide(const TriangleMesh& m, std::mt19937& rng) {
+  std::uniform_int_distribution<std::size_t> pick(0, m.triangles.size() - 1);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  glm::dvec3 c{0.0}, n{0.0};
+  for (int tries = 0; tries < 100 && glm::length(n) == 0.0; ++tries) {
+    const auto& t = m.triangles[pick(rng)];
+    const glm::dvec3 a = m.positions[t[0]], b = m.positions[t[1]], d = m.positions[t[2]];
+    const glm::dvec3 cross = glm::cross(b - a, d - a);
+    if (glm::length(cross) > 0.0) {
+      n = glm::normalize(cross);
+      c = (a + b + d) / 3.0;
+    }
+  }
+  glm::dvec3 side = glm::cross(n, glm::dvec3{unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5});
+  side = glm::length(side) > 0.0 ? glm::normalize(side) : glm::dvec3{1.0, 0.0, 0.0};
+  const double speed = 0.026 * std::pow(2.0 / 0.026, unit(rng));  // [m/s]
+  const double depth = 3e-3 * unit(rng);                          // [m]
+  std::vector<Probe> path;
+  glm::dvec3 last = c + 0.003 * n;
+  for (int i = 0; i < 120; ++i) {
+    const double t = i * 1e-3;                                                    // [s]
+    const double press = i < 20 ? 0.003 - (0.003 + depth) * (i / 20.0) : -depth;  // [m] along n
+    Probe p;
+    p.position = c + press * n + (i < 20 ? 0.0 : speed * (t - 0.02)) * side;
+    p.velocity = (p.position - last) / 1e-3;
+    p.time = t;
+    last = p.position;
+    path.push_back(p);
+  }
+  return path;
+}
+
+/// What a proxy is asked to anticipate before tick i: the tick itself, the
+/// next one, the predicted one, somewhere far, or a non-finite HIP.
+Probe something_to_anticipate(const std::vector<Probe>& path, std::size_t i, std::mt19937& rng) {
+  std::uniform_int_distribution<int> kind(0, 6);
+  Probe p = path[i];
+  switch (kind(rng)) {
+    case 0:
+      return p;
+    case 1:
+      return path[std::min(i + 1, path.size() - 1)];
+    case 2:
+      return i > 0 ? predicted_probe(path[i - 1], 1e-3) : p;
+    case 3:
+      p.position += glm::dvec3{0.05, -0.03, 0.02};
+      return p;
+    case 4:
+      p.position.x = not_a_number;
+      return p;
+    case 5:
+      p.velocity.y = not_a_number;
+      return p;
+    default:
+      p.position = glm::dvec3{std::numeric_limits<double>::infinity(), 0.0, 0.0};
+      return p;
+  }
+}
+
+/// What compare_on() saw.
+struct Compared {
+  long allocations{0};  ///< made by the look-ahead
+  long ticks{0};
+  long touching{0};
+  Compared& operator+=(const Compared& o) {
+    allocations += o.allocations;
+    ticks += o.ticks;
+    touching += o.touching;
+    return *this;
+  }
+};
+
+/// Runs `path` on two equal proxies, the second anticipating something
+/// before every tick: the same contacts, proxies and tick records, bit for
+/// bit.
+template <class S>
+Compared compare_on(const S& shape, const ProxyConfig& config, const std::vector<Probe>& path, std::mt19937& rng) {
+  ProxyConstraint<S> plain(shape, config), ahead(shape, config);
+  Compared out;
+  long& allocations = out.allocations;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const Probe next = something_to_anticipate(path, i, rng);
+    allocations += test::count_allocations([&] { ahead.anticipate(next); });
+    const Contact a = plain.contact(path[i]);
+    const Contact b = ahead.contact(path[i]);
+    INFO("tick " << i);
+    REQUIRE(a.touching == b.touching);
+    REQUIRE(same(a.force, b.force));
+    REQUIRE(same(a.normal, b.normal));
+    REQUIRE(same(a.depth, b.depth));
+    REQUIRE(a.primitive == b.primitive);
+    REQUIRE(same(plain.proxy(), ahead.proxy()));
+    REQUIRE(plain.last_tick().moves == ahead.last_tick().moves);
+    REQUIRE(plain.last_tick().nodes == ahead.last_tick().nodes);
+    REQUIRE(plain.last_tick().sliding == ahead.last_tick().sliding);
+    ++out.ticks;
+    out.touching += a.touching ? 1 : 0;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a proxy anticipated before every tick makes the same ticks bit for bit, without allocating",
+          "[anticipate]") {
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  Compared seen;
+  int paths = 0;
+  for (const Named& m : meshes()) {
+    INFO(m.name);
+    const MeshShape shape(m.mesh);
+    for (const double radius : {0.0, 5e-4, 2e-3}) {
+      INFO("radius " << radius);
+      for (const bool stick_first : {true, false}) {
+        ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+        config.radius = radius;
+        config.stick_first = stick_first;
+        for (int k = 0; k < 4; ++k, ++paths)
+          seen += compare_on(shape, config, press_and_slide(m.mesh, rng), rng);
+      }
+    }
+  }
+  // a height field (a bumpy grid): the point proxy and a ball
+  std::vector<double> heights(64 * 64);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      heights[static_cast<std::size_t>(y * 64 + x)] = 0.002 * std::sin(0.4 * x) * std::cos(0.3 * y);
+  const HeightFieldShape field(64, 64, 0.1 / 63, 0.1 / 63, heights);
+  const TriangleMesh as_mesh = test::wavy_sheet(0.1, 64, 0.002, 0.03);
+  for (const double radius : {0.0, 1e-3}) {
+    ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+    config.radius = radius;
+    for (int k = 0; k < 8; ++k, ++paths) {
+      std::vector<Probe> path = press_and_slide(as_mesh, rng);
+      for (Probe& p : path)
+        p.position += glm::dvec3{0.05, 0.05, 0.0};  // over the grid, which starts at the origin
+      seen += compare_on(field, config, path, rng);
+    }
+  }
+  CHECK(paths > 0);
+  CHECK(seen.touching > seen.ticks / 2);  // most ticks press on the surface
+  if (test::allocations_counted) CHECK(seen.allocations == 0);
+#if HAPTICFIELD_TEST_HAS_IO
+  if (std::filesystem::is_directory(std::filesystem::path(HAPTICFIELD_SOURCE_DIR) / ".." / "shared" / "data"))
+    CHECK(meshes().size() == 9);  // the three constructed, and the six real models read
+#endif
+}
+
+TEST_CASE("a shape that moves is not anticipated (its copy could allocate): nothing is done", "[anticipate]") {
+  static_assert(!std::is_nothrow_copy_constructible_v<Moving<MeshShape>>);
+  ProxyConstraint proxy(Moving<MeshShape>(MeshShape(test::icosphere(3, 0.05)), MovingPose{}), ProxyConfig{});
+  Probe p;
+  p.position = glm::dvec3{0.0, 0.0, 0.049};
+  const long allocations = test::count_allocations([&] { proxy.anticipate(p); });
+  if (test::allocations_counted) CHECK(allocations == 0);
+  // the first tick after a look-ahead still puts the proxy at the HIP
+  (void)proxy.contact(p);
+  CHECK(same(proxy.proxy(), p.position));
+}
+
+// --- every wrapper passes the look-ahead on -------------------------------------
+
+namespace {
+
+/// A constraint that records what it is asked to anticipate.
+struct Recorder {
+  std::vector<Probe>* seen;
+  Contact contact(const Probe&) noexcept { return Contact{}; }
+  void anticipate(const Probe& next) const noexcept { seen->push_back(next); }
+};
+
+/// A field that records its look-ahead calls and each tick's probe, in
+/// order (for the loops): 'a' then the probe anticipated, 'f' then the
+/// probe forced.
+struct Logged {
+  struct Entry {
+    char what;
+    Probe probe;
+    std::int64_t at;  ///< clock time [ns]
+  };
+  std::vector<Entry>* log;
+  const VirtualClock* clock;
+  glm::dvec3 push{0.3, 0.0, 0.0};  ///< [N], so that the free arm moves
+  glm::dvec3 force(const Probe& p) noexcept {
+    log->push_back({'f', p, clock->now()});
+    return push;
+  }
+  void anticipate(const Probe& next) const noexcept { log->push_back({'a', next, clock->now()}); }
+};
+
+}  // namespace
+
+TEST_CASE("ContactField, sums, scales, clamps and AnyField pass the look-ahead on; fields without one are left alone",
+          "[anticipate]") {
+  std::vector<Probe> seen;
+  seen.reserve(64);
+  Probe p;
+  p.position = glm::dvec3{0.01, 0.02, 0.03};
+  p.velocity = glm::dvec3{0.1, not_a_number, 0.0};
+  auto contact_field = contact(Recorder{&seen});
+  static_assert(AnticipatingField<decltype(contact_field)>);
+  contact_field.anticipate(p);
+  REQUIRE(seen.size() == 1);
+  CHECK(same(seen[0].position, p.position));
+  CHECK(seen[0].velocity == glm::dvec3{0.0});  // as force() gives the constraint a non-finite velocity
+  Probe lost = p;
+  lost.position.z = not_a_number;
+  contact_field.anticipate(lost);  // no HIP: nothing to anticipate
+  CHECK(seen.size() == 1);
+
+  SumField sum(contact(Recorder{&seen}), ZeroField{}, contact(Recorder{&seen}));
+  sum.anticipate(p);
+  CHECK(seen.size() == 3);
+  ScaledField scaled(contact(Recorder{&seen}), 2.0);
+  scaled.anticipate(p);
+  ClampedField clamped(contact(Recorder{&seen}), 2.0);
+  clamped.anticipate(p);
+  CHECK(seen.size() == 5);
+  AnyField any(ClampedField(contact(Recorder{&seen}), 1.0));
+  const long allocations = test::count_allocations([&] { any.anticipate(p); });
+  CHECK(seen.size() == 6);
+  if (test::allocations_counted) CHECK(allocations == 0);
+  AnyField empty;
+  empty.anticipate(p);
+  AnyField zero(ZeroField{});
+  zero.anticipate(p);
+  anticipate_if_able(ZeroField{}, p);
+  CHECK(seen.size() == 6);
+}
+
+TEST_CASE("predicted_probe: the HIP moved by its velocity, time on; a non-finite move keeps the position",
+          "[anticipate]") {
+  Probe p;
+  p.position = glm::dvec3{0.01, 0.02, 0.03};
+  p.velocity = glm::dvec3{0.5, -0.25, 0.0};
+  p.time = 2.0;
+  const Probe next = predicted_probe(p, 1e-3);
+  CHECK(next.position == p.position + 1e-3 * p.velocity);
+  CHECK(next.time == 2.0 + 1e-3);
+  CHECK(next.velocity == p.velocity);
+  p.velocity.z = not_a_number;
+  CHECK(predicted_probe(p, 1e-3).position == p.position);
+  p.velocity.z = 1e308;
+  CHECK(predicted_probe(p, 1e300).position == p.position);
+}
+
+// --- the loops call it -------------------------------------------------------------
+
+TEST_CASE("Pacer::wait calls ready() once: after the sleep and before the spin (hybrid), after the wake (sleep)",
+          "[anticipate]") {
+  constexpr std::int64_t period = 1'000'000;  // [ns]
+  for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
+    CAPTURE(static_cast<int>(mode));
+    VirtualClock clock;
+    clock.set_wake_delay(20'000);
+    Pacer pacer(period, PacingConfig{mode, 100'000});
+    pacer.start(clock.now());
+    for (int tick = 0; tick < 20; ++tick) {
+      const std::int64_t deadline = pacer.deadline();
+      int calls = 0;
+      std::int64_t called_at = -1;
+      const std::int64_t wake = pacer.wait(clock, [&]() noexcept {
+        ++calls;
+        called_at = clock.now();
+      });
+      CHECK(calls == 1);
+      if (tick > 0 && mode == PacingMode::hybrid) {
+        CHECK(called_at == deadline - 100'000 + 20'000);  // woken (late) for the spin
+        CHECK(wake == deadline);
+      } else if (tick > 0) {
+        CHECK(called_at == deadline + 20'000);
+        CHECK(wake == called_at);
+      }
+      pacer.finish(wake);
+    }
+  }
+}
+
+TEST_CASE("ServoLoop anticipates every tick but the first, after the sleep, on the last HIP moved one period",
+          "[anticipate]") {
+  for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
+    CAPTURE(static_cast<int>(mode));
+    LoopConfig config;
+    config.pacing.mode = mode;
+    testing::ArmRig rig(testing::ArmRig::free_arm(), config);
+    std::vector<Logged::Entry> log;
+    log.reserve(1000);
+    Logged field{&log, &rig.clock};
+    REQUIRE(rig.loop.run(field, {.max_ticks = 300}) == StopReason::tick_limit);
+    REQUIRE(log.size() == 2 * 300 - 1);
+    CHECK(log[0].what == 'f');
+    bool moved = false;
+    for (std::size_t i = 1; i + 1 < log.size(); i += 2) {
+      INFO("entry " << i);
+      REQUIRE(log[i].what == 'a');
+      REQUIRE(log[i + 1].what == 'f');
+      const Probe expected = predicted_probe(log[i - 1].probe, 1e-3);
+      CHECK(log[i].probe.position == expected.position);
+      CHECK(log[i].probe.time == expected.time);
+      CHECK(log[i].at <= log[i + 1].at);
+      moved = moved || glm::length(log[i].probe.velocity) > 0.0;
+    }
+    CHECK(moved);  // the prediction had a velocity to go by
+  }
+  // off: never
+  LoopConfig off;
+  off.anticipate = false;
+  testing::ArmRig rig(testing::ArmRig::free_arm(), off);
+  std::vector<Logged::Entry> log;
+  log.reserve(100);
+  Logged field{&log, &rig.clock};
+  rig.loop.run(field, {.max_ticks = 40});
+  CHECK(log.size() == 40);
+}
+
+TEST_CASE("a callback is anticipated only when made with with_anticipation()", "[anticipate]") {
+  testing::ArmRig rig(testing::ArmRig::free_arm());
+  std::vector<Logged::Entry> log;
+  log.reserve(200);
+  Logged field{&log, &rig.clock};
+  auto callback = [&field](const TickInput& in) noexcept { return field.force(in.probe); };
+  rig.loop.run(callback, {.max_ticks = 30});
+  CHECK(log.size() == 30);
+  log.clear();
+  auto ahead = with_anticipation(callback, field);
+  rig.loop.run(ahead, {.max_ticks = 30});
+  CHECK(log.size() == 59);
+  // through AnyField, as the tools and Python pass their fields
+  AnyField any(field);
+  log.clear();
+  auto through_any = [&any](const TickInput& in) noexcept { return any.force(in.probe); };
+  auto any_ahead = with_anticipation(through_any, any);
+  rig.loop.run(any_ahead, {.max_ticks = 30});
+  CHECK(log.size() == 59);
+}
+
+TEST_CASE("MultiArmLoop anticipates each arm's field on its own arm's HIP", "[anticipate]") {
+  VirtualClock clock;
+  SimulatedArm arm_a(testing::ArmRig::free_arm()), arm_b(testing::ArmRig::free_arm());
+  SimulatedTransport link_a(arm_a, [&clock] { return clock.now(); });
+  SimulatedTransport link_b(arm_b, [&clock] { return clock.now(); });
+  ForceArm device_a(link_a), device_b(link_b);
+  MultiArmLoop<ForceArm, 2, VirtualClock> loop({&device_a, &device_b}, clock, testing::ArmRig::quiet({}));
+  std::vector<Logged::Entry> log_a, log_b;
+  log_a.reserve(400);
+  log_b.reserve(400);
+  Logged a{&log_a, &clock, {0.3, 0.0, 0.0}}, b{&log_b, &clock, {0.0, -0.2, 0.0}};
+  REQUIRE(loop.run({.max_ticks = 100}, a, b) == StopReason::tick_limit);
+  for (const auto* log : {&log_a, &log_b}) {
+    REQUIRE(log->size() == 199);
+    for (std::size_t i = 1; i + 1 < log->size(); i += 2) {
+      REQUIRE((*log)[i].what == 'a');
+      CHECK((*log)[i].probe.position == predicted_probe((*log)[i - 1].probe, 1e-3).position);
+    }
+  }
+}
