@@ -9,6 +9,7 @@
 //
 //   bench_surface [--ticks N] [--max-triangles N] [--paced-ticks N] [--no-passivity]
 #include <hapticfield/kernels.hpp>
+#include <hapticfield/servo/pacer.hpp>
 #include <hapticfield/surface.hpp>
 
 #include <algorithm>
@@ -19,6 +20,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+
+#include <sys/prctl.h>
 #include <limits>
 #include <random>
 #include <string>
@@ -256,27 +259,36 @@ hf::Probe predicted(const std::vector<hf::Probe>& path, std::size_t i) {
   return p;
 }
 
-/// The look-ahead (ProxyConstraint::anticipate, called by the servo loop
-/// after each sleep) against none, at 1M triangles: two proxies on meshes
-/// built apart, one pass each way with their ticks alternated, (1) back to
-/// back as the table above times them, and (2) paced at 1 kHz: each tick
-/// after a sleep to its deadline, as in a servo loop, the other proxy's tick
-/// half a period away. Wall time on the monotonic clock; the look-ahead is
-/// not inside the timed tick, its own cost is given apart.
+/// The look-ahead (ProxyConstraint::anticipate, run by the servo loop in
+/// the slack before each deadline) against none, at 1M triangles: two
+/// proxies on meshes built apart, one pass each way with their ticks
+/// alternated, (1) back to back as the table below times them, the
+/// look-ahead right before its tick, and (2) paced at 1 kHz as the loop in
+/// sleep mode runs them: a sleep to each deadline, the look-ahead after a
+/// sleep to 100 us before it, the other proxy's tick half a period away.
+/// Wall time on the monotonic clock from the tick's wake to its force; the
+/// look-ahead's own cost apart, with how often it ran past the deadline.
 void anticipation_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles,
                           long paced_ticks) {
   if (max_triangles < 1'000'000) return;
   std::printf(
-      "## The look-ahead (ProxyConstraint::anticipate after each sleep, LoopConfig::anticipate) against none, "
+      "## The look-ahead (ProxyConstraint::anticipate in the slack before each deadline, LoopConfig::anticipate) "
+      "against none, "
       "1M triangles\n\n"
-      "Two proxies on equal meshes built apart, ticks alternated; back to back over the whole path, then paced at "
-      "1 kHz (a sleep to each deadline, as the servo loop does) over its first %ld ticks. Wall time of the tick "
-      "alone (monotonic clock); the look-ahead's own time apart.\n\n"
+      "Two proxies on equal meshes built apart, ticks alternated; back to back over the whole path (the look-ahead "
+      "right before its tick), then paced at 1 kHz over its first %ld ticks as the servo loop in sleep mode runs "
+      "them (a sleep to each deadline; the look-ahead after a sleep to 100 us before it; timer slack 1 ns, as the loop "
+      "sets it). Wall time of the tick "
+      "alone, from its wake to its force (monotonic clock); the look-ahead's own time apart.\n\n"
       "| radius [mm] | timing | mean [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | look-ahead: mean [ns] | p99 [ns] | "
       "p99.9 [ns] | worst [ns] | none / look-ahead mean | none / look-ahead p99 | none / look-ahead p99.9 | "
-      "look-ahead's own mean [ns] |\n"
-      "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+      "look-ahead's own mean [ns] | its p99 [ns] | its p99.9 [ns] | look-aheads skipped / past the deadline |\n"
+      "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
       paced_ticks);
+  // the loop's timer slack (rt/realtime_thread.hpp): 1 ns, so each sleep
+  // ends at its time, not up to 50 us later
+  const int slack = prctl(PR_GET_TIMERSLACK, 0UL, 0UL, 0UL, 0UL);
+  (void)prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
   const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
   const hf::MeshShape one(mesh), other(mesh);
@@ -286,20 +298,30 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
     for (const bool paced : {false, true}) {
       hf::ProxyConstraint plain(one, config), ahead(other, config);
       const std::size_t ticks = paced ? std::min(path.size(), static_cast<std::size_t>(paced_ticks)) : path.size();
-      std::vector<double> tp(ticks), ta(ticks), own(ticks);
+      std::vector<double> tp(ticks), ta(ticks), own;
+      own.reserve(ticks);
       glm::dvec3 sink{0.0};
       double deadline = monotonic_ns() + 1e6;
+      long late = 0, skipped = 0;  // look-aheads that ended past their tick's deadline; that a late wake skipped
       for (std::size_t i = 0; i < ticks; ++i) {
         for (int k = 0; k < 2; ++k) {
           const bool plain_now = (k == 0) == (i % 2 == 0);
+          if (!plain_now) {  // as the loop: in the lead before the deadline (paced), else right before
+            const double lead = static_cast<double>(hf::PacingConfig{}.look_ahead_ns);  // [ns]
+            if (paced) sleep_until_ns(deadline - lead);
+            const double t0 = monotonic_ns();
+            if (!paced || deadline - t0 > lead / 4) {  // Pacer's rule: a quarter of the lead left, else skipped
+              ahead.anticipate(predicted(path, i));
+              const double t1 = monotonic_ns();
+              own.push_back(t1 - t0);
+              late += paced && t1 > deadline ? 1 : 0;
+            } else {
+              ++skipped;
+            }
+          }
           if (paced) {
             sleep_until_ns(deadline);
             deadline += 5e5;  // [ns] the other proxy's tick half a period on
-          }
-          if (!plain_now) {
-            const double t0 = monotonic_ns();
-            ahead.anticipate(predicted(path, i));
-            own[i] = monotonic_ns() - t0;
           }
           const double t0 = monotonic_ns();
           sink += plain_now ? plain.contact(path[i]).force : ahead.contact(path[i]).force;
@@ -308,13 +330,16 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
       }
       if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
       const hf::bench::Cost p = summary(std::move(tp)), a = summary(std::move(ta)), o = summary(std::move(own));
-      std::printf("| %.1f | %s | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f | %.0f |\n",
-                  radius * 1e3, paced ? "paced at 1 kHz" : "back to back", p.mean_ns, p.p99_ns, p.p999_ns, p.worst_ns,
-                  a.mean_ns, a.p99_ns, a.p999_ns, a.worst_ns, p.mean_ns / a.mean_ns, p.p99_ns / a.p99_ns,
-                  p.p999_ns / a.p999_ns, o.mean_ns);
+      std::printf(
+          "| %.1f | %s | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f | %.0f | %.0f | "
+          "%.0f | %ld / %ld |\n",
+          radius * 1e3, paced ? "paced at 1 kHz" : "back to back", p.mean_ns, p.p99_ns, p.p999_ns, p.worst_ns,
+          a.mean_ns, a.p99_ns, a.p999_ns, a.worst_ns, p.mean_ns / a.mean_ns, p.p99_ns / a.p99_ns, p.p999_ns / a.p999_ns,
+          o.mean_ns, o.p99_ns, o.p999_ns, skipped, late);
     }
   }
   std::printf("\n");
+  (void)prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(slack), 0UL, 0UL, 0UL);
 }
 
 /// The highest stiffness [N/m] that stays passive at `rate` [Hz] (bisection

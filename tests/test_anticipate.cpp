@@ -23,11 +23,13 @@
 #include "hapticfield/core/compose.hpp"
 #include "hapticfield/core/contact.hpp"
 #include "hapticfield/core/field.hpp"
+#include "hapticfield/core/live_field.hpp"
 #include "hapticfield/servo/multi_arm_loop.hpp"
 #include "hapticfield/servo/pacer.hpp"
 #include "hapticfield/surface/height_field.hpp"
 #include "hapticfield/surface/mesh_shape.hpp"
 #include "hapticfield/surface/moving_shape.hpp"
+#include "hapticfield/surface/posed_shape.hpp"
 #include "hapticfield/surface/proxy.hpp"
 #include "run_seed.hpp"
 #include "surface_meshes.hpp"
@@ -166,8 +168,9 @@ struct Compared {
 /// before every tick: the same contacts, proxies and tick records, bit for
 /// bit.
 template <class S>
-Compared compare_on(const S& shape, const ProxyConfig& config, const std::vector<Probe>& path, std::mt19937& rng) {
-  ProxyConstraint<S> plain(shape, config), ahead(shape, config);
+Compared compare_on(const S& one, const S& other, const ProxyConfig& config, const std::vector<Probe>& path,
+                    std::mt19937& rng) {
+  ProxyConstraint<S> plain(one, config), ahead(other, config);  // shapes built apart: nothing shared
   Compared out;
   long& allocations = out.allocations;
   for (std::size_t i = 0; i < path.size(); ++i) {
@@ -202,7 +205,7 @@ TEST_CASE("a proxy anticipated before every tick makes the same ticks bit for bi
   int paths = 0;
   for (const Named& m : meshes()) {
     INFO(m.name);
-    const MeshShape shape(m.mesh);
+    const MeshShape shape(m.mesh), apart(m.mesh);
     for (const double radius : {0.0, 5e-4, 2e-3}) {
       INFO("radius " << radius);
       for (const bool stick_first : {true, false}) {
@@ -210,7 +213,7 @@ TEST_CASE("a proxy anticipated before every tick makes the same ticks bit for bi
         config.radius = radius;
         config.stick_first = stick_first;
         for (int k = 0; k < 4; ++k, ++paths)
-          seen += compare_on(shape, config, press_and_slide(m.mesh, rng), rng);
+          seen += compare_on(shape, apart, config, press_and_slide(m.mesh, rng), rng);
       }
     }
   }
@@ -219,7 +222,7 @@ TEST_CASE("a proxy anticipated before every tick makes the same ticks bit for bi
   for (int y = 0; y < 64; ++y)
     for (int x = 0; x < 64; ++x)
       heights[static_cast<std::size_t>(y * 64 + x)] = 0.002 * std::sin(0.4 * x) * std::cos(0.3 * y);
-  const HeightFieldShape field(64, 64, 0.1 / 63, 0.1 / 63, heights);
+  const HeightFieldShape field(64, 64, 0.1 / 63, 0.1 / 63, heights), field_apart(64, 64, 0.1 / 63, 0.1 / 63, heights);
   const TriangleMesh as_mesh = test::wavy_sheet(0.1, 64, 0.002, 0.03);
   for (const double radius : {0.0, 1e-3}) {
     ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
@@ -228,7 +231,7 @@ TEST_CASE("a proxy anticipated before every tick makes the same ticks bit for bi
       std::vector<Probe> path = press_and_slide(as_mesh, rng);
       for (Probe& p : path)
         p.position += glm::dvec3{0.05, 0.05, 0.0};  // over the grid, which starts at the origin
-      seen += compare_on(field, config, path, rng);
+      seen += compare_on(field, field_apart, config, path, rng);
     }
   }
   CHECK(paths > 0);
@@ -240,8 +243,8 @@ TEST_CASE("a proxy anticipated before every tick makes the same ticks bit for bi
 #endif
 }
 
-TEST_CASE("a shape that moves is not anticipated (its copy could allocate): nothing is done", "[anticipate]") {
-  static_assert(!std::is_nothrow_copy_constructible_v<Moving<MeshShape>>);
+TEST_CASE("a shape that moves is not anticipated (advance() would take its feed's newest pose): nothing is done",
+          "[anticipate]") {
   ProxyConstraint proxy(Moving<MeshShape>(MeshShape(test::icosphere(3, 0.05)), MovingPose{}), ProxyConfig{});
   Probe p;
   p.position = glm::dvec3{0.0, 0.0, 0.049};
@@ -250,6 +253,61 @@ TEST_CASE("a shape that moves is not anticipated (its copy could allocate): noth
   // the first tick after a look-ahead still puts the proxy at the HIP
   (void)proxy.contact(p);
   CHECK(same(proxy.proxy(), p.position));
+}
+
+namespace {
+
+/// A mesh that counts its queries through a pointer: not pure (the count is
+/// a side effect), unless Pure, which the test uses to see the look-ahead's
+/// queries.
+template <bool Pure>
+struct CountingMesh {
+  static constexpr bool pure_queries = Pure;
+  MeshShape mesh;
+  long* queries;
+  Hit closest(const glm::dvec3& p, double d) const noexcept { return ++*queries, mesh.closest(p, d); }
+  Hit first_hit(const glm::dvec3& a, const glm::dvec3& b) const noexcept { return ++*queries, mesh.first_hit(a, b); }
+  Hit sweep_sphere(const glm::dvec3& a, const glm::dvec3& b, double r) const noexcept {
+    return ++*queries, mesh.sweep_sphere(a, b, r);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the look-ahead makes the queries of the tick it anticipates; a shape that is not pure gets none",
+          "[anticipate]") {
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  const TriangleMesh sheet = test::wavy_sheet(0.1, 80, 0.004, 0.03);
+  static_assert(PureQueries<MeshShape> && PureQueries<HeightFieldShape> && PureQueries<PlaneShape> &&
+                PureQueries<SphereShape> && PureQueries<Posed<MeshShape>>);
+  static_assert(!PureQueries<CountingMesh<false>> && !PureQueries<Moving<MeshShape>>);
+  long queries = 0, ahead_queries = 0, impure_queries = 0;
+  for (const double radius : {0.0, 5e-4}) {
+    ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+    config.radius = radius;
+    ProxyConstraint pure(CountingMesh<true>{MeshShape(sheet), &queries}, config);
+    ProxyConstraint impure(CountingMesh<false>{MeshShape(sheet), &impure_queries}, config);
+    long queried_ticks = 0;
+    for (int k = 0; k < 6; ++k) {
+      const std::vector<Probe> path = press_and_slide(sheet, rng);
+      for (const Probe& p : path) {
+        const long before = queries;
+        pure.anticipate(p);  // the very tick that follows
+        ahead_queries = queries - before;
+        (void)pure.contact(p);
+        INFO("t " << p.time);
+        REQUIRE(ahead_queries == queries - before - ahead_queries);
+        queried_ticks += ahead_queries > 0 ? 1 : 0;
+        const long impure_before = impure_queries;
+        impure.anticipate(p);
+        REQUIRE(impure_queries == impure_before);
+        (void)impure.contact(p);
+      }
+    }
+    CHECK(queried_ticks > 100);  // the look-ahead did query, on most ticks
+  }
 }
 
 // --- every wrapper passes the look-ahead on -------------------------------------
@@ -284,7 +342,7 @@ struct Logged {
 
 }  // namespace
 
-TEST_CASE("ContactField, sums, scales, clamps and AnyField pass the look-ahead on; fields without one are left alone",
+TEST_CASE("ContactField, sums, scales, clamps, AnyField and LiveField pass the look-ahead on; others are left alone",
           "[anticipate]") {
   std::vector<Probe> seen;
   seen.reserve(64);
@@ -314,12 +372,20 @@ TEST_CASE("ContactField, sums, scales, clamps and AnyField pass the look-ahead o
   const long allocations = test::count_allocations([&] { any.anticipate(p); });
   CHECK(seen.size() == 6);
   if (test::allocations_counted) CHECK(allocations == 0);
+  LiveField<decltype(contact_field)> live(contact(Recorder{&seen}));
+  static_assert(AnticipatingField<LiveField<decltype(contact_field)>>);
+  live.anticipate(p);
+  CHECK(seen.size() == 7);
+  live.publish(contact(Recorder{&seen}));  // a newer field: looked at only once a tick has taken it
+  (void)live.force(p);
+  live.anticipate(p);
+  CHECK(seen.size() == 8);
   AnyField empty;
   empty.anticipate(p);
   AnyField zero(ZeroField{});
   zero.anticipate(p);
   anticipate_if_able(ZeroField{}, p);
-  CHECK(seen.size() == 6);
+  CHECK(seen.size() == 8);
 }
 
 TEST_CASE("predicted_probe: the HIP moved by its velocity, time on; a non-finite move keeps the position",
@@ -340,37 +406,62 @@ TEST_CASE("predicted_probe: the HIP moved by its velocity, time on; a non-finite
 
 // --- the loops call it -------------------------------------------------------------
 
-TEST_CASE("Pacer::wait calls ready() once: after the sleep and before the spin (hybrid), after the wake (sleep)",
+TEST_CASE("Pacer::wait runs ready() in the slack before the deadline, never when a late wake leaves too little",
           "[anticipate]") {
   constexpr std::int64_t period = 1'000'000;  // [ns]
+  constexpr std::int64_t early = 100'000;     // [ns] the margin (hybrid) or the look-ahead lead (sleep)
   for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
     CAPTURE(static_cast<int>(mode));
     VirtualClock clock;
-    clock.set_wake_delay(20'000);
-    Pacer pacer(period, PacingConfig{mode, 100'000});
+    clock.set_wake_delay(20'000);  // every sleep returns 20 us late
+    PacingConfig pacing{mode, early};
+    pacing.look_ahead_ns = early;
+    Pacer pacer(period, pacing);
     pacer.start(clock.now());
     for (int tick = 0; tick < 20; ++tick) {
+      CAPTURE(tick);
       const std::int64_t deadline = pacer.deadline();
+      if (tick == 10) clock.shift_next_wake(60'000);  // woken 20 us before the deadline: too little slack
+      if (tick == 12) clock.shift_next_wake(50'000);  // woken 30 us before: enough
       int calls = 0;
       std::int64_t called_at = -1;
       const std::int64_t wake = pacer.wait(clock, [&]() noexcept {
         ++calls;
         called_at = clock.now();
       });
-      CHECK(calls == 1);
-      if (tick > 0 && mode == PacingMode::hybrid) {
-        CHECK(called_at == deadline - 100'000 + 20'000);  // woken (late) for the spin
-        CHECK(wake == deadline);
-      } else if (tick > 0) {
-        CHECK(called_at == deadline + 20'000);
-        CHECK(wake == called_at);
+      if (tick == 0 || tick == 10) {  // the first deadline is now; the late wake leaves 20 us (< 25)
+        CHECK(calls == 0);
+      } else {
+        CHECK(calls == 1);
+        CHECK(called_at == deadline - early + (tick == 12 ? 70'000 : 20'000));
       }
+      // the tick's own wake: on the deadline after the spin, 20 us late after the second sleep
+      if (tick > 0) CHECK(wake == (mode == PacingMode::hybrid ? deadline : deadline + 20'000));
       pacer.finish(wake);
     }
+    CHECK(pacer.readied() == 18);
   }
+  // sleep mode with no lead, and the plain wait: one sleep, never ready()
+  VirtualClock clock;
+  PacingConfig no_lead;
+  no_lead.look_ahead_ns = 0;
+  Pacer pacer(period, no_lead);
+  pacer.start(clock.now());
+  for (int tick = 0; tick < 5; ++tick) {
+    const std::int64_t wake = pacer.wait(clock, []() noexcept { FAIL("ready() with no lead"); });
+    CHECK(wake == static_cast<std::int64_t>(tick) * period);
+    pacer.finish(wake);
+  }
+  CHECK(pacer.readied() == 0);
+  PacingConfig bad;
+  bad.look_ahead_ns = -1;
+  CHECK_THROWS_AS(bad.validate(), std::invalid_argument);
+  LoopConfig with_bad;  // the loop refuses it at construction
+  with_bad.pacing = bad;
+  CHECK_THROWS_AS(with_bad.validate(), std::invalid_argument);
 }
 
-TEST_CASE("ServoLoop anticipates every tick but the first, after the sleep, on the last HIP moved one period",
+TEST_CASE("ServoLoop anticipates every tick but the first, before its deadline, on the last HIP moved one period",
           "[anticipate]") {
   for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
     CAPTURE(static_cast<int>(mode));
@@ -391,7 +482,7 @@ TEST_CASE("ServoLoop anticipates every tick but the first, after the sleep, on t
       const Probe expected = predicted_probe(log[i - 1].probe, 1e-3);
       CHECK(log[i].probe.position == expected.position);
       CHECK(log[i].probe.time == expected.time);
-      CHECK(log[i].at <= log[i + 1].at);
+      CHECK(log[i + 1].at - log[i].at == default_spin_margin_ns);  // in the slack before the deadline
       moved = moved || glm::length(log[i].probe.velocity) > 0.0;
     }
     CHECK(moved);  // the prediction had a velocity to go by

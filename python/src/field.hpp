@@ -131,6 +131,7 @@ struct SharedField {
   std::shared_ptr<AnyField> field;
   glm::dvec3 force(const Probe& probe) noexcept { return field->force(probe); }
   void reset() noexcept { field->reset(); }
+  void anticipate(const Probe& next) const noexcept { field->anticipate(next); }
 };
 
 /// F = sum of the parts; the vector is filled at construction only.
@@ -145,6 +146,10 @@ struct FieldSum {
   void reset() noexcept {
     for (auto& p : parts)
       p.reset();
+  }
+  void anticipate(const Probe& next) const noexcept {
+    for (const auto& p : parts)
+      p.anticipate(next);
   }
 };
 

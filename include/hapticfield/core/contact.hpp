@@ -96,7 +96,10 @@ class ContactField {
   /// The constraint's look-ahead (core/field.hpp) on the probe force() would
   /// give it; nothing changes. The parts are not run.
   void anticipate(const Probe& next) const noexcept {
-    if constexpr (requires(const C& c) { c.anticipate(next); }) {
+    if constexpr (requires(const C& c) {
+                    { c.anticipate(next) }
+                    noexcept;
+                  }) {
       if (!is_finite(next.position)) return;
       Probe on = next;
       if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};

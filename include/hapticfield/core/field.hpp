@@ -39,8 +39,9 @@ void reset_if_stateful(F& field) noexcept {
 /// next force() depends on. What it gains is the memory that tick reads,
 /// brought into cache before the tick comes (a proxy on a large mesh: its
 /// tree's nodes and triangles where the HIP is going). The servo loop calls
-/// it after each period's sleep, before the read (LoopConfig::anticipate).
-/// Like force(): no allocation, lock, exception or I/O.
+/// it in the slack before each deadline (LoopConfig::anticipate). Like
+/// force(): no allocation, lock, exception or I/O, and no effect on anything
+/// the next force() reads.
 template <class F>
 concept AnticipatingField = HapticField<F> && requires(const F& field, const Probe& probe) {
   { field.anticipate(probe) }

@@ -34,6 +34,13 @@ class LiveField {
     if (Field* field = buffer_.acquire()) reset_if_stateful(*field);
   }
 
+  /// Servo thread: the look-ahead (core/field.hpp) of the field the last
+  /// tick used; a field published since is not looked at before its first
+  /// tick.
+  void anticipate(const Probe& next) const noexcept {
+    if (const Field* field = buffer_.held()) anticipate_if_able(*field, next);
+  }
+
  private:
   TripleBuffer<Field> buffer_;
 };

@@ -73,6 +73,10 @@ class TripleBuffer {
     return slots_[index_.front()].get();
   }
 
+  /// Reader thread: the object the last acquire() gave (the initial one
+  /// before any), without taking a newer one.
+  [[nodiscard]] const T* held() const noexcept { return slots_[index_.front()].get(); }
+
  private:
   std::unique_ptr<T> slots_[3];
   rt::TripleIndex index_;

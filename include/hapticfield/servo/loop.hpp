@@ -54,11 +54,12 @@ struct LoopConfig {
   bool auto_home{true};       ///< request homing when the device is not homed
   bool auto_arm{true};        ///< request arming at start (the device arms once homed)
   bool disarm_on_exit{true};  ///< disarm when run() returns
-  /// After each period's sleep, before the read, the field's look-ahead
+  /// In the slack before each deadline, the field's look-ahead
   /// (core/field.hpp: anticipate() on the last HIP moved one period by its
   /// velocity), so the memory the tick reads is in cache when it runs (a
-  /// proxy on a large mesh: docs/surfaces.md). In hybrid pacing it runs
-  /// before the spin; in sleep mode it delays the read by its own cost.
+  /// proxy on a large mesh: docs/surfaces.md). Hybrid pacing runs it in
+  /// its spin margin; sleep mode wakes PacingConfig::look_ahead_ns before
+  /// the deadline for it and sleeps again (Pacer::wait(clock, ready)).
   /// Fields without one, and callbacks not made by with_anticipation(),
   /// are not affected.
   bool anticipate{true};
@@ -82,6 +83,7 @@ struct LoopConfig {
     if (priority < 1 || priority > 99) throw std::invalid_argument("LoopConfig: priority must be within 1..99");
     if (!std::isfinite(recover_after) || recover_after < 0.0 || recover_after > 3600.0)
       throw std::invalid_argument("LoopConfig: recover_after must be within [0, 3600] [s] (0: never)");
+    pacing.validate();
   }
 };
 
@@ -494,10 +496,7 @@ class ServoLoop {
         return StopReason::tick_limit;
       }
       const std::int64_t deadline = pacer.deadline();
-      const bool has_last = tick_ > first_tick;  // a HIP to predict from
-      const std::int64_t wake = pacer.wait(*clock_, [&compute, &in, has_last, this]() noexcept {
-        if (has_last) anticipate(compute, in.probe);
-      });
+      const std::int64_t wake = wait_for_tick(pacer, compute, in.probe, tick_ > first_tick);
       read_once(in);
       glm::dvec3 f{0.0};
       if constexpr (std::is_nothrow_invocable_v<Compute&, const TickInput&>) {
@@ -529,16 +528,21 @@ class ServoLoop {
     }
   }
 
-  /// The look-ahead of a callback that has one (LoopConfig::anticipate) on
-  /// `last` moved one period on.
+  /// The pacer's wait for the next deadline, with the look-ahead of a
+  /// callback that has one (LoopConfig::anticipate) on `last` (the HIP of
+  /// the tick before, when there was one) moved one period on, in the slack
+  /// before the deadline (Pacer::wait(clock, ready)).
   template <class Compute>
-  void anticipate(const Compute& compute, const Probe& last) const noexcept {
+  std::int64_t wait_for_tick(Pacer& pacer, const Compute& compute, const Probe& last, bool has_last) noexcept {
     if constexpr (requires(const Compute& c, const Probe& p) {
                     { c.anticipate(p) }
                     noexcept;
                   }) {
-      if (config_.anticipate) compute.anticipate(predicted_probe(last, period_));
+      if (config_.anticipate && has_last)
+        return pacer.wait(*clock_,
+                          [&compute, &last, this]() noexcept { compute.anticipate(predicted_probe(last, period_)); });
     }
+    return pacer.wait(*clock_);
   }
 
   D* device_;

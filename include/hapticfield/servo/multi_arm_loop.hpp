@@ -69,9 +69,13 @@ class MultiArmLoop {
       if (stop_.exchange(false, std::memory_order_acq_rel)) return stop_all(StopReason::requested);
       if (tick >= limits.max_ticks) return stop_all(StopReason::tick_limit);
       const std::int64_t deadline = pacer.deadline();
-      const std::int64_t wake = pacer.wait(*clock_, [this, &in, &field_refs, tick]() noexcept {
-        if (tick > 0) anticipate_arms(in, field_refs, std::make_index_sequence<N>{});
-      });
+      std::int64_t wake = 0;
+      if (tick > 0 && arms_[0]->config_.anticipate && (AnticipatingField<Fields> || ...))
+        wake = pacer.wait(*clock_, [this, &in, &field_refs]() noexcept {
+          anticipate_arms(in, field_refs, std::make_index_sequence<N>{});
+        });
+      else
+        wake = pacer.wait(*clock_);
       tick_arms(in, field_refs, std::make_index_sequence<N>{});
       apply_policy();
       const std::int64_t end = clock_->now();
@@ -112,7 +116,8 @@ class MultiArmLoop {
   }
 
   /// Each arm's field's look-ahead on its last HIP moved one period on
-  /// (LoopConfig::anticipate, as ServoLoop).
+  /// (LoopConfig::anticipate of the first arm, which sets the shared
+  /// timing, as ServoLoop).
   template <class Refs, std::size_t... I>
   void anticipate_arms(const std::array<TickInput, N>& in, const Refs& refs, std::index_sequence<I...>) const noexcept {
     (anticipate_arm(*arms_[I], in[I], std::get<I>(refs)), ...);
@@ -120,7 +125,7 @@ class MultiArmLoop {
 
   template <class F>
   static void anticipate_arm(const ServoLoop<D, C>& arm, const TickInput& in, const F& field) noexcept {
-    if (arm.config_.anticipate) anticipate_if_able(field, predicted_probe(in.probe, arm.period_));
+    anticipate_if_able(field, predicted_probe(in.probe, arm.period_));
   }
 
   template <class F>

@@ -54,21 +54,31 @@ struct PacingConfig {
   PacingMode mode{PacingMode::sleep};
   std::int64_t spin_margin_ns{default_spin_margin_ns};  ///< hybrid: spin this long before each deadline [ns]
   OverrunPolicy overrun{OverrunPolicy::skip};           ///< what the tick after an overrun does
+  /// Sleep mode with a look-ahead (Pacer::wait(clock, ready)): wake this
+  /// long before the deadline to run it, then sleep again [ns]; 0: no
+  /// look-ahead in sleep mode. (Hybrid mode runs it in its margin.)
+  std::int64_t look_ahead_ns{default_spin_margin_ns};
 
-  /// @throws std::invalid_argument for a margin outside [0, 1 s].
+  /// @throws std::invalid_argument for a margin or look-ahead lead outside
+  ///         [0, 1 s].
   void validate() const {
     if (spin_margin_ns < 0 || spin_margin_ns > max_spin_margin_ns)
       throw std::invalid_argument("PacingConfig: spin_margin_ns must be within [0, 1e9] [ns]");
+    if (look_ahead_ns < 0 || look_ahead_ns > max_spin_margin_ns)
+      throw std::invalid_argument("PacingConfig: look_ahead_ns must be within [0, 1e9] [ns]");
   }
 };
 
 class Pacer {
  public:
   /// @param period_ns  tick period [ns], > 0
-  /// @param pacing     how to wait (the margin is clamped into [0, period / 2])
+  /// @param pacing     how to wait (the margin and the look-ahead lead are
+  ///                   clamped into [0, period / 2])
   explicit Pacer(std::int64_t period_ns, PacingConfig pacing = {}) noexcept : period_ns_(period_ns), pacing_(pacing) {
     if (pacing_.spin_margin_ns < 0) pacing_.spin_margin_ns = 0;
     if (pacing_.spin_margin_ns > period_ns_ / 2) pacing_.spin_margin_ns = period_ns_ / 2;
+    if (pacing_.look_ahead_ns < 0) pacing_.look_ahead_ns = 0;
+    if (pacing_.look_ahead_ns > period_ns_ / 2) pacing_.look_ahead_ns = period_ns_ / 2;
   }
 
   /// The first tick is due now.
@@ -82,49 +92,23 @@ class Pacer {
   /// hybrid mode spinning the last stretch) and returns the wake time [ns].
   template <ServoClock C>
   std::int64_t wait(C& clock) noexcept {
-    return wait(clock, []() noexcept {});
+    auto nothing = []() noexcept {};
+    return wait_for(clock, nothing, false);
   }
 
-  /// The same, with `ready()` called once when the sleeping is over: in
-  /// hybrid mode before the spin (its time comes out of the margin), in
-  /// sleep mode after the wake (the wake time returned is after it). The
-  /// servo loop's look-ahead (LoopConfig::anticipate) runs there.
+  /// The same, with `ready()` run once in the slack before the deadline
+  /// (the servo loop's look-ahead, LoopConfig::anticipate): in hybrid mode
+  /// after the sleep, before the spin (out of the margin); in sleep mode the
+  /// thread wakes PacingConfig::look_ahead_ns before the deadline to run it,
+  /// then sleeps again to the deadline. It runs only while more than a
+  /// quarter of that stretch (margin or lead, > 0) is left, so
+  /// a late wake skips it rather than be made later. The time returned is
+  /// the tick's own wake: ready()'s time counts in the wake latency only
+  /// where it ran past the deadline.
   template <ServoClock C, class Ready>
   std::int64_t wait(C& clock, Ready&& ready) noexcept {
     static_assert(std::is_nothrow_invocable_v<Ready&>, "Pacer::wait: ready() must be noexcept");
-    std::int64_t now = clock.now();
-    bool readied = false;
-    if constexpr (SpinningClock<C>) {
-      if (pacing_.mode == PacingMode::hybrid) {
-        const std::int64_t sleep_to = deadline_ - pacing_.spin_margin_ns;
-        while (now < sleep_to) {
-          clock.sleep_until(sleep_to);
-          now = clock.now();
-        }
-        ready();
-        readied = true;
-        now = clock.now();
-        if (now < deadline_) {
-          clock.spin_until(deadline_);
-          const std::int64_t after = clock.now();
-          spun_ns_ += after - now;
-          ++spins_;
-          now = after;
-        }
-      }
-    }
-    while (now < deadline_) {
-      clock.sleep_until(deadline_);
-      now = clock.now();
-    }
-    if (!readied) {
-      ready();
-      now = clock.now();
-    }
-    previous_wake_ = first_ ? now : wake_;
-    first_ = false;
-    wake_ = now;
-    return now;
+    return wait_for(clock, ready, true);
   }
 
   /// Ends the tick that finished at end [ns]: moves to the next deadline and
@@ -156,8 +140,46 @@ class Pacer {
   [[nodiscard]] std::int64_t spun_ns() const noexcept { return spun_ns_; }
   /// Waits that ended with a spin.
   [[nodiscard]] std::uint64_t spins() const noexcept { return spins_; }
+  /// Waits whose ready() ran (wait(clock, ready)).
+  [[nodiscard]] std::uint64_t readied() const noexcept { return readied_; }
 
  private:
+  template <ServoClock C, class Ready>
+  std::int64_t wait_for(C& clock, Ready& ready, bool with_ready) noexcept {
+    std::int64_t now = clock.now();
+    bool hybrid = false;
+    if constexpr (SpinningClock<C>) hybrid = pacing_.mode == PacingMode::hybrid;
+    // how long before the deadline the first sleep ends [ns]
+    const std::int64_t early = hybrid ? pacing_.spin_margin_ns : (with_ready ? pacing_.look_ahead_ns : 0);
+    const std::int64_t sleep_to = deadline_ - early;
+    while (now < sleep_to) {
+      clock.sleep_until(sleep_to);
+      now = clock.now();
+    }
+    if (with_ready && early > 0 && deadline_ - now > early / 4) {  // slack left: the look-ahead
+      ready();
+      ++readied_;
+      now = clock.now();
+    }
+    if constexpr (SpinningClock<C>) {
+      if (hybrid && now < deadline_) {
+        clock.spin_until(deadline_);
+        const std::int64_t after = clock.now();
+        spun_ns_ += after - now;
+        ++spins_;
+        now = after;
+      }
+    }
+    while (now < deadline_) {
+      clock.sleep_until(deadline_);
+      now = clock.now();
+    }
+    previous_wake_ = first_ ? now : wake_;
+    first_ = false;
+    wake_ = now;
+    return now;
+  }
+
   std::int64_t period_ns_;
   PacingConfig pacing_;
   std::int64_t deadline_{0};
@@ -165,6 +187,7 @@ class Pacer {
   std::int64_t previous_wake_{0};
   std::int64_t spun_ns_{0};
   std::uint64_t spins_{0};
+  std::uint64_t readied_{0};
   bool first_{true};
   bool overran_{false};
 };

@@ -84,6 +84,8 @@ class HeightFieldShape {
   /// closest() measures to the bilinear patches, sweep_sphere() meets the
   /// cells' two triangles: the two may disagree on whether a ball overlaps.
   static constexpr bool closest_matches_sweep = false;
+  /// Its queries only read the grid, shared by copies (PureQueries).
+  static constexpr bool pure_queries = true;
 
   /// @throws std::invalid_argument for fewer than 2 x 2 samples (0 x 0
   ///         included), more than height_field_max_samples (checked before

@@ -51,6 +51,8 @@ class MeshShape {
   /// Each primitive is a flat, convex triangle (the proxy moves over one
   /// without a sweep).
   static constexpr bool flat_primitives = true;
+  /// Its queries only read the tree, shared by copies (PureQueries).
+  static constexpr bool pure_queries = true;
 
   /// Takes the mesh and builds its tree (allocates; may take about a second
   /// per million triangles).

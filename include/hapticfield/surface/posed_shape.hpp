@@ -226,6 +226,8 @@ class PosedQueries {
 template <Shape S>
 class Posed : public PosedQueries<Posed<S>, S> {
  public:
+  /// As pure as the shape it places (PureQueries).
+  static constexpr bool pure_queries = PureQueries<S>;
   /// @throws std::invalid_argument for an invalid pose (Pose::validate()).
   Posed(S shape, const Pose& pose) : shape_(std::move(shape)), pose_(pose) { pose_.validate(); }
 

@@ -83,10 +83,11 @@
 /// surface's at the proxy. Static shapes take none of these steps.
 ///
 /// anticipate(next) runs the tick `next` would make on a copy of the proxy
-/// and drops it: the servo loop calls it after each period's sleep, so the
-/// tree's nodes and triangles the coming tick reads are in cache when it
-/// runs (after 1 ms asleep a tick otherwise meets many of them in memory:
-/// docs/surfaces.md, Cost). Static shapes only.
+/// and drops it: the servo loop calls it in the slack before each
+/// deadline, so the tree's nodes and triangles the coming tick reads are in
+/// cache when it runs (after 1 ms asleep a tick otherwise meets many of
+/// them in memory: docs/surfaces.md, Cost). Static shapes whose queries
+/// change nothing (PureQueries) only.
 
 #include <algorithm>
 #include <array>
@@ -95,7 +96,6 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
-#include <type_traits>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -380,9 +380,10 @@ class ProxyConstraint {
 
   /// The tick `next` would make, run on a copy of this proxy and dropped:
   /// nothing here changes, but the tree nodes and triangles that tick reads
-  /// are in cache when it comes (core/field.hpp, AnticipatingField). A
-  /// shape that moves (advance()) or whose copy may allocate is not copied:
-  /// nothing is done.
+  /// are in cache when it comes (core/field.hpp, AnticipatingField). Only
+  /// on a shape that stands still (no advance(): a moving shape's would
+  /// take its pose feed's newest pose) and whose queries change nothing
+  /// (PureQueries); on any other, nothing is done.
   void anticipate(const Probe& next) const noexcept {
     if constexpr (anticipates) {
       ProxyConstraint scratch(*this);
@@ -925,9 +926,9 @@ class ProxyConstraint {
     { s.carry(p) } -> std::same_as<glm::dvec3>;
     { s.surface_velocity(p) } -> std::same_as<glm::dvec3>;
   };
-  /// anticipate() runs a copy's tick: the shape stands still and its copy
-  /// cannot allocate (a mesh's shares its tree).
-  static constexpr bool anticipates = !advances && std::is_nothrow_copy_constructible_v<S>;
+  /// anticipate() runs a copy's tick: the shape stands still, its queries
+  /// change nothing and its copy cannot allocate (a mesh's shares its tree).
+  static constexpr bool anticipates = !advances && PureQueries<S>;
 
   /// The HIP's velocity the damping acts on: relative to the surface at the
   /// proxy `at` on a moving shape (zero for a non-finite HIP velocity).

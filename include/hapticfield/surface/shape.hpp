@@ -26,6 +26,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
@@ -68,6 +69,16 @@ concept Shape = requires(const S& shape, const glm::dvec3& p, double max_distanc
   { shape.first_hit(p, p) }
   noexcept->std::same_as<Hit>;
 };
+
+/// A shape whose queries change nothing but their answers (no counter, log
+/// or cache written) and whose copy is cheap and never allocates. A shape
+/// opts in with `static constexpr bool pure_queries = true;` (the library's
+/// static shapes do): a proxy on it may then run a tick on a scratch copy
+/// of itself to look ahead (ProxyConstraint::anticipate).
+template <class S>
+concept PureQueries = Shape<S> && requires {
+  requires S::pure_queries;
+} && std::is_nothrow_copy_constructible_v<S>;
 
 /// Counts of one query's work (nodes of a tree, cells of a grid): the bound
 /// the tests assert and the benches report.
@@ -123,6 +134,7 @@ struct PlaneShapeConfig {
 /// surface frame (core/surface_frame.hpp: x and y for the normal +z).
 class PlaneShape {
  public:
+  static constexpr bool pure_queries = true;  ///< (PureQueries)
   /// @throws std::invalid_argument for a non-finite point, a normal that is
   ///         not unit length or a size that is not finite and > 0.
   explicit PlaneShape(const PlaneShapeConfig& config) : config_(config), frame_(surface_frame(config.normal)) {
@@ -191,6 +203,7 @@ struct SphereShapeConfig {
 /// the bitangent north (zero at the poles). Its size is the radius.
 class SphereShape {
  public:
+  static constexpr bool pure_queries = true;  ///< (PureQueries)
   /// @throws std::invalid_argument for a non-finite centre or a radius that
   ///         is not finite and > 0.
   explicit SphereShape(const SphereShapeConfig& config) : config_(config) {

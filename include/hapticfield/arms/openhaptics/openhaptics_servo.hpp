@@ -221,6 +221,7 @@ class OpenHapticsServo {
   static LoopConfig adapt(LoopConfig c, const OpenHapticsDevice& device) noexcept {
     c.rate = device.config().scheduler_rate;
     c.realtime = RealTime::off;
+    c.anticipate = false;  // the HD scheduler owns the timing: no slack to look ahead in
     return c;
   }
 
