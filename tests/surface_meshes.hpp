@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/vec2.hpp>
 
 #include <glm/geometric.hpp>
@@ -120,6 +121,20 @@ inline TriangleMesh wavy_sheet(double side, int n, double amplitude, double wave
   for (auto& x : mesh.positions)
     x.z = amplitude * std::sin(k * x.x) * std::sin(k * x.y);
   return mesh;
+}
+
+/// A mesh scaled to `diagonal` [m] across its box, about the box's centre
+/// (real models, whatever their units, made hand-sized).
+inline TriangleMesh fitted(TriangleMesh m, double diagonal = 0.2) {
+  glm::dvec3 lo{1e300}, hi{-1e300};
+  for (const auto& p : m.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const double s = diagonal / glm::length(hi - lo);
+  for (auto& p : m.positions)
+    p = (p - 0.5 * (lo + hi)) * s;
+  return m;
 }
 
 }  // namespace hapticfield::test

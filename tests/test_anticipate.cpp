@@ -52,18 +52,6 @@ bool same(const glm::dvec3& a, const glm::dvec3& b) {
   return same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z);
 }
 
-TriangleMesh fitted(TriangleMesh m, double diagonal) {
-  glm::dvec3 lo{1e300}, hi{-1e300};
-  for (const auto& p : m.positions) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  const double s = diagonal / glm::length(hi - lo);
-  for (auto& p : m.positions)
-    p = (p - 0.5 * (lo + hi)) * s;
-  return m;
-}
-
 struct Named {
   std::string name;
   TriangleMesh mesh;
@@ -82,7 +70,7 @@ std::vector<Named> meshes() {
     for (const char* name : {"gltf/Duck.gltf", "meshes/spot.obj", "meshes/teapot.obj", "meshes/fandisk.obj",
                              "meshes/rocker-arm.obj", "meshes/stanford-bunny.obj"}) {
       const std::filesystem::path p = data / name;
-      if (std::filesystem::exists(p)) out.push_back({name, fitted(io::load_mesh(p.string()).mesh, 0.2)});
+      if (std::filesystem::exists(p)) out.push_back({name, test::fitted(io::load_mesh(p.string()).mesh)});
     }
   else
     WARN("real models skipped: " << data << " is absent");

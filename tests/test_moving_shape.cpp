@@ -161,16 +161,7 @@ std::vector<std::pair<std::string, TriangleMesh>> real_models() {
                            "meshes/stanford-bunny.obj", "gltf/Duck.gltf"}) {
     const std::filesystem::path p = data / name;
     if (!std::filesystem::exists(p)) continue;
-    TriangleMesh m = io::load_mesh(p.string()).mesh;
-    glm::dvec3 lo{1e300}, hi{-1e300};
-    for (const auto& v : m.positions) {
-      lo = glm::min(lo, v);
-      hi = glm::max(hi, v);
-    }
-    const double s = 0.2 / glm::length(hi - lo);
-    for (auto& v : m.positions)
-      v = (v - 0.5 * (lo + hi)) * s;
-    out.emplace_back(name, std::move(m));
+    out.emplace_back(name, test::fitted(io::load_mesh(p.string()).mesh));
   }
 #endif
   return out;

@@ -81,19 +81,6 @@ int crossings(const TriangleMesh& m, const glm::dvec3& a, const glm::dvec3& b) {
   return count;
 }
 
-/// Models scaled to a 0.2 m diagonal about their centre (hand-sized).
-TriangleMesh fitted(TriangleMesh m, double diagonal = 0.2) {
-  glm::dvec3 lo{1e300}, hi{-1e300};
-  for (const auto& p : m.positions) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  const double s = diagonal / glm::length(hi - lo);
-  for (auto& p : m.positions)
-    p = (p - 0.5 * (lo + hi)) * s;
-  return m;
-}
-
 /// A uniformly random rotation (a normalised Gaussian quaternion).
 glm::dmat3 random_rotation(std::mt19937& rng) {
   std::normal_distribution<double> g;
@@ -296,7 +283,7 @@ std::vector<Model> real_models() {
     TriangleMesh m = io::load_mesh(p.string()).mesh;
     const bool small = m.triangles.size() <= 7000;
     if (p.extension() == ".gltf") out.push_back({std::string(name) + " (own units)", m, small});
-    out.push_back({std::string(name) + " (0.2 m)", fitted(m), small});
+    out.push_back({std::string(name) + " (0.2 m)", test::fitted(m), small});
   }
 #endif
   return out;
