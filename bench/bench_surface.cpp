@@ -239,15 +239,6 @@ void first_pass_section(double side, const std::vector<hf::Probe>& path, std::si
   std::printf("\n");
 }
 
-/// Sleeps to `deadline` [ns] on the monotonic clock, as the servo loop does.
-void sleep_until_ns(double deadline) {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(deadline / 1e9);
-  ts.tv_nsec = static_cast<long>(deadline - 1e9 * static_cast<double>(ts.tv_sec));
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
-  }
-}
-
 /// The HIP of tick i as a loop anticipates it after tick i - 1: the last
 /// one moved by the last step (the path's velocity field is a fixed damping
 /// input, not its motion; a device's velocity is the same difference).
@@ -263,9 +254,9 @@ hf::Probe predicted(const std::vector<hf::Probe>& path, std::size_t i) {
 /// the slack before each deadline) against none, at 1M triangles: two
 /// proxies on meshes built apart, one pass each way with their ticks
 /// alternated, (1) back to back as the table below times them, the
-/// look-ahead right before its tick, and (2) paced at 1 kHz as the loop in
-/// sleep mode runs them: a sleep to each deadline, the look-ahead after a
-/// sleep to 100 us before it, the other proxy's tick half a period away.
+/// look-ahead right before its tick, and (2) paced at 1 kHz by the loop's
+/// Pacer in sleep mode, the look-ahead through Pacer::wait(clock, ready) as
+/// the loop runs it, the other proxy's tick half a period away.
 /// Wall time on the monotonic clock from the tick's wake to its force; the
 /// look-ahead's own cost apart, with how often it ran past the deadline.
 void anticipation_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles,
@@ -276,10 +267,10 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
       "against none, "
       "1M triangles\n\n"
       "Two proxies on equal meshes built apart, ticks alternated; back to back over the whole path (the look-ahead "
-      "right before its tick), then paced at 1 kHz over its first %ld ticks as the servo loop in sleep mode runs "
-      "them (a sleep to each deadline; the look-ahead after a sleep to 100 us before it; timer slack 1 ns, as the loop "
-      "sets it). Wall time of the tick "
-      "alone, from its wake to its force (monotonic clock); the look-ahead's own time apart.\n\n"
+      "right before its tick), then paced at 1 kHz over its first %ld ticks by the loop's Pacer in sleep mode (the "
+      "look-ahead through Pacer::wait(clock, ready), 100 us before the deadline; timer slack 1 ns, as the loop sets "
+      "it). Wall time of the tick alone, from its wake to its force (monotonic clock); the look-ahead's own time "
+      "apart.\n\n"
       "| radius [mm] | timing | mean [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | look-ahead: mean [ns] | p99 [ns] | "
       "p99.9 [ns] | worst [ns] | none / look-ahead mean | none / look-ahead p99 | none / look-ahead p99.9 | "
       "look-ahead's own mean [ns] | its p99 [ns] | its p99.9 [ns] | look-aheads skipped / past the deadline |\n"
@@ -301,31 +292,37 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
       std::vector<double> tp(ticks), ta(ticks), own;
       own.reserve(ticks);
       glm::dvec3 sink{0.0};
-      double deadline = monotonic_ns() + 1e6;
-      long late = 0, skipped = 0;  // look-aheads that ended past their tick's deadline; that a late wake skipped
+      // paced: two Pacers (the loop's, in sleep mode), half a period apart;
+      // the look-ahead proxy's waits run its look-ahead as the loop does
+      const hf::SteadyClock clock;
+      hf::Pacer pace_plain(1'000'000), pace_ahead(1'000'000);
+      const std::int64_t start = clock.now() + 1'000'000;
+      pace_plain.start(start);
+      pace_ahead.start(start + 500'000);
+      long late = 0, skipped = 0;  // look-aheads that ended past their tick's deadline; that the pacer skipped
       for (std::size_t i = 0; i < ticks; ++i) {
         for (int k = 0; k < 2; ++k) {
-          const bool plain_now = (k == 0) == (i % 2 == 0);
-          if (!plain_now) {  // as the loop: in the lead before the deadline (paced), else right before
-            const double lead = static_cast<double>(hf::PacingConfig{}.look_ahead_ns);  // [ns]
-            if (paced) sleep_until_ns(deadline - lead);
+          const bool plain_now = paced ? k == 0 : (k == 0) == (i % 2 == 0);  // back to back: who goes first swaps
+          const hf::Probe next = predicted(path, i);
+          const auto look = [&ahead, &next, &own]() noexcept {
             const double t0 = monotonic_ns();
-            if (!paced || deadline - t0 > lead / 4) {  // Pacer's rule: a quarter of the lead left, else skipped
-              ahead.anticipate(predicted(path, i));
-              const double t1 = monotonic_ns();
-              own.push_back(t1 - t0);
-              late += paced && t1 > deadline ? 1 : 0;
-            } else {
-              ++skipped;
-            }
-          }
-          if (paced) {
-            sleep_until_ns(deadline);
-            deadline += 5e5;  // [ns] the other proxy's tick half a period on
+            ahead.anticipate(next);
+            own.push_back(monotonic_ns() - t0);  // (reserved: no allocation)
+          };
+          if (paced && plain_now) {
+            (void)pace_plain.wait(clock);
+          } else if (paced) {
+            (void)pace_ahead.wait(clock, look);
+            skipped += pace_ahead.look_ahead().skipped ? 1 : 0;
+            late += pace_ahead.look_ahead().late ? 1 : 0;
+          } else if (!plain_now) {
+            look();
           }
           const double t0 = monotonic_ns();
           sink += plain_now ? plain.contact(path[i]).force : ahead.contact(path[i]).force;
-          (plain_now ? tp : ta)[i] = monotonic_ns() - t0;
+          const double t1 = monotonic_ns();
+          (plain_now ? tp : ta)[i] = t1 - t0;
+          if (paced) (void)(plain_now ? pace_plain : pace_ahead).finish(clock.now());
         }
       }
       if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");

@@ -331,6 +331,7 @@ struct FieldRef {
   glm::dvec3 force(const Probe& p) noexcept { return field->force(p); }
   void reset() noexcept { field->reset(); }
   void anticipate(const Probe& next) const noexcept { anticipate_if_able(*field, next); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return field_looks_ahead(*field); }
 };
 
 /// --shape: the scene, its proxy field, and the snapshot after the run.
@@ -469,7 +470,7 @@ int run_demo(const Arguments& o, D& device, Felt& felt, C& clock, bool hardware)
     return felt.field.force(in.probe);
   };
 
-  auto ahead = with_anticipation(callback, felt.field);  // a shape's proxy looks ahead after each sleep
+  auto ahead = with_anticipation(callback, felt.field);  // a shape's proxy looks ahead before each deadline
   cli::LoopThread servo(loop, ahead, {.max_ticks = ticks});
   const auto t0 = std::chrono::steady_clock::now();
   const std::int64_t loop_start = clock.now();

@@ -668,7 +668,7 @@ int run_shape_view(const Arguments& o, D& device, Field& field, const ShapeScene
         {in.probe.time, in.probe.position, field.proxy(), loop.last_command(), field.last_contact().touching});
     return f;
   };
-  auto ahead = with_anticipation(tick, field);  // the proxy's look-ahead after each sleep
+  auto ahead = with_anticipation(tick, field);  // the proxy's look-ahead before each deadline
   const std::uint64_t ticks = o.seconds ? static_cast<std::uint64_t>(std::llround(*o.seconds * o.rate)) : no_tick_limit;
   cli::LoopThread servo(loop, ahead, {.max_ticks = ticks});
 

@@ -3,8 +3,9 @@
 // it is asked to anticipate (random paths with a new seed each run, printed
 // on failure; constructed meshes, a height field and every real model in
 // ../shared/data), without allocating; every field wrapper passes it on; and
-// the servo loops call it once a tick, after the sleep, on the last HIP
-// moved one period by its velocity.
+// the servo loops call it once a tick, in the slack before the deadline, on
+// the last HIP moved one period by its velocity, and only for a field whose
+// look-ahead does something.
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -176,6 +177,19 @@ Compared compare_on(const S& one, const S& other, const ProxyConfig& config, con
     REQUIRE(plain.last_tick().moves == ahead.last_tick().moves);
     REQUIRE(plain.last_tick().nodes == ahead.last_tick().nodes);
     REQUIRE(plain.last_tick().sliding == ahead.last_tick().sliding);
+    REQUIRE(plain.last_tick().planes == ahead.last_tick().planes);
+    REQUIRE(plain.last_tick().blocked == ahead.last_tick().blocked);
+    REQUIRE(plain.last_tick().held_first == ahead.last_tick().held_first);
+    REQUIRE(plain.last_tick().embedded == ahead.last_tick().embedded);
+    REQUIRE(same(a.surface_uv.x, b.surface_uv.x));
+    REQUIRE(same(a.surface_uv.y, b.surface_uv.y));
+    REQUIRE(same(a.surface_tangent, b.surface_tangent));
+    REQUIRE(same(a.surface_bitangent, b.surface_bitangent));
+    REQUIRE(a.material == b.material);
+    REQUIRE(plain.last_path().count == ahead.last_path().count);
+    for (int k = 0; k < plain.last_path().count; ++k)
+      REQUIRE(same(plain.last_path().points[static_cast<std::size_t>(k)],
+                   ahead.last_path().points[static_cast<std::size_t>(k)]));
     ++out.ticks;
     out.touching += a.touching ? 1 : 0;
   }
@@ -307,6 +321,7 @@ struct Recorder {
   std::vector<Probe>* seen;
   Contact contact(const Probe&) noexcept { return Contact{}; }
   void anticipate(const Probe& next) const noexcept { seen->push_back(next); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return true; }
 };
 
 /// A field that records its look-ahead calls and each tick's probe, in
@@ -321,11 +336,13 @@ struct Logged {
   std::vector<Entry>* log;
   const VirtualClock* clock;
   glm::dvec3 push{0.3, 0.0, 0.0};  ///< [N], so that the free arm moves
+  bool ahead{true};                ///< what looks_ahead() says
   glm::dvec3 force(const Probe& p) noexcept {
     log->push_back({'f', p, clock->now()});
     return push;
   }
   void anticipate(const Probe& next) const noexcept { log->push_back({'a', next, clock->now()}); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return ahead; }
 };
 
 }  // namespace
@@ -360,20 +377,40 @@ TEST_CASE("ContactField, sums, scales, clamps, AnyField and LiveField pass the l
   const long allocations = test::count_allocations([&] { any.anticipate(p); });
   CHECK(seen.size() == 6);
   if (test::allocations_counted) CHECK(allocations == 0);
-  LiveField<decltype(contact_field)> live(contact(Recorder{&seen}));
+  std::vector<Probe> first, second;
+  first.reserve(8);
+  second.reserve(8);
+  LiveField<decltype(contact_field)> live(contact(Recorder{&first}));
   static_assert(AnticipatingField<LiveField<decltype(contact_field)>>);
+  CHECK(live.looks_ahead());
   live.anticipate(p);
-  CHECK(seen.size() == 7);
-  live.publish(contact(Recorder{&seen}));  // a newer field: looked at only once a tick has taken it
+  CHECK(first.size() == 1);
+  live.publish(contact(Recorder{&second}));  // a newer field: not looked at before a tick has taken it
+  live.anticipate(p);
+  CHECK(first.size() == 2);
+  CHECK(second.empty());
   (void)live.force(p);
   live.anticipate(p);
-  CHECK(seen.size() == 8);
+  CHECK(first.size() == 2);
+  CHECK(second.size() == 1);
+  CHECK(seen.size() == 6);
   AnyField empty;
   empty.anticipate(p);
   AnyField zero(ZeroField{});
   zero.anticipate(p);
   anticipate_if_able(ZeroField{}, p);
-  CHECK(seen.size() == 8);
+  CHECK(seen.size() == 6);
+  // looks_ahead(): what the parts say
+  CHECK(any.looks_ahead());
+  CHECK(sum.looks_ahead());
+  CHECK_FALSE(empty.looks_ahead());
+  CHECK_FALSE(zero.looks_ahead());
+  CHECK_FALSE(field_looks_ahead(ZeroField{}));
+  CHECK_FALSE(SumField(ZeroField{}, ZeroField{}).looks_ahead());
+  CHECK(contact(ProxyConstraint(MeshShape(test::icosphere(1, 0.01)), ProxyConfig{})).looks_ahead());
+  CHECK_FALSE(
+      contact(ProxyConstraint(Moving<MeshShape>(MeshShape(test::icosphere(1, 0.01)), MovingPose{}), ProxyConfig{}))
+          .looks_ahead());
 }
 
 TEST_CASE("predicted_probe: the HIP moved by its velocity, time on; a non-finite move keeps the position",
@@ -397,31 +434,35 @@ TEST_CASE("predicted_probe: the HIP moved by its velocity, time on; a non-finite
 TEST_CASE("Pacer::wait runs ready() in the slack before the deadline, never when a late wake leaves too little",
           "[anticipate]") {
   constexpr std::int64_t period = 1'000'000;  // [ns]
-  constexpr std::int64_t early = 100'000;     // [ns] the margin (hybrid) or the look-ahead lead (sleep)
   for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
     CAPTURE(static_cast<int>(mode));
+    // the margin (hybrid) and the look-ahead lead (sleep) differ: each mode uses its own
+    const std::int64_t early = mode == PacingMode::hybrid ? 80'000 : 120'000;
     VirtualClock clock;
     clock.set_wake_delay(20'000);  // every sleep returns 20 us late
-    PacingConfig pacing{mode, early};
-    pacing.look_ahead_ns = early;
+    PacingConfig pacing{mode, 80'000};
+    pacing.look_ahead_ns = 120'000;
     Pacer pacer(period, pacing);
     pacer.start(clock.now());
     for (int tick = 0; tick < 20; ++tick) {
       CAPTURE(tick);
       const std::int64_t deadline = pacer.deadline();
-      if (tick == 10) clock.shift_next_wake(60'000);  // woken 20 us before the deadline: too little slack
-      if (tick == 12) clock.shift_next_wake(50'000);  // woken 30 us before: enough
+      if (tick == 10) clock.shift_next_wake(early - 20'000 - early / 4);  // a quarter of the stretch left: too little
+      if (tick == 12) clock.shift_next_wake(early - 20'000 - early / 4 - 1'000);  // 1 us more: enough
       int calls = 0;
       std::int64_t called_at = -1;
       const std::int64_t wake = pacer.wait(clock, [&]() noexcept {
         ++calls;
         called_at = clock.now();
       });
-      if (tick == 0 || tick == 10) {  // the first deadline is now; the late wake leaves 20 us (< 25)
+      if (tick == 0 || tick == 10) {  // the first deadline is now; the late wake leaves too little
         CHECK(calls == 0);
+        CHECK(pacer.look_ahead().skipped);
       } else {
         CHECK(calls == 1);
-        CHECK(called_at == deadline - early + (tick == 12 ? 70'000 : 20'000));
+        CHECK(called_at == deadline - (tick == 12 ? early / 4 + 1'000 : early - 20'000));
+        CHECK(pacer.look_ahead().ran);
+        CHECK_FALSE(pacer.look_ahead().late);
       }
       // the tick's own wake: on the deadline after the spin, 20 us late after the second sleep
       if (tick > 0) CHECK(wake == (mode == PacingMode::hybrid ? deadline : deadline + 20'000));
@@ -429,18 +470,80 @@ TEST_CASE("Pacer::wait runs ready() in the slack before the deadline, never when
     }
     CHECK(pacer.readied() == 18);
   }
-  // sleep mode with no lead, and the plain wait: one sleep, never ready()
-  VirtualClock clock;
-  PacingConfig no_lead;
-  no_lead.look_ahead_ns = 0;
-  Pacer pacer(period, no_lead);
-  pacer.start(clock.now());
-  for (int tick = 0; tick < 5; ++tick) {
-    const std::int64_t wake = pacer.wait(clock, []() noexcept { FAIL("ready() with no lead"); });
-    CHECK(wake == static_cast<std::int64_t>(tick) * period);
+}
+
+TEST_CASE("Pacer::wait: ready()'s own time comes out of the slack; a run past the deadline makes the wake late",
+          "[anticipate]") {
+  constexpr std::int64_t period = 1'000'000;  // [ns]
+  for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
+    CAPTURE(static_cast<int>(mode));
+    VirtualClock clock;
+    PacingConfig pacing{mode, 100'000};
+    pacing.look_ahead_ns = 100'000;
+    Pacer pacer(period, pacing);
+    pacer.start(clock.now());
+    pacer.finish(clock.now());   // the first deadline now one period on
+    std::int64_t cost = 30'000;  // [ns] what ready() takes
+    auto ready = [&clock, &cost]() noexcept { clock.advance(cost); };
+    // 30 us: inside the slack; the tick wakes on its deadline
+    std::int64_t deadline = pacer.deadline();
+    std::int64_t wake = pacer.wait(clock, ready);
+    CHECK(wake == deadline);
+    CHECK(pacer.look_ahead().took_ns == 30'000);
+    if (mode == PacingMode::hybrid) CHECK(pacer.spun_ns() == 70'000);  // the spin is what is left
     pacer.finish(wake);
+    // 150 us: it runs (it has not taken that long before) and ends 50 us past the deadline
+    cost = 150'000;
+    deadline = pacer.deadline();
+    wake = pacer.wait(clock, ready);
+    CHECK(pacer.look_ahead().ran);
+    CHECK(pacer.look_ahead().late);
+    CHECK(wake == deadline + 50'000);
+    pacer.finish(wake);
+    // next period: it took 150 us lately and only 100 us are left: skipped, the tick on time
+    cost = 1'000;
+    deadline = pacer.deadline();
+    wake = pacer.wait(clock, ready);
+    CHECK(pacer.look_ahead().skipped);
+    CHECK(wake == deadline);
+    pacer.finish(wake);
+    // the memory of the long run fades (1/64 a run): it runs again within a few dozen periods
+    int skipped = 1;
+    for (int k = 0; k < 200 && pacer.look_ahead().skipped; ++k) {
+      wake = pacer.wait(clock, ready);
+      pacer.finish(wake);
+      skipped += pacer.look_ahead().skipped ? 1 : 0;
+    }
+    CHECK(pacer.look_ahead().ran);
+    CHECK(skipped < 60);
   }
-  CHECK(pacer.readied() == 0);
+}
+
+TEST_CASE("Pacer::wait: no slack, no ready() (a lead or margin of 0, the plain wait)", "[anticipate]") {
+  constexpr std::int64_t period = 1'000'000;  // [ns]
+  for (const PacingMode mode : {PacingMode::sleep, PacingMode::hybrid}) {
+    VirtualClock clock;
+    PacingConfig none{mode, 0};
+    none.look_ahead_ns = mode == PacingMode::hybrid ? 100'000 : 0;  // hybrid uses its margin only
+    Pacer pacer(period, none);
+    pacer.start(clock.now());
+    for (int tick = 0; tick < 5; ++tick) {
+      const std::int64_t wake = pacer.wait(clock, []() noexcept { FAIL("ready() with no slack"); });
+      CHECK(wake == static_cast<std::int64_t>(tick) * period);
+      pacer.finish(wake);
+    }
+    CHECK(pacer.readied() == 0);
+  }
+  // the lead is clamped to half a period
+  VirtualClock clock;
+  PacingConfig wide;
+  wide.look_ahead_ns = 900'000;
+  Pacer pacer(period, wide);
+  pacer.start(clock.now());
+  pacer.finish(clock.now());
+  std::int64_t called_at = -1;
+  (void)pacer.wait(clock, [&]() noexcept { called_at = clock.now(); });
+  CHECK(called_at == period / 2);
   PacingConfig bad;
   bad.look_ahead_ns = -1;
   CHECK_THROWS_AS(bad.validate(), std::invalid_argument);
@@ -455,11 +558,18 @@ TEST_CASE("ServoLoop anticipates every tick but the first, before its deadline, 
     CAPTURE(static_cast<int>(mode));
     LoopConfig config;
     config.pacing.mode = mode;
+    config.pacing.spin_margin_ns = 70'000;
+    config.pacing.look_ahead_ns = 130'000;
+    const std::int64_t early = mode == PacingMode::hybrid ? 70'000 : 130'000;
     testing::ArmRig rig(testing::ArmRig::free_arm(), config);
     std::vector<Logged::Entry> log;
     log.reserve(1000);
     Logged field{&log, &rig.clock};
     REQUIRE(rig.loop.run(field, {.max_ticks = 300}) == StopReason::tick_limit);
+    const LoopSnapshot st = rig.loop.statistics();
+    CHECK(st.look_aheads == 299);
+    CHECK(st.look_aheads_skipped == 0);
+    CHECK(st.look_aheads_late == 0);
     REQUIRE(log.size() == 2 * 300 - 1);
     CHECK(log[0].what == 'f');
     bool moved = false;
@@ -470,20 +580,27 @@ TEST_CASE("ServoLoop anticipates every tick but the first, before its deadline, 
       const Probe expected = predicted_probe(log[i - 1].probe, 1e-3);
       CHECK(log[i].probe.position == expected.position);
       CHECK(log[i].probe.time == expected.time);
-      CHECK(log[i + 1].at - log[i].at == default_spin_margin_ns);  // in the slack before the deadline
+      CHECK(log[i + 1].at - log[i].at == early);  // in the slack before the deadline
       moved = moved || glm::length(log[i].probe.velocity) > 0.0;
     }
     CHECK(moved);  // the prediction had a velocity to go by
   }
-  // off: never
-  LoopConfig off;
-  off.anticipate = false;
-  testing::ArmRig rig(testing::ArmRig::free_arm(), off);
-  std::vector<Logged::Entry> log;
-  log.reserve(100);
-  Logged field{&log, &rig.clock};
-  rig.loop.run(field, {.max_ticks = 40});
-  CHECK(log.size() == 40);
+  // off, or a field whose look-ahead does nothing: never, and one plain sleep a period
+  for (const bool off : {true, false}) {
+    LoopConfig config;
+    config.anticipate = !off;
+    testing::ArmRig rig(testing::ArmRig::free_arm(), config);
+    std::vector<Logged::Entry> log;
+    log.reserve(100);
+    Logged field{&log, &rig.clock};
+    field.ahead = off;                     // (off: the field would; not off: the field says it does nothing)
+    rig.clock.shift_next_wake(3'000'000);  // a 3 ms stall in the sleep before tick 1
+    rig.loop.run(field, {.max_ticks = 40});
+    CHECK(log.size() == 40);
+    const LoopSnapshot st = rig.loop.statistics();
+    CHECK(st.look_aheads + st.look_aheads_skipped == 0);
+    CHECK(st.missed_deadlines == 3);  // the whole stall, seen by the tick's own sleep
+  }
 }
 
 TEST_CASE("a callback is anticipated only when made with with_anticipation()", "[anticipate]") {
@@ -524,6 +641,17 @@ TEST_CASE("MultiArmLoop anticipates each arm's field on its own arm's HIP", "[an
     for (std::size_t i = 1; i + 1 < log->size(); i += 2) {
       REQUIRE((*log)[i].what == 'a');
       CHECK((*log)[i].probe.position == predicted_probe((*log)[i - 1].probe, 1e-3).position);
+      CHECK((*log)[i + 1].at - (*log)[i].at == PacingConfig{}.look_ahead_ns);  // before the deadline
     }
   }
+  CHECK(loop.statistics().look_aheads == 99);
+  // off (the first arm's setting, which sets the shared timing): never
+  LoopConfig off = testing::ArmRig::quiet({});
+  off.anticipate = false;
+  MultiArmLoop<ForceArm, 2, VirtualClock> quiet({&device_a, &device_b}, clock, off);
+  log_a.clear();
+  log_b.clear();
+  REQUIRE(quiet.run({.max_ticks = 50}, a, b) == StopReason::tick_limit);
+  CHECK(log_a.size() == 50);
+  CHECK(log_b.size() == 50);
 }

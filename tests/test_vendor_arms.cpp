@@ -33,6 +33,8 @@
 #include "hapticfield/devices/open_device.hpp"
 #include "hapticfield/servo/clock.hpp"
 #include "hapticfield/servo/loop.hpp"
+#include "hapticfield/surface/proxy.hpp"
+#include "hapticfield/surface/shape.hpp"
 #include "run_seed.hpp"
 
 using namespace hapticfield;
@@ -689,6 +691,17 @@ TEST_CASE("OpenHapticsServo: our tick inside HD's callback, with the loop's sema
       CHECK(servo.run(f) == StopReason::requested);
       stopper.join();
       CHECK(glm::length(s.force()) == 0.0);
+    }
+    SECTION("a field that looks ahead is not looked ahead here: HD's scheduler owns the timing") {
+      ProxyConstraint floor(PlaneShape(PlaneShapeConfig{glm::dvec3{0.0, 0.0, -0.02}}), ProxyConfig{});
+      static_assert(ProxyConstraint<PlaneShape>::looks_ahead());
+      servo.reset_statistics();
+      REQUIRE(servo.run(floor, {.max_ticks = 500}) == StopReason::tick_limit);
+      const LoopSnapshot w = servo.statistics();
+      CHECK(w.ticks == 500);
+      CHECK(w.look_aheads == 0);
+      CHECK(w.look_aheads_skipped == 0);
+      CHECK(w.rate == Approx(1000.0));  // one HD callback a tick, no second wake
     }
     SECTION("a restart ramps up from zero") {
       std::vector<double> asked;

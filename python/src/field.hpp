@@ -132,6 +132,7 @@ struct SharedField {
   glm::dvec3 force(const Probe& probe) noexcept { return field->force(probe); }
   void reset() noexcept { field->reset(); }
   void anticipate(const Probe& next) const noexcept { field->anticipate(next); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return field->looks_ahead(); }
 };
 
 /// F = sum of the parts; the vector is filled at construction only.
@@ -150,6 +151,11 @@ struct FieldSum {
   void anticipate(const Probe& next) const noexcept {
     for (const auto& p : parts)
       p.anticipate(next);
+  }
+  [[nodiscard]] bool looks_ahead() const noexcept {
+    for (const auto& p : parts)
+      if (p.looks_ahead()) return true;
+    return false;
   }
 };
 

@@ -186,7 +186,7 @@ py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, 
   if (token && token->requested.load()) loop.request_stop();  // a request made before the run ends it at once
   PendingInterrupt interrupt;
   long loop_mallocs = -1, loop_frees = -1;
-  auto ahead = with_anticipation(callback, *f);  // a shape's proxy looks ahead after each sleep
+  auto ahead = with_anticipation(callback, *f);  // a shape's proxy looks ahead before each deadline
   const StopReason reason = run_watched(loop, ahead, ticks, token, interrupt, loop_mallocs, loop_frees);
   const py::ssize_t n = static_cast<py::ssize_t>(rows.size());
   py::array_t<double> t(n);

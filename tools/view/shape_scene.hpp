@@ -164,6 +164,7 @@ class ShapeProxyField {
     local.position -= shift_;
     proxy_.anticipate(local);
   }
+  [[nodiscard]] bool looks_ahead() const noexcept { return proxy_.looks_ahead(); }
   /// The next tick starts the proxy from `outside` again.
   void reset() noexcept {
     fresh_ = true;

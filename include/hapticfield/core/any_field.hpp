@@ -42,6 +42,7 @@ class AnyField {
   void anticipate(const Probe& next) const noexcept {
     if (model_) model_->anticipate(next);
   }
+  [[nodiscard]] bool looks_ahead() const noexcept { return model_ && model_->looks_ahead(); }
 
   /// True when a field is held.
   [[nodiscard]] explicit operator bool() const noexcept { return static_cast<bool>(model_); }
@@ -59,6 +60,7 @@ class AnyField {
     virtual glm::dvec3 force(const Probe& probe) noexcept = 0;
     virtual void reset() noexcept = 0;
     virtual void anticipate(const Probe& next) const noexcept = 0;
+    virtual bool looks_ahead() const noexcept = 0;
   };
 
   template <class F>
@@ -68,6 +70,7 @@ class AnyField {
     glm::dvec3 force(const Probe& probe) noexcept override { return field.force(probe); }
     void reset() noexcept override { reset_if_stateful(field); }
     void anticipate(const Probe& next) const noexcept override { anticipate_if_able(field, next); }
+    bool looks_ahead() const noexcept override { return field_looks_ahead(field); }
     F field;
   };
 

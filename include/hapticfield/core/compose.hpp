@@ -31,6 +31,9 @@ class SumField {
   void anticipate(const Probe& next) const noexcept {
     std::apply([&next](const auto&... f) { (anticipate_if_able(f, next), ...); }, fields_);
   }
+  [[nodiscard]] bool looks_ahead() const noexcept {
+    return std::apply([](const auto&... f) { return (false || ... || field_looks_ahead(f)); }, fields_);
+  }
 
   /// The i-th part.
   template <std::size_t I>
@@ -55,6 +58,7 @@ class ScaledField {
 
   void reset() noexcept { reset_if_stateful(field_); }
   void anticipate(const Probe& next) const noexcept { anticipate_if_able(field_, next); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return field_looks_ahead(field_); }
 
   [[nodiscard]] Field& inner() noexcept { return field_; }
 
@@ -80,6 +84,7 @@ class ClampedField {
 
   void reset() noexcept { reset_if_stateful(field_); }
   void anticipate(const Probe& next) const noexcept { anticipate_if_able(field_, next); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return field_looks_ahead(field_); }
 
   [[nodiscard]] Field& inner() noexcept { return field_; }
 

@@ -96,15 +96,18 @@ class ContactField {
   /// The constraint's look-ahead (core/field.hpp) on the probe force() would
   /// give it; nothing changes. The parts are not run.
   void anticipate(const Probe& next) const noexcept {
-    if constexpr (requires(const C& c) {
-                    { c.anticipate(next) }
-                    noexcept;
-                  }) {
+    if constexpr (anticipating) {
       if (!is_finite(next.position)) return;
       Probe on = next;
       if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
       constraint_.anticipate(on);
     }
+  }
+  [[nodiscard]] bool looks_ahead() const noexcept {
+    if constexpr (anticipating)
+      return static_cast<bool>(constraint_.looks_ahead());
+    else
+      return false;
   }
 
   void reset() noexcept {
@@ -124,6 +127,14 @@ class ContactField {
   }
 
  private:
+  /// The constraint has a look-ahead (core/field.hpp).
+  static constexpr bool anticipating = requires(const C& c, const Probe& p) {
+    { c.anticipate(p) }
+    noexcept;
+    { c.looks_ahead() }
+    noexcept->std::convertible_to<bool>;
+  };
+
   C constraint_;
   std::tuple<Parts...> parts_;
   Contact last_{};

@@ -42,10 +42,14 @@ void reset_if_stateful(F& field) noexcept {
 /// it in the slack before each deadline (LoopConfig::anticipate). Like
 /// force(): no allocation, lock, exception or I/O, and no effect on anything
 /// the next force() reads.
+/// `looks_ahead()` says whether anticipate() does anything (a wrapper's
+/// answer is its parts'): a loop makes room for it only then.
 template <class F>
 concept AnticipatingField = HapticField<F> && requires(const F& field, const Probe& probe) {
   { field.anticipate(probe) }
   noexcept;
+  { field.looks_ahead() }
+  noexcept->std::convertible_to<bool>;
 };
 
 /// Calls field.anticipate(next) when the field has one; otherwise does
@@ -53,6 +57,15 @@ concept AnticipatingField = HapticField<F> && requires(const F& field, const Pro
 template <HapticField F>
 void anticipate_if_able(const F& field, const Probe& next) noexcept {
   if constexpr (AnticipatingField<F>) field.anticipate(next);
+}
+
+/// True when the field's anticipate() does something.
+template <HapticField F>
+[[nodiscard]] bool field_looks_ahead(const F& field) noexcept {
+  if constexpr (AnticipatingField<F>)
+    return static_cast<bool>(field.looks_ahead());
+  else
+    return false;
 }
 
 /// The probe one step of `seconds` after `probe`: its time moved on, its

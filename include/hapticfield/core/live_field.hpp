@@ -40,6 +40,11 @@ class LiveField {
   void anticipate(const Probe& next) const noexcept {
     if (const Field* field = buffer_.held()) anticipate_if_able(*field, next);
   }
+  /// Servo thread: whether the field the last tick used looks ahead.
+  [[nodiscard]] bool looks_ahead() const noexcept {
+    const Field* field = buffer_.held();
+    return field != nullptr && field_looks_ahead(*field);
+  }
 
  private:
   TripleBuffer<Field> buffer_;

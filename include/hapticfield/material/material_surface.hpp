@@ -111,6 +111,7 @@ class MaterialSurface {
     if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
     proxy_.anticipate(on);
   }
+  [[nodiscard]] bool looks_ahead() const noexcept { return proxy_.looks_ahead(); }
 
   void reset() noexcept {
     proxy_.reset();

@@ -60,8 +60,8 @@ struct LoopConfig {
   /// proxy on a large mesh: docs/surfaces.md). Hybrid pacing runs it in
   /// its spin margin; sleep mode wakes PacingConfig::look_ahead_ns before
   /// the deadline for it and sleeps again (Pacer::wait(clock, ready)).
-  /// Fields without one, and callbacks not made by with_anticipation(),
-  /// are not affected.
+  /// Only while the field's looks_ahead() is true: other fields, and
+  /// callbacks not made by with_anticipation(), are paced as before.
   bool anticipate{true};
   /// After a stale-state or missed-deadline latch, clear it and re-arm (with
   /// the soft start) once new states have arrived on time for this long [s];
@@ -107,6 +107,7 @@ struct AnticipatingCallback {
     return glm::dvec3(callback(in));
   }
   void anticipate(const Probe& next) const noexcept { anticipate_if_able(field, next); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return field_looks_ahead(field); }
 };
 
 /// `callback` (glm::dvec3(const TickInput&)) with the field it asks for a
@@ -529,18 +530,24 @@ class ServoLoop {
   }
 
   /// The pacer's wait for the next deadline, with the look-ahead of a
-  /// callback that has one (LoopConfig::anticipate) on `last` (the HIP of
-  /// the tick before, when there was one) moved one period on, in the slack
-  /// before the deadline (Pacer::wait(clock, ready)).
+  /// callback whose field has one that does something
+  /// (LoopConfig::anticipate) on `last` (the HIP of the tick before, when
+  /// there was one) moved one period on, in the slack before the deadline
+  /// (Pacer::wait(clock, ready)); what it did goes into the statistics.
   template <class Compute>
   std::int64_t wait_for_tick(Pacer& pacer, const Compute& compute, const Probe& last, bool has_last) noexcept {
     if constexpr (requires(const Compute& c, const Probe& p) {
                     { c.anticipate(p) }
                     noexcept;
+                    { c.looks_ahead() }
+                    noexcept->std::convertible_to<bool>;
                   }) {
-      if (config_.anticipate && has_last)
-        return pacer.wait(*clock_,
-                          [&compute, &last, this]() noexcept { compute.anticipate(predicted_probe(last, period_)); });
+      if (config_.anticipate && has_last && compute.looks_ahead()) {
+        const std::int64_t wake = pacer.wait(
+            *clock_, [&compute, &last, this]() noexcept { compute.anticipate(predicted_probe(last, period_)); });
+        stats_->add_look_ahead(pacer.look_ahead());
+        return wake;
+      }
     }
     return pacer.wait(*clock_);
   }

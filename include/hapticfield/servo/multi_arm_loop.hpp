@@ -61,7 +61,7 @@ class MultiArmLoop {
       ServoLoop<D, C>* arm;
       ~Restore() { arm->restore_realtime(); }
     } restore{arms_[0].get()};
-    Pacer pacer(arms_[0]->period_ns_);
+    Pacer pacer(arms_[0]->period_ns_, arms_[0]->config_.pacing);
     pacer.start(clock_->now());
     std::array<TickInput, N> in{};
     const auto field_refs = std::forward_as_tuple(fields...);
@@ -70,12 +70,14 @@ class MultiArmLoop {
       if (tick >= limits.max_ticks) return stop_all(StopReason::tick_limit);
       const std::int64_t deadline = pacer.deadline();
       std::int64_t wake = 0;
-      if (tick > 0 && arms_[0]->config_.anticipate && (AnticipatingField<Fields> || ...))
+      if (tick > 0 && arms_[0]->config_.anticipate && (false || ... || field_looks_ahead(fields))) {
         wake = pacer.wait(*clock_, [this, &in, &field_refs]() noexcept {
           anticipate_arms(in, field_refs, std::make_index_sequence<N>{});
         });
-      else
+        stats_->add_look_ahead(pacer.look_ahead());
+      } else {
         wake = pacer.wait(*clock_);
+      }
       tick_arms(in, field_refs, std::make_index_sequence<N>{});
       apply_policy();
       const std::int64_t end = clock_->now();

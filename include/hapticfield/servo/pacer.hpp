@@ -69,6 +69,14 @@ struct PacingConfig {
   }
 };
 
+/// What the last Pacer::wait(clock, ready) did with ready().
+struct LookAhead {
+  bool ran{false};          ///< ready() ran
+  bool skipped{false};      ///< a late wake left too little slack: it did not run
+  bool late{false};         ///< it ran, and ended past the deadline
+  std::int64_t took_ns{0};  ///< how long it ran [ns]
+};
+
 class Pacer {
  public:
   /// @param period_ns  tick period [ns], > 0
@@ -100,11 +108,14 @@ class Pacer {
   /// (the servo loop's look-ahead, LoopConfig::anticipate): in hybrid mode
   /// after the sleep, before the spin (out of the margin); in sleep mode the
   /// thread wakes PacingConfig::look_ahead_ns before the deadline to run it,
-  /// then sleeps again to the deadline. It runs only while more than a
-  /// quarter of that stretch (margin or lead, > 0) is left, so
-  /// a late wake skips it rather than be made later. The time returned is
-  /// the tick's own wake: ready()'s time counts in the wake latency only
-  /// where it ran past the deadline.
+  /// then sleeps again to the deadline. It runs only while the slack left
+  /// is more than a quarter of that stretch (margin or lead, > 0) and more
+  /// than it has lately taken (its longest run, forgotten by 1/64 a wait),
+  /// so a late wake skips it rather than be made later by it; it can still
+  /// end past the deadline when a run takes longer than any recent one
+  /// (look_ahead() says what it did). The time returned is the tick's own
+  /// wake: ready()'s time counts in the wake latency only where it ran past
+  /// the deadline.
   template <ServoClock C, class Ready>
   std::int64_t wait(C& clock, Ready&& ready) noexcept {
     static_assert(std::is_nothrow_invocable_v<Ready&>, "Pacer::wait: ready() must be noexcept");
@@ -142,6 +153,8 @@ class Pacer {
   [[nodiscard]] std::uint64_t spins() const noexcept { return spins_; }
   /// Waits whose ready() ran (wait(clock, ready)).
   [[nodiscard]] std::uint64_t readied() const noexcept { return readied_; }
+  /// What the last wait(clock, ready) did with ready().
+  [[nodiscard]] const LookAhead& look_ahead() const noexcept { return look_ahead_; }
 
  private:
   template <ServoClock C, class Ready>
@@ -156,10 +169,23 @@ class Pacer {
       clock.sleep_until(sleep_to);
       now = clock.now();
     }
-    if (with_ready && early > 0 && deadline_ - now > early / 4) {  // slack left: the look-ahead
-      ready();
-      ++readied_;
-      now = clock.now();
+    look_ahead_ = LookAhead{};
+    if (with_ready && early > 0) {
+      const std::int64_t left = deadline_ - now;  // the slack [ns]
+      if (left > early / 4 && left > ready_high_ns_) {
+        ready();
+        const std::int64_t after = clock.now();
+        look_ahead_.ran = true;
+        look_ahead_.took_ns = after - now;
+        look_ahead_.late = after > deadline_;
+        ready_high_ns_ =
+            look_ahead_.took_ns > ready_high_ns_ ? look_ahead_.took_ns : ready_high_ns_ - ready_high_ns_ / 64;
+        ++readied_;
+        now = after;
+      } else {
+        look_ahead_.skipped = true;
+        ready_high_ns_ -= ready_high_ns_ / 64;  // forgotten while skipped too, or one long run would stop it for good
+      }
     }
     if constexpr (SpinningClock<C>) {
       if (hybrid && now < deadline_) {
@@ -188,6 +214,8 @@ class Pacer {
   std::int64_t spun_ns_{0};
   std::uint64_t spins_{0};
   std::uint64_t readied_{0};
+  std::int64_t ready_high_ns_{0};  ///< ready()'s recent longest run [ns] (decays by 1/64 a run)
+  LookAhead look_ahead_{};
   bool first_{true};
   bool overran_{false};
 };

@@ -8,6 +8,8 @@
 #include <atomic>
 #include <cstdint>
 
+#include "hapticfield/servo/pacer.hpp"
+
 namespace hapticfield {
 
 /// Histogram of durations with 1 us bins up to 20 ms (plus overflow) and an
@@ -89,6 +91,10 @@ struct LoopSnapshot {
   double wake_p50{0.0}, wake_p99{0.0}, wake_max{0.0};                          ///< wake latency after the deadline [s]
   double compute_p50{0.0}, compute_p99{0.0}, compute_max{0.0}, compute_mean{0.0};  ///< tick work [s]
   double peak_force{0.0};                                                          ///< largest commanded |F| [N]
+  /// The field's look-ahead (LoopConfig::anticipate): runs, runs a late
+  /// wake skipped, runs that ended past the deadline, the longest [s].
+  std::uint64_t look_aheads{0}, look_aheads_skipped{0}, look_aheads_late{0};
+  double look_ahead_max{0.0};
 };
 
 /// Everything the loop records per tick.
@@ -118,6 +124,16 @@ class LoopStatistics {
     recoveries_.fetch_add(1, std::memory_order_relaxed);
   }
   void add_safety_event() noexcept { safety_.fetch_add(1, std::memory_order_relaxed); }
+  /// What the pacer did with the look-ahead before this tick.
+  void add_look_ahead(const LookAhead& a) noexcept {
+    if (a.skipped) look_aheads_skipped_.fetch_add(1, std::memory_order_relaxed);
+    if (!a.ran) return;
+    look_aheads_.fetch_add(1, std::memory_order_relaxed);
+    if (a.late) look_aheads_late_.fetch_add(1, std::memory_order_relaxed);
+    std::int64_t m = look_ahead_max_.load(std::memory_order_relaxed);
+    while (a.took_ns > m && !look_ahead_max_.compare_exchange_weak(m, a.took_ns, std::memory_order_relaxed)) {
+    }
+  }
   void record_force(double magnitude) noexcept {
     double m = peak_force_.load(std::memory_order_relaxed);
     while (magnitude > m && !peak_force_.compare_exchange_weak(m, magnitude, std::memory_order_relaxed)) {
@@ -151,6 +167,10 @@ class LoopStatistics {
     s.compute_max = compute_.max() * ns;
     s.compute_mean = compute_.mean() * ns;
     s.peak_force = peak_force_.load(std::memory_order_relaxed);
+    s.look_aheads = look_aheads_.load(std::memory_order_relaxed);
+    s.look_aheads_skipped = look_aheads_skipped_.load(std::memory_order_relaxed);
+    s.look_aheads_late = look_aheads_late_.load(std::memory_order_relaxed);
+    s.look_ahead_max = static_cast<double>(look_ahead_max_.load(std::memory_order_relaxed)) * ns;
     return s;
   }
 
@@ -172,6 +192,10 @@ class LoopStatistics {
     last_latch_time_.store(-1.0, std::memory_order_relaxed);
     last_recovery_time_.store(-1.0, std::memory_order_relaxed);
     peak_force_.store(0.0, std::memory_order_relaxed);
+    look_aheads_.store(0, std::memory_order_relaxed);
+    look_aheads_skipped_.store(0, std::memory_order_relaxed);
+    look_aheads_late_.store(0, std::memory_order_relaxed);
+    look_ahead_max_.store(0, std::memory_order_relaxed);
   }
 
  private:
@@ -190,6 +214,10 @@ class LoopStatistics {
   std::atomic<std::int64_t> first_wake_{0};
   std::atomic<std::int64_t> last_wake_{0};
   std::atomic<double> peak_force_{0.0};
+  std::atomic<std::uint64_t> look_aheads_{0};
+  std::atomic<std::uint64_t> look_aheads_skipped_{0};
+  std::atomic<std::uint64_t> look_aheads_late_{0};
+  std::atomic<std::int64_t> look_ahead_max_{0};
 };
 
 }  // namespace hapticfield

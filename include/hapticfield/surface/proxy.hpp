@@ -390,6 +390,9 @@ class ProxyConstraint {
       (void)scratch.contact(next);
     }
   }
+  /// True when anticipate() does something (the shape stands still and is
+  /// PureQueries).
+  [[nodiscard]] static constexpr bool looks_ahead() noexcept { return anticipates; }
 
   /// Forgets the proxy: the next tick starts it at the HIP.
   void reset() noexcept {

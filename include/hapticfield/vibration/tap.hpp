@@ -60,6 +60,9 @@ class Tap {
   }
 
   void reset() noexcept { reset_if_stateful(field_); }
+  /// The field's look-ahead (core/field.hpp); nothing is pushed.
+  void anticipate(const Probe& next) const noexcept { anticipate_if_able(field_, next); }
+  [[nodiscard]] bool looks_ahead() const noexcept { return field_looks_ahead(field_); }
 
   [[nodiscard]] F& field() noexcept { return field_; }
   [[nodiscard]] const F& field() const noexcept { return field_; }
