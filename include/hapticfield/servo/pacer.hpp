@@ -110,7 +110,7 @@ class Pacer {
   /// thread wakes PacingConfig::look_ahead_ns before the deadline to run it,
   /// then sleeps again to the deadline. It runs only while the slack left
   /// is more than a quarter of that stretch (margin or lead, > 0) and more
-  /// than it has lately taken (its longest run, forgotten by 1/64 a wait),
+  /// than it has lately taken (its longest run, forgotten by 1/8 a wait),
   /// so a late wake skips it rather than be made later by it; it can still
   /// end past the deadline when a run takes longer than any recent one
   /// (look_ahead() says what it did). The time returned is the tick's own
@@ -179,12 +179,12 @@ class Pacer {
         look_ahead_.took_ns = after - now;
         look_ahead_.late = after > deadline_;
         ready_high_ns_ =
-            look_ahead_.took_ns > ready_high_ns_ ? look_ahead_.took_ns : ready_high_ns_ - ready_high_ns_ / 64;
+            look_ahead_.took_ns > ready_high_ns_ ? look_ahead_.took_ns : ready_high_ns_ - ready_high_ns_ / 8;
         ++readied_;
         now = after;
       } else {
         look_ahead_.skipped = true;
-        ready_high_ns_ -= ready_high_ns_ / 64;  // forgotten while skipped too, or one long run would stop it for good
+        ready_high_ns_ -= ready_high_ns_ / 8;  // forgotten while skipped too, or one long run would stop it for good
       }
     }
     if constexpr (SpinningClock<C>) {
@@ -214,7 +214,7 @@ class Pacer {
   std::int64_t spun_ns_{0};
   std::uint64_t spins_{0};
   std::uint64_t readied_{0};
-  std::int64_t ready_high_ns_{0};  ///< ready()'s recent longest run [ns] (decays by 1/64 a run)
+  std::int64_t ready_high_ns_{0};  ///< ready()'s recent longest run [ns] (decays by 1/8 a wait)
   LookAhead look_ahead_{};
   bool first_{true};
   bool overran_{false};
