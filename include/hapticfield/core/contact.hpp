@@ -128,12 +128,7 @@ class ContactField {
 
  private:
   /// The constraint has a look-ahead (core/field.hpp).
-  static constexpr bool anticipating = requires(const C& c, const Probe& p) {
-    { c.anticipate(p) }
-    noexcept;
-    { c.looks_ahead() }
-    noexcept->std::convertible_to<bool>;
-  };
+  static constexpr bool anticipating = LooksAhead<C>;
 
   C constraint_;
   std::tuple<Parts...> parts_;

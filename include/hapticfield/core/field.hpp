@@ -43,14 +43,18 @@ void reset_if_stateful(F& field) noexcept {
 /// force(): no allocation, lock, exception or I/O, and no effect on anything
 /// the next force() reads.
 /// `looks_ahead()` says whether anticipate() does anything (a wrapper's
-/// answer is its parts'): a loop makes room for it only then.
-template <class F>
-concept AnticipatingField = HapticField<F> && requires(const F& field, const Probe& probe) {
-  { field.anticipate(probe) }
+/// answer is its parts'): a loop makes room for it only then. LooksAhead is
+/// the pair alone, for what is not a field (a constraint, a loop callback).
+template <class T>
+concept LooksAhead = requires(const T& t, const Probe& probe) {
+  { t.anticipate(probe) }
   noexcept;
-  { field.looks_ahead() }
+  { t.looks_ahead() }
   noexcept->std::convertible_to<bool>;
 };
+
+template <class F>
+concept AnticipatingField = HapticField<F> && LooksAhead<F>;
 
 /// Calls field.anticipate(next) when the field has one; otherwise does
 /// nothing.

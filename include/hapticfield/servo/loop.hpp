@@ -536,12 +536,7 @@ class ServoLoop {
   /// (Pacer::wait(clock, ready)); what it did goes into the statistics.
   template <class Compute>
   std::int64_t wait_for_tick(Pacer& pacer, const Compute& compute, const Probe& last, bool has_last) noexcept {
-    if constexpr (requires(const Compute& c, const Probe& p) {
-                    { c.anticipate(p) }
-                    noexcept;
-                    { c.looks_ahead() }
-                    noexcept->std::convertible_to<bool>;
-                  }) {
+    if constexpr (LooksAhead<Compute>) {
       if (config_.anticipate && has_last && compute.looks_ahead()) {
         const std::int64_t wake = pacer.wait(
             *clock_, [&compute, &last, this]() noexcept { compute.anticipate(predicted_probe(last, period_)); });
