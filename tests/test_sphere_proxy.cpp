@@ -22,6 +22,7 @@
 #include "hapticfield/surface/proxy_check.hpp"
 #include "run_seed.hpp"
 #include "surface_meshes.hpp"
+#include "tree_walk_shape.hpp"
 
 using namespace hapticfield;
 using test::probe_at;
@@ -471,7 +472,7 @@ TEST_CASE(
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const auto unit = [&] { return 0.5 + 0.5 * u(rng); };
-  int compared = 0, contacts = 0, same = 0, grazing = 0;
+  int compared = 0, contacts = 0, same = 0, grazing = 0, served = 0;
   std::uint64_t nodes_with = 0, nodes_without = 0;
   for (int m = 0; m < 24; ++m) {
     const double size = std::pow(10.0, -3.0 + 3.0 * unit());  // [m]
@@ -516,6 +517,7 @@ TEST_CASE(
     const MeshBvh bvh = MeshBvh::build(mesh);
     MeshBvh boxes_only = MeshBvh::build(mesh);
     boxes_only.refit(mesh);
+    MeshBvh::Neighbourhood near;  // kept from sweep to sweep, as a proxy keeps one
     for (int i = 0; i < 1500; ++i) {
       const std::size_t start =
           kind == 4 && i % 2 == 0 ? mesh.triangles.size() - 1 - rng() % 24 : rng() % mesh.triangles.size();
@@ -576,6 +578,26 @@ TEST_CASE(
         REQUIRE(tree.triangle == plain.triangle);
         REQUIRE(tree.t == plain.t);
       }
+      // through the Neighbourhood: this sweep, then one from a little way off (inside the region it gathered)
+      const glm::dvec3 nearby = from + 0.05 * r * glm::dvec3{u(rng), u(rng), u(rng)};
+      for (const glm::dvec3& start_at : {from, nearby}) {
+        const BvhHit& whole = start_at == from ? tree : bvh.sweep_sphere(start_at, to, r);
+        const glm::dvec3 sweep_lo = glm::min(start_at, to) - glm::dvec3{r},
+                         sweep_hi = glm::max(start_at, to) + glm::dvec3{r};
+        const bool inside =
+            near.gathered && near.fits && near.box.holds(BvhBox(sweep_lo, sweep_hi, glm::length(to - start_at)));
+        const BvhHit local = bvh.sweep_sphere(start_at, to, r, nullptr, start_at == from ? seeded : BvhHit{}, &near);
+        served += inside ? 1 : 0;
+        INFO("through the Neighbourhood, from " << (start_at == from ? "the start" : "nearby") << ": t " << local.t
+                                                << " (found " << local.found() << ", inside " << inside << ")");
+        REQUIRE(local.found() == whole.found());
+        REQUIRE(local.complete == whole.complete);
+        if (whole.found()) {
+          REQUIRE(local.triangle == whole.triangle);
+          REQUIRE(local.t == whole.t);
+          REQUIRE(local.contact_point == whole.contact_point);
+        }
+      }
       ++compared;
       if (i % 15 != 2 || seeded.found()) continue;
       // the brute force: every triangle's own first contact (each with the whole move), the earliest; of
@@ -614,13 +636,177 @@ TEST_CASE(
       ++grazing;
     }
   }
-  INFO(compared << " sweeps compared, tree nodes " << nodes_with << " with the slabs, " << nodes_without
-                << " without; against the brute force " << contacts << " contacts, equal in " << same << ", a graze in "
-                << grazing);
+  INFO(compared << " sweeps compared (" << served << " more answered by a Neighbourhood alone), tree nodes "
+                << nodes_with << " with the slabs, " << nodes_without << " without; against the brute force "
+                << contacts << " contacts, equal in " << same << ", a graze in " << grazing);
   CHECK(compared > 30000);
+  CHECK(served > compared / 10);  // the Neighbourhood answered alone that often
   CHECK(static_cast<double>(nodes_with) < 0.9 * static_cast<double>(nodes_without));  // the slabs skip nodes
   CHECK(contacts > 400);
   CHECK(grazing < same / 20);
+}
+
+TEST_CASE(
+    "a tie (a ball met by several triangles at the very same t) goes to the seed, else to the lowest mesh index, "
+    "whatever the order of the triangles and whether a Neighbourhood answers",
+    "[radius]") {
+  // A ball dropped straight onto a flat sheet's vertex or edge touches every
+  // triangle around it at the same t (their faces' planes are one). The
+  // oracle: every triangle's own contact, the earliest t, the lowest index
+  // among those at it. The same sheet with its triangles in reverse order
+  // names the other end of each tie, so an answer that hung on the order
+  // the tree visits them would fail one of the two.
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  TriangleMesh forward = test::flat_sheet(0.1, 40);
+  forward.uvs.clear();
+  TriangleMesh reversed = forward;
+  std::reverse(reversed.triangles.begin(), reversed.triangles.end());
+  int ties = 0, seeded_ties = 0;
+  for (const TriangleMesh* mesh : {&forward, &reversed}) {
+    const MeshBvh bvh = MeshBvh::build(*mesh);
+    MeshBvh::Neighbourhood near;
+    for (int i = 0; i < 400; ++i) {
+      // a grid vertex, or the middle of an edge between two (0.0025 m apart)
+      const double cell = 0.1 / 40;
+      glm::dvec3 at{-0.05 + cell * static_cast<double>(rng() % 41), -0.05 + cell * static_cast<double>(rng() % 41),
+                    0.0};
+      if (i % 2) at.x = std::fmin(at.x + 0.5 * cell, 0.05 - 0.5 * cell);
+      const double r = 0.0002 + 0.002 * u(rng);
+      const glm::dvec3 from = at + glm::dvec3{0.0, 0.0, r + 0.001 * u(rng)}, to = at - glm::dvec3{0.0, 0.0, 0.001};
+      double first = 2.0;
+      std::vector<std::uint32_t> at_first;
+      for (std::size_t j = 0; j < mesh->triangles.size(); ++j) {
+        double t = 1.0;
+        glm::dvec3 contact{0.0};
+        const glm::dvec3 a = corner(*mesh, j, 0);
+        if (!detail::sweep_ball_triangle(a, corner(*mesh, j, 1) - a, corner(*mesh, j, 2) - a, from, to - from, r, t,
+                                         contact))
+          continue;
+        if (t < first) at_first.clear();
+        if (t <= first) {
+          first = t;
+          at_first.push_back(static_cast<std::uint32_t>(j));
+        }
+      }
+      REQUIRE(!at_first.empty());
+      const std::uint32_t lowest = *std::min_element(at_first.begin(), at_first.end());
+      ties += at_first.size() > 1 ? 1 : 0;
+      INFO("case " << i << ": " << at_first.size() << " triangles at t " << first << ", the lowest " << lowest);
+      const BvhHit tree = bvh.sweep_sphere(from, to, r),
+                   local = bvh.sweep_sphere(from, to, r, nullptr, BvhHit{}, &near);
+      REQUIRE(tree.found());
+      CHECK(tree.t == first);
+      CHECK(tree.triangle == lowest);
+      CHECK(local.triangle == lowest);
+      // seeded with the highest of them: the seed keeps the tie
+      const std::uint32_t highest = *std::max_element(at_first.begin(), at_first.end());
+      BvhHit seed_hit;
+      double t = 1.0;
+      const glm::dvec3 a = corner(*mesh, highest, 0);
+      REQUIRE(MeshBvh::touch_triangle(a, corner(*mesh, highest, 1) - a, corner(*mesh, highest, 2) - a, highest, from,
+                                      to - from, r, t, seed_hit));
+      CHECK(bvh.sweep_sphere(from, to, r, nullptr, seed_hit).triangle == highest);
+      CHECK(bvh.sweep_sphere(from, to, r, nullptr, seed_hit, &near).triangle == highest);
+      seeded_ties += at_first.size() > 1 ? 1 : 0;
+    }
+  }
+  CHECK(ties > 600);  // (nearly) every drop is a tie of 2 to 6 triangles
+  CHECK(seeded_ties == ties);
+}
+
+TEST_CASE("a Neighbourhood used with another tree, or after the tree's refit, is gathered again", "[radius]") {
+  // A region gathered on one sheet, then asked of a sheet lifted 0.3 mm
+  // (another tree) and of the first tree refit to the lifted sheet: each
+  // answers as its own tree does (a stale region would miss the lifted
+  // triangles or name the other tree's slots).
+  const TriangleMesh sheet = test::wavy_sheet(0.05, 120, 0.002, 0.03);
+  TriangleMesh lifted = sheet;
+  for (glm::dvec3& p : lifted.positions)
+    p.z += 0.0003;
+  MeshBvh bvh = MeshBvh::build(sheet);
+  const MeshBvh other = MeshBvh::build(lifted);
+  const double r = 0.0005;
+  const glm::dvec3 at{0.0075, 0.0075, 0.002};  // a crest of the sheet: level, 2 mm high
+  const glm::dvec3 from = at + glm::dvec3{0.0, 0.0, r + 0.0004}, to = from - glm::dvec3{0.0, 0.0, 0.00015};
+  MeshBvh::Neighbourhood near;
+  const BvhHit first = bvh.sweep_sphere(from, to, r, nullptr, BvhHit{}, &near);
+  CHECK_FALSE(first.found());  // 0.4 mm over the sheet, moved down 0.15 mm
+  REQUIRE(near.fits);
+  const BvhHit on_other = other.sweep_sphere(from, to, r, nullptr, BvhHit{}, &near),
+               other_tree = other.sweep_sphere(from, to, r);
+  REQUIRE(other_tree.found());  // the lifted sheet, 0.1 mm under the ball: met
+  CHECK(on_other.triangle == other_tree.triangle);
+  CHECK(on_other.t == other_tree.t);
+  (void)bvh.sweep_sphere(from, to, r, nullptr, BvhHit{}, &near);  // gathered on the first tree again
+  bvh.refit(lifted);
+  const BvhHit refit = bvh.sweep_sphere(from, to, r, nullptr, BvhHit{}, &near),
+               refit_tree = bvh.sweep_sphere(from, to, r);
+  REQUIRE(refit_tree.found());
+  CHECK(refit.triangle == refit_tree.triangle);
+  CHECK(refit.t == refit_tree.t);
+}
+
+TEST_CASE(
+    "a ball proxy keeps its region of the tree from tick to tick: the same ticks bit for bit as a proxy whose "
+    "sweeps all walk the tree",
+    "[radius][invariant]") {
+  // Presses and slides round a circle (26 mm/s to 1 m/s, random depths) of
+  // 0.5 and 2 mm balls on fine wavy sheets (0.1 and 0.25 mm triangles: the
+  // ball's region holds a few to a hundred leaves), an icosphere and a box.
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const std::vector<TriangleMesh> meshes{test::wavy_sheet(0.04, 280, 0.002, 0.03),
+                                         test::wavy_sheet(0.05, 140, 0.003, 0.02), test::icosphere(4, 0.03),
+                                         test::box({-0.02, -0.02, -0.02}, {0.02, 0.02, 0.02}, 8)};
+  long ticks = 0, touching = 0, fewer_nodes = 0;
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    const MeshShape shape(meshes[m]);
+    const bool sheet = m < 2;
+    for (const double r : {0.0005, 0.002}) {
+      ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+      config.radius = r;
+      ProxyConstraint<MeshShape> kept(shape, config);
+      ProxyConstraint<test::TreeWalk> walked(test::TreeWalk{shape}, config);
+      for (int run = 0; run < 6; ++run) {
+        kept.reset();
+        walked.reset();
+        const double angle = 2.0 * std::numbers::pi * u(rng), speed = 0.026 * std::pow(40.0, u(rng));  // [m/s]
+        const glm::dvec3 top = sheet ? glm::dvec3{0.01 * (u(rng) - 0.5), 0.01 * (u(rng) - 0.5), 0.004}
+                                     : glm::dvec3{0.005 * (u(rng) - 0.5), 0.005 * (u(rng) - 0.5), 0.04};
+        const double depth = 0.006 + 0.004 * u(rng);  // how far under its start the HIP goes [m]
+        for (int i = 0; i < 400; ++i) {
+          // pressed in 100 ms, then round a circle of 4 mm radius at `speed`
+          const double down = depth * std::fmin(1.0, i / 100.0);
+          const double turned = angle + std::fmax(0.0, i - 100.0) * 1e-3 * speed / 0.004;  // [rad]
+          const glm::dvec3 side{-std::sin(turned), std::cos(turned), 0.0};
+          const glm::dvec3 hip = top - glm::dvec3{0.0, 0.0, (sheet ? 0.0 : 0.015) + down} +
+                                 0.004 * glm::dvec3{std::cos(turned), std::sin(turned), 0.0};
+          const Probe probe = probe_at(hip, (i < 100 ? 0.0 : speed) * side);
+          const Contact a = kept.contact(probe), b = walked.contact(probe);
+          INFO("mesh " << m << ", r " << r << ", run " << run << ", tick " << i);
+          REQUIRE(a.touching == b.touching);
+          REQUIRE(a.force == b.force);
+          REQUIRE(a.primitive == b.primitive);
+          REQUIRE(kept.proxy() == walked.proxy());
+          REQUIRE(kept.last_path().count == walked.last_path().count);
+          for (int q = 0; q < kept.last_path().count; ++q)
+            REQUIRE(kept.last_path().points[static_cast<std::size_t>(q)] ==
+                    walked.last_path().points[static_cast<std::size_t>(q)]);
+          ++ticks;
+          touching += a.touching ? 1 : 0;
+          fewer_nodes += kept.last_tick().nodes < walked.last_tick().nodes ? 1 : 0;
+        }
+      }
+    }
+  }
+  INFO(ticks << " ticks, " << touching << " touching, " << fewer_nodes << " with fewer nodes through the region");
+  CHECK(touching > ticks / 2);
+  CHECK(fewer_nodes > ticks / 10);  // the region answered
 }
 
 TEST_CASE("a node's slab never passes by a contact: two cases at the edge of rounding", "[radius]") {

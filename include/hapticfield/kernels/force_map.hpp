@@ -16,6 +16,7 @@
 
 #include <glm/vec2.hpp>
 
+#include "hapticfield/core/always_inline.hpp"
 #include "hapticfield/core/restrict.hpp"
 #include "hapticfield/image/gray_image.hpp"
 #include "hapticfield/kernels/border.hpp"
@@ -24,11 +25,6 @@
 #include "hapticfield/kernels/integral_kernel.hpp"
 #include "hapticfield/kernels/mask.hpp"
 
-#if defined(__GNUC__) || defined(__clang__)
-#define HAPTICFIELD_ALWAYS_INLINE __attribute__((always_inline))
-#else
-#define HAPTICFIELD_ALWAYS_INLINE
-#endif
 #if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
 #define HAPTICFIELD_X86_DISPATCH 1
 #include <immintrin.h>

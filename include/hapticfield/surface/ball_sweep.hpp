@@ -86,17 +86,19 @@ namespace hapticfield::detail {
   const double dn = glm::dot(d, n);         // [m] per unit t
   if (dn < 0.0 && h0 >= -r) {
     const double t = h0 > r ? (h0 - r) / -dn : 0.0;
-    if (t < t_best) {
-      const glm::dvec3 q = from + t * d - (t > 0.0 ? r : h0) * n;  // the touched point on the plane
-      // inside the triangle: the three edge functions' signs (relative tolerance)
-      const glm::dvec3 w = q - a;
-      const double u = glm::dot(glm::cross(w, e2), cross), v = glm::dot(glm::cross(e1, w), cross);
-      const double whole = area2 * area2, slack = 1e-12 * whole;
-      if (u >= -slack && v >= -slack && u + v <= whole + slack && (t > 0.0 || h0 >= 0.0)) {
-        t_best = t;
-        contact = q;
-        found = true;
-      }
+    const glm::dvec3 q = from + t * d - (t > 0.0 ? r : h0) * n;  // the touched point on the plane
+    // inside the triangle: the three edge functions' signs (relative tolerance)
+    const glm::dvec3 w = q - a;
+    const double u = glm::dot(glm::cross(w, e2), cross), v = glm::dot(glm::cross(e1, w), cross);
+    const double whole = area2 * area2, slack = 1e-12 * whole;
+    if (u >= -slack && v >= -slack && u + v <= whole + slack && (t > 0.0 || h0 >= 0.0)) {
+      // the first contact: the edges and corners, in the plane, come no
+      // sooner (tried only when there is none inside the face, so the
+      // answer does not hang on the t_best it was asked with)
+      if (!(t < t_best)) return false;
+      t_best = t;
+      contact = q;
+      found = true;
     }
   }
   // the corners' balls and the edges' cylinders: none is met before a
@@ -108,17 +110,20 @@ namespace hapticfield::detail {
   if (found) return true;
   const double h1 = h0 + t_best * dn;  // [m] the height at t_best
   if (h0 <= 0.0 && h1 <= 0.0) return false;
-  const double low = h0 > 0.0 && h1 > 0.0 ? std::fmin(h0, h1) : 0.0;  // [m]
+  const double low = h0 > 0.0 && h1 > 0.0 ? (h1 < h0 ? h1 : h0) : 0.0;  // [m] (no NaN here: inline, not fmin)
   if (!(low < r)) return false;
   const double rho = std::sqrt(r * r - low * low);  // [m]
   const std::array<glm::dvec3, 3> corner{a, a + e1, a + e2};
   const glm::dvec3 middle = (corner[0] + corner[1] + corner[2]) / 3.0;
   double reach2 = 0.0;  // the bounding circle's radius, squared [m^2]
-  for (const glm::dvec3& c : corner)
-    reach2 = std::fmax(reach2, glm::dot(c - middle, c - middle));
+  for (const glm::dvec3& c : corner) {
+    const double to_corner2 = glm::dot(c - middle, c - middle);
+    if (to_corner2 > reach2) reach2 = to_corner2;
+  }
   const glm::dvec3 to_middle = middle - from + h0 * n;  // from the centre's projection, in the plane
   const glm::dvec3 slide = d - dn * n;                  // the projected move
-  const double along = std::clamp(glm::dot(to_middle, slide) / std::fmax(glm::dot(slide, slide), 1e-300), 0.0, t_best);
+  const double slide2 = glm::dot(slide, slide);
+  const double along = std::clamp(glm::dot(to_middle, slide) / (slide2 > 1e-300 ? slide2 : 1e-300), 0.0, t_best);
   const glm::dvec3 gap = to_middle - along * slide;
   const double bound = rho + std::sqrt(reach2);
   if (glm::dot(gap, gap) > bound * bound) return false;

@@ -26,9 +26,16 @@
 /// shared edge or vertex meets one of its triangles, and the tie rule below),
 /// and closest(p, r), the
 /// nearest point within r (the Voronoi-region closest point on a triangle,
-/// Ericson, "Real-Time Collision Detection", 2005, section 5.1.5). Each
+/// Ericson, "Real-Time Collision Detection", 2005, section 5.1.5), and
+/// sweep_sphere(from, to, r), a ball's first contact. Each
 /// query visits at most `max_nodes` nodes (its budget); past that it stops
-/// and says so (BvhHit::complete = false).
+/// and says so (BvhHit::complete = false). A query first skips its trunk:
+/// the levels where its box meets one child's box only (cheap float tests),
+/// answering as from the root. A ball's sweep may also go through the
+/// caller's Neighbourhood, the leaves around where it swept last, kept from
+/// sweep to sweep: it then tests those leaves alone, with the same answer
+/// (a tie in t goes to the seed, else to the lowest mesh index, however the
+/// triangles are visited).
 ///
 /// Ties (a segment that meets a triangle on its boundary: within
 /// bvh_tie_band of an edge or a vertex, relative to the triangle). The solid
@@ -60,6 +67,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticfield/core/always_inline.hpp"
 #include "hapticfield/core/vector_math.hpp"
 #include "hapticfield/rt/huge_pages.hpp"
 #include "hapticfield/surface/ball_sweep.hpp"
@@ -144,6 +152,40 @@ inline constexpr std::size_t bvh_max_depth = 64;
 inline constexpr std::uint32_t bvh_max_leaf = 4;
 /// Default node budget of one query: a few microseconds at worst.
 inline constexpr std::uint32_t bvh_default_max_nodes = 4096;
+/// Most leaves a MeshBvh::Neighbourhood holds (a ball's region whose
+/// leaves do not fit is swept through the tree).
+inline constexpr std::size_t bvh_neighbourhood_leaves = 128;
+/// A MeshBvh::Neighbourhood reaches this far past the sweep that gathers
+/// it, relative to the ball's radius (0.4: a 0.5 mm ball's region reaches
+/// 0.2 mm further, some 10 ticks of a hand's slide at 20 mm/s).
+inline constexpr double bvh_neighbourhood_reach = 0.4;
+
+/// A box a query can reach (float, rounded outward, with an allowance for
+/// the rounding of the traversal's own tests): a node box that misses it
+/// holds nothing the query meets, and the query's own tests reject it.
+struct BvhBox {
+  std::array<float, 3> lo{}, hi{};
+  BvhBox() = default;
+  /// [low, high] [m]; `length` [m], a segment's, widens the allowance.
+  BvhBox(const glm::dvec3& low, const glm::dvec3& high, double length = 0.0) noexcept {
+    // the traversal's rounding (1e-9 relative), and float's: 2.4e-7 of the
+    // largest coordinate is more than half a float step there, so rounding
+    // to the nearest float still leaves the box around [low, high]
+    const double allowance = (1e-9 + 2.4e-7) * (largest_component(low) + largest_component(high) + length) + 1e-37;
+    for (int k = 0; k < 3; ++k) {
+      const auto axis = static_cast<std::size_t>(k);
+      lo[axis] = static_cast<float>(low[k] - allowance);
+      hi[axis] = static_cast<float>(high[k] + allowance);
+    }
+  }
+  /// True when `inner` lies wholly inside this box.
+  [[nodiscard]] bool holds(const BvhBox& inner) const noexcept {
+    for (std::size_t k = 0; k < 3; ++k)
+      if (!(inner.lo[k] >= lo[k] && inner.hi[k] <= hi[k])) return false;
+    return true;
+  }
+};
+
 /// A hit within this barycentric distance of an edge (relative to the
 /// triangle) is on the edge: the tie rule decides it (see the file comment).
 inline constexpr double bvh_tie_band = 1e-7;
@@ -238,7 +280,8 @@ class MeshBvh {
     /// behind it, or its cut with the plane (a disk of radius
     /// sqrt(r^2 - h^2) at its least height h in front) never reaches the
     /// bounding circle.
-    [[nodiscard]] bool may_touch(const glm::dvec3& from, const glm::dvec3& d, double r, double t_max) const noexcept {
+    [[nodiscard]] bool may_touch(const glm::dvec3& from, const glm::dvec3& d, double r,
+                                 double t_max) const noexcept HAPTICFIELD_ALWAYS_INLINE {
       const double h0 = glm::dot(normal, from - middle);  // [m]
       const double dn = glm::dot(normal, d);              // [m] per unit t
       const double h1 = h0 + t_max * dn;
@@ -268,7 +311,8 @@ class MeshBvh {
     /// it stays more than r beyond either face of the slab, or the disks it
     /// cuts from the slab (radius sqrt(r^2 - h^2) at its least height h
     /// beyond it) stay farther than reach from middle.
-    [[nodiscard]] bool may_touch(const glm::dvec3& from, const glm::dvec3& d, double r, double t_max) const noexcept {
+    [[nodiscard]] bool may_touch(const glm::dvec3& from, const glm::dvec3& d, double r,
+                                 double t_max) const noexcept HAPTICFIELD_ALWAYS_INLINE {
       const double h0 = glm::dot(normal, from - middle);  // [m]
       const double dn = glm::dot(normal, d);              // [m] per unit t
       const double h1 = h0 + t_max * dn;
@@ -305,6 +349,26 @@ class MeshBvh {
                                   BvhHit& best) noexcept { intersect(i, a, d, best_t, best); });
   }
 
+  /// A ball's region of the tree, kept by the caller between sweeps
+  /// (MeshBvh::sweep_sphere's `near`; a proxy keeps one from tick to tick):
+  /// the leaves whose boxes meet a box around the sweep that gathered it,
+  /// bvh_neighbourhood_reach radii past it, in tree order. A short sweep
+  /// whose box lies inside tests those leaves alone (each one's box, then
+  /// its slab and its triangles) instead of walking the tree down to them.
+  /// A region with more leaves than it holds is remembered as such, and
+  /// sweeps inside it walk the tree. Fixed size, no allocation. It names
+  /// the tree and the refit it was gathered from: used with another tree (a
+  /// copy, one built apart) or after a refit, it is gathered again.
+  struct Neighbourhood {
+    BvhBox box;                                                    ///< the region gathered
+    const BvhNodePair* tree{nullptr};                              ///< the tree's pairs it was gathered from
+    std::uint64_t refits{0};                                       ///< that tree's refit count then
+    bool gathered{false};                                          ///< box holds a region
+    bool fits{false};                                              ///< its leaves fit in `leaves`
+    std::uint32_t count{0};                                        ///< leaves held
+    std::array<std::uint32_t, bvh_neighbourhood_leaves> leaves{};  ///< 2 pair + side of each leaf (its NodeBounds)
+  };
+
   /// The first contact of a ball of `radius` [m] whose centre moves from
   /// `from` to `to` with the mesh (a swept sphere against the triangles'
   /// Minkowski sum: the face, offset by the radius on its front, the edges'
@@ -319,14 +383,36 @@ class MeshBvh {
   /// sweep_ball_triangle): the traversal starts from its t, so it skips
   /// every box the ball cannot reach before it. The answer is the seed's
   /// unless a triangle is met strictly earlier.
+  ///
+  /// A tie (two triangles met at the very same t) goes to the seed, else
+  /// to the lower mesh index, so the answer does not hang on the order the
+  /// triangles are visited in.
+  ///
+  /// `near`, when given, is the caller's Neighbourhood: a short sweep
+  /// inside its region tests the region's leaves alone, one outside it
+  /// gathers a new region first; the answer is the same.
   [[nodiscard]] BvhHit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
-                                    QueryStats* stats = nullptr, const BvhHit& seed = BvhHit{}) const noexcept {
-    if (!(radius > 0.0) || !std::isfinite(radius)) return BvhHit{};
-    return traverse<true>(
-        from, to, radius, stats,
-        [this, radius](std::uint32_t i, const glm::dvec3& a, const glm::dvec3& d, double& best_t,
-                       BvhHit& best) noexcept { touch(i, a, d, radius, best_t, best); },
-        seed);
+                                    QueryStats* stats = nullptr, const BvhHit& seed = BvhHit{},
+                                    Neighbourhood* near = nullptr) const noexcept {
+    if (!(radius > 0.0) || !std::isfinite(radius)) {
+      if (stats) *stats = QueryStats{};
+      return BvhHit{};
+    }
+    const std::uint32_t seeded = seed.found() && seed.t >= 0.0 && seed.t <= 1.0 ? seed.triangle : no_primitive;
+    const BallLeaf leaf{this, radius, seeded};
+    if (near == nullptr) return traverse<true>(from, to, radius, stats, leaf, seed);
+    QueryStats work;
+    BvhHit best;
+    if (sweep_near(from, to, radius, seed, leaf, *near, best, work)) {
+      if (stats) *stats = work;
+      return best;
+    }
+    best = traverse<true>(from, to, radius, stats, leaf, seed);
+    if (stats) {  // and a gather that did not serve
+      stats->nodes += work.nodes;
+      stats->primitives += work.primitives;
+    }
+    return best;
   }
 
   /// The swept ball (centre from + t d, radius r) against the triangle a,
@@ -357,7 +443,10 @@ class MeshBvh {
     Stack stack;
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     if (!(box_distance2(root_, p) <= best_d2)) return best;
-    for (;;) {
+    // (a box more than max_distance away on one axis is farther than that)
+    const glm::dvec3 around{std::isfinite(max_distance) ? max_distance : std::numeric_limits<double>::infinity()};
+    bool reachable = descend(BvhBox(p - around, p + around), index, count, work);
+    while (reachable) {
       if (++work.nodes > config_.max_nodes) {
         best.complete = false;
         break;
@@ -427,6 +516,7 @@ class MeshBvh {
           throw std::invalid_argument("MeshBvh::refit: triangle " + std::to_string(t) + " uses a vertex out of range");
     for (const glm::dvec3& p : mesh.positions)
       if (!is_finite(p)) throw std::invalid_argument("MeshBvh::refit: a vertex is not finite");
+    ++refits_;
     for (Triangle& tri : triangles_) {
       const TriangleIndices& t = mesh.triangles[tri.id];
       const glm::dvec3 a = mesh.positions[t[0]];
@@ -524,7 +614,13 @@ class MeshBvh {
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     double entry = 0.0;
     if (!slabs.cross(root_, best_t, entry)) return best;
-    for (;;) {
+    // the box the segment's points up to best_t span, grown (the slabs
+    // accept no node box that misses it)
+    const glm::dvec3 end = from + best_t * d;
+    bool reachable =
+        descend(BvhBox(glm::min(from, end) - glm::dvec3{grow}, glm::max(from, end) + glm::dvec3{grow}, glm::length(d)),
+                index, count, work);
+    while (reachable) {
       if (++work.nodes > config_.max_nodes) {
         best = BvhHit{};
         best.t = 0.0;
@@ -568,6 +664,31 @@ class MeshBvh {
     if (best.found()) best.point = from + best.t * d;
     if (stats) *stats = work;
     return best;
+  }
+
+  /// The query's trunk, skipped: from the node (index, count) down, while
+  /// the query's box meets only one child's box, into that child (the
+  /// other's subtree holds nothing the query meets, and its tests would
+  /// reject it). The traversal then starts where the box meets both
+  /// children, or at a leaf, and visits below it the nodes it would have
+  /// visited from the root, in the same order, so it answers the same; only
+  /// the trunk's full tests are saved (the first levels of a small query on
+  /// a large mesh). Each step counts as a node visited. False: the box meets
+  /// neither child's box (nothing is reachable).
+  bool descend(const BvhBox& box, std::uint32_t& index, std::uint32_t& count, QueryStats& work) const noexcept {
+    while (count == 0) {
+      const BvhNodePair& pair = pairs_[index];
+      std::array<bool, 2> meets{true, true};
+      for (std::size_t k = 0; k < 3; ++k)
+        for (std::size_t c = 0; c < 2; ++c)
+          meets[c] = meets[c] && pair.lo[k][c] <= box.hi[k] && pair.hi[k][c] >= box.lo[k];
+      if (meets[0] == meets[1]) return meets[0];  // both: the traversal starts here; neither: nothing to meet
+      ++work.nodes;
+      const std::size_t side = meets[0] ? 0 : 1;
+      index = pair.index[side];
+      count = pair.count[side];
+    }
+    return true;
   }
 
   /// A triangle as the queries want it: corner a, edges e1 = b - a,
@@ -872,14 +993,144 @@ class MeshBvh {
     best.b2 = b2;
   }
 
+  /// sweep_sphere()'s test of one leaf's triangle, as the traversals call
+  /// it (always inlined there: it is their innermost step).
+  struct BallLeaf {
+    const MeshBvh* bvh;
+    double radius;         ///< [m]
+    std::uint32_t seeded;  ///< the seed's mesh index (no_primitive: none)
+    void operator()(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double& best_t,
+                    BvhHit& best) const noexcept HAPTICFIELD_ALWAYS_INLINE {
+      bvh->touch(slot, from, d, radius, seeded, best_t, best);
+    }
+  };
+
   /// The swept ball (centre from + t d, radius r) against one triangle:
   /// the earliest contact with its face (front only), its edges or its
-  /// corners, kept when t < best_t (sweep_sphere()).
-  void touch(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double r, double& best_t,
-             BvhHit& best) const noexcept {
-    if (!bounds_[slot].may_touch(from, d, r, best_t)) return;  // its plane and circle, first
+  /// corners, kept when t < best_t, or when t = best_t and the triangle's
+  /// mesh index is lower than best's, unless best is the seed (mesh index
+  /// `seeded`) (sweep_sphere()).
+  void touch(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double r, std::uint32_t seeded,
+             double& best_t, BvhHit& best) const noexcept HAPTICFIELD_ALWAYS_INLINE {
     const Triangle& tri = triangles_[slot];
-    (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best);
+    // a tie may take best: asked a little past best_t, whose own tests count
+    // a ball that just touches there as clear (sweep_ball_triangle answers
+    // the same whatever it is asked with, when it meets the triangle sooner)
+    if (!(best.found() && tri.id < best.triangle && best.triangle != seeded)) {
+      if (bounds_[slot].may_touch(from, d, r, best_t))  // its plane and circle, first
+        (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best);
+      return;
+    }
+    double t = detail::smaller(1.0, best_t + 1e-9 * (best_t + 1e-3));
+    if (!bounds_[slot].may_touch(from, d, r, t)) return;
+    BvhHit candidate;
+    if (touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, t, candidate) && t <= best_t) {
+      best_t = t;
+      best = candidate;
+    }
+  }
+
+  /// sweep_sphere() through `near` (false: the tree must answer): the
+  /// sweep's box, grown by the radius, inside near's region whose leaves
+  /// fit, or a short sweep (no longer than the region's reach) that gathers
+  /// a new region first. The leaves are tested in tree order, each by its
+  /// box, its slab and its triangles (`leaf`), so the answer is the tree's.
+  template <class Leaf>
+  bool sweep_near(const glm::dvec3& from, const glm::dvec3& to, double radius, const BvhHit& seed, Leaf&& leaf,
+                  Neighbourhood& near, BvhHit& best, QueryStats& work) const noexcept {
+    const glm::dvec3 d = to - from;
+    if (triangles_.empty() || root_.count > 0 || !is_finite(from) || !is_finite(d)) return false;
+    double best_t = 1.0;
+    best = BvhHit{};
+    if (seed.found() && seed.t >= 0.0 && seed.t <= 1.0) {
+      best = seed;
+      best_t = seed.t;
+    }
+    const glm::dvec3 end = from + best_t * d;
+    const double length = glm::length(d);
+    const glm::dvec3 grown{radius};
+    const BvhBox box(glm::min(from, end) - grown, glm::max(from, end) + grown, length);
+    if (!near.gathered || near.tree != pairs_.data() || near.refits != refits_ || !near.box.holds(box)) {
+      const double reach = bvh_neighbourhood_reach * radius;  // [m]
+      if (!(best_t * length <= reach)) return false;          // a long sweep: the tree's order finds its contact sooner
+      gather(BvhBox(glm::min(from, end) - grown - glm::dvec3{reach}, glm::max(from, end) + grown + glm::dvec3{reach},
+                    length),
+             near, work);
+      // too many leaves (a ball large against the triangles): the tree
+      // answers the sweeps around, and the next try waits until the ball
+      // has gone 8 regions' reach away, so the trying costs little
+      if (!near.fits)
+        near.box = BvhBox(glm::min(from, end) - grown - glm::dvec3{8.0 * reach},
+                          glm::max(from, end) + grown + glm::dvec3{8.0 * reach}, length);
+    }
+    if (!near.fits) return false;
+    const bool no_slabs = node_bounds_.empty();
+    for (std::uint32_t k = 0; k < near.count; ++k) {
+      const std::uint32_t node = near.leaves[k];
+      const BvhNodePair& pair = pairs_[node / 2];
+      const std::size_t side = node % 2;
+      if (++work.nodes > config_.max_nodes) {
+        best = BvhHit{};
+        best.t = 0.0;
+        best.complete = false;
+        return true;
+      }
+      if (!box_meets(pair, side, box) || (!no_slabs && !node_bounds_[node].may_touch(from, d, radius, best_t)))
+        continue;
+      for (std::uint32_t i = pair.index[side]; i < pair.index[side] + pair.count[side]; ++i) {
+        ++work.primitives;
+        leaf(i, from, d, best_t, best);
+      }
+    }
+    if (best.found()) best.point = from + best.t * d;
+    return true;
+  }
+
+  /// Fills `near` with the leaves whose boxes meet `box`, depth first
+  /// (each pair visited counts as a node); near.fits is false when they do
+  /// not fit.
+  void gather(const BvhBox& box, Neighbourhood& near, QueryStats& work) const noexcept {
+    near.box = box;
+    near.tree = pairs_.data();
+    near.refits = refits_;
+    near.gathered = true;
+    near.fits = false;
+    near.count = 0;
+    // children still to visit (2 pair + side), the next on top; a depth
+    // first walk leaves at most two a level
+    std::array<std::uint32_t, 2 * bvh_max_depth> stack;  // filled before read
+    std::size_t top = 0;
+    if (box_meets(root_, box)) {
+      const auto visit = [&](std::uint32_t p) noexcept {
+        ++work.nodes;
+        for (std::size_t c = 2; c-- > 0;)  // the right child under the left
+          if (box_meets(pairs_[p], c, box)) stack[top++] = static_cast<std::uint32_t>(2 * p + c);
+      };
+      visit(root_.index);
+      while (top > 0) {
+        const std::uint32_t node = stack[--top];
+        const BvhNodePair& pair = pairs_[node / 2];
+        const std::size_t side = node % 2;
+        if (pair.count[side] == 0) {
+          visit(pair.index[side]);
+        } else {
+          if (near.count == near.leaves.size()) return;  // too many: not kept
+          near.leaves[near.count++] = node;
+        }
+      }
+    }
+    near.fits = true;
+  }
+
+  /// True when a node's box meets `box` (the root's, or a pair's child's).
+  [[nodiscard]] static bool box_meets(const BvhNode& n, const BvhBox& box) noexcept {
+    for (std::size_t k = 0; k < 3; ++k)
+      if (!(n.lo[k] <= box.hi[k] && n.hi[k] >= box.lo[k])) return false;
+    return true;
+  }
+  [[nodiscard]] static bool box_meets(const BvhNodePair& pair, std::size_t side, const BvhBox& box) noexcept {
+    return pair.lo[0][side] <= box.hi[0] && pair.hi[0][side] >= box.lo[0] && pair.lo[1][side] <= box.hi[1] &&
+           pair.hi[1][side] >= box.lo[1] && pair.lo[2][side] <= box.hi[2] && pair.hi[2][side] >= box.lo[2];
   }
 
   /// The tie rule (file comment) for a segment along d that meets the
@@ -1291,6 +1542,7 @@ class MeshBvh {
   std::vector<NodeBounds> node_bounds_;  ///< two a pair: node_bounds_[2 p + side], pair p's child
   std::size_t depth_{0};
   MeshBvhConfig config_{};
+  std::uint64_t refits_{0};  ///< refit() calls (a Neighbourhood gathered before one is gathered again)
 };
 
 }  // namespace hapticfield

@@ -53,6 +53,8 @@ class MeshShape {
   static constexpr bool flat_primitives = true;
   /// Its queries only read the tree, shared by copies (PureQueries).
   static constexpr bool pure_queries = true;
+  /// What a caller keeps between its ball sweeps (sweep_sphere's `cache`).
+  using SweepCache = MeshBvh::Neighbourhood;
 
   /// Takes the mesh and builds its tree (allocates; may take about a second
   /// per million triangles).
@@ -117,8 +119,13 @@ class MeshShape {
   /// lies beyond that contact (MeshBvh::sweep_sphere's seed). The answer is
   /// the same whatever the hint, but for which of two triangles met at the
   /// very same t is named.
+  ///
+  /// `cache`, when given, is the caller's region of the tree, kept between
+  /// its sweeps (MeshBvh::Neighbourhood): short sweeps inside it skip the
+  /// walk down the tree. The answer is the same with or without it.
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
-                                 QueryStats* stats = nullptr, std::uint32_t hint = no_primitive) const noexcept {
+                                 QueryStats* stats = nullptr, std::uint32_t hint = no_primitive,
+                                 SweepCache* cache = nullptr) const noexcept {
     BvhHit seed;
     const TriangleMesh& m = data_->mesh;
     if (hint < m.triangles.size() && radius > 0.0 && std::isfinite(radius)) {
@@ -127,7 +134,7 @@ class MeshShape {
       double t = 1.0;
       (void)MeshBvh::touch_triangle(a, e1, e2, hint, from, to - from, radius, t, seed);
     }
-    const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats, seed);
+    const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats, seed, cache);
     Hit out = describe(h);
     out.t = h.t;
     if (!h.found()) return out;

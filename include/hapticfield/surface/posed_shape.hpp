@@ -162,6 +162,8 @@ class PosedQueries {
   static constexpr bool flat_primitives = requires { requires S::flat_primitives; };
   /// closest() and the sweeps see the same surface (the inner shape's say).
   static constexpr bool closest_matches_sweep = !requires { requires !S::closest_matches_sweep; };
+  /// The inner shape's (its sweeps keep it in their own frame).
+  using SweepCache = SweepCacheOf<S>;
 
   [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance) const noexcept {
     return world(inner().closest(local(p), max_distance));
@@ -199,6 +201,13 @@ class PosedQueries {
     s.sweep_sphere(from, to, radius, stats, hint);
   }
   { return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint)); }
+  /// With the caller's cache of the inner shape's sweeps (in its own frame,
+  /// so a new pose leaves it valid).
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius, QueryStats* stats,
+                                 std::uint32_t hint, SweepCache* cache) const noexcept requires requires(const S& s) {
+    s.sweep_sphere(from, to, radius, stats, hint, cache);
+  }
+  { return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache)); }
 
   /// The point of one primitive nearest to p, where the inner shape answers
   /// for one primitive.

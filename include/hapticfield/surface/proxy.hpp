@@ -404,6 +404,7 @@ class ProxyConstraint {
     held_planes_ = Planes{};
     held_face_ = Hit{};
     hint_ = no_primitive;
+    sweep_cache_ = SweepCache{};
   }
 
   /// The proxy's position [m] (on the surface while touching, else the HIP).
@@ -981,7 +982,15 @@ class ProxyConstraint {
   [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to) noexcept {
     if constexpr (sweeps_spheres) {
       if (config_.radius > 0.0) {
-        if constexpr (requires(QueryStats * q) { shape_.sweep_sphere(from, to, 1.0, q, std::uint32_t{0}); }) {
+        if constexpr (requires(QueryStats * q, SweepCache * c) {
+                        shape_.sweep_sphere(from, to, 1.0, q, std::uint32_t{0}, c);
+                      }) {
+          QueryStats q;  // and the shape's region of the last sweeps, kept (MeshShape::sweep_sphere's cache)
+          const Hit h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_, &sweep_cache_);
+          tick_.nodes += q.nodes;
+          if (h.found()) hint_ = h.primitive;
+          return h;
+        } else if constexpr (requires(QueryStats * q) { shape_.sweep_sphere(from, to, 1.0, q, std::uint32_t{0}); }) {
           QueryStats q;  // the primitive met last is tried first (MeshShape::sweep_sphere's hint)
           const Hit h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_);
           tick_.nodes += q.nodes;
@@ -1072,6 +1081,8 @@ class ProxyConstraint {
   Hit held_face_{};                   ///< the face the proxy last touched
   Hit face_{};                        ///< a deforming shape's face the proxy touched last tick
   std::uint32_t hint_{no_primitive};  ///< the primitive a ball's sweep met last, tried first by the next
+  using SweepCache = SweepCacheOf<S>;
+  SweepCache sweep_cache_{};  ///< what the shape keeps between a ball's sweeps (MeshShape: its region of the tree)
   ProxyTick tick_{};
   ProxyPath path_{};
 };

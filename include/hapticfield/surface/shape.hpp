@@ -80,6 +80,23 @@ concept PureQueries = Shape<S> && requires {
   requires S::pure_queries;
 } && std::is_nothrow_copy_constructible_v<S>;
 
+/// What a shape's ball sweeps keep for their caller between queries
+/// (S::SweepCache: MeshShape's region of its tree), or NoSweepCache.
+struct NoSweepCache {};
+template <class S>
+struct SweepCacheFor {
+  using Cache = NoSweepCache;
+};
+template <class S>
+requires requires {
+  typename S::SweepCache;
+}
+struct SweepCacheFor<S> {
+  using Cache = typename S::SweepCache;
+};
+template <class S>
+using SweepCacheOf = typename SweepCacheFor<S>::Cache;
+
 /// Counts of one query's work (nodes of a tree, cells of a grid): the bound
 /// the tests assert and the benches report.
 struct QueryStats {
