@@ -4,8 +4,9 @@
 // per million triangles; the height-field tick against a tangible-image
 // tick; a mesh's first pass on 2 MB against 4 KB pages; the look-ahead
 // against none, back to back and paced at 1 kHz (--paced-ticks, default
-// 10000: 10 s a row); and the highest stiffness that stays passive at each
-// servo rate.
+// 10000: 10 s a row); a ball's region of the tree kept between sweeps
+// against none; and the highest stiffness that stays passive at each servo
+// rate.
 //
 //   bench_surface [--ticks N] [--max-triangles N] [--paced-ticks N] [--no-passivity]
 #include <hapticfield/kernels.hpp>
@@ -30,6 +31,7 @@
 
 #include "../tests/surface_energy.hpp"
 #include "../tests/surface_meshes.hpp"
+#include "../tests/tree_walk_shape.hpp"
 #include "surface_path.hpp"
 #include "tick_cost.hpp"
 
@@ -177,25 +179,81 @@ double monotonic_ns() {
   return 1e9 * static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec);
 }
 
-/// One pass over the path by two proxies on equal meshes built apart, their
-/// ticks alternated (the one that goes first swaps every tick), each timed
-/// on the monotonic clock (a preempted tick counts, as likely for either):
-/// the first pass after the builds, both cold, as a hand's first pass over
-/// a part of a large mesh is.
+/// One pass over the path by two proxies, their ticks alternated (the one
+/// that goes first swaps every tick), each timed on the monotonic clock (a
+/// preempted tick counts, as likely for either); with `look_ahead`, each
+/// proxy anticipates its tick right before it (as the servo loop does in
+/// the slack before the deadline). `nodes` receives each proxy's mean tree
+/// nodes a tick.
 template <class A, class B>
-std::array<hf::bench::Cost, 2> first_pass_pair(A& a, B& b, const std::vector<hf::Probe>& path) {
+std::array<hf::bench::Cost, 2> alternated_pair(A& a, B& b, const std::vector<hf::Probe>& path, bool look_ahead,
+                                               std::array<double, 2>& nodes) {
   std::vector<double> ta(path.size()), tb(path.size());
   glm::dvec3 sink{0.0};
+  nodes = {0.0, 0.0};
   for (std::size_t i = 0; i < path.size(); ++i) {
     for (int k = 0; k < 2; ++k) {
       const bool a_now = (k == 0) == (i % 2 == 0);
+      if (look_ahead) a_now ? a.anticipate(path[i]) : b.anticipate(path[i]);
       const double t0 = monotonic_ns();
       sink += a_now ? a.contact(path[i]).force : b.contact(path[i]).force;
       (a_now ? ta : tb)[i] = monotonic_ns() - t0;
+      nodes[a_now ? 0 : 1] += a_now ? a.last_tick().nodes : b.last_tick().nodes;
     }
   }
   if (!hf::is_finite(sink)) std::printf("(non-finite force)\n");
+  for (double& n : nodes)
+    n /= static_cast<double>(std::max<std::size_t>(1, path.size()));
   return {summary(std::move(ta)), summary(std::move(tb))};
+}
+
+/// The first pass after the builds of two proxies' meshes, both cold, as a
+/// hand's first pass over a part of a large mesh is.
+template <class A, class B>
+std::array<hf::bench::Cost, 2> first_pass_pair(A& a, B& b, const std::vector<hf::Probe>& path) {
+  std::array<double, 2> nodes{};
+  return alternated_pair(a, b, path, false, nodes);
+}
+
+/// A ball's region of the tree kept between its sweeps (MeshBvh::
+/// Neighbourhood, what a ball proxy on a mesh does) against every sweep
+/// walking the tree (test::TreeWalk), at 1M triangles: meshes built apart,
+/// a warm-up pass each, then ticks alternated, back to back and with the
+/// look-ahead right before each tick. Forces are the same bit for bit
+/// (test_sphere_proxy).
+void neighbourhood_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles) {
+  if (max_triangles < 1'000'000) return;
+  std::printf(
+      "## A ball's region of the tree kept between sweeps (MeshBvh::Neighbourhood, the default) against every "
+      "sweep walking the tree, 1M triangles\n\n"
+      "Meshes built apart, a pass each first, then ticks alternated (wall time per tick, monotonic clock); back to "
+      "back, and with each tick anticipated right before it as the servo loop's look-ahead does.\n\n"
+      "| radius [mm] | timing | kept: mean [ns] | p99 [ns] | p99.9 [ns] | worst [ns] | walked: mean [ns] | p99 [ns] | "
+      "p99.9 [ns] | worst [ns] | walked / kept mean | walked / kept p99 | walked / kept p99.9 | tree nodes a tick, "
+      "kept / walked |\n"
+      "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
+  const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+  const hf::MeshShape one(mesh), other(mesh);
+  for (const double radius : {0.0005, 0.002}) {
+    hf::ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+    config.radius = radius;
+    for (const bool look_ahead : {false, true}) {
+      hf::ProxyConstraint<hf::MeshShape> kept(one, config);
+      hf::ProxyConstraint<hf::test::TreeWalk> walked(hf::test::TreeWalk{other}, config);
+      std::array<double, 2> nodes{};
+      (void)alternated_pair(kept, walked, path, false, nodes);  // the warm-up pass
+      kept.reset();
+      walked.reset();
+      const auto [k, w] = alternated_pair(kept, walked, path, look_ahead, nodes);
+      std::printf(
+          "| %.1f | %s | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f | %.1f / %.1f |\n",
+          radius * 1e3, look_ahead ? "look-ahead before each tick" : "back to back", k.mean_ns, k.p99_ns, k.p999_ns,
+          k.worst_ns, w.mean_ns, w.p99_ns, w.p999_ns, w.worst_ns, w.mean_ns / k.mean_ns, w.p99_ns / k.p99_ns,
+          w.p999_ns / k.p999_ns, nodes[0], nodes[1]);
+    }
+  }
+  std::printf("\n");
 }
 
 /// The first pass over a large mesh on 2 MB pages (the default) against
@@ -383,6 +441,8 @@ int main(int argc, char** argv) {
   first_pass_section(side, path, max_triangles);
   // --- the look-ahead against none, back to back and paced at 1 kHz ---
   anticipation_section(side, path, max_triangles, paced_ticks);
+  // --- a ball's region of the tree kept between sweeps against none ---
+  neighbourhood_section(side, path, max_triangles);
 
   // --- baseline: the proxy on an analytic plane ---
   hf::ProxyConstraint plane(hf::PlaneShape(hf::PlaneShapeConfig{}), hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
