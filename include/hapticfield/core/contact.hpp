@@ -48,6 +48,29 @@ struct Contact {
   std::uint32_t material{0};              ///< material index of the touched primitive
 };
 
+/// The probe a contact's constraint is asked with (ContactField,
+/// MaterialSurface), into `on`: `probe` with a non-finite velocity (a glitch
+/// of the device's differentiation) set to zero, so only what depends on it
+/// is lost. False for a non-finite position: there is no contact to ask for.
+[[nodiscard]] inline bool constraint_probe(const Probe& probe, Probe& on) noexcept {
+  if (!is_finite(probe.position)) return false;
+  on = probe;
+  if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
+  return true;
+}
+
+/// Tells `on` of this tick's contact, for the parts a contact's force is
+/// summed with: |Fc|, the normal, and where on the surface it touches.
+inline void tell_contact(Probe& on, const Contact& c) noexcept {
+  on.normal_force = glm::length(c.force);
+  on.surface_normal = c.normal;
+  on.surface_uv = c.surface_uv;
+  on.surface_tangent = c.surface_tangent;
+  on.surface_bitangent = c.surface_bitangent;
+  on.primitive = c.primitive;
+  on.material = c.material;
+}
+
 /// A constraint: a surface that reports the contact of the HIP with it.
 /// `contact()` is on the servo path: noexcept, no allocation; a non-finite
 /// probe gives a Contact that is not touching. It may change the
@@ -73,21 +96,14 @@ class ContactField {
   /// it: the constraint and the parts see a zero velocity, so Fc keeps its
   /// spring term and loses its damping.
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
-    if (!is_finite(probe.position)) {
+    Probe on;
+    if (!constraint_probe(probe, on)) {
       last_ = Contact{};
       return glm::dvec3{0.0};
     }
-    Probe on = probe;
-    if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
     last_ = constraint_.contact(on);
     if (!last_.touching) return glm::dvec3{0.0};
-    on.normal_force = glm::length(last_.force);
-    on.surface_normal = last_.normal;
-    on.surface_uv = last_.surface_uv;
-    on.surface_tangent = last_.surface_tangent;
-    on.surface_bitangent = last_.surface_bitangent;
-    on.primitive = last_.primitive;
-    on.material = last_.material;
+    tell_contact(on, last_);
     const glm::dvec3 f =
         std::apply([&on, this](auto&... part) { return (last_.force + ... + glm::dvec3(part.force(on))); }, parts_);
     return is_finite(f) ? f : glm::dvec3{0.0};
@@ -97,10 +113,8 @@ class ContactField {
   /// give it; nothing changes. The parts are not run.
   void anticipate(const Probe& next) const noexcept {
     if constexpr (anticipating) {
-      if (!is_finite(next.position)) return;
-      Probe on = next;
-      if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
-      constraint_.anticipate(on);
+      Probe on;
+      if (constraint_probe(next, on)) constraint_.anticipate(on);
     }
   }
   [[nodiscard]] bool looks_ahead() const noexcept {

@@ -68,13 +68,12 @@ class MaterialSurface {
   /// non-finite position.
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept {
     const MaterialMap* map = materials_->acquire();
-    if (!is_finite(probe.position)) {
+    Probe on;
+    if (!constraint_probe(probe, on)) {
       last_ = Contact{};
       held_ = false;
       return glm::dvec3{0.0};
     }
-    Probe on = probe;
-    if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
     if (map != nullptr && held_) apply(map->sample(held_uv_));
     last_ = proxy_.contact(on);
     if (!last_.touching) {
@@ -90,13 +89,7 @@ class MaterialSurface {
     held_ = true;
     held_uv_ = last_.surface_uv;
     if (map != nullptr) vibration_ = map->maps().vibration.at(last_.surface_uv);  // the point touched now
-    on.normal_force = glm::length(last_.force);
-    on.surface_normal = last_.normal;
-    on.surface_uv = last_.surface_uv;
-    on.surface_tangent = last_.surface_tangent;
-    on.surface_bitangent = last_.surface_bitangent;
-    on.primitive = last_.primitive;
-    on.material = last_.material;
+    tell_contact(on, last_);
     const glm::dvec3 t =
         std::apply([&on](auto&... part) { return (glm::dvec3{0.0} + ... + glm::dvec3(part.force(on))); }, textures_);
     const glm::dvec3 f = last_.force + sample_.texture_gain * t;
@@ -106,10 +99,8 @@ class MaterialSurface {
   /// The proxy's look-ahead (core/field.hpp) on the probe force() would
   /// give it; nothing changes.
   void anticipate(const Probe& next) const noexcept {
-    if (!is_finite(next.position)) return;
-    Probe on = next;
-    if (!is_finite(on.velocity)) on.velocity = glm::dvec3{0.0};
-    proxy_.anticipate(on);
+    Probe on;
+    if (constraint_probe(next, on)) proxy_.anticipate(on);
   }
   [[nodiscard]] bool looks_ahead() const noexcept { return proxy_.looks_ahead(); }
 
