@@ -398,7 +398,7 @@ class MeshBvh {
       if (stats) *stats = QueryStats{};
       return BvhHit{};
     }
-    const std::uint32_t seeded = seed.found() && seed.t >= 0.0 && seed.t <= 1.0 ? seed.triangle : no_primitive;
+    const std::uint32_t seeded = usable(seed) ? seed.triangle : no_primitive;
     const BallLeaf leaf{this, radius, seeded};
     if (near == nullptr) return traverse<true>(from, to, radius, stats, leaf, seed);
     QueryStats work;
@@ -598,7 +598,7 @@ class MeshBvh {
     if (triangles_.empty() || !is_finite(from) || !is_finite(d)) return best;
     // a seed's contact ends the move early: nothing past its t is wanted
     double best_t = 1.0;
-    if (seed.found() && seed.t >= 0.0 && seed.t <= 1.0) {
+    if (usable(seed)) {
       best = seed;
       best_t = seed.t;
     }
@@ -622,9 +622,7 @@ class MeshBvh {
                 index, count, work);
     while (reachable) {
       if (++work.nodes > config_.max_nodes) {
-        best = BvhHit{};
-        best.t = 0.0;
-        best.complete = false;
+        best = out_of_budget();
         break;
       }
       if (count > 0) {
@@ -678,10 +676,7 @@ class MeshBvh {
   bool descend(const BvhBox& box, std::uint32_t& index, std::uint32_t& count, QueryStats& work) const noexcept {
     while (count == 0) {
       const BvhNodePair& pair = pairs_[index];
-      std::array<bool, 2> meets{true, true};
-      for (std::size_t k = 0; k < 3; ++k)
-        for (std::size_t c = 0; c < 2; ++c)
-          meets[c] = meets[c] && pair.lo[k][c] <= box.hi[k] && pair.hi[k][c] >= box.lo[k];
+      const std::array<bool, 2> meets{box_meets(pair, 0, box), box_meets(pair, 1, box)};
       if (meets[0] == meets[1]) return meets[0];  // both: the traversal starts here; neither: nothing to meet
       ++work.nodes;
       const std::size_t side = meets[0] ? 0 : 1;
@@ -689,6 +684,20 @@ class MeshBvh {
       count = pair.count[side];
     }
     return true;
+  }
+
+  /// A seed (sweep_sphere) that counts: found, at a t within the move.
+  [[nodiscard]] static bool usable(const BvhHit& seed) noexcept {
+    return seed.found() && seed.t >= 0.0 && seed.t <= 1.0;
+  }
+
+  /// A segment query's answer once its node budget has run out: nothing
+  /// found, and not complete (t = 0: the segment is not known free).
+  [[nodiscard]] static BvhHit out_of_budget() noexcept {
+    BvhHit h;
+    h.t = 0.0;
+    h.complete = false;
+    return h;
   }
 
   /// A triangle as the queries want it: corner a, edges e1 = b - a,
@@ -1042,7 +1051,7 @@ class MeshBvh {
     if (triangles_.empty() || root_.count > 0 || !is_finite(from) || !is_finite(d)) return false;
     double best_t = 1.0;
     best = BvhHit{};
-    if (seed.found() && seed.t >= 0.0 && seed.t <= 1.0) {
+    if (usable(seed)) {
       best = seed;
       best_t = seed.t;
     }
@@ -1070,9 +1079,7 @@ class MeshBvh {
       const BvhNodePair& pair = pairs_[node / 2];
       const std::size_t side = node % 2;
       if (++work.nodes > config_.max_nodes) {
-        best = BvhHit{};
-        best.t = 0.0;
-        best.complete = false;
+        best = out_of_budget();
         return true;
       }
       if (!box_meets(pair, side, box) || (!no_slabs && !node_bounds_[node].may_touch(from, d, radius, best_t)))
