@@ -7,7 +7,10 @@
 //       in a tick is clean against a brute-force scan (MeshChecker);
 //   (c) a probe on the boundary (in a face's plane, on an edge or a vertex)
 //       is not inside: no force beyond k times its distance into the solid
-//       plus a tolerance relative to the triangle's size.
+//       plus a tolerance relative to the triangle's size;
+// and the query the proxy checks its contact with: closest() within a
+// reach answers as a brute-force scan, and as the same tree without its
+// nodes' slabs.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -611,5 +614,65 @@ TEST_CASE("the constructed solids are outward: a positive volume by the divergen
     for (const auto& t : m.triangles)
       volume += glm::dot(m.positions[t[0]], glm::cross(m.positions[t[1]], m.positions[t[2]])) / 6.0;
     CHECK(volume > 0.0);
+  }
+}
+
+TEST_CASE(
+    "closest within a reach (a ball's nearest): the tree with its nodes' slabs answers as without them and as a "
+    "brute-force scan, on constructed meshes and every real model",
+    "[invariant]") {
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Model> models = {{"wavy sheet", test::wavy_sheet(0.1, 120, 0.002, 0.03), true},
+                               {"icosphere", test::icosphere(3, 0.02), true},
+                               {"0.1 mm slab", slab(1e-4), true}};
+  for (Model& m : real_models())
+    models.push_back(std::move(m));
+  for (const Model& m : models) {
+    const MeshBvh tree = MeshBvh::build(m.mesh);
+    MeshBvh boxes = MeshBvh::build(m.mesh);
+    boxes.refit(m.mesh);  // the same tree with its nodes' slabs dropped: boxes alone prune
+    const std::size_t n = m.mesh.triangles.size();
+    double edge = 0.0;  // the mean longest edge [m]
+    for (std::size_t i = 0; i < n; ++i)
+      edge += triangle(m.mesh, i).size / static_cast<double>(n);
+    const int cases = static_cast<int>(2000 * scale());
+    const int brute_every = m.small ? 4 : 40;  // the brute-force scan on a share of the queries
+    int found = 0, scanned = 0;
+    for (int i = 0; i < cases; ++i) {
+      const Triangle t = triangle(m.mesh, rng() % n);
+      if (t.n == glm::dvec3{0.0}) continue;
+      double b1 = u(rng), b2 = u(rng);
+      if (b1 + b2 > 1.0) {
+        b1 = 1.0 - b1;
+        b2 = 1.0 - b2;
+      }
+      // a ball's reach of a quarter to eight edges, from under the surface to well above it
+      const double reach = edge * (0.25 + 8.0 * u(rng) * u(rng));  // [m]
+      const glm::dvec3 p = t.a + b1 * (t.b - t.a) + b2 * (t.c - t.a) + (2.0 * u(rng) - 0.5) * reach * t.n;
+      const BvhHit a = tree.closest(p, reach), b = boxes.closest(p, reach);
+      INFO(m.name << ", query " << i << ", reach " << reach);
+      REQUIRE(a.found() == b.found());
+      if (a.found()) {
+        REQUIRE(a.distance == b.distance);  // the least of the same distances, bit for bit
+        ++found;
+      }
+      if (i % brute_every != 0) continue;
+      ++scanned;
+      double nearest = std::numeric_limits<double>::infinity();  // [m]
+      for (const auto& tri : m.mesh.triangles) {
+        const glm::dvec3 v = m.mesh.positions[tri[0]];
+        double w1 = 0.0, w2 = 0.0;
+        const glm::dvec3 q =
+            detail::closest_on_triangle(p, v, m.mesh.positions[tri[1]] - v, m.mesh.positions[tri[2]] - v, w1, w2);
+        nearest = std::fmin(nearest, glm::length(q - p));
+      }
+      if (std::fabs(nearest - reach) > 1e-9 * reach) REQUIRE(a.found() == (nearest <= reach));
+      if (a.found()) REQUIRE(std::fabs(a.distance - nearest) <= 1e-12 * reach);
+    }
+    INFO(m.name << ": " << found << " of " << cases << " found, " << scanned << " scanned");
+    CHECK(found > cases / 4);
   }
 }

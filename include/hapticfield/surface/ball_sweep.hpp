@@ -67,10 +67,13 @@ namespace hapticfield::detail {
 /// or under an open sheet leaves through it as a point does. A ball that
 /// already overlaps a feature and moves toward it meets it at t = 0. True
 /// when it touches before t_best, which then receives the time, and contact
-/// the touched point of the triangle.
+/// the touched point of the triangle. `circle_tested`: the caller has found
+/// that the ball's cut with the plane may reach the triangle's bounding
+/// circle over [0, t_best] (MeshBvh::TriangleBounds), so that first test of
+/// the edges and corners is not made again.
 [[nodiscard]] inline bool sweep_ball_triangle(const glm::dvec3& a, const glm::dvec3& e1, const glm::dvec3& e2,
                                               const glm::dvec3& from, const glm::dvec3& d, double r, double& t_best,
-                                              glm::dvec3& contact) noexcept {
+                                              glm::dvec3& contact, bool circle_tested = false) noexcept {
   const glm::dvec3 cross = glm::cross(e1, e2);
   // the ball stays r or more on one side of the triangle's plane along the
   // whole move (heights are linear in t): it meets nothing of it
@@ -112,21 +115,23 @@ namespace hapticfield::detail {
   if (h0 <= 0.0 && h1 <= 0.0) return false;
   const double low = h0 > 0.0 && h1 > 0.0 ? (h1 < h0 ? h1 : h0) : 0.0;  // [m] (no NaN here: inline, not fmin)
   if (!(low < r)) return false;
-  const double rho = std::sqrt(r * r - low * low);  // [m]
   const std::array<glm::dvec3, 3> corner{a, a + e1, a + e2};
-  const glm::dvec3 middle = (corner[0] + corner[1] + corner[2]) / 3.0;
-  double reach2 = 0.0;  // the bounding circle's radius, squared [m^2]
-  for (const glm::dvec3& c : corner) {
-    const double to_corner2 = glm::dot(c - middle, c - middle);
-    if (to_corner2 > reach2) reach2 = to_corner2;
+  if (!circle_tested) {
+    const double rho = std::sqrt(r * r - low * low);  // [m]
+    const glm::dvec3 middle = (corner[0] + corner[1] + corner[2]) / 3.0;
+    double reach2 = 0.0;  // the bounding circle's radius, squared [m^2]
+    for (const glm::dvec3& c : corner) {
+      const double to_corner2 = glm::dot(c - middle, c - middle);
+      if (to_corner2 > reach2) reach2 = to_corner2;
+    }
+    const glm::dvec3 to_middle = middle - from + h0 * n;  // from the centre's projection, in the plane
+    const glm::dvec3 slide = d - dn * n;                  // the projected move
+    const double slide2 = glm::dot(slide, slide);
+    const double along = std::clamp(glm::dot(to_middle, slide) / (slide2 > 1e-300 ? slide2 : 1e-300), 0.0, t_best);
+    const glm::dvec3 gap = to_middle - along * slide;
+    const double bound = rho + std::sqrt(reach2);
+    if (glm::dot(gap, gap) > bound * bound) return false;
   }
-  const glm::dvec3 to_middle = middle - from + h0 * n;  // from the centre's projection, in the plane
-  const glm::dvec3 slide = d - dn * n;                  // the projected move
-  const double slide2 = glm::dot(slide, slide);
-  const double along = std::clamp(glm::dot(to_middle, slide) / (slide2 > 1e-300 ? slide2 : 1e-300), 0.0, t_best);
-  const glm::dvec3 gap = to_middle - along * slide;
-  const double bound = rho + std::sqrt(reach2);
-  if (glm::dot(gap, gap) > bound * bound) return false;
   const auto in_front = [&](double t, const glm::dvec3& q) { return glm::dot(from + t * d - q, cross) > 0.0; };
   for (std::size_t k = 0; k < 3; ++k) {
     double t = 0.0;

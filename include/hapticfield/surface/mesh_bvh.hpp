@@ -26,14 +26,18 @@
 /// shared edge or vertex meets one of its triangles, and the tie rule below),
 /// and closest(p, r), the
 /// nearest point within r (the Voronoi-region closest point on a triangle,
-/// Ericson, "Real-Time Collision Detection", 2005, section 5.1.5), and
+/// Ericson, "Real-Time Collision Detection", 2005, section 5.1.5; a node
+/// small against r is also passed by through its slab, NodeBounds, when
+/// every point of it is farther than the nearest found: a ball's reach takes
+/// in the boxes of the smooth surface under it), and
 /// sweep_sphere(from, to, r), a ball's first contact. Each
 /// query visits at most `max_nodes` nodes (its budget); past that it stops
 /// and says so (BvhHit::complete = false). A query first skips its trunk:
 /// the levels where its box meets one child's box only (cheap float tests),
 /// answering as from the root. A ball's sweep may also go through the
 /// caller's Neighbourhood, the leaves around where it swept last, kept from
-/// sweep to sweep: it then tests those leaves alone, with the same answer
+/// sweep to sweep: it then tests those leaves alone (their boxes all at
+/// once, kept in the Neighbourhood axis by axis), with the same answer
 /// (a tie in t goes to the seed, else to the lowest mesh index, however the
 /// triangles are visited).
 ///
@@ -325,6 +329,18 @@ class MeshBvh {
       const double within = std::sqrt(detail::larger(0.0, disk2)) + reach + 4e-8 * r;  // [m]
       return detail::projected_gap2(from, d, normal, middle, h0, dn, t_max) <= within * within;
     }
+
+    /// At most the squared distance from p to the slab's triangles [m^2]:
+    /// they lie in the flat cylinder `thickness` to either side of the
+    /// plane and `reach` across from middle.
+    [[nodiscard]] double distance2_below(const glm::dvec3& p) const noexcept HAPTICFIELD_ALWAYS_INLINE {
+      const glm::dvec3 off = p - middle;
+      const double h = glm::dot(normal, off);  // [m]
+      const glm::dvec3 across = off - h * normal;
+      const double beyond = detail::larger(0.0, std::fabs(h) - thickness);                    // [m]
+      const double aside = detail::larger(0.0, std::sqrt(glm::dot(across, across)) - reach);  // [m]
+      return beyond * beyond + aside * aside;
+    }
   };
 
   /// Builds the hierarchy over `mesh` (validated first).
@@ -367,6 +383,9 @@ class MeshBvh {
     bool fits{false};                                              ///< its leaves fit in `leaves`
     std::uint32_t count{0};                                        ///< leaves held
     std::array<std::uint32_t, bvh_neighbourhood_leaves> leaves{};  ///< 2 pair + side of each leaf (its NodeBounds)
+    /// Each leaf's box, axis by axis (lo[axis][k]: leaf k's minimum), so a
+    /// sweep tests every leaf's at once [m]
+    std::array<std::array<float, bvh_neighbourhood_leaves>, 3> lo{}, hi{};
   };
 
   /// The first contact of a ball of `radius` [m] whose centre moves from
@@ -419,12 +438,13 @@ class MeshBvh {
   /// a + e1, a + e2 (mesh index `id`): when it touches before best_t, best_t
   /// and best (triangle, t, the touched point and its barycentric weights)
   /// take that contact and the answer is true. What sweep_sphere() does at
-  /// every triangle; a seed for it is made the same way.
+  /// every triangle; a seed for it is made the same way. `circle_tested`:
+  /// as sweep_ball_triangle's (the triangle's TriangleBounds passed).
   static bool touch_triangle(const glm::dvec3& a, const glm::dvec3& e1, const glm::dvec3& e2, std::uint32_t id,
-                             const glm::dvec3& from, const glm::dvec3& d, double r, double& best_t,
-                             BvhHit& best) noexcept {
+                             const glm::dvec3& from, const glm::dvec3& d, double r, double& best_t, BvhHit& best,
+                             bool circle_tested = false) noexcept {
     glm::dvec3 contact{0.0};
-    if (!detail::sweep_ball_triangle(a, e1, e2, from, d, r, best_t, contact)) return false;
+    if (!detail::sweep_ball_triangle(a, e1, e2, from, d, r, best_t, contact, circle_tested)) return false;
     best.triangle = id;
     best.t = best_t;
     (void)detail::closest_on_triangle(contact, a, e1, e2, best.b1, best.b2);  // the touched point's weights
@@ -446,6 +466,8 @@ class MeshBvh {
     // (a box more than max_distance away on one axis is farther than that)
     const glm::dvec3 around{std::isfinite(max_distance) ? max_distance : std::numeric_limits<double>::infinity()};
     bool reachable = descend(BvhBox(p - around, p + around), index, count, work);
+    const double reach = std::sqrt(best_d2);  // [m]
+    const bool slabs = !node_bounds_.empty() && std::isfinite(max_distance);
     while (reachable) {
       if (++work.nodes > config_.max_nodes) {
         best.complete = false;
@@ -469,7 +491,13 @@ class MeshBvh {
         }
       } else {
         const BvhNodePair& pair = pairs_[index];
-        const std::array<double, 2> d2 = box_distance2(pair, p);
+        std::array<double, 2> d2 = box_distance2(pair, p);
+        // a small node's slab: nearer bounds for a ball's query, whose reach
+        // takes in the boxes of the smooth surface around it
+        if (slabs)
+          for (std::size_t c = 0; c < 2; ++c)
+            if (d2[c] <= best_d2 && worth_slab(pair, c, reach))
+              d2[c] = detail::larger(d2[c], node_bounds_[2 * std::size_t{index} + c].distance2_below(p));
         const std::size_t near = d2[1] < d2[0] ? 1 : 0, far = 1 - near;
         if (d2[near] <= best_d2) {
           if (d2[far] <= best_d2) stack.push(Pending{pair.index[far], pair.count[far], d2[far]});
@@ -1027,13 +1055,13 @@ class MeshBvh {
     // the same whatever it is asked with, when it meets the triangle sooner)
     if (!(best.found() && tri.id < best.triangle && best.triangle != seeded)) {
       if (bounds_[slot].may_touch(from, d, r, best_t))  // its plane and circle, first
-        (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best);
+        (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best, true);
       return;
     }
     double t = detail::smaller(1.0, best_t + 1e-9 * (best_t + 1e-3));
     if (!bounds_[slot].may_touch(from, d, r, t)) return;
     BvhHit candidate;
-    if (touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, t, candidate) && t <= best_t) {
+    if (touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, t, candidate, true) && t <= best_t) {
       best_t = t;
       best = candidate;
     }
@@ -1073,17 +1101,25 @@ class MeshBvh {
                           glm::max(from, end) + grown + glm::dvec3{8.0 * reach}, length);
     }
     if (!near.fits) return false;
+    // every leaf counts as a node visited
+    work.nodes += near.count;
+    if (work.nodes > config_.max_nodes) {
+      best = out_of_budget();
+      return true;
+    }
+    // the leaves' boxes against the sweep's, all at once
+    std::array<std::uint8_t, bvh_neighbourhood_leaves> meets;  // filled for [0, count) before read
+    for (std::size_t k = 0; k < near.count; ++k)
+      meets[k] = static_cast<std::uint8_t>((near.lo[0][k] <= box.hi[0]) & (near.hi[0][k] >= box.lo[0]) &
+                                           (near.lo[1][k] <= box.hi[1]) & (near.hi[1][k] >= box.lo[1]) &
+                                           (near.lo[2][k] <= box.hi[2]) & (near.hi[2][k] >= box.lo[2]));
     const bool no_slabs = node_bounds_.empty();
     for (std::uint32_t k = 0; k < near.count; ++k) {
+      if (!meets[k]) continue;
       const std::uint32_t node = near.leaves[k];
+      if (!no_slabs && !node_bounds_[node].may_touch(from, d, radius, best_t)) continue;
       const BvhNodePair& pair = pairs_[node / 2];
       const std::size_t side = node % 2;
-      if (++work.nodes > config_.max_nodes) {
-        best = out_of_budget();
-        return true;
-      }
-      if (!box_meets(pair, side, box) || (!no_slabs && !node_bounds_[node].may_touch(from, d, radius, best_t)))
-        continue;
       for (std::uint32_t i = pair.index[side]; i < pair.index[side] + pair.count[side]; ++i) {
         ++work.primitives;
         leaf(i, from, d, best_t, best);
@@ -1122,6 +1158,10 @@ class MeshBvh {
           visit(pair.index[side]);
         } else {
           if (near.count == near.leaves.size()) return;  // too many: not kept
+          for (std::size_t k = 0; k < 3; ++k) {
+            near.lo[k][near.count] = pair.lo[k][side];
+            near.hi[k][near.count] = pair.hi[k][side];
+          }
           near.leaves[near.count++] = node;
         }
       }
