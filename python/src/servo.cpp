@@ -51,6 +51,8 @@ py::dict snapshot_dict(const LoopSnapshot& s) {
   d["compute_p99_s"] = s.compute_p99;
   d["compute_max_s"] = s.compute_max;
   d["peak_force_n"] = s.peak_force;
+  d["look_aheads"] = s.look_aheads;            // ticks anticipated before their deadline (run_servo's anticipate)
+  d["look_aheads_late"] = s.look_aheads_late;  // of those, run past the deadline
   return d;
 }
 
@@ -168,10 +170,12 @@ StopReason run_watched(Loop& loop, Callback& callback, std::uint64_t ticks, Stop
 }
 
 template <Device D, ServoClock C>
-py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, RealTime realtime, StopToken* token) {
+py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, RealTime realtime, bool anticipate,
+                StopToken* token) {
   LoopConfig config;
   config.rate = rate;
   config.realtime = realtime;
+  config.anticipate = anticipate;
   config.recover_after = 0.5;  // [s] fresh states before re-arming after a latch
   const auto ticks = static_cast<std::uint64_t>(std::llround(seconds * rate));
   std::vector<TraceRow> rows;
@@ -238,8 +242,8 @@ py::dict run_on(D& device, C& clock, Field& field, double seconds, double rate, 
 /// simulated one held by the scripted hand.
 template <ServoClock C>
 py::dict run_device(const DeviceSpec& spec, C& clock, Field& field, double seconds, double rate, RealTime rt,
-                    const std::string& hand, const V3& hand_centre, double hand_size, double hand_speed,
-                    StopToken* token) {
+                    bool anticipate, const std::string& hand, const V3& hand_centre, double hand_size,
+                    double hand_speed, StopToken* token) {
   DeviceOptions options;
   options.now = [&clock] { return clock.now(); };
   if (spec.simulated) {
@@ -247,7 +251,7 @@ py::dict run_device(const DeviceSpec& spec, C& clock, Field& field, double secon
     options.hand.path.validate();
   }
   AnyDevice arm = open_device(spec, options);
-  return run_on(arm, clock, field, seconds, rate, rt, token);
+  return run_on(arm, clock, field, seconds, rate, rt, anticipate, token);
 }
 
 /// A device string checked by the front door; a bad one is a ValueError
@@ -263,7 +267,7 @@ DeviceSpec device_spec(const std::string& device) {
 py::dict run_servo(Field& field, double seconds, double rate, const std::string& device, const std::string& hand,
                    const V3& hand_centre, double hand_size, double hand_speed, const std::string& realtime,
                    bool confirm_hardware, const std::optional<std::string>& clock_name,
-                   const std::shared_ptr<StopToken>& stop) {
+                   const std::shared_ptr<StopToken>& stop, bool anticipate) {
   const DeviceSpec spec = device_spec(device);
   const bool real_arm = !spec.simulated;
   // The simulated arm runs on the virtual clock unless told otherwise: what a run renders is then the same on
@@ -312,7 +316,8 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
       }
     } lockstep(field.guards);
     VirtualClock clock;
-    return run_device(spec, clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
+    return run_device(spec, clock, field, seconds, rate, rt, anticipate, hand, hand_centre, hand_size, hand_speed,
+                      stop.get());
   }
   // Every simulator the field is made of (a MuJoCo scene) steps on its own thread in real time for the run.
   struct RealTimeSimulators {
@@ -327,7 +332,8 @@ py::dict run_servo(Field& field, double seconds, double rate, const std::string&
     }
   } simulators(field.guards);
   SteadyClock clock;
-  return run_device(spec, clock, field, seconds, rate, rt, hand, hand_centre, hand_size, hand_speed, stop.get());
+  return run_device(spec, clock, field, seconds, rate, rt, anticipate, hand, hand_centre, hand_size, hand_speed,
+                    stop.get());
 }
 
 }  // namespace
@@ -355,8 +361,10 @@ void bind_servo(py::module_& m) {
         py::arg("device") = "sim", py::arg("hand") = "raster", py::arg("hand_centre") = V3{0.0, 0.0, -0.008},
         py::arg("hand_size") = 0.06, py::arg("hand_speed") = 0.06, py::arg("realtime") = "off",
         py::arg("confirm_hardware") = false, py::arg("clock") = py::none(), py::arg("stop") = py::none(),
+        py::arg("anticipate") = true,
         "Runs the 1 kHz servo loop (absolute deadlines, the safety chain) on a field for seconds [s] at rate [Hz] "
-        "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N]), trace "
+        "and returns a dict: statistics (rate, periods [s], deadlines, safety events, peak force [N], look_aheads and "
+        "look_aheads_late: ticks anticipated, and run past their deadline), trace "
         "(one row a tick: t [s], position N x 3 [m], force N x 3 [N] as that tick commanded after the safety chain, "
         "homed and armed N booleans: the tick's device state, False before homing / arming), period_histogram "
         "(counts per histogram_bin_s), stop_reason, final_force (the last force written to the arm [N], the stop's "
@@ -376,7 +384,10 @@ void bind_servo(py::module_& m) {
         "stop: a ServoStop token another thread can request() to end the run (stop_reason 'requested'). Ctrl-C "
         "(any exception a signal handler raises) stops the loop within a few ms with zero force and is then "
         "raised, the result attached as its `result` attribute (stop_reason 'interrupted'): "
-        "`except KeyboardInterrupt as e: run = e.result`.");
+        "`except KeyboardInterrupt as e: run = e.result`. anticipate (default True): before each deadline a "
+        "shape's proxy runs the coming tick on a copy, on the last position moved one period by its velocity, "
+        "so that the part of the mesh it reads is in cache when the tick runs (LoopConfig::anticipate); the "
+        "forces are the same without it, only the tick's time differs.");
   m.def(
       "list_devices",
       [] {

@@ -147,3 +147,20 @@ def test_a_ball_on_height_fields_depth_maps_and_reliefs_rests_r_above_them(tmp_p
     assert c["touching"][-1]
     assert c["proxy"][-1][2] == pytest.approx(0.001 + r, rel=1e-6)
     hf.surface_contact(hf.plane_surface(), radius=0.05)
+
+
+@pytest.mark.parametrize("r", [0.0, 0.0005])
+def test_the_look_ahead_leaves_the_forces_unchanged_and_can_be_switched_off(r):
+    # a ball (or the point) slid over a box's top with friction: the same run with the loop's look-ahead
+    # (the default) and without it renders the same forces, bit for bit; only the first anticipates ticks
+    vertices, faces = box((-0.04, -0.04, -0.05), (0.04, 0.04, -0.01))
+    field = hf.surface_contact(hf.mesh_surface_from_arrays(vertices, faces), radius=r, stiffness=K, damping=0.5,
+                               static_friction=0.5, dynamic_friction=0.4)
+    runs = [hf.run_servo(field, seconds=2.0, hand="circle", hand_centre=(0.0, 0.0, -0.012), hand_size=0.03,
+                         anticipate=anticipate) for anticipate in (True, False)]
+    ahead, plain = runs
+    touching = np.linalg.norm(plain["trace"]["force"], axis=1) > 0.5
+    assert touching.sum() > 500  # pressed into the top for most of the run [N]
+    assert np.array_equal(ahead["trace"]["force"], plain["trace"]["force"])
+    assert np.array_equal(ahead["trace"]["position"], plain["trace"]["position"])
+    assert ahead["statistics"]["look_aheads"] > 1000 and plain["statistics"]["look_aheads"] == 0
