@@ -1107,12 +1107,15 @@ class MeshBvh {
       best = out_of_budget();
       return true;
     }
-    // the leaves' boxes against the sweep's, all at once
+    // the leaves' boxes against the sweep's, all at once (each test a 0 or
+    // a 1, and'ed without a branch, so that the loop runs several leaves at
+    // a time)
     std::array<std::uint8_t, bvh_neighbourhood_leaves> meets;  // filled for [0, count) before read
+    const auto bit = [](bool b) noexcept { return static_cast<unsigned>(b); };
     for (std::size_t k = 0; k < near.count; ++k)
-      meets[k] = static_cast<std::uint8_t>((near.lo[0][k] <= box.hi[0]) & (near.hi[0][k] >= box.lo[0]) &
-                                           (near.lo[1][k] <= box.hi[1]) & (near.hi[1][k] >= box.lo[1]) &
-                                           (near.lo[2][k] <= box.hi[2]) & (near.hi[2][k] >= box.lo[2]));
+      meets[k] = static_cast<std::uint8_t>(bit(near.lo[0][k] <= box.hi[0]) & bit(near.hi[0][k] >= box.lo[0]) &
+                                           bit(near.lo[1][k] <= box.hi[1]) & bit(near.hi[1][k] >= box.lo[1]) &
+                                           bit(near.lo[2][k] <= box.hi[2]) & bit(near.hi[2][k] >= box.lo[2]));
     const bool no_slabs = node_bounds_.empty();
     for (std::uint32_t k = 0; k < near.count; ++k) {
       if (!meets[k]) continue;
