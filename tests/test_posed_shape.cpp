@@ -197,6 +197,18 @@ TEST_CASE("random poses: a posed mesh answers like the mesh moved vertex by vert
           CHECK(std::fabs(w.t - v.t) < 1e-9);
           if (w.primitive == v.primitive) CHECK(distance(w.point, v.point) < 1e-9);  // else a tie at the same t
         }
+        // with the cache and a plane the move slides along (a world
+        // direction, turned into the mesh's frame): the posed answer as it was
+        MeshShape::SweepCache cache;
+        const glm::dvec3 slide = glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
+        const Hit x = posed.sweep_sphere(p, q, r, &stats, hint, &cache, &slide);
+        const Hit y = posed.sweep_sphere(p, q, r, &stats, hint);
+        REQUIRE(x.found() == y.found());
+        if (x.found()) {
+          CHECK(x.t == y.t);
+          CHECK(x.primitive == y.primitive);
+          CHECK(x.point == y.point);
+        }
       }
       // the proxy on both, along a random stroke across the shape: the same forces
       ProxyConstraint a(posed, ProxyConfig{1500.0, 0.0, 0.3, 0.2});

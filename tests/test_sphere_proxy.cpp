@@ -578,6 +578,25 @@ TEST_CASE(
         REQUIRE(tree.triangle == plain.triangle);
         REQUIRE(tree.t == plain.t);
       }
+      // told a plane the move slides along (sweep_sphere's `slide`: the start face's normal, as the proxy's
+      // slides give it, or any direction), the sweep passes by what lies out of the ball's reach behind it
+      // and answers the same, bit for bit, through the tree and through the Neighbourhood
+      const glm::dvec3 slide =
+          i % 3 == 0 ? n : glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
+      MeshBvh::Neighbourhood slide_near;
+      for (MeshBvh::Neighbourhood* through : {static_cast<MeshBvh::Neighbourhood*>(nullptr), &slide_near}) {
+        const BvhHit along = bvh.sweep_sphere(from, to, r, nullptr, seeded, through, &slide);
+        INFO("with the slide plane " << (i % 3 == 0 ? "of the start face" : "at random")
+                                     << (through ? ", through a Neighbourhood" : "") << ": t " << along.t << " (found "
+                                     << along.found() << ")");
+        REQUIRE(along.found() == tree.found());
+        REQUIRE(along.complete == tree.complete);
+        if (tree.found()) {
+          REQUIRE(along.triangle == tree.triangle);
+          REQUIRE(along.t == tree.t);
+          REQUIRE(along.contact_point == tree.contact_point);
+        }
+      }
       // through the Neighbourhood: this sweep, then one from a little way off (inside the region it gathered)
       const glm::dvec3 nearby = from + 0.05 * r * glm::dvec3{u(rng), u(rng), u(rng)};
       for (const glm::dvec3& start_at : {from, nearby}) {

@@ -39,7 +39,10 @@
 /// sweep to sweep: it then tests those leaves alone (their boxes all at
 /// once, kept in the Neighbourhood axis by axis), with the same answer
 /// (a tie in t goes to the seed, else to the lowest mesh index, however the
-/// triangles are visited).
+/// triangles are visited). A ball's sweep told the plane it slides along
+/// passes by, without their full test, the triangles wholly out of its reach
+/// behind that plane: the face under a sliding ball, and the surface curving
+/// away below it.
 ///
 /// Ties (a segment that meets a triangle on its boundary: within
 /// bvh_tie_band of an edge or a vertex, relative to the triangle). The solid
@@ -410,15 +413,32 @@ class MeshBvh {
   /// `near`, when given, is the caller's Neighbourhood: a short sweep
   /// inside its region tests the region's leaves alone, one outside it
   /// gathers a new region first; the answer is the same.
+  ///
+  /// `slide`, when given, is a unit normal the move runs along (a plane the
+  /// ball slides on): the ball never comes within r of a point more than r
+  /// behind the plane through the move's lower end along it, so a triangle
+  /// wholly behind that (the face under a ball that slides over it, and the
+  /// surface curving away below) is passed by without its full test. Any
+  /// unit normal gives the same answer; it saves work where the surface
+  /// under the move lies behind it.
   [[nodiscard]] BvhHit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
                                     QueryStats* stats = nullptr, const BvhHit& seed = BvhHit{},
-                                    Neighbourhood* near = nullptr) const noexcept {
+                                    Neighbourhood* near = nullptr, const glm::dvec3* slide = nullptr) const noexcept {
     if (!(radius > 0.0) || !std::isfinite(radius)) {
       if (stats) *stats = QueryStats{};
       return BvhHit{};
     }
     const std::uint32_t seeded = usable(seed) ? seed.triangle : no_primitive;
-    const BallLeaf leaf{this, radius, seeded};
+    BallLeaf leaf{this, radius, seeded};
+    if (slide != nullptr && is_finite(*slide)) {
+      // less a few rounding units of the coordinates, so that only a triangle
+      // clearly out of reach is passed by (the full test's own rounding)
+      const double coordinate = detail::larger(largest_component(from), largest_component(to));  // [m]
+      const double rounding = 16.0 * std::numeric_limits<double>::epsilon() * (coordinate + radius);
+      leaf.slides = true;
+      leaf.slide = *slide;
+      leaf.behind = detail::smaller(glm::dot(*slide, from), glm::dot(*slide, to)) - radius - rounding;
+    }
     if (near == nullptr) return traverse<true>(from, to, radius, stats, leaf, seed);
     QueryStats work;
     BvhHit best;
@@ -1034,32 +1054,45 @@ class MeshBvh {
   /// it (always inlined there: it is their innermost step).
   struct BallLeaf {
     const MeshBvh* bvh;
-    double radius;         ///< [m]
-    std::uint32_t seeded;  ///< the seed's mesh index (no_primitive: none)
+    double radius;          ///< [m]
+    std::uint32_t seeded;   ///< the seed's mesh index (no_primitive: none)
+    bool slides{false};     ///< the move runs along `slide` (sweep_sphere's)
+    glm::dvec3 slide{0.0};  ///< unit
+    double behind{0.0};     ///< points q with slide . q below this are out of the ball's reach [m]
     void operator()(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double& best_t,
                     BvhHit& best) const noexcept HAPTICFIELD_ALWAYS_INLINE {
-      bvh->touch(slot, from, d, radius, seeded, best_t, best);
+      bvh->touch(slot, from, d, *this, best_t, best);
     }
   };
+
+  /// True when the triangle lies wholly behind the plane a sliding ball
+  /// cannot reach past (BallLeaf::behind): its corners all below it.
+  [[nodiscard]] static bool out_of_reach(const Triangle& tri, const BallLeaf& ball) noexcept HAPTICFIELD_ALWAYS_INLINE {
+    const double a = glm::dot(ball.slide, tri.a);  // [m]
+    const double rise = detail::larger(0.0, detail::larger(glm::dot(ball.slide, tri.e1), glm::dot(ball.slide, tri.e2)));
+    return a + rise < ball.behind;
+  }
 
   /// The swept ball (centre from + t d, radius r) against one triangle:
   /// the earliest contact with its face (front only), its edges or its
   /// corners, kept when t < best_t, or when t = best_t and the triangle's
   /// mesh index is lower than best's, unless best is the seed (mesh index
   /// `seeded`) (sweep_sphere()).
-  void touch(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double r, std::uint32_t seeded,
-             double& best_t, BvhHit& best) const noexcept HAPTICFIELD_ALWAYS_INLINE {
+  void touch(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, const BallLeaf& ball, double& best_t,
+             BvhHit& best) const noexcept HAPTICFIELD_ALWAYS_INLINE {
     const Triangle& tri = triangles_[slot];
+    const double r = ball.radius;
     // a tie may take best: asked a little past best_t, whose own tests count
     // a ball that just touches there as clear (sweep_ball_triangle answers
     // the same whatever it is asked with, when it meets the triangle sooner)
-    if (!(best.found() && tri.id < best.triangle && best.triangle != seeded)) {
-      if (bounds_[slot].may_touch(from, d, r, best_t))  // its plane and circle, first
+    if (!(best.found() && tri.id < best.triangle && best.triangle != ball.seeded)) {
+      if (bounds_[slot].may_touch(from, d, r, best_t) &&  // its plane and circle, first
+          !(ball.slides && out_of_reach(tri, ball)))
         (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best, true);
       return;
     }
     double t = detail::smaller(1.0, best_t + 1e-9 * (best_t + 1e-3));
-    if (!bounds_[slot].may_touch(from, d, r, t)) return;
+    if (!bounds_[slot].may_touch(from, d, r, t) || (ball.slides && out_of_reach(tri, ball))) return;
     BvhHit candidate;
     if (touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, t, candidate, true) && t <= best_t) {
       best_t = t;

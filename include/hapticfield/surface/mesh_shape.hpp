@@ -123,9 +123,13 @@ class MeshShape {
   /// `cache`, when given, is the caller's region of the tree, kept between
   /// its sweeps (MeshBvh::Neighbourhood): short sweeps inside it skip the
   /// walk down the tree. The answer is the same with or without it.
+  ///
+  /// `slide`, when given, is the unit normal of a plane the move runs along
+  /// (MeshBvh::sweep_sphere's): triangles behind the ball's reach below it
+  /// are passed by. The answer is the same with or without it.
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
                                  QueryStats* stats = nullptr, std::uint32_t hint = no_primitive,
-                                 SweepCache* cache = nullptr) const noexcept {
+                                 SweepCache* cache = nullptr, const glm::dvec3* slide = nullptr) const noexcept {
     BvhHit seed;
     const TriangleMesh& m = data_->mesh;
     if (hint < m.triangles.size() && radius > 0.0 && std::isfinite(radius)) {
@@ -134,7 +138,7 @@ class MeshShape {
       double t = 1.0;
       (void)MeshBvh::touch_triangle(a, e1, e2, hint, from, to - from, radius, t, seed);
     }
-    const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats, seed, cache);
+    const BvhHit h = data_->bvh.sweep_sphere(from, to, radius, stats, seed, cache, slide);
     Hit out = describe(h);
     out.t = h.t;
     if (!h.found()) return out;

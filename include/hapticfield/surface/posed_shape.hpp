@@ -151,8 +151,8 @@ struct Pose {
 /// go into the shape's frame, the inner shape answers, and the Hit comes
 /// back through Pose::hit_to_world. Each query exists only where the inner
 /// shape has it, so the proxy sees the same optional queries through the
-/// wrapper: the QueryStats* forms, sweep_sphere (with the primitive hint
-/// MeshShape takes), on_primitive(), flat_primitives and
+/// wrapper: the QueryStats* forms, sweep_sphere (with the primitive hint,
+/// the cache and the slide plane MeshShape takes), on_primitive(), flat_primitives and
 /// closest_matches_sweep.
 template <class Placed, Shape S>
 class PosedQueries {
@@ -208,6 +208,19 @@ class PosedQueries {
     s.sweep_sphere(from, to, radius, stats, hint, cache);
   }
   { return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache)); }
+  /// And the unit normal of a plane the move runs along, where the inner
+  /// shape takes one (MeshShape::sweep_sphere's `slide`), turned into its
+  /// frame.
+  [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius, QueryStats* stats,
+                                 std::uint32_t hint, SweepCache* cache, const glm::dvec3* slide) const noexcept requires
+      requires(const S& s) {
+    s.sweep_sphere(from, to, radius, stats, hint, cache, slide);
+  }
+  {
+    if (slide == nullptr) return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache));
+    const glm::dvec3 along = static_cast<const Placed&>(*this).pose().vector_to_local(*slide);
+    return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache, &along));
+  }
 
   /// The point of one primitive nearest to p, where the inner shape answers
   /// for one primitive.

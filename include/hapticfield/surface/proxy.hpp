@@ -320,7 +320,7 @@ class ProxyConstraint {
         } else if (tick_.nodes < config_.tick_node_budget) {  // (else the tick's budget is spent: frictionless)
           bool replanned = false;  // the proxy ends where `back` has it, on other planes than the frictionless motion's
           Motion back{frictionless};
-          const Hit h = sweep(frictionless, candidate);
+          const Hit h = sweep(frictionless, candidate, &planes.normal[0]);
           ++tick_.moves;
           if (h.complete && !h.found()) {
             // held where it is still on the surface; a plane's extension
@@ -637,7 +637,7 @@ class ProxyConstraint {
       // along the surface (a flick, a jump of the HIP): the full tick
       if (length > std::fmax(depth, config_.radius)) return FrictionFirst::full;
       if (length > planes.tolerance) {
-        const Hit h = sweep(proxy_, x);
+        const Hit h = sweep(proxy_, x, &planes.normal[0]);
         ++tick_.moves;
         if (!h.complete) return FrictionFirst::full;
         if (h.found()) {  // the surface rises ahead: the constrained motion goes on from where it met it
@@ -687,7 +687,7 @@ class ProxyConstraint {
           m.blocked = true;
           break;
         }
-        const Hit h = sweep(m.x, target);
+        const Hit h = sweep(m.x, target, m.planes.count > 0 ? &m.planes.normal[0] : nullptr);
         ++tick_.moves;
         if (!h.complete) {
           m.blocked = true;
@@ -979,20 +979,28 @@ class ProxyConstraint {
 
   /// shape_.first_hit (a point) or shape_.sweep_sphere (a ball of the
   /// tool's radius), counting the nodes it visits when the shape can.
-  [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to) noexcept {
+  /// `slide`: the normal of a plane the move runs along (the ball slides on
+  /// it), for a shape that passes by what lies behind the ball's reach
+  /// (MeshShape::sweep_sphere's); the answer is the same without it.
+  [[nodiscard]] Hit sweep(const glm::dvec3& from, const glm::dvec3& to,
+                          [[maybe_unused]] const glm::dvec3* slide = nullptr) noexcept {
     if constexpr (sweeps_spheres) {
       if (config_.radius > 0.0) {
-        if constexpr (requires(QueryStats * q, SweepCache * c) {
-                        shape_.sweep_sphere(from, to, 1.0, q, std::uint32_t{0}, c);
-                      }) {
-          QueryStats q;  // and the shape's region of the last sweeps, kept (MeshShape::sweep_sphere's cache)
-          const Hit h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_, &sweep_cache_);
-          tick_.nodes += q.nodes;
-          if (h.found()) hint_ = h.primitive;
-          return h;
-        } else if constexpr (requires(QueryStats * q) { shape_.sweep_sphere(from, to, 1.0, q, std::uint32_t{0}); }) {
-          QueryStats q;  // the primitive met last is tried first (MeshShape::sweep_sphere's hint)
-          const Hit h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_);
+        if constexpr (requires(QueryStats * q, std::uint32_t hint) { shape_.sweep_sphere(from, to, 1.0, q, hint); }) {
+          // the primitive met last is tried first (MeshShape::sweep_sphere's
+          // hint), and the shape's region of the last sweeps kept (its cache)
+          QueryStats q;
+          Hit h;
+          if constexpr (requires(QueryStats * s, SweepCache * c, const glm::dvec3* n) {
+                          shape_.sweep_sphere(from, to, 1.0, s, std::uint32_t{0}, c, n);
+                        })
+            h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_, &sweep_cache_, slide);
+          else if constexpr (requires(QueryStats * s, SweepCache * c) {
+                               shape_.sweep_sphere(from, to, 1.0, s, std::uint32_t{0}, c);
+                             })
+            h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_, &sweep_cache_);
+          else
+            h = shape_.sweep_sphere(from, to, config_.radius, &q, hint_);
           tick_.nodes += q.nodes;
           if (h.found()) hint_ = h.primitive;
           return h;
