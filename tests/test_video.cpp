@@ -1897,6 +1897,102 @@ TEST_CASE("a worker late past its hold: the force fades out and back in, never a
   }
 }
 
+TEST_CASE("a cut window the worker publishes already past its hold stays silent; the new scene comes back over T/2",
+          "[video][fade][stall]") {
+  const double fps = 25.0, fade = 0.1, dt = 1e-3, half = 0.5 * fade;
+  const PlaneMapping mapping(1.0, glm::dvec2{32.0, 24.0});  // 1 px/mm, centred
+  // 60 frames (2.4 s): a ramp along x up to frame 19, along y from frame
+  // 20 (a cut at 0.8 s). The cut's window, (20, 21), is the one that fades
+  // the old scene out and the new one in.
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 60; ++k)
+    frames.push_back(k >= 20 ? axis_ramp(true, 1.5) : axis_ramp(false, 0.8));
+  const std::string seq = write_sequence("stale_cut", frames);
+  // The worker is held before it prepares frame 21 (so the cut's window
+  // is not out), then, once let go, before the next frame it prepares.
+  std::atomic<bool> hold{true}, holding{false}, hold_next{true}, holding_next{false};
+  VideoFieldConfig config;
+  config.prepare = plain_config(5);
+  config.fade = fade;
+  config.before_prepare = [&](long k) {
+    while (k == 21 && hold.load()) {
+      holding.store(true);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    while (k > 21 && hold_next.load()) {
+      holding_next.store(true);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  };
+  VideoField field(std::make_unique<VideoSource>(seq, VideoSourceConfig{.fallback_fps = fps}), mapping, config);
+  const Release release{hold}, release_next{hold_next};
+  Probe probe;
+  probe.position = {4e-3, -3e-3, 0.0};
+  const glm::dvec2 px = mapping.to_image(probe.position);
+  const double new_scene =
+      glm::length(mapping.vector_to_device(still(frames[30], config.prepare.tangible).at(px.x, px.y)));
+  REQUIRE(new_scene > 1e-3);
+  REQUIRE(glm::length(still(frames[0], config.prepare.tangible).at(px.x, px.y)) > 1e-3);
+  double t = 0.0;
+  const auto tick = [&] {
+    probe.time = t;
+    t += dt;
+    return field.force(probe);
+  };
+  // In lockstep up to 0.78 s: window (19, 20) is out, the worker holds at 21.
+  field.set_lockstep(true);
+  for (int i = 0; i < 780; ++i)
+    (void)tick();
+  for (int i = 0; i < 20000 && !holding.load(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  REQUIRE(holding.load());
+  // Played on without lockstep to 2 s: window (19, 20) goes stale at 1.3 s
+  // and its force fades out to zero.
+  field.set_lockstep(false);
+  glm::dvec3 f{1.0};
+  for (int i = 780; i < 2000; ++i)
+    f = tick();
+  REQUIRE(f == glm::dvec3{0.0});
+  // Let the worker prepare frame 21: it publishes the cut's window (20,
+  // 21), held only until 1.34 s, and holds before its next frame. That
+  // window is felt stale from its first tick: the force stays zero (the
+  // cut enters at its silent middle, and nothing is present).
+  hold.store(false);
+  for (int i = 0; i < 20000 && !holding_next.load(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  REQUIRE(holding_next.load());
+  const long cuts_seen = static_cast<long>(field.cuts().size());
+  double worst_stale = 0.0;
+  for (int i = 0; i < 200; ++i) {
+    const long stale = field.statistics().stale;
+    worst_stale = std::max(worst_stale, glm::length(tick()));
+    CHECK(field.statistics().stale == stale + 1);  // every one of these ticks felt a stale window
+  }
+  CHECK(cuts_seen == 1);
+  CHECK(worst_stale == 0.0);
+  // Let it go on, in lockstep: a window due now comes, and the new scene
+  // (along y) fades in over T/2 from zero, never a step; the old one
+  // (along x) is never felt again.
+  hold_next.store(false);
+  field.set_lockstep(true);
+  const double ramp = dt / half;  // the most presence moves in one tick
+  glm::dvec3 before{0.0};
+  double worst_jump = 0.0, worst_x = 0.0, last = 0.0;
+  for (int i = 0; i < 200; ++i) {
+    const glm::dvec3 g = tick();
+    worst_jump = std::max(worst_jump, glm::length(g - before) - (ramp * new_scene + 1e-12));
+    worst_x = std::max(worst_x, std::abs(g.x));
+    before = g;
+    last = glm::length(g);
+  }
+  CAPTURE(worst_jump, worst_x, last, new_scene);
+  CHECK(worst_jump <= 0.0);
+  CHECK(worst_x == 0.0);
+  CHECK(last == Approx(new_scene).epsilon(1e-9));  // the new scene, whole
+  CHECK(field.error().empty());
+  field.stop();
+}
+
 TEST_CASE("cuts in the first half of the last fade (one- and two-frame flashes at 4x): the scene before fades on",
           "[video][fade]") {
   const double fps = 25.0, fade = 0.1, dt = 1e-3, rate = 4.0, half = 0.5 * fade;
