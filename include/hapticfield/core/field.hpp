@@ -36,12 +36,13 @@ void reset_if_stateful(F& field) noexcept {
 
 /// A field that can look ahead: `anticipate(probe)` runs, on a scratch copy
 /// of its state, the tick the probe would make, and changes nothing the
-/// next force() depends on. What it gains is the memory that tick reads,
+/// next force() returns. What it gains is the memory that tick reads,
 /// brought into cache before the tick comes (a proxy on a large mesh: its
-/// tree's nodes and triangles where the HIP is going). The servo loop calls
-/// it in the slack before each deadline (LoopConfig::anticipate). Like
-/// force(): no allocation, lock, exception or I/O, and no effect on anything
-/// the next force() reads.
+/// tree's nodes and triangles where the HIP is going), and what the field
+/// caches for itself, kept (a ball proxy's region of the tree). The servo
+/// loop calls it in the slack before each deadline (LoopConfig::anticipate),
+/// on the loop's thread. Like force(): no allocation, lock, exception or
+/// I/O, and no effect on any answer of the next force().
 /// `looks_ahead()` says whether anticipate() does anything (a wrapper's
 /// answer is its parts'): a loop makes room for it only then. LooksAhead is
 /// the pair alone, for what is not a field (a constraint, a loop callback).

@@ -86,8 +86,10 @@
 /// and drops it: the servo loop calls it in the slack before each
 /// deadline, so the tree's nodes and triangles the coming tick reads are in
 /// cache when it runs (after 1 ms asleep a tick otherwise meets many of
-/// them in memory: docs/surfaces.md, Cost). Static shapes whose queries
-/// change nothing (PureQueries) only.
+/// them in memory: docs/surfaces.md, Cost). A ball keeps the region of the
+/// tree the copy's sweeps gathered (its sweep cache, whose use never
+/// changes an answer), so the tick does not gather it again. Static shapes
+/// whose queries change nothing (PureQueries) only.
 
 #include <algorithm>
 #include <array>
@@ -379,15 +381,20 @@ class ProxyConstraint {
   [[nodiscard]] glm::dvec3 force(const Probe& probe) noexcept { return contact(probe).force; }
 
   /// The tick `next` would make, run on a copy of this proxy and dropped:
-  /// nothing here changes, but the tree nodes and triangles that tick reads
-  /// are in cache when it comes (core/field.hpp, AnticipatingField). Only
-  /// on a shape that stands still (no advance(): a moving shape's would
-  /// take its pose feed's newest pose) and whose queries change nothing
+  /// no answer of the next tick changes, but the tree nodes and triangles
+  /// that tick reads are in cache when it comes (core/field.hpp,
+  /// AnticipatingField). A ball keeps the copy's sweep cache (a mesh's
+  /// region of the tree, gathered where the copy swept): the tick answers
+  /// the same with any region, and where it sweeps as the copy did it does
+  /// not gather one again (its ProxyTick::nodes count fewer). Only on a
+  /// shape that stands still (no advance(): a moving shape's would take its
+  /// pose feed's newest pose) and whose queries change nothing
   /// (PureQueries); on any other, nothing is done.
   void anticipate(const Probe& next) const noexcept {
     if constexpr (anticipates) {
       ProxyConstraint scratch(*this);
       (void)scratch.contact(next);
+      if (config_.radius > 0.0) sweep_cache_ = scratch.sweep_cache_;
     }
   }
   /// True when anticipate() does something (the shape stands still and is
@@ -1090,7 +1097,9 @@ class ProxyConstraint {
   Hit face_{};                        ///< a deforming shape's face the proxy touched last tick
   std::uint32_t hint_{no_primitive};  ///< the primitive a ball's sweep met last, tried first by the next
   using SweepCache = SweepCacheOf<S>;
-  SweepCache sweep_cache_{};  ///< what the shape keeps between a ball's sweeps (MeshShape: its region of the tree)
+  /// What the shape keeps between a ball's sweeps (MeshShape: its region of
+  /// the tree); a cache: anticipate() may leave its copy's here.
+  mutable SweepCache sweep_cache_{};
   ProxyTick tick_{};
   ProxyPath path_{};
 };
