@@ -66,6 +66,16 @@ double distance_to(const TriangleMesh& mesh, std::size_t j, const glm::dvec3& p)
   return glm::length(p - detail::closest_on_triangle(p, a, corner(mesh, j, 1) - a, corner(mesh, j, 2) - a, b1, b2));
 }
 
+/// Two answers of the same sweep asked two ways: the same, bit for bit.
+void require_same_hit(const BvhHit& asked, const BvhHit& reference) {
+  REQUIRE(asked.found() == reference.found());
+  REQUIRE(asked.complete == reference.complete);
+  if (!reference.found()) return;
+  REQUIRE(asked.triangle == reference.triangle);
+  REQUIRE(asked.t == reference.t);
+  REQUIRE(asked.contact_point == reference.contact_point);
+}
+
 }  // namespace
 
 TEST_CASE("a ball on a plane rests its radius above it, Fc = k (r - height of the HIP)", "[radius]") {
@@ -579,23 +589,19 @@ TEST_CASE(
         REQUIRE(tree.t == plain.t);
       }
       // told a plane the move slides along (sweep_sphere's `slide`: the start face's normal, as the proxy's
-      // slides give it, or any direction), the sweep passes by what lies out of the ball's reach behind it
-      // and answers the same, bit for bit, through the tree and through the Neighbourhood
+      // slides give it, or any direction, of any length), the sweep passes by what lies out of the ball's
+      // reach behind it and answers the same, bit for bit, through the tree and through the Neighbourhood
       const glm::dvec3 slide =
-          i % 3 == 0 ? n : glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
+          i % 3 == 0 ? n
+                     : (i % 3 == 1 ? 1.0 : 3.0 * unit() + 1e-3) *
+                           glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
       MeshBvh::Neighbourhood slide_near;
       for (MeshBvh::Neighbourhood* through : {static_cast<MeshBvh::Neighbourhood*>(nullptr), &slide_near}) {
         const BvhHit along = bvh.sweep_sphere(from, to, r, nullptr, seeded, through, &slide);
-        INFO("with the slide plane " << (i % 3 == 0 ? "of the start face" : "at random")
-                                     << (through ? ", through a Neighbourhood" : "") << ": t " << along.t << " (found "
-                                     << along.found() << ")");
-        REQUIRE(along.found() == tree.found());
-        REQUIRE(along.complete == tree.complete);
-        if (tree.found()) {
-          REQUIRE(along.triangle == tree.triangle);
-          REQUIRE(along.t == tree.t);
-          REQUIRE(along.contact_point == tree.contact_point);
-        }
+        INFO("with the slide plane " << (i % 3 == 0 ? "of the start face" : "at random") << ", |normal| "
+                                     << glm::length(slide) << (through ? ", through a Neighbourhood" : "") << ": t "
+                                     << along.t << " (found " << along.found() << ")");
+        require_same_hit(along, tree);
       }
       // through the Neighbourhood: this sweep, then one from a little way off (inside the region it gathered)
       const glm::dvec3 nearby = from + 0.05 * r * glm::dvec3{u(rng), u(rng), u(rng)};
@@ -609,13 +615,7 @@ TEST_CASE(
         served += inside ? 1 : 0;
         INFO("through the Neighbourhood, from " << (start_at == from ? "the start" : "nearby") << ": t " << local.t
                                                 << " (found " << local.found() << ", inside " << inside << ")");
-        REQUIRE(local.found() == whole.found());
-        REQUIRE(local.complete == whole.complete);
-        if (whole.found()) {
-          REQUIRE(local.triangle == whole.triangle);
-          REQUIRE(local.t == whole.t);
-          REQUIRE(local.contact_point == whole.contact_point);
-        }
+        require_same_hit(local, whole);
       }
       ++compared;
       if (i % 15 != 2 || seeded.found()) continue;

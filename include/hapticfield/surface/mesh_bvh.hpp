@@ -414,13 +414,13 @@ class MeshBvh {
   /// inside its region tests the region's leaves alone, one outside it
   /// gathers a new region first; the answer is the same.
   ///
-  /// `slide`, when given, is a unit normal the move runs along (a plane the
-  /// ball slides on): the ball never comes within r of a point more than r
-  /// behind the plane through the move's lower end along it, so a triangle
-  /// wholly behind that (the face under a ball that slides over it, and the
-  /// surface curving away below) is passed by without its full test. Any
-  /// unit normal gives the same answer; it saves work where the surface
-  /// under the move lies behind it.
+  /// `slide`, when given, is the normal of a plane the move runs along (a
+  /// plane the ball slides on; any length but 0): the ball never comes
+  /// within r of a point more than r behind the plane through the move's
+  /// lower end, so a triangle wholly behind that (the face under a ball
+  /// that slides over it, and the surface curving away below) is passed by
+  /// without its full test. Any normal gives the same answer; it saves work
+  /// where the surface under the move lies behind it.
   [[nodiscard]] BvhHit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,
                                     QueryStats* stats = nullptr, const BvhHit& seed = BvhHit{},
                                     Neighbourhood* near = nullptr, const glm::dvec3* slide = nullptr) const noexcept {
@@ -430,14 +430,14 @@ class MeshBvh {
     }
     const std::uint32_t seeded = usable(seed) ? seed.triangle : no_primitive;
     BallLeaf leaf{this, radius, seeded};
-    if (slide != nullptr && is_finite(*slide)) {
+    if (const double length = slide ? glm::length(*slide) : 0.0; length > 0.0 && std::isfinite(length)) {
       // less a few rounding units of the coordinates, so that only a triangle
       // clearly out of reach is passed by (the full test's own rounding)
       const double coordinate = detail::larger(largest_component(from), largest_component(to));  // [m]
       const double rounding = 16.0 * std::numeric_limits<double>::epsilon() * (coordinate + radius);
       leaf.slides = true;
-      leaf.slide = *slide;
-      leaf.behind = detail::smaller(glm::dot(*slide, from), glm::dot(*slide, to)) - radius - rounding;
+      leaf.slide = *slide / length;
+      leaf.behind = detail::smaller(glm::dot(leaf.slide, from), glm::dot(leaf.slide, to)) - radius - rounding;
     }
     if (near == nullptr) return traverse<true>(from, to, radius, stats, leaf, seed);
     QueryStats work;
@@ -1057,7 +1057,7 @@ class MeshBvh {
     double radius;          ///< [m]
     std::uint32_t seeded;   ///< the seed's mesh index (no_primitive: none)
     bool slides{false};     ///< the move runs along `slide` (sweep_sphere's)
-    glm::dvec3 slide{0.0};  ///< unit
+    glm::dvec3 slide{0.0};  ///< unit: sweep_sphere's, normalised
     double behind{0.0};     ///< points q with slide . q below this are out of the ball's reach [m]
     void operator()(std::uint32_t slot, const glm::dvec3& from, const glm::dvec3& d, double& best_t,
                     BvhHit& best) const noexcept HAPTICFIELD_ALWAYS_INLINE {

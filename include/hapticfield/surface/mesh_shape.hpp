@@ -124,7 +124,7 @@ class MeshShape {
   /// its sweeps (MeshBvh::Neighbourhood): short sweeps inside it skip the
   /// walk down the tree. The answer is the same with or without it.
   ///
-  /// `slide`, when given, is the unit normal of a plane the move runs along
+  /// `slide`, when given, is the normal of a plane the move runs along
   /// (MeshBvh::sweep_sphere's): triangles behind the ball's reach below it
   /// are passed by. The answer is the same with or without it.
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius,

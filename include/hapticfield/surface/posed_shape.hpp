@@ -208,7 +208,7 @@ class PosedQueries {
     s.sweep_sphere(from, to, radius, stats, hint, cache);
   }
   { return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache)); }
-  /// And the unit normal of a plane the move runs along, where the inner
+  /// And the normal of a plane the move runs along, where the inner
   /// shape takes one (MeshShape::sweep_sphere's `slide`), turned into its
   /// frame.
   [[nodiscard]] Hit sweep_sphere(const glm::dvec3& from, const glm::dvec3& to, double radius, QueryStats* stats,
