@@ -768,6 +768,35 @@ TEST_CASE("a Neighbourhood used with another tree, or after the tree's refit, is
   CHECK(refit.t == refit_tree.t);
 }
 
+TEST_CASE("a ball's sweep up to its radius long gathers a region around it; a longer one walks the tree", "[radius]") {
+  // A 0.5 mm ball 0.1 mm over a wavy sheet's crest slides level, each
+  // sweep with a fresh Neighbourhood: up to bvh_neighbourhood_sweep radii
+  // (a slip where static friction lets go) it gathers a region that holds
+  // it, and answers as the tree does; past that it leaves the region
+  // ungathered. Random directions, a new seed each run.
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const MeshBvh bvh = MeshBvh::build(test::wavy_sheet(0.05, 200, 0.002, 0.03));
+  const double r = 0.0005;
+  const glm::dvec3 from{0.0075, 0.0075, 0.002 + r + 0.0001};  // over a crest of the sheet: level, 2 mm high
+  for (int i = 0; i < 200; ++i) {
+    const double length = r * bvh_neighbourhood_sweep * (i % 2 == 0 ? 0.4 + 0.599 * u(rng) : 1.001 + u(rng));  // [m]
+    const double angle = 2.0 * std::numbers::pi * u(rng);
+    const glm::dvec3 to = from + length * glm::dvec3{std::cos(angle), std::sin(angle), 0.0};
+    MeshBvh::Neighbourhood near;
+    const BvhHit local = bvh.sweep_sphere(from, to, r, nullptr, BvhHit{}, &near);
+    INFO("sweep " << i << ": " << length / r << " radii long, found " << local.found() << " at t " << local.t);
+    require_same_hit(local, bvh.sweep_sphere(from, to, r));
+    CHECK(near.gathered == (i % 2 == 0));
+    if (i % 2 == 0) {
+      CHECK(near.fits);
+      CHECK(near.box.holds(BvhBox(glm::min(from, to) - glm::dvec3{r}, glm::max(from, to) + glm::dvec3{r}, length)));
+    }
+  }
+}
+
 TEST_CASE(
     "a ball proxy keeps its region of the tree from tick to tick: the same ticks bit for bit as a proxy whose "
     "sweeps all walk the tree",

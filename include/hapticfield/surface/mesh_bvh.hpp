@@ -166,6 +166,13 @@ inline constexpr std::size_t bvh_neighbourhood_leaves = 128;
 /// it, relative to the ball's radius (0.4: a 0.5 mm ball's region reaches
 /// 0.2 mm further, some 10 ticks of a hand's slide at 20 mm/s).
 inline constexpr double bvh_neighbourhood_reach = 0.4;
+/// A ball's sweep up to this long, relative to its radius, that leaves its
+/// Neighbourhood's region gathers a new one around it; a longer sweep walks
+/// the tree (whose nearest-first order finds its contact sooner). 1: a
+/// 0.5 mm ball's slip of up to 0.5 mm in a tick, where its static friction
+/// lets go, stays in a region (the tree walk it took instead cost more
+/// than the gather and the region's leaves).
+inline constexpr double bvh_neighbourhood_sweep = 1.0;
 
 /// A box a query can reach (float, rounded outward, with an allowance for
 /// the rounding of the traversal's own tests): a node box that misses it
@@ -371,7 +378,7 @@ class MeshBvh {
   /// A ball's region of the tree, kept by the caller between sweeps
   /// (MeshBvh::sweep_sphere's `near`; a proxy keeps one from tick to tick):
   /// the leaves whose boxes meet a box around the sweep that gathered it,
-  /// bvh_neighbourhood_reach radii past it, in tree order. A short sweep
+  /// bvh_neighbourhood_reach radii past it, in tree order. A sweep
   /// whose box lies inside tests those leaves alone (each one's box, then
   /// its slab and its triangles) instead of walking the tree down to them.
   /// A region with more leaves than it holds is remembered as such, and
@@ -1086,13 +1093,13 @@ class MeshBvh {
     // a ball that just touches there as clear (sweep_ball_triangle answers
     // the same whatever it is asked with, when it meets the triangle sooner)
     if (!(best.found() && tri.id < best.triangle && best.triangle != ball.seeded)) {
-      if (bounds_[slot].may_touch(from, d, r, best_t) &&  // its plane and circle, first
-          !(ball.slides && out_of_reach(tri, ball)))
+      // behind the slide plane (three dot products), then its plane and circle
+      if (!(ball.slides && out_of_reach(tri, ball)) && bounds_[slot].may_touch(from, d, r, best_t))
         (void)touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, best_t, best, true);
       return;
     }
     double t = detail::smaller(1.0, best_t + 1e-9 * (best_t + 1e-3));
-    if (!bounds_[slot].may_touch(from, d, r, t) || (ball.slides && out_of_reach(tri, ball))) return;
+    if ((ball.slides && out_of_reach(tri, ball)) || !bounds_[slot].may_touch(from, d, r, t)) return;
     BvhHit candidate;
     if (touch_triangle(tri.a, tri.e1, tri.e2, tri.id, from, d, r, t, candidate, true) && t <= best_t) {
       best_t = t;
@@ -1102,9 +1109,10 @@ class MeshBvh {
 
   /// sweep_sphere() through `near` (false: the tree must answer): the
   /// sweep's box, grown by the radius, inside near's region whose leaves
-  /// fit, or a short sweep (no longer than the region's reach) that gathers
-  /// a new region first. The leaves are tested in tree order, each by its
-  /// box, its slab and its triangles (`leaf`), so the answer is the tree's.
+  /// fit, or a short sweep (no longer than bvh_neighbourhood_sweep radii up
+  /// to its seed's t) that gathers a new region first. The leaves are
+  /// tested in tree order, each by its box, its slab and its triangles
+  /// (`leaf`), so the answer is the tree's.
   template <class Leaf>
   bool sweep_near(const glm::dvec3& from, const glm::dvec3& to, double radius, const BvhHit& seed, Leaf&& leaf,
                   Neighbourhood& near, BvhHit& best, QueryStats& work) const noexcept {
@@ -1122,7 +1130,8 @@ class MeshBvh {
     const BvhBox box(glm::min(from, end) - grown, glm::max(from, end) + grown, length);
     if (!near.gathered || near.tree != pairs_.data() || near.refits != refits_ || !near.box.holds(box)) {
       const double reach = bvh_neighbourhood_reach * radius;  // [m]
-      if (!(best_t * length <= reach)) return false;          // a long sweep: the tree's order finds its contact sooner
+      // a long sweep: the tree's order finds its contact sooner
+      if (!(best_t * length <= bvh_neighbourhood_sweep * radius)) return false;
       gather(BvhBox(glm::min(from, end) - grown - glm::dvec3{reach}, glm::max(from, end) + grown + glm::dvec3{reach},
                     length),
              near, work);
