@@ -62,9 +62,11 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -1152,22 +1154,33 @@ class MeshBvh {
     // the leaves' boxes against the sweep's, all at once (each test a 0 or
     // a 1, and'ed without a branch, so that the loop runs several leaves at
     // a time)
-    std::array<std::uint8_t, bvh_neighbourhood_leaves> meets;  // filled for [0, count) before read
+    static_assert(bvh_neighbourhood_leaves % 8 == 0);
+    alignas(8) std::array<std::uint8_t, bvh_neighbourhood_leaves> meets;  // filled for [0, count) before read
     const auto bit = [](bool b) noexcept { return static_cast<unsigned>(b); };
     for (std::size_t k = 0; k < near.count; ++k)
       meets[k] = static_cast<std::uint8_t>(bit(near.lo[0][k] <= box.hi[0]) & bit(near.hi[0][k] >= box.lo[0]) &
                                            bit(near.lo[1][k] <= box.hi[1]) & bit(near.hi[1][k] >= box.lo[1]) &
                                            bit(near.lo[2][k] <= box.hi[2]) & bit(near.hi[2][k] >= box.lo[2]));
+    for (std::size_t k = near.count; k % 8 != 0; ++k)
+      meets[k] = 0;
+    // the leaves met, in order: eight answers read at once, and only the
+    // ones met visited (no branch a leaf missed, which no predictor foresees)
+    constexpr bool little = std::endian::native == std::endian::little;
     const bool no_slabs = node_bounds_.empty();
-    for (std::uint32_t k = 0; k < near.count; ++k) {
-      if (!meets[k]) continue;
-      const std::uint32_t node = near.leaves[k];
-      if (!no_slabs && !node_bounds_[node].may_touch(from, d, radius, best_t)) continue;
-      const BvhNodePair& pair = pairs_[node / 2];
-      const std::size_t side = node % 2;
-      for (std::uint32_t i = pair.index[side]; i < pair.index[side] + pair.count[side]; ++i) {
-        ++work.primitives;
-        leaf(i, from, d, best_t, best);
+    for (std::size_t first = 0; first < near.count; first += 8) {
+      std::uint64_t eight = 0;  // meets[first, first + 8), in memory order
+      std::memcpy(&eight, &meets[first], sizeof eight);
+      while (eight != 0) {
+        const int bit_at = little ? std::countr_zero(eight) : 63 - std::countl_zero(eight);  // the first one met
+        eight &= ~(std::uint64_t{1} << bit_at);
+        const std::uint32_t node = near.leaves[first + static_cast<std::size_t>(little ? bit_at / 8 : 7 - bit_at / 8)];
+        if (!no_slabs && !node_bounds_[node].may_touch(from, d, radius, best_t)) continue;
+        const BvhNodePair& pair = pairs_[node / 2];
+        const std::size_t side = node % 2;
+        for (std::uint32_t i = pair.index[side]; i < pair.index[side] + pair.count[side]; ++i) {
+          ++work.primitives;
+          leaf(i, from, d, best_t, best);
+        }
       }
     }
     if (best.found()) best.point = from + best.t * d;
