@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -54,6 +55,46 @@ double brute_distance(const TriangleMesh& m, const glm::dvec3& p) {
 }  // namespace
 
 // --- analytic shapes ---------------------------------------------------------------
+
+TEST_CASE("detail::smaller and larger answer b < a ? b : a and b > a ? b : a to the bit, signed zeros and NaN too",
+          "[invariant]") {
+  // The traversals' min and max (an SSE2 instruction where there is one):
+  // the same bits as the comparisons they stand for, whichever operand is
+  // a zero of either sign, an infinity or a NaN, and on random doubles.
+  const std::uint32_t seed = test::run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937_64 rng(seed);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> values{0.0,
+                             -0.0,
+                             1.0,
+                             -1.0,
+                             inf,
+                             -inf,
+                             nan,
+                             -nan,
+                             std::numeric_limits<double>::denorm_min(),
+                             std::numeric_limits<double>::max(),
+                             1e-300};
+  for (int i = 0; i < 2000; ++i) {
+    double v = 0.0;
+    const std::uint64_t bits = rng();
+    std::memcpy(&v, &bits, sizeof v);  // any double, NaNs with payloads too
+    values.push_back(v);
+  }
+  const auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+  long compared = 0;
+  for (std::size_t i = 0; i < values.size(); i += (i < 11 ? 1 : 97))
+    for (const double b : values) {
+      const double a = values[i];
+      INFO("a " << a << ", b " << b);
+      REQUIRE(same(detail::smaller(a, b), b < a ? b : a));
+      REQUIRE(same(detail::larger(a, b), b > a ? b : a));
+      ++compared;
+    }
+  CHECK(compared > 40000);
+  static_assert(detail::smaller(1.0, 2.0) == 1.0 && detail::larger(1.0, 2.0) == 2.0);  // still constexpr
+}
 
 TEST_CASE("a plane shape answers closest and first_hit with the closed forms") {
   const PlaneShape plane(PlaneShapeConfig{{0.0, 0.0, 0.01}, {0.0, 0.0, 1.0}, 0.01});

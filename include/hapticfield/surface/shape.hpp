@@ -28,6 +28,10 @@
 #include <string>
 #include <type_traits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -107,12 +111,22 @@ struct QueryStats {
 namespace detail {
 
 /// a < b ? a : b, inlined (std::fmin is a library call that also handles
-/// NaN; the traversals that use these never see one).
+/// NaN; the traversals that use these never see one). On SSE2 it is the
+/// minsd instruction, whose answer is the same to the bit: written as a
+/// comparison, the compiler turns some of these into a branch on the data
+/// (a clamp at 0 that a later step tests again), which no predictor
+/// foresees (a fifth of a ball's mispredicted branches on a mesh).
 [[nodiscard]] constexpr double smaller(double a, double b) noexcept {
+#if defined(__SSE2__)
+  if (!std::is_constant_evaluated()) return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(b), _mm_set_sd(a)));
+#endif
   return b < a ? b : a;
 }
-/// a > b ? a : b, inlined (see smaller()).
+/// a > b ? a : b, inlined (see smaller(); maxsd on SSE2).
 [[nodiscard]] constexpr double larger(double a, double b) noexcept {
+#if defined(__SSE2__)
+  if (!std::is_constant_evaluated()) return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(b), _mm_set_sd(a)));
+#endif
   return b > a ? b : a;
 }
 
