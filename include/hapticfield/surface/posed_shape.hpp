@@ -217,9 +217,8 @@ class PosedQueries {
     s.sweep_sphere(from, to, radius, stats, hint, cache, slide);
   }
   {
-    if (slide == nullptr) return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache));
-    const glm::dvec3 along = static_cast<const Placed&>(*this).pose().vector_to_local(*slide);
-    return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache, &along));
+    const glm::dvec3 along = slide ? static_cast<const Placed&>(*this).pose().vector_to_local(*slide) : glm::dvec3{0.0};
+    return world(inner().sweep_sphere(local(from), local(to), radius, stats, hint, cache, slide ? &along : nullptr));
   }
 
   /// The point of one primitive nearest to p, where the inner shape answers
