@@ -113,13 +113,19 @@ inline TriangleMesh icosphere(int levels, double radius, glm::dvec3 centre = glm
   return mesh;
 }
 
-/// A wavy sheet z = amplitude sin(2 pi x / wavelength) sin(2 pi y / wavelength)
-/// over [-side/2, side/2]^2, 2 n^2 triangles, facing +z.
+/// The wavy sheet's height at (x, y) [m]: amplitude sin(2 pi x / wavelength)
+/// sin(2 pi y / wavelength), as wavy_sheet() puts its vertices.
+inline double wavy_height(double x, double y, double amplitude, double wavelength) {
+  const double k = 2.0 * 3.14159265358979323846 / wavelength;
+  return amplitude * std::sin(k * x) * std::sin(k * y);
+}
+
+/// A wavy sheet z = wavy_height(x, y) over [-side/2, side/2]^2, 2 n^2
+/// triangles, facing +z.
 inline TriangleMesh wavy_sheet(double side, int n, double amplitude, double wavelength) {
   TriangleMesh mesh = flat_sheet(side, n);
-  const double k = 2.0 * 3.14159265358979323846 / wavelength;
   for (auto& x : mesh.positions)
-    x.z = amplitude * std::sin(k * x.x) * std::sin(k * x.y);
+    x.z = wavy_height(x.x, x.y, amplitude, wavelength);
   return mesh;
 }
 

@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
-#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -266,9 +265,8 @@ TEST_CASE("a ball's look-ahead leaves the region of the tree it gathered to the 
     Probe p;
     p.time = i * 1e-3;
     p.position = glm::dvec3{0.01 * std::cos(angle), 0.01 * std::sin(angle), 0.0};
-    p.position.z = 0.002 * std::sin(2.0 * std::numbers::pi / 0.03 * p.position.x) *
-                       std::sin(2.0 * std::numbers::pi / 0.03 * p.position.y) +
-                   0.003 - sink;  // from 1 mm above the sheet to 1 mm into it
+    p.position.z = test::wavy_height(p.position.x, p.position.y, 0.002, 0.03) + 0.003 -
+                   sink;  // from 1 mm above the sheet to 1 mm into it
     ahead.anticipate(p);
     const Contact a = plain.contact(p), b = ahead.contact(p);
     INFO("tick " << i);
