@@ -5,8 +5,8 @@
 // tick; a mesh's first pass on 2 MB against 4 KB pages; the look-ahead
 // against none, back to back and paced at 1 kHz (--paced-ticks, default
 // 10000: 10 s a row); a ball's region of the tree kept between sweeps
-// against none; and the highest stiffness that stays passive at each servo
-// rate.
+// against none; each tick cold against the same tick again warm; and the
+// highest stiffness that stays passive at each servo rate.
 //
 //   bench_surface [--ticks N] [--max-triangles N] [--paced-ticks N] [--no-passivity]
 #include <hapticfield/kernels.hpp>
@@ -397,6 +397,54 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
   (void)prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(slack), 0UL, 0UL, 0UL);
 }
 
+/// What the slowest ticks cost in memory against in arithmetic, at 1M
+/// triangles: each tick of one pass timed as the tables time it (cold: its
+/// first touch of the triangles and tree nodes around a slip), then the
+/// same tick again on a copy of the proxy taken before it, right after
+/// (warm: its data, code and branches as that tick left them). The warm
+/// tick is what the arithmetic costs; the difference is the memory's
+/// latency, which the look-ahead hides by touching the data in the slack
+/// before the deadline. Wall time, monotonic clock; the copies outside the
+/// times; answers equal (the copy makes the same tick).
+void warm_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles) {
+  if (max_triangles < 1'000'000) return;
+  std::printf(
+      "## The slowest ticks: cold (as the tables time them) against the same tick again right after (warm), "
+      "1M triangles\n\n"
+      "One pass; before each tick a copy of the proxy, which makes the same tick again right after it with its "
+      "data, code and branches warm. The warm time is the arithmetic; the rest of the cold time is memory "
+      "latency (the triangles and tree nodes a slip reaches first), which the look-ahead takes off the tick. "
+      "Wall time per tick (monotonic clock), copies untimed.\n\n"
+      "| radius [mm] | cold: mean [ns] | p99 [ns] | p99.9 [ns] | warm: mean [ns] | p99 [ns] | p99.9 [ns] | "
+      "cold / warm mean | cold / warm p99 | cold / warm p99.9 | answers equal |\n"
+      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+  const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
+  const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+  const hf::MeshShape shape(mesh);
+  for (const double radius : {0.0, 0.0005}) {
+    hf::ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
+    config.radius = radius;
+    hf::ProxyConstraint proxy(shape, config);
+    std::vector<double> cold(path.size()), warm(path.size());
+    bool equal = true;
+    for (std::size_t i = 0; i < path.size(); ++i) {
+      hf::ProxyConstraint again(proxy);
+      double t0 = monotonic_ns();
+      const glm::dvec3 f = proxy.contact(path[i]).force;
+      cold[i] = monotonic_ns() - t0;
+      t0 = monotonic_ns();
+      const glm::dvec3 g = again.contact(path[i]).force;
+      warm[i] = monotonic_ns() - t0;
+      equal = equal && f == g;
+    }
+    const hf::bench::Cost c = summary(std::move(cold)), w = summary(std::move(warm));
+    std::printf("| %.1f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f | %s |\n", radius * 1e3,
+                c.mean_ns, c.p99_ns, c.p999_ns, w.mean_ns, w.p99_ns, w.p999_ns, c.mean_ns / w.mean_ns,
+                c.p99_ns / w.p99_ns, c.p999_ns / w.p999_ns, equal ? "yes" : "NO");
+  }
+  std::printf("\n");
+}
+
 /// The highest stiffness [N/m] that stays passive at `rate` [Hz] (bisection
 /// on the energy check of tests/surface_energy.hpp), on a mesh surface.
 double highest_passive(const hf::TriangleMesh& mesh, double rate) {
@@ -443,6 +491,8 @@ int main(int argc, char** argv) {
   anticipation_section(side, path, max_triangles, paced_ticks);
   // --- a ball's region of the tree kept between sweeps against none ---
   neighbourhood_section(side, path, max_triangles);
+  // --- the slowest ticks cold against warm: memory against arithmetic ---
+  warm_section(side, path, max_triangles);
 
   // --- baseline: the proxy on an analytic plane ---
   hf::ProxyConstraint plane(hf::PlaneShape(hf::PlaneShapeConfig{}), hf::ProxyConfig{1500.0, 1.0, 0.5, 0.4});
