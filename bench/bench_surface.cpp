@@ -397,23 +397,25 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
   (void)prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(slack), 0UL, 0UL, 0UL);
 }
 
-/// What the slowest ticks cost in memory against in arithmetic, at 1M
+/// What the slowest ticks cost in arithmetic against the rest, at 1M
 /// triangles: each tick of one pass timed as the tables time it (cold: its
 /// first touch of the triangles and tree nodes around a slip), then the
 /// same tick again on a copy of the proxy taken before it, right after
 /// (warm: its data, code and branches as that tick left them). The warm
-/// tick is what the arithmetic costs; the difference is the memory's
-/// latency, which the look-ahead hides by touching the data in the slack
-/// before the deadline. Wall time, monotonic clock; the copies outside the
-/// times; answers equal (the copy makes the same tick).
+/// tick is what the arithmetic costs; the difference is what a slip meets
+/// first (memory, a branch history not seen before), which the look-ahead
+/// takes off the tick by making the same queries in the slack before the
+/// deadline. Wall time, monotonic clock; the copies outside the times;
+/// answers equal (the copy makes the same tick).
 void warm_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles) {
   if (max_triangles < 1'000'000) return;
   std::printf(
       "## The slowest ticks: cold (as the tables time them) against the same tick again right after (warm), "
       "1M triangles\n\n"
       "One pass; before each tick a copy of the proxy, which makes the same tick again right after it with its "
-      "data, code and branches warm. The warm time is the arithmetic; the rest of the cold time is memory "
-      "latency (the triangles and tree nodes a slip reaches first), which the look-ahead takes off the tick. "
+      "data, code and branches warm. The warm time is the arithmetic; the rest of the cold time is what a slip "
+      "meets first (tree nodes, triangles and vertices, a branch history not seen before), which the look-ahead "
+      "takes off the tick. "
       "Wall time per tick (monotonic clock), copies untimed.\n\n"
       "| radius [mm] | cold: mean [ns] | p99 [ns] | p99.9 [ns] | warm: mean [ns] | p99 [ns] | p99.9 [ns] | "
       "cold / warm mean | cold / warm p99 | cold / warm p99.9 | answers equal |\n"
@@ -491,7 +493,7 @@ int main(int argc, char** argv) {
   anticipation_section(side, path, max_triangles, paced_ticks);
   // --- a ball's region of the tree kept between sweeps against none ---
   neighbourhood_section(side, path, max_triangles);
-  // --- the slowest ticks cold against warm: memory against arithmetic ---
+  // --- the slowest ticks cold against warm: the arithmetic against the rest ---
   warm_section(side, path, max_triangles);
 
   // --- baseline: the proxy on an analytic plane ---
