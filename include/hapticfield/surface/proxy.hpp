@@ -386,7 +386,9 @@ class ProxyConstraint {
   /// AnticipatingField). A ball keeps the copy's sweep cache (a mesh's
   /// region of the tree, gathered where the copy swept): the tick answers
   /// the same with any region, and where it sweeps as the copy did it does
-  /// not gather one again (its ProxyTick::nodes count fewer). Only on a
+  /// not gather one again (its ProxyTick::nodes count fewer; so a tick that
+  /// would run out of ProxyConfig::tick_node_budget without the look-ahead
+  /// may not with it, and answer differently). Only on a
   /// shape that stands still (no advance(): a moving shape's would take its
   /// pose feed's newest pose) and whose queries change nothing
   /// (PureQueries); on any other, nothing is done.
