@@ -329,14 +329,14 @@ Surface depth_map(const py::object& path, double pixel_size, double metres_per_u
 
 /// A Surface from a mesh made as every tool makes it (io/mesh_shading.hpp: the same normals, the same refusal).
 Surface surface_from_mesh(io::LoadedMesh& loaded, const std::string& name, const std::string& what, const Pose& pose,
-                          bool shade_normals, std::uint32_t max_nodes) {
+                          bool shade_normals, std::uint32_t max_nodes, bool huge_pages) {
   Surface s;
   io::MeshShapeReport report;
   std::optional<MeshShape> shape;
   {
     py::gil_scoped_release release;
     shape.emplace(io::mesh_shape_from(loaded, name, shade_normals ? io::MeshShading::smooth : io::MeshShading::faceted,
-                                      max_nodes, &report));
+                                      max_nodes, &report, huge_pages));
   }
   s.bounds = pair_of(io::placed_bounds(shape->mesh(), pose));
   s.shape = std::make_shared<const AnyShape>(std::in_place_type<Posed<MeshShape>>, std::move(*shape), pose);
@@ -352,7 +352,7 @@ Surface surface_from_mesh(io::LoadedMesh& loaded, const std::string& name, const
 
 Surface mesh_surface(const py::object& path, double scale, const std::optional<V3>& origin,
                      const std::optional<Pose>& pose, bool shade_normals, std::uint32_t max_nodes,
-                     std::size_t max_triangles) {
+                     std::size_t max_triangles, bool huge_pages) {
   if (!is_path(path)) throw py::type_error("mesh_surface: expected a path (.stl, .obj, .gltf or .glb)");
   if (max_nodes == 0) throw py::value_error("max_nodes: must be > 0");
   const Pose placed = pose_of(pose, origin);
@@ -376,7 +376,7 @@ Surface mesh_surface(const py::object& path, double scale, const std::optional<V
   }
   if (loaded.mesh.triangles.empty()) throw FileError("cannot load '" + p + "': the mesh has no triangles");
   return surface_from_mesh(loaded, p, "mesh " + std::filesystem::path(p).filename().string(), placed, shade_normals,
-                           max_nodes);
+                           max_nodes, huge_pages);
 }
 
 /// An N x cols array of one kind ('f' real, 'i' integer) read as `T`, checked as described in
@@ -406,7 +406,7 @@ py::array_t<T, py::array::c_style | py::array::forcecast> rows_array(const py::a
 Surface mesh_surface_from_arrays(const py::array& vertices, const py::array& faces, const std::optional<py::array>& uvs,
                                  const std::optional<py::array>& normals, const std::optional<Pose>& pose,
                                  const std::optional<V3>& origin, bool shade_normals, std::uint32_t max_nodes,
-                                 std::size_t max_triangles) {
+                                 std::size_t max_triangles, bool huge_pages) {
   if (max_nodes == 0) throw py::value_error("max_nodes: must be > 0");
   if (max_triangles == 0 || max_triangles > io::default_max_mesh_triangles)
     throw py::value_error("max_triangles: must be in 1..." + std::to_string(io::default_max_mesh_triangles));
@@ -472,7 +472,7 @@ Surface mesh_surface_from_arrays(const py::array& vertices, const py::array& fac
                                std::to_string(degenerate) + " of " + std::to_string(m.triangles.size()) +
                                    " triangles have zero area (kept; the surface skips them)"});
   try {
-    return surface_from_mesh(loaded, "the arrays", "mesh from arrays", placed, shade_normals, max_nodes);
+    return surface_from_mesh(loaded, "the arrays", "mesh from arrays", placed, shade_normals, max_nodes, huge_pages);
   } catch (const FileError& e) {  // nothing to touch: the arrays are the caller's values, not a file
     throw py::value_error(
         std::string(e.what()).replace(0, std::string("cannot use 'the arrays'").size(), "vertices, faces"));
@@ -667,14 +667,15 @@ std::vector<glm::dvec3> vertex_rows(const py::array& a, std::size_t count, const
 }
 
 DeformingSurface deforming_mesh(const py::array& vertices, const py::array& faces, const std::optional<py::array>& uvs,
-                                const std::optional<py::array>& normals, bool shade_normals, std::uint32_t max_nodes) {
+                                const std::optional<py::array>& normals, bool shade_normals, std::uint32_t max_nodes,
+                                bool huge_pages) {
   const Surface made = mesh_surface_from_arrays(vertices, faces, uvs, normals, std::nullopt, std::nullopt,
-                                                shade_normals, max_nodes, io::default_max_mesh_triangles);
+                                                shade_normals, max_nodes, io::default_max_mesh_triangles, huge_pages);
   DeformingSurface out;
   static_cast<Surface&>(out) = made;
   auto d = std::make_shared<Deformation>();
   d->mesh = std::get<Posed<MeshShape>>(*made.shape).shape().mesh();
-  d->config = MeshShapeConfig{shade_normals, max_nodes};
+  d->config = MeshShapeConfig{shade_normals, max_nodes, huge_pages};
   d->normals_from_faces = shade_normals && !normals;
   out.deformation = std::move(d);
   out.kind = "mesh";
@@ -843,11 +844,12 @@ void bind_surface(py::module_& m) {
         "set_pose() moves it while loops run.");
   m.def("deforming_mesh", &deforming_mesh, py::arg("vertices"), py::arg("faces"), py::arg("uvs") = py::none(),
         py::arg("normals") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
+        py::arg("huge_pages") = true,
         "A DeformingSurface: a triangle mesh from arrays as mesh_surface_from_arrays (vertices N x 3 [m] in the "
         "device frame, faces M x 3, optional uvs and normals), whose vertices set_vertices() moves while loops "
         "run. A deformation is not rigid: a touching proxy is put back in front of the face it touched; a "
         "surface that passes through the HIP within one tick leaves it inside, felt as nothing until it comes "
-        "out.");
+        "out. huge_pages as mesh_surface.");
 
   py::class_<SurfaceField, Field>(
       m, "SurfaceField",
@@ -894,25 +896,28 @@ void bind_surface(py::module_& m) {
         "and colour files, NaN values and missing files raise FileError naming the file.");
   m.def("mesh_surface", &mesh_surface, py::arg("path"), py::arg("scale") = 1.0, py::arg("origin") = py::none(),
         py::arg("pose") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
-        py::arg("max_triangles") = io::default_max_mesh_triangles,
+        py::arg("max_triangles") = io::default_max_mesh_triangles, py::arg("huge_pages") = true,
         "A triangle mesh from a file (.stl, .obj, .gltf, .glb by extension); scale: the file's unit in metres "
         "(0.001 for millimetres; glTF is in metres), then placed by pose (a Pose) or moved by origin [m]. "
         "shade_normals (default, as in feel_shape, servo_demo and the viewer): force shading with the file's vertex "
         "normals, or normals computed from the faces where it has none; False: face normals (flat facets). Each "
         "triangle is felt from the side its normal points to. A mesh with no triangle of any area raises FileError. A "
         "missing, malformed or oversized "
-        "file raises FileError naming it; Surface.warnings lists what was accepted but may surprise.");
+        "file raises FileError naming it; Surface.warnings lists what was accepted but may surprise. huge_pages "
+        "(default): the mesh's tree and arrays on 2 MB pages where the kernel allows (a hand's first pass over a part "
+        "of a large mesh is faster); False: the system's own pages. The forces are the same either way.");
   m.def("mesh_surface_from_arrays", &mesh_surface_from_arrays, py::arg("vertices"), py::arg("faces"),
         py::arg("uvs") = py::none(), py::arg("normals") = py::none(), py::arg("pose") = py::none(),
         py::arg("origin") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,
-        py::arg("max_triangles") = io::default_max_mesh_triangles,
+        py::arg("max_triangles") = io::default_max_mesh_triangles, py::arg("huge_pages") = true,
         "A triangle mesh from numpy arrays: vertices N x 3 [m] (real), faces M x 3 vertex indices from 0 (integer "
         "dtype; each triangle felt from the side its counter-clockwise winding faces), optional uvs N x 2 and "
         "normals N x 3 (per vertex; normalised). Placed by pose (a Pose) or origin [m]. shade_normals as "
         "mesh_surface: the given normals, else normals from the faces; False: face normals. At most max_triangles "
         "faces (default and limit 20 M) and 3 x max_triangles vertices. ValueError naming the array and row for a "
         "wrong shape or dtype, an index out of range, a value not finite, a zero normal, no face, or faces that all "
-        "have zero area; a broadcast (zero-stride) or overlapping array is refused before anything is allocated.");
+        "have zero area; a broadcast (zero-stride) or overlapping array is refused before anything is allocated. "
+        "huge_pages as mesh_surface.");
   m.def(
       "plane_surface",
       [](const V3& point, const V3& normal, double size, const std::optional<Pose>& pose) {

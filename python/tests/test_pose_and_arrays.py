@@ -7,6 +7,7 @@ import pathlib
 import random
 import resource
 import subprocess
+import sys
 import time
 
 import numpy as np
@@ -187,6 +188,90 @@ def test_mesh_from_arrays_checks_uvs_and_normals():
         hf.mesh_surface_from_arrays(v, f, max_triangles=0)
     with pytest.raises(ValueError, match="faces: 12 rows, more than the limit of 11"):
         hf.mesh_surface_from_arrays(v, f, max_triangles=11)
+
+
+def wavy_height(x, y, amplitude=0.002, wavelength=0.03):
+    """The wavy sheet's height at x, y [m]."""
+    return amplitude * np.sin(2 * np.pi * x / wavelength) * np.sin(2 * np.pi * y / wavelength)
+
+
+def wavy_grid_arrays(n, side=0.1, amplitude=0.002, wavelength=0.03):
+    """A wavy sheet over a side x side square [m], n x n vertices, 2 (n - 1)^2 triangles facing up."""
+    x, y = np.meshgrid(np.linspace(-side / 2, side / 2, n), np.linspace(-side / 2, side / 2, n))
+    v = np.column_stack([x.ravel(), y.ravel(), wavy_height(x.ravel(), y.ravel(), amplitude, wavelength)])
+    i = np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]
+    a, b, c, d = i.ravel(), i.ravel() + 1, i.ravel() + n, i.ravel() + n + 1
+    return v, np.vstack([np.column_stack([a, b, d]), np.column_stack([a, d, c])])
+
+
+# Run in a fresh interpreter: how many bytes of its mappings a mesh of 400 x 400 vertices (318 402 triangles, a tree
+# of some 50 MB) marks for transparent huge pages (VmFlags "hg" in /proc/self/smaps) with huge_pages=argv[1].
+MARKED_BY_A_MESH = """
+import sys
+import numpy as np
+import hapticfield as hf
+sys.path.insert(0, sys.argv[2])
+from test_pose_and_arrays import wavy_grid_arrays
+
+def marked():
+    total = size = 0
+    with open("/proc/self/smaps") as smaps:
+        for line in smaps:
+            if line.startswith("Size:"):
+                size = int(line.split()[1]) * 1024
+            elif line.startswith("VmFlags:") and "hg" in line.split()[1:]:
+                total += size
+    return total
+
+v, f = wavy_grid_arrays(400)
+before = marked()
+surface = hf.mesh_surface_from_arrays(v, f, huge_pages=sys.argv[1] == "on")
+print(marked() - before)
+"""
+
+
+def transparent_huge_pages_offered():
+    try:
+        return "[never]" not in pathlib.Path("/sys/kernel/mm/transparent_hugepage/enabled").read_text()
+    except OSError:
+        return False
+
+
+def test_huge_pages_moves_the_mesh_not_its_forces(tmp_path):
+    # the same forces, contacts and proxy bit for bit with the mesh on 2 MB pages and off them: strokes pressed
+    # 0.2-2 mm into a wavy sheet of 20 000 triangles at random, from every maker of meshes
+    rng = np.random.default_rng(SEED + 11)
+    v, f = wavy_grid_arrays(101)
+    for _ in range(3):
+        start, end = rng.uniform(-0.04, 0.04, 2), rng.uniform(-0.04, 0.04, 2)
+        s = np.linspace(0.0, 1.0, 400)[:, None]
+        xy = (1 - s) * start + s * end
+        down = np.minimum(1.0, 4 * s[:, 0])  # from 3 mm above the surface to `depth` under it, then along
+        depth = rng.uniform(0.0002, 0.002)
+        path = np.column_stack([xy, wavy_height(xy[:, 0], xy[:, 1]) + 0.003 * (1 - down) - depth * down])
+        made = [hf.mesh_surface_from_arrays(v, f, huge_pages=h) for h in (True, False)]
+        made += [hf.deforming_mesh(v, f, huge_pages=h) for h in (True, False)]
+        runs = [hf.surface_contact(m, stiffness=1500.0, static_friction=0.4).contacts(path) for m in made]
+        assert runs[0]["touching"].sum() > 100
+        for run in runs[1:]:
+            for key in ("touching", "force", "proxy", "normal"):
+                np.testing.assert_array_equal(runs[0][key], run[key])
+    stl = octahedron_stl(tmp_path / "octa.stl")
+    path = np.array([[0.004, 0.004 + 5e-5 * i, 0.03 - 3e-4 * i] for i in range(101)])
+    np.testing.assert_array_equal(hf.surface_contact(hf.mesh_surface(stl, huge_pages=False)).forces(path),
+                                  hf.surface_contact(hf.mesh_surface(stl)).forces(path))
+    with pytest.raises(TypeError):
+        hf.mesh_surface_from_arrays(v, f, huge_pages="yes")
+
+    # the switch reaches the memory: each in a fresh process (the kernel's mark stays on an address range after
+    # it is freed), tens of MB marked with it on, none with it off
+    if not transparent_huge_pages_offered():
+        pytest.skip("this kernel offers no transparent huge pages: only the forces were compared")
+    here = str(pathlib.Path(__file__).parent)
+    marked = {flag: int(subprocess.run([sys.executable, "-c", MARKED_BY_A_MESH, flag, here], capture_output=True,
+                                       text=True, check=True).stdout.split()[-1]) for flag in ("on", "off")}
+    assert marked["on"] >= 20 << 20, marked
+    assert marked["off"] == 0, marked
 
 
 def test_a_broadcast_height_array_is_refused_at_once():

@@ -48,13 +48,15 @@ struct MeshShapeReport {
 /// `loaded` are rewritten to say what the shape does (a file without vertex
 /// normals: computed from the faces, or face normals used).
 /// @param name  the file, for the error
+/// @param huge_pages  MeshShapeConfig::huge_pages (the tree and arrays on
+///        2 MB pages where the kernel allows)
 /// @throws FileError naming the file when no triangle has an area (an empty
 ///         mesh never gets here: the readers refuse it).
 /// @throws std::invalid_argument for a zero node budget.
 [[nodiscard]] inline MeshShape mesh_shape_from(LoadedMesh& loaded, const std::string& name,
                                                MeshShading shading = MeshShading::smooth,
                                                std::uint32_t max_nodes = bvh_default_max_nodes,
-                                               MeshShapeReport* report = nullptr) {
+                                               MeshShapeReport* report = nullptr, bool huge_pages = true) {
   const bool file_normals = loaded.mesh.has_normals();
   const bool shade = shading == MeshShading::smooth;
   MeshShapeReport r;
@@ -67,7 +69,7 @@ struct MeshShapeReport {
       w.message = shade ? "no vertex normals in the file: computed from the faces around each vertex (force shading)"
                         : "no vertex normals in the file: the surface uses face normals";
   TriangleMesh mesh = shade && !file_normals ? with_vertex_normals(std::move(loaded.mesh)) : std::move(loaded.mesh);
-  MeshShape shape(std::move(mesh), MeshShapeConfig{shade, max_nodes});
+  MeshShape shape(std::move(mesh), MeshShapeConfig{shade, max_nodes, huge_pages});
   r.touchable = shape.bvh().triangle_count();
   if (r.touchable == 0)
     throw FileError("cannot use '" + name + "': " +
