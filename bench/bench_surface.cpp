@@ -215,6 +215,13 @@ std::array<hf::bench::Cost, 2> first_pass_pair(A& a, B& b, const std::vector<hf:
   return alternated_pair(a, b, path, false, nodes);
 }
 
+/// The bench's wavy sheet, `side` [m] square, of about 1M triangles (707 x
+/// 707 squares): what the 1M-triangle sections feel.
+hf::TriangleMesh million_triangle_sheet(double side) {
+  const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
+  return hf::test::wavy_sheet(side, n, 0.002, 0.03);
+}
+
 /// A ball's region of the tree kept between its sweeps (MeshBvh::
 /// Neighbourhood, what a ball proxy on a mesh does) against every sweep
 /// walking the tree (test::TreeWalk), at 1M triangles: meshes built apart,
@@ -232,8 +239,7 @@ void neighbourhood_section(double side, const std::vector<hf::Probe>& path, std:
       "p99.9 [ns] | worst [ns] | walked / kept mean | walked / kept p99 | walked / kept p99.9 | tree nodes a tick, "
       "kept / walked |\n"
       "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
-  const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+  const hf::TriangleMesh mesh = million_triangle_sheet(side);
   const hf::MeshShape one(mesh), other(mesh);
   for (const double radius : {0.0005, 0.002}) {
     hf::ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
@@ -338,8 +344,7 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
   // ends at its time, not up to 50 us later
   const int slack = prctl(PR_GET_TIMERSLACK, 0UL, 0UL, 0UL, 0UL);
   (void)prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
-  const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
-  const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+  const hf::TriangleMesh mesh = million_triangle_sheet(side);
   const hf::MeshShape one(mesh), other(mesh);
   for (const double radius : {0.0, 0.0005}) {
     hf::ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
@@ -420,8 +425,7 @@ void warm_section(double side, const std::vector<hf::Probe>& path, std::size_t m
       "| radius [mm] | cold: mean [ns] | p99 [ns] | p99.9 [ns] | warm: mean [ns] | p99 [ns] | p99.9 [ns] | "
       "cold / warm mean | cold / warm p99 | cold / warm p99.9 | answers equal |\n"
       "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
-  const int n = static_cast<int>(std::lround(std::sqrt(1'000'000.0 / 2.0)));
-  const hf::TriangleMesh mesh = hf::test::wavy_sheet(side, n, 0.002, 0.03);
+  const hf::TriangleMesh mesh = million_triangle_sheet(side);
   const hf::MeshShape shape(mesh);
   for (const double radius : {0.0, 0.0005}) {
     hf::ProxyConfig config{1500.0, 1.0, 0.5, 0.4};
