@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import hapticfield as hf
+from grid_meshes import grid
 
 SOURCE = pathlib.Path(os.environ.get("HAPTICFIELD_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
 K = 1200.0  # stiffness [N/m]
@@ -91,18 +92,6 @@ def test_moving_surface_refuses_bad_poses_and_a_surface_that_already_moves():
 
 
 # --- deforming meshes ------------------------------------------------------------
-
-def grid(n=12, size=0.04):
-    """A flat square n x n vertices, 2 (n - 1)^2 triangles facing +z, centred on the origin [m]."""
-    x, y = np.meshgrid(np.linspace(-size / 2, size / 2, n), np.linspace(-size / 2, size / 2, n))
-    vertices = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], axis=1)
-    faces = []
-    for j in range(n - 1):
-        for i in range(n - 1):
-            a = j * n + i
-            faces += [(a, a + 1, a + n + 1), (a, a + n + 1, a + n)]
-    return vertices, np.asarray(faces, dtype=np.int64)
-
 
 def bump(vertices, height):
     v = vertices.copy()
