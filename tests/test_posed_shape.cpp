@@ -209,6 +209,16 @@ TEST_CASE("random poses: a posed mesh answers like the mesh moved vertex by vert
           CHECK(x.primitive == y.primitive);
           CHECK(x.point == y.point);
         }
+        // closest through that cache (the region the sweep gathered, in the
+        // mesh's frame) near where the sweep began: as without it
+        const glm::dvec3 by = p + 0.3 * r * glm::dvec3{u(rng), u(rng), u(rng)} / 0.04;
+        const Hit z = posed.closest(by, r, &stats, &cache), zz = posed.closest(by, r);
+        REQUIRE(z.found() == zz.found());
+        if (z.found()) {
+          CHECK(z.primitive == zz.primitive);
+          CHECK(z.point == zz.point);
+          CHECK(z.distance == zz.distance);
+        }
       }
       // the proxy on both, along a random stroke across the shape: the same forces
       ProxyConstraint a(posed, ProxyConfig{1500.0, 0.0, 0.3, 0.2});

@@ -618,18 +618,25 @@ TEST_CASE("the constructed solids are outward: a positive volume by the divergen
 }
 
 TEST_CASE(
-    "closest within a reach (a ball's nearest): the tree with its nodes' slabs answers as without them and as a "
-    "brute-force scan, on constructed meshes and every real model",
+    "closest within a reach (a ball's nearest): the tree with its nodes' slabs, without them and through a ball's "
+    "Neighbourhood answer as a brute-force scan, bit for bit (the lowest mesh index of the nearest), on constructed "
+    "meshes and every real model",
     "[invariant]") {
   const std::uint32_t seed = run_seed();
   INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Model> models = {{"wavy sheet", test::wavy_sheet(0.1, 120, 0.002, 0.03), true},
-                               {"icosphere", test::icosphere(3, 0.02), true},
-                               {"0.1 mm slab", slab(1e-4), true}};
+  std::vector<Model> models = {
+      {"wavy sheet", test::wavy_sheet(0.1, 120, 0.002, 0.03), true},
+      {"icosphere", test::icosphere(3, 0.02), true},
+      {"0.1 mm slab", slab(1e-4), true},
+      {"20 mm cube (ties at every edge and corner)", test::box({0, 0, 0}, {0.02, 0.02, 0.02}), true}};
   for (Model& m : real_models())
     models.push_back(std::move(m));
+  const auto same = [](const BvhHit& a, const BvhHit& b) {
+    return a.found() == b.found() && (!a.found() || (a.triangle == b.triangle && a.point == b.point &&
+                                                     a.distance == b.distance && a.b1 == b.b1 && a.b2 == b.b2));
+  };
   for (const Model& m : models) {
     const MeshBvh tree = MeshBvh::build(m.mesh);
     MeshBvh boxes = MeshBvh::build(m.mesh);
@@ -640,7 +647,7 @@ TEST_CASE(
       edge += triangle(m.mesh, i).size / static_cast<double>(n);
     const int cases = static_cast<int>(2000 * scale());
     const int brute_every = m.small ? 4 : 40;  // the brute-force scan on a share of the queries
-    int found = 0, scanned = 0;
+    int found = 0, scanned = 0, served = 0, ties = 0;
     for (int i = 0; i < cases; ++i) {
       const Triangle t = triangle(m.mesh, rng() % n);
       if (t.n == glm::dvec3{0.0}) continue;
@@ -651,28 +658,55 @@ TEST_CASE(
       }
       // a ball's reach of a quarter to eight edges, from under the surface to well above it
       const double reach = edge * (0.25 + 8.0 * u(rng) * u(rng));  // [m]
-      const glm::dvec3 p = t.a + b1 * (t.b - t.a) + b2 * (t.c - t.a) + (2.0 * u(rng) - 0.5) * reach * t.n;
+      glm::dvec3 p = t.a + b1 * (t.b - t.a) + b2 * (t.c - t.a) + (2.0 * u(rng) - 0.5) * reach * t.n;
+      if (i % 8 == 0) p = (i % 16 == 0) ? t.a : 0.5 * (t.a + t.b);  // on a corner or an edge: ties
       const BvhHit a = tree.closest(p, reach), b = boxes.closest(p, reach);
       INFO(m.name << ", query " << i << ", reach " << reach);
-      REQUIRE(a.found() == b.found());
-      if (a.found()) {
-        REQUIRE(a.distance == b.distance);  // the least of the same distances, bit for bit
-        ++found;
-      }
+      REQUIRE(same(a, b));
+      found += a.found() ? 1 : 0;
+      // through a region gathered by a short sweep of a ball of that reach
+      // from a little way off: its leaves answer where p's reach lies inside
+      MeshBvh::Neighbourhood near;
+      const glm::dvec3 off{u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5};
+      const glm::dvec3 from = p + 0.6 * reach * off;
+      (void)tree.sweep_sphere(from, from + 0.1 * reach * t.n, reach, nullptr, BvhHit{}, &near);
+      const BvhHit c = tree.closest(p, reach, nullptr, &near);
+      REQUIRE(same(a, c));
+      const glm::dvec3 around{reach};
+      served += near.fits && near.box.holds(BvhBox(p - around, p + around)) ? 1 : 0;
       if (i % brute_every != 0) continue;
       ++scanned;
-      double nearest = std::numeric_limits<double>::infinity();  // [m]
-      for (const auto& tri : m.mesh.triangles) {
+      // the oracle: every triangle with area (the tree's), the least squared
+      // distance, and of those at it the lowest mesh index
+      double least = reach * reach;  // [m^2]
+      std::uint32_t lowest = no_primitive;
+      int at_least = 0;
+      for (std::size_t j = 0; j < n; ++j) {
+        if (triangle(m.mesh, j).n == glm::dvec3{0.0}) continue;
+        const auto& tri = m.mesh.triangles[j];
         const glm::dvec3 v = m.mesh.positions[tri[0]];
         double w1 = 0.0, w2 = 0.0;
         const glm::dvec3 q =
             detail::closest_on_triangle(p, v, m.mesh.positions[tri[1]] - v, m.mesh.positions[tri[2]] - v, w1, w2);
-        nearest = std::fmin(nearest, glm::length(q - p));
+        const double d2 = glm::dot(q - p, q - p);
+        if (d2 < least || (d2 == least && lowest == no_primitive)) {
+          least = d2;
+          lowest = static_cast<std::uint32_t>(j);
+          at_least = 1;
+        } else if (d2 == least) {
+          ++at_least;  // j > lowest: the first met keeps it
+        }
       }
-      if (std::fabs(nearest - reach) > 1e-9 * reach) REQUIRE(a.found() == (nearest <= reach));
-      if (a.found()) REQUIRE(std::fabs(a.distance - nearest) <= 1e-12 * reach);
+      REQUIRE(a.found() == (lowest != no_primitive));
+      if (!a.found()) continue;
+      REQUIRE(a.triangle == lowest);
+      REQUIRE(a.distance == std::sqrt(least));
+      ties += at_least > 1 ? 1 : 0;
     }
-    INFO(m.name << ": " << found << " of " << cases << " found, " << scanned << " scanned");
+    INFO(m.name << ": " << found << " of " << cases << " found, " << scanned << " scanned, " << ties
+                << " exact ties among those, " << served << " answered by a Neighbourhood");
     CHECK(found > cases / 4);
+    CHECK(served > cases / 10);
+    CHECK(ties > scanned / 20);  // the corners and edges asked: the tie rule is tested
   }
 }

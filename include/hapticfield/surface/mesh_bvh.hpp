@@ -29,7 +29,9 @@
 /// Ericson, "Real-Time Collision Detection", 2005, section 5.1.5; a node
 /// small against r is also passed by through its slab, NodeBounds, when
 /// every point of it is farther than the nearest found: a ball's reach takes
-/// in the boxes of the smooth surface under it), and
+/// in the boxes of the smooth surface under it; two triangles at the very
+/// same distance go to the lower mesh index, whatever the order they are
+/// visited in), and
 /// sweep_sphere(from, to, r), a ball's first contact. Each
 /// query visits at most `max_nodes` nodes (its budget); past that it stops
 /// and says so (BvhHit::complete = false). A query first skips its trunk:
@@ -39,7 +41,8 @@
 /// sweep to sweep: it then tests those leaves alone (their boxes all at
 /// once, kept in the Neighbourhood axis by axis), with the same answer
 /// (a tie in t goes to the seed, else to the lowest mesh index, however the
-/// triangles are visited). A ball's sweep told the plane it slides along
+/// triangles are visited); so may a closest() whose reach lies inside the
+/// region. A ball's sweep told the plane it slides along
 /// passes by, without their full test, the triangles wholly out of its reach
 /// behind that plane: the face under a sliding ball, and the surface curving
 /// away below it.
@@ -482,13 +485,25 @@ class MeshBvh {
   }
 
   /// The point of the mesh nearest to p if one is within max_distance [m]
-  /// (not found: none). stats, when given, receives the work done.
-  [[nodiscard]] BvhHit closest(const glm::dvec3& p, double max_distance, QueryStats* stats = nullptr) const noexcept {
+  /// (not found: none); of two at the very same distance, the lower mesh
+  /// index's. stats, when given, receives the work done.
+  ///
+  /// `near`, when given, is a ball's Neighbourhood (sweep_sphere's): when p's
+  /// reach (max_distance, finite) lies inside its region, the region's
+  /// leaves alone are tested, the nearest box first, and the answer is the
+  /// tree's; else the tree answers. It is read, never gathered.
+  [[nodiscard]] BvhHit closest(const glm::dvec3& p, double max_distance, QueryStats* stats = nullptr,
+                               const Neighbourhood* near = nullptr) const noexcept {
     BvhHit best;
     QueryStats work;
     if (stats) *stats = work;
     if (triangles_.empty() || !is_finite(p) || !(max_distance >= 0.0)) return best;
     double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
+    if (near != nullptr && closest_near(p, max_distance, *near, best, best_d2, work)) {
+      if (best.found()) best.distance = std::sqrt(best_d2);
+      if (stats) *stats = work;
+      return best;
+    }
     Stack stack;
     std::uint32_t index = root_.index, count = root_.count;  // the node being visited
     if (!(box_distance2(root_, p) <= best_d2)) return best;
@@ -505,18 +520,7 @@ class MeshBvh {
       if (count > 0) {
         for (std::uint32_t i = index; i < index + count; ++i) {
           ++work.primitives;
-          const Triangle& tri = triangles_[i];
-          double b1 = 0.0, b2 = 0.0;
-          const glm::dvec3 q = detail::closest_on_triangle(p, tri.a, tri.e1, tri.e2, b1, b2);
-          const glm::dvec3 r = q - p;
-          const double d2 = glm::dot(r, r);
-          if (d2 <= best_d2) {
-            best_d2 = d2;
-            best.triangle = tri.id;
-            best.point = q;
-            best.b1 = b1;
-            best.b2 = b2;
-          }
+          keep_nearer(triangles_[i], p, best, best_d2);
         }
       } else {
         const BvhNodePair& pair = pairs_[index];
@@ -1184,6 +1188,70 @@ class MeshBvh {
       }
     }
     if (best.found()) best.point = from + best.t * d;
+    return true;
+  }
+
+  /// closest()'s test of one triangle: its point nearest to p taken when
+  /// nearer than best_d2 [m^2], or as near and of a lower mesh index (so
+  /// the answer does not hang on the order the triangles are visited in).
+  static void keep_nearer(const Triangle& tri, const glm::dvec3& p, BvhHit& best,
+                          double& best_d2) noexcept HAPTICFIELD_ALWAYS_INLINE {
+    double b1 = 0.0, b2 = 0.0;
+    const glm::dvec3 q = detail::closest_on_triangle(p, tri.a, tri.e1, tri.e2, b1, b2);
+    const glm::dvec3 r = q - p;
+    const double d2 = glm::dot(r, r);  // [m^2]
+    if (d2 < best_d2 || (d2 == best_d2 && tri.id < best.triangle)) {  // (none found: no_primitive, above any index)
+      best_d2 = d2;
+      best.triangle = tri.id;
+      best.point = q;
+      best.b1 = b1;
+      best.b2 = b2;
+    }
+  }
+
+  /// closest() through `near` (false: the tree must answer): p's reach,
+  /// max_distance around it, inside near's region whose leaves fit, so
+  /// every leaf that reach meets is held. The leaf whose box is nearest is
+  /// tested first, then every other whose box, and slab, is within the
+  /// nearest distance found so far; each held leaf counts as a node, as in
+  /// sweep_near().
+  bool closest_near(const glm::dvec3& p, double max_distance, const Neighbourhood& near, BvhHit& best, double& best_d2,
+                    QueryStats& work) const noexcept {
+    if (!near.gathered || !near.fits || near.tree != pairs_.data() || near.refits != refits_ ||
+        !std::isfinite(max_distance))
+      return false;
+    const glm::dvec3 around{max_distance};
+    if (!near.box.holds(BvhBox(p - around, p + around))) return false;
+    if (work.nodes + near.count > config_.max_nodes) return false;  // the tree's walk may fit its budget
+    work.nodes += near.count;
+    std::array<double, bvh_neighbourhood_leaves> box_d2;  // [m^2], filled for [0, count) before read
+    std::size_t nearest = 0;
+    for (std::size_t k = 0; k < near.count; ++k) {
+      double sum = 0.0;
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        const double at = p[static_cast<int>(axis)];
+        const double out = detail::larger(0.0, detail::larger(static_cast<double>(near.lo[axis][k]) - at,
+                                                              at - static_cast<double>(near.hi[axis][k])));
+        sum += out * out;
+      }
+      box_d2[k] = sum;
+      if (sum < box_d2[nearest]) nearest = k;
+    }
+    const bool slabs = !node_bounds_.empty();
+    const auto visit = [&](std::size_t k) noexcept {
+      if (!(box_d2[k] <= best_d2)) return;
+      const std::uint32_t node = near.leaves[k];
+      if (slabs && !(node_bounds_[node].distance2_below(p) <= best_d2)) return;
+      const BvhNodePair& pair = pairs_[node / 2];
+      const std::size_t side = node % 2;
+      for (std::uint32_t i = pair.index[side]; i < pair.index[side] + pair.count[side]; ++i) {
+        ++work.primitives;
+        keep_nearer(triangles_[i], p, best, best_d2);
+      }
+    };
+    if (near.count > 0) visit(nearest);
+    for (std::size_t k = 0; k < near.count; ++k)
+      if (k != nearest) visit(k);
     return true;
   }
 

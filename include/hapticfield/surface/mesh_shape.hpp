@@ -90,8 +90,12 @@ class MeshShape {
   [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance) const noexcept {
     return closest(p, max_distance, nullptr);
   }
-  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats) const noexcept {
-    const BvhHit h = data_->bvh.closest(p, max_distance, stats);
+  /// `cache`, when given, is a ball's region of the tree (sweep_sphere's):
+  /// read, never gathered; where p's reach lies inside it, its leaves alone
+  /// are tested (MeshBvh::closest). The answer is the same with or without.
+  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats,
+                            const SweepCache* cache = nullptr) const noexcept {
+    const BvhHit h = data_->bvh.closest(p, max_distance, stats, cache);
     Hit out = describe(h);
     out.distance = h.distance;
     return out;

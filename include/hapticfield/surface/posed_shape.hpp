@@ -173,6 +173,12 @@ class PosedQueries {
     s.closest(p, max_distance, stats);
   }
   { return world(inner().closest(local(p), max_distance, stats)); }
+  /// With a ball's cache of the inner shape's sweeps (its own frame).
+  [[nodiscard]] Hit closest(const glm::dvec3& p, double max_distance, QueryStats* stats,
+                            const SweepCache* cache) const noexcept requires requires(const S& s) {
+    s.closest(p, max_distance, stats, cache);
+  }
+  { return world(inner().closest(local(p), max_distance, stats, cache)); }
 
   [[nodiscard]] Hit first_hit(const glm::dvec3& from, const glm::dvec3& to) const noexcept {
     return world(inner().first_hit(local(from), local(to)));

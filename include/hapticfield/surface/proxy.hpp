@@ -1063,7 +1063,9 @@ class ProxyConstraint {
 
   /// shape_.closest, counting as sweep() does; first the primitive of
   /// `hint` alone when the shape can answer for one (on_primitive()), which
-  /// costs no traversal while the proxy stays on the face it last met.
+  /// costs no traversal while the proxy stays on the face it last met. A
+  /// ball's query reads its sweeps' cache where the shape takes one (a
+  /// mesh's region: its leaves alone answer where the query lies inside).
   [[nodiscard]] Hit nearest(const glm::dvec3& p, double max_distance, const Hit& hint) noexcept {
     if constexpr (requires { shape_.on_primitive(hint.primitive, p, max_distance); }) {
       if (hint.found()) {
@@ -1071,7 +1073,12 @@ class ProxyConstraint {
         if (h.found()) return h;
       }
     }
-    if constexpr (requires(QueryStats * q) { shape_.closest(p, max_distance, q); }) {
+    if constexpr (requires(QueryStats * q, const SweepCache* c) { shape_.closest(p, max_distance, q, c); }) {
+      QueryStats q;
+      const Hit h = shape_.closest(p, max_distance, &q, config_.radius > 0.0 ? &sweep_cache_ : nullptr);
+      tick_.nodes += q.nodes;
+      return h;
+    } else if constexpr (requires(QueryStats * q) { shape_.closest(p, max_distance, q); }) {
       QueryStats q;
       const Hit h = shape_.closest(p, max_distance, &q);
       tick_.nodes += q.nodes;
