@@ -1200,7 +1200,8 @@ class MeshBvh {
     const glm::dvec3 q = detail::closest_on_triangle(p, tri.a, tri.e1, tri.e2, b1, b2);
     const glm::dvec3 r = q - p;
     const double d2 = glm::dot(r, r);  // [m^2]
-    if (d2 < best_d2 || (d2 == best_d2 && tri.id < best.triangle)) {  // (none found: no_primitive, above any index)
+    // (none found yet: best.triangle is no_primitive, above any index)
+    if (d2 < best_d2 || (d2 == best_d2 && tri.id < best.triangle)) {
       best_d2 = d2;
       best.triangle = tri.id;
       best.point = q;

@@ -814,7 +814,11 @@ class ProxyConstraint {
   /// left the face the proxy came off), and its touched face one of theirs
   /// (the force's normal is that face's); true when m then lies on the
   /// surface inside the static cone about the HIP's point on them (m
-  /// changed), false otherwise (m as it was).
+  /// changed), false otherwise (m as it was). On curved primitives (a
+  /// height field's bilinear cells) a plane is the tangent plane where the
+  /// proxy met a cell, and the proxy held on it comes onto the cells
+  /// around, which hold no plane but are the surface under it: there the
+  /// face it touches (found within reach: on the surface) is enough.
   [[nodiscard]] bool hold_on_pressed(const glm::dvec3& goal, Motion& m) const noexcept {
     Motion held = m;
     (void)held.planes.project(goal);
@@ -824,7 +828,9 @@ class ProxyConstraint {
       face.primitive = held.planes.primitive[static_cast<std::size_t>(i)];
       held.touched = on_same_face(m.x, reach(held.planes), face);
     }
-    if (!on_planes(held.planes, held.touched) || !in_cone(goal, held)) return false;
+    if (curved_primitives && !on_planes(held.planes, held.touched)) held.touched = m.touched;
+    if (!(on_planes(held.planes, held.touched) || (curved_primitives && held.touched.found())) || !in_cone(goal, held))
+      return false;
     m = held;
     return true;
   }
@@ -982,6 +988,15 @@ class ProxyConstraint {
   /// with closest_matches_sweep = false: a height field's bilinear patches
   /// against its cells' triangles), so overlaps() is exact for a ball.
   static constexpr bool closest_matches_sweep = !requires { requires !S::closest_matches_sweep; };
+  /// The shape says its primitives are flat (a mesh's triangles).
+  static constexpr bool flat_primitives = requires { requires S::flat_primitives; };
+  /// The shape answers for one primitive (on_primitive()).
+  static constexpr bool answers_one_primitive = requires(const S& s, const glm::dvec3& p) {
+    s.on_primitive(std::uint32_t{0}, p, 0.0);
+  };
+  /// Its primitives may curve: it answers for one but does not say they
+  /// are flat (a height field's bilinear cells).
+  static constexpr bool curved_primitives = !flat_primitives && answers_one_primitive;
 
   /// The shape can sweep a ball (sweep_sphere), for a radius > 0.
   static constexpr bool sweeps_spheres = requires(const S& s, const glm::dvec3& p) { s.sweep_sphere(p, p, 1.0); };
