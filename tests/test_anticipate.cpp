@@ -25,6 +25,7 @@
 #include "hapticfield/core/contact.hpp"
 #include "hapticfield/core/field.hpp"
 #include "hapticfield/core/live_field.hpp"
+#include "hapticfield/material/material_surface.hpp"
 #include "hapticfield/servo/multi_arm_loop.hpp"
 #include "hapticfield/servo/pacer.hpp"
 #include "hapticfield/surface/height_field.hpp"
@@ -347,6 +348,57 @@ TEST_CASE("the look-ahead makes the queries of the tick it anticipates; a shape 
     }
     CHECK(queried_ticks > 100);  // the look-ahead did query, on most ticks
   }
+}
+
+TEST_CASE(
+    "a material surface's look-ahead makes the queries of the tick it anticipates, with the material that "
+    "tick reads",
+    "[anticipate]") {
+  // Friction stripes 1 cm wide (mu_s 0.1 and 1.0, mu_k 0.05 and 0.9) across
+  // a wavy sheet: each tick first takes the material at the uv where the
+  // proxy is held, the last tick's contact. A look-ahead run with the
+  // material of the tick before sticks where the tick slides (or slides
+  // where it sticks) as the proxy crosses a stripe's edge, and makes
+  // other queries than the tick it stands for.
+  const std::uint32_t seed = run_seed();
+  INFO("seed " << seed << " (replay: --rng-seed " << seed << ")");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const TriangleMesh sheet = test::wavy_sheet(0.1, 80, 0.004, 0.03);  // uv over its 10 cm: a stripe 1 cm
+  material::MaterialMaps maps;
+  const auto stripes = [](float a, float b) {
+    return material::PropertyMap(10, 1, {a, b, a, b, a, b, a, b, a, b}, material::UvLayout{material::UvWrap::clamp});
+  };
+  maps.static_friction = stripes(0.1F, 1.0F);
+  maps.dynamic_friction = stripes(0.05F, 0.9F);
+  long queries = 0, queried_ticks = 0;
+  for (const double radius : {0.0, 5e-4}) {
+    ProxyConfig config;
+    config.radius = radius;
+    auto surface =
+        material::material_surface(CountingMesh<true>{MeshShape(sheet), &queries}, config, material::MaterialMap(maps));
+    static_assert(AnticipatingField<decltype(surface)>);
+    for (int k = 0; k < 6; ++k) {
+      surface.reset();
+      const double y = 0.03 * (2.0 * unit(rng) - 1.0), speed = 0.02 + 0.1 * unit(rng);  // [m], [m/s]
+      // (up to 7 cm across x: seven stripes' edges at 0.12 m/s)
+      for (int i = 0; i < 600; ++i) {  // 5 mm over the sheet, pressed 1.5 mm in over 40 ms, then across x
+        const double x = -0.04 + speed * 1e-3 * std::max(0, i - 40);
+        Probe p;
+        p.position = {x, y, test::wavy_height(x, y, 0.004, 0.03) + 0.005 - 0.0065 * std::min(i, 40) / 40.0};
+        p.velocity = {i > 40 ? speed : 0.0, 0.0, 0.0};
+        p.time = i * 1e-3;
+        const long before = queries;
+        surface.anticipate(p);  // the very tick that follows
+        const long ahead = queries - before;
+        (void)surface.force(p);
+        INFO("radius " << radius << ", slide " << k << ", tick " << i);
+        REQUIRE(ahead == queries - before - ahead);
+        queried_ticks += ahead > 0 ? 1 : 0;
+      }
+    }
+  }
+  CHECK(queried_ticks > 1000);
 }
 
 // --- every wrapper passes the look-ahead on -------------------------------------

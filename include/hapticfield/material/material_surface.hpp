@@ -97,10 +97,19 @@ class MaterialSurface {
   }
 
   /// The proxy's look-ahead (core/field.hpp) on the probe force() would
-  /// give it; nothing changes.
+  /// give it, with the material force() would give it first (the map's at
+  /// the held point; a map published since is the next tick's alone);
+  /// nothing changes.
   void anticipate(const Probe& next) const noexcept {
     Probe on;
-    if (constraint_probe(next, on)) proxy_.anticipate(on);
+    if (!constraint_probe(next, on)) return;
+    const MaterialMap* map = materials_->held();
+    if (map != nullptr && held_) {
+      const MaterialSample s = map->sample(held_uv_);
+      proxy_.anticipate(on, s.stiffness, s.damping, s.static_friction, s.dynamic_friction);
+    } else {
+      proxy_.anticipate(on);
+    }
   }
   [[nodiscard]] bool looks_ahead() const noexcept { return proxy_.looks_ahead(); }
 

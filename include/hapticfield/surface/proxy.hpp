@@ -393,11 +393,16 @@ class ProxyConstraint {
   /// pose feed's newest pose) and whose queries change nothing
   /// (PureQueries); on any other, nothing is done.
   void anticipate(const Probe& next) const noexcept {
-    if constexpr (anticipates) {
-      ProxyConstraint scratch(*this);
-      (void)scratch.contact(next);
-      if (config_.radius > 0.0) sweep_cache_ = scratch.sweep_cache_;
-    }
+    anticipate_with(next, [](ProxyConstraint&) noexcept {});
+  }
+  /// anticipate() with the material the next tick will be given first
+  /// (set_material()'s arguments): a material surface reads its map at the
+  /// proxy's held point before each tick.
+  void anticipate(const Probe& next, double stiffness, double damping, double static_friction,
+                  double dynamic_friction) const noexcept {
+    anticipate_with(next, [&](ProxyConstraint& scratch) noexcept {
+      (void)scratch.set_material(stiffness, damping, static_friction, dynamic_friction);
+    });
   }
   /// True when anticipate() does something (the shape stands still and is
   /// PureQueries).
@@ -934,6 +939,18 @@ class ProxyConstraint {
   /// offsets above the tick's planes, plus the tool's radius.
   [[nodiscard]] double reach(const Planes& planes) const noexcept {
     return 4.0 * planes.max_offset + planes.tolerance + config_.radius;
+  }
+
+  /// anticipate()'s run: a scratch copy, readied by `ready`, makes the
+  /// tick; a ball keeps its sweep cache.
+  template <class Ready>
+  void anticipate_with(const Probe& next, Ready&& ready) const noexcept {
+    if constexpr (anticipates) {
+      ProxyConstraint scratch(*this);
+      ready(scratch);
+      (void)scratch.contact(next);
+      if (config_.radius > 0.0) sweep_cache_ = scratch.sweep_cache_;
+    }
   }
 
   /// The shape changes between ticks: advance(time) at the start of each.
