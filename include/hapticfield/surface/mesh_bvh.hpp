@@ -1228,15 +1228,10 @@ class MeshBvh {
     std::array<double, bvh_neighbourhood_leaves> box_d2;  // [m^2], filled for [0, count) before read
     std::size_t nearest = 0;
     for (std::size_t k = 0; k < near.count; ++k) {
-      double sum = 0.0;
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        const double at = p[static_cast<int>(axis)];
-        const double out = detail::larger(0.0, detail::larger(static_cast<double>(near.lo[axis][k]) - at,
-                                                              at - static_cast<double>(near.hi[axis][k])));
-        sum += out * out;
-      }
-      box_d2[k] = sum;
-      if (sum < box_d2[nearest]) nearest = k;
+      const BvhNode leaf{
+          {near.lo[0][k], near.lo[1][k], near.lo[2][k]}, 0, {near.hi[0][k], near.hi[1][k], near.hi[2][k]}, 0};
+      box_d2[k] = box_distance2(leaf, p);
+      if (box_d2[k] < box_d2[nearest]) nearest = k;
     }
     const bool slabs = !node_bounds_.empty();
     const auto visit = [&](std::size_t k) noexcept {

@@ -828,14 +828,17 @@ class ProxyConstraint {
     Motion held = m;
     (void)held.planes.project(goal);
     if (held.planes.count == 0) return false;
-    for (int i = 0; i < held.planes.count && !on_planes(held.planes, held.touched); ++i) {
-      Hit face;
-      face.primitive = held.planes.primitive[static_cast<std::size_t>(i)];
-      held.touched = on_same_face(m.x, reach(held.planes), face);
+    if constexpr (curved_primitives) {
+      if (!held.touched.found()) return false;
+    } else {
+      for (int i = 0; i < held.planes.count && !on_planes(held.planes, held.touched); ++i) {
+        Hit face;
+        face.primitive = held.planes.primitive[static_cast<std::size_t>(i)];
+        held.touched = on_same_face(m.x, reach(held.planes), face);
+      }
+      if (!on_planes(held.planes, held.touched)) return false;
     }
-    if (curved_primitives && !on_planes(held.planes, held.touched)) held.touched = m.touched;
-    if (!(on_planes(held.planes, held.touched) || (curved_primitives && held.touched.found())) || !in_cone(goal, held))
-      return false;
+    if (!in_cone(goal, held)) return false;
     m = held;
     return true;
   }
@@ -1070,10 +1073,7 @@ class ProxyConstraint {
   /// within max_distance of it; else nothing. A move between two points over
   /// one flat, convex face needs no sweep.
   [[nodiscard]] Hit on_same_face(const glm::dvec3& p, double max_distance, const Hit& face) const noexcept {
-    if constexpr (requires {
-                    requires S::flat_primitives;
-                    shape_.on_primitive(face.primitive, p, max_distance);
-                  }) {
+    if constexpr (flat_primitives && answers_one_primitive) {
       if (face.found()) return shape_.on_primitive(face.primitive, p, max_distance);
     }
     return Hit{};
@@ -1105,14 +1105,13 @@ class ProxyConstraint {
         if (h.found()) return h;
       }
     }
-    if constexpr (requires(QueryStats * q, const SweepCache* c) { shape_.closest(p, max_distance, q, c); }) {
+    if constexpr (requires(QueryStats * q) { shape_.closest(p, max_distance, q); }) {
       QueryStats q;
-      const Hit h = shape_.closest(p, max_distance, &q, config_.radius > 0.0 ? &sweep_cache_ : nullptr);
-      tick_.nodes += q.nodes;
-      return h;
-    } else if constexpr (requires(QueryStats * q) { shape_.closest(p, max_distance, q); }) {
-      QueryStats q;
-      const Hit h = shape_.closest(p, max_distance, &q);
+      Hit h;
+      if constexpr (requires(const SweepCache* c) { shape_.closest(p, max_distance, &q, c); })
+        h = shape_.closest(p, max_distance, &q, config_.radius > 0.0 ? &sweep_cache_ : nullptr);
+      else
+        h = shape_.closest(p, max_distance, &q);
       tick_.nodes += q.nodes;
       return h;
     } else {
