@@ -499,49 +499,8 @@ class MeshBvh {
     if (stats) *stats = work;
     if (triangles_.empty() || !is_finite(p) || !(max_distance >= 0.0)) return best;
     double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::max();
-    if (near != nullptr && closest_near(p, max_distance, *near, best, best_d2, work)) {
-      if (best.found()) best.distance = std::sqrt(best_d2);
-      if (stats) *stats = work;
-      return best;
-    }
-    Stack stack;
-    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
-    if (!(box_distance2(root_, p) <= best_d2)) return best;
-    // (a box more than max_distance away on one axis is farther than that)
-    const glm::dvec3 around{std::isfinite(max_distance) ? max_distance : std::numeric_limits<double>::infinity()};
-    bool reachable = descend(BvhBox(p - around, p + around), index, count, work);
-    const double reach = std::sqrt(best_d2);  // [m]
-    const bool slabs = !node_bounds_.empty() && std::isfinite(max_distance);
-    while (reachable) {
-      if (++work.nodes > config_.max_nodes) {
-        best.complete = false;
-        break;
-      }
-      if (count > 0) {
-        for (std::uint32_t i = index; i < index + count; ++i) {
-          ++work.primitives;
-          keep_nearer(triangles_[i], p, best, best_d2);
-        }
-      } else {
-        const BvhNodePair& pair = pairs_[index];
-        std::array<double, 2> d2 = box_distance2(pair, p);
-        // a small node's slab: nearer bounds for a ball's query, whose reach
-        // takes in the boxes of the smooth surface around it
-        if (slabs)
-          for (std::size_t c = 0; c < 2; ++c)
-            if (d2[c] <= best_d2 && worth_slab(pair, c, reach))
-              d2[c] = detail::larger(d2[c], node_bounds_[2 * std::size_t{index} + c].distance2_below(p));
-        const std::size_t near = d2[1] < d2[0] ? 1 : 0, far = 1 - near;
-        if (d2[near] <= best_d2) {
-          if (d2[far] <= best_d2) stack.push(Pending{pair.index[far], pair.count[far], d2[far]});
-          index = pair.index[near];
-          count = pair.count[near];
-          continue;
-        }
-      }
-      // pop, skipping boxes farther than the best point so far
-      if (!stack.pop(index, count, [best_d2](double key) { return key <= best_d2; })) break;
-    }
+    if (near == nullptr || !closest_near(p, max_distance, *near, best, best_d2, work))
+      closest_tree(p, max_distance, best, best_d2, work);
     if (best.found()) best.distance = std::sqrt(best_d2);
     if (stats) *stats = work;
     return best;
@@ -1207,6 +1166,50 @@ class MeshBvh {
       best.point = q;
       best.b1 = b1;
       best.b2 = b2;
+    }
+  }
+
+  /// closest()'s walk of the tree from its root: the nearest triangle to p
+  /// within best_d2 [m^2] into best (best_d2 shrinks as nearer ones turn up).
+  void closest_tree(const glm::dvec3& p, double max_distance, BvhHit& best, double& best_d2,
+                    QueryStats& work) const noexcept {
+    Stack stack;
+    std::uint32_t index = root_.index, count = root_.count;  // the node being visited
+    if (!(box_distance2(root_, p) <= best_d2)) return;
+    // (a box more than max_distance away on one axis is farther than that)
+    const glm::dvec3 around{std::isfinite(max_distance) ? max_distance : std::numeric_limits<double>::infinity()};
+    bool reachable = descend(BvhBox(p - around, p + around), index, count, work);
+    const double reach = std::sqrt(best_d2);  // [m]
+    const bool slabs = !node_bounds_.empty() && std::isfinite(max_distance);
+    while (reachable) {
+      if (++work.nodes > config_.max_nodes) {
+        best.complete = false;
+        break;
+      }
+      if (count > 0) {
+        for (std::uint32_t i = index; i < index + count; ++i) {
+          ++work.primitives;
+          keep_nearer(triangles_[i], p, best, best_d2);
+        }
+      } else {
+        const BvhNodePair& pair = pairs_[index];
+        std::array<double, 2> d2 = box_distance2(pair, p);
+        // a small node's slab: nearer bounds for a ball's query, whose reach
+        // takes in the boxes of the smooth surface around it
+        if (slabs)
+          for (std::size_t c = 0; c < 2; ++c)
+            if (d2[c] <= best_d2 && worth_slab(pair, c, reach))
+              d2[c] = detail::larger(d2[c], node_bounds_[2 * std::size_t{index} + c].distance2_below(p));
+        const std::size_t near = d2[1] < d2[0] ? 1 : 0, far = 1 - near;
+        if (d2[near] <= best_d2) {
+          if (d2[far] <= best_d2) stack.push(Pending{pair.index[far], pair.count[far], d2[far]});
+          index = pair.index[near];
+          count = pair.count[near];
+          continue;
+        }
+      }
+      // pop, skipping boxes farther than the best point so far
+      if (!stack.pop(index, count, [best_d2](double key) { return key <= best_d2; })) break;
     }
   }
 
