@@ -5,7 +5,8 @@
 // tick; a mesh's first pass on 2 MB against 4 KB pages; the look-ahead
 // against none, back to back and paced at 1 kHz (--paced-ticks, default
 // 10000: 10 s a row); a ball's region of the tree kept between sweeps
-// against none; each tick cold against the same tick again warm; and the
+// against none; each tick cold against the same tick again warm, beside a
+// load from memory that waits for the one before (a pointer chase); and the
 // highest stiffness that stays passive at each servo rate.
 //
 //   bench_surface [--ticks N] [--max-triangles N] [--paced-ticks N] [--no-passivity]
@@ -402,6 +403,37 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
   (void)prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(slack), 0UL, 0UL, 0UL);
 }
 
+/// The machine's limit for what a cold tick meets: the time of a load that
+/// depends on the one before and misses every cache [ns], timed as the
+/// median of five passes of a chase through 256 MB (about the 1M-triangle
+/// mesh's arrays, and more than this machine's share of its caches) in a
+/// random order, one 64-byte line a step, on 2 MB pages as the mesh's
+/// arrays are.
+double dependent_load_ns() {
+  constexpr std::size_t line = 8, lines = (std::size_t{256} << 20) / 64;  // 8 words a line
+  std::vector<std::uint64_t> chase;
+  hf::reserve_on_huge_pages(chase, lines * line);
+  chase.resize(lines * line);
+  std::vector<std::uint32_t> order(lines);
+  for (std::size_t i = 0; i < lines; ++i)
+    order[i] = static_cast<std::uint32_t>(i);
+  std::shuffle(order.begin(), order.end(), std::mt19937_64(1));
+  for (std::size_t i = 0; i < lines; ++i)
+    chase[order[i] * line] = std::uint64_t{order[(i + 1) % lines]} * line;
+  constexpr int hops = 1'000'000;
+  std::array<double, 5> pass{};
+  std::uint64_t at = 0;
+  for (double& ns : pass) {
+    const double t0 = monotonic_ns();
+    for (int h = 0; h < hops; ++h)
+      at = chase[at];
+    ns = (monotonic_ns() - t0) / hops;
+  }
+  if (at == 1) std::printf("(chase ended on word 1)\n");  // keeps the chase
+  std::sort(pass.begin(), pass.end());
+  return pass[2];
+}
+
 /// What the slowest ticks cost in arithmetic against the rest, at 1M
 /// triangles: each tick of one pass timed as the tables time it (cold: its
 /// first touch of the triangles and tree nodes around a slip), then the
@@ -414,6 +446,7 @@ void anticipation_section(double side, const std::vector<hf::Probe>& path, std::
 /// answers equal (the copy makes the same tick).
 void warm_section(double side, const std::vector<hf::Probe>& path, std::size_t max_triangles) {
   if (max_triangles < 1'000'000) return;
+  const double load_ns = dependent_load_ns();
   std::printf(
       "## The slowest ticks: cold (as the tables time them) against the same tick again right after (warm), "
       "1M triangles\n\n"
@@ -422,9 +455,13 @@ void warm_section(double side, const std::vector<hf::Probe>& path, std::size_t m
       "meets first (tree nodes, triangles and vertices, a branch history not seen before), which the look-ahead "
       "takes off the tick. "
       "Wall time per tick (monotonic clock), copies untimed.\n\n"
+      "The last column is the cold p99's excess over the warm one in loads from memory that each wait for the "
+      "one before (the machine's limit: a chase through 256 MB in a random order, this run, %.0f ns a load).\n\n"
       "| radius [mm] | cold: mean [ns] | p99 [ns] | p99.9 [ns] | warm: mean [ns] | p99 [ns] | p99.9 [ns] | "
-      "cold / warm mean | cold / warm p99 | cold / warm p99.9 | answers equal |\n"
-      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+      "cold / warm mean | cold / warm p99 | cold / warm p99.9 | answers equal | cold - warm p99, in loads from "
+      "memory |\n"
+      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|\n",
+      load_ns);
   const hf::TriangleMesh mesh = million_triangle_sheet(side);
   const hf::MeshShape shape(mesh);
   for (const double radius : {0.0, 0.0005}) {
@@ -444,9 +481,9 @@ void warm_section(double side, const std::vector<hf::Probe>& path, std::size_t m
       equal = equal && f == g;
     }
     const hf::bench::Cost c = summary(std::move(cold)), w = summary(std::move(warm));
-    std::printf("| %.1f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f | %s |\n", radius * 1e3,
+    std::printf("| %.1f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.2f | %.2f | %s | %.1f |\n", radius * 1e3,
                 c.mean_ns, c.p99_ns, c.p999_ns, w.mean_ns, w.p99_ns, w.p999_ns, c.mean_ns / w.mean_ns,
-                c.p99_ns / w.p99_ns, c.p999_ns / w.p999_ns, equal ? "yes" : "NO");
+                c.p99_ns / w.p99_ns, c.p999_ns / w.p999_ns, equal ? "yes" : "NO", (c.p99_ns - w.p99_ns) / load_ns);
   }
   std::printf("\n");
 }
