@@ -168,6 +168,9 @@ struct ContactArrays {
   double* contact_force = nullptr;    ///< N x 3, Fc alone [N]
   std::int64_t* primitive = nullptr;  ///< N, -1: none
   bool* touching = nullptr;           ///< N
+  /// Optional: each tick's path (ProxyConstraint::last_path): N x proxy_max_path x 3 [m], and its points, N.
+  double* path = nullptr;
+  std::int32_t* path_points = nullptr;
 };
 
 /// A surface contact: F = Fc (the proxy on the shape) + the parts, which see |Fc|, the normal, uv, tangent
@@ -205,6 +208,14 @@ void trace_as(AnyField& any, const ProbeArrays& a, const ContactArrays& c) noexc
     c.depth[i] = k.depth;
     c.primitive[i] = k.primitive == no_primitive ? -1 : static_cast<std::int64_t>(k.primitive);
     c.touching[i] = k.touching;
+    if (c.path) {
+      const ProxyPath& path = field->constraint().last_path();
+      c.path_points[i] = path.count;
+      double* to = c.path + 3 * proxy_max_path * i;
+      for (int q = 0; q < path.count; ++q)
+        for (int j = 0; j < 3; ++j)
+          to[3 * q + j] = path.points[static_cast<std::size_t>(q)][j];
+    }
   }
 }
 
@@ -532,7 +543,7 @@ SurfaceField surface_contact(const Surface& surface, const std::vector<Field>& p
 }
 
 py::dict contacts(SurfaceField& self, const Array& positions, const std::optional<Array>& velocities, double period,
-                  double start_time) {
+                  double start_time, bool paths) {
   if (!(std::isfinite(period) && period > 0.0)) throw py::value_error("contacts: period must be finite and > 0 [s]");
   const py::ssize_t n = rows_of(positions, 3, "positions");
   if (velocities && rows_of(*velocities, 3, "velocities") != n)
@@ -549,9 +560,15 @@ py::dict contacts(SurfaceField& self, const Array& positions, const std::optiona
   a.n = n;
   a.period = period;
   a.start_time = start_time;
-  const ContactArrays c{proxy.mutable_data(),   normal.mutable_data(),        uv.mutable_data(),
-                        depth.mutable_data(),   contact_force.mutable_data(), primitive.mutable_data(),
-                        touching.mutable_data()};
+  ContactArrays c{proxy.mutable_data(),         normal.mutable_data(),    uv.mutable_data(),      depth.mutable_data(),
+                  contact_force.mutable_data(), primitive.mutable_data(), touching.mutable_data()};
+  // each tick's path, padded to the longest a tick can take, then cut to its points below
+  std::vector<double> path_buffer(paths ? static_cast<std::size_t>(n) * proxy_max_path * 3 : 0);
+  std::vector<std::int32_t> path_points(paths ? static_cast<std::size_t>(n) : 0);
+  if (paths) {
+    c.path = path_buffer.data();
+    c.path_points = path_points.data();
+  }
   std::shared_ptr<AnyField> field = self.impl;
   const FieldUse use(self);
   {
@@ -567,6 +584,16 @@ py::dict contacts(SurfaceField& self, const Array& positions, const std::optiona
   out["depth"] = depth;
   out["primitive"] = primitive;
   out["touching"] = touching;
+  if (paths) {
+    py::list list;
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const auto points = static_cast<py::ssize_t>(path_points[static_cast<std::size_t>(i)]);
+      auto piece = matrix(points, 3);
+      std::copy_n(path_buffer.data() + 3 * proxy_max_path * i, 3 * points, piece.mutable_data());
+      list.append(piece);
+    }
+    out["path"] = list;
+  }
   return out;
 }
 
@@ -856,11 +883,14 @@ void bind_surface(py::module_& m) {
       "A surface felt through a proxy (surface_contact()): a Field (forces, force, reset, run_servo, sums) that "
       "also tells, with contacts(), where the proxy is at each probe.")
       .def("contacts", &contacts, py::arg("positions"), py::arg("velocities") = py::none(),
-           py::arg("period") = servo_period, py::arg("start_time") = 0.0,
+           py::arg("period") = servo_period, py::arg("start_time") = 0.0, py::arg("paths") = false,
            "Evaluates the field at N probes in order as consecutive ticks (like forces()) and returns a dict of "
            "arrays: force N x 3 [N] (Fc + parts), contact_force N x 3 [N] (Fc alone), proxy N x 3 [m], normal "
            "N x 3 (unit, toward the user; zero when not touching), uv N x 2, depth N [m], primitive N (triangle "
-           "or grid cell j (width - 1) + i; -1: none) and touching N (bool). The GIL is released.");
+           "or grid cell j (width - 1) + i; -1: none) and touching N (bool). paths=True adds path: a list of N "
+           "arrays, each K x 3 [m], the way the proxy went in that tick (where it started, then the end of each "
+           "straight piece, the last row where it stays; every piece swept against the shape), so a move that "
+           "looks like a jump can be checked piece by piece. The GIL is released.");
 
   m.def("height_field", &height_field, py::arg("heights"), py::arg("spacing") = 1e-4, py::arg("origin") = py::none(),
         py::arg("pose") = py::none(), py::arg("shade_normals") = true, py::arg("max_nodes") = bvh_default_max_nodes,

@@ -163,8 +163,8 @@ class Surface:
 
 class SurfaceField(Field):
     """A surface felt through a proxy (surface_contact()): a Field (forces, force, reset, run_servo, sums) that also tells, with contacts(), where the proxy is at each probe."""
-    def contacts(self, positions: numpy.typing.ArrayLike, velocities: Optional[numpy.typing.ArrayLike] = None, period: float = 0.001, start_time: float = 0.0) -> Dict[str, Any]:
-        """Evaluates the field at N probes in order as consecutive ticks (like forces()) and returns a dict of arrays: force N x 3 [N] (Fc + parts), contact_force N x 3 [N] (Fc alone), proxy N x 3 [m], normal N x 3 (unit, toward the user; zero when not touching), uv N x 2, depth N [m], primitive N (triangle or grid cell j (width - 1) + i; -1: none) and touching N (bool). The GIL is released."""
+    def contacts(self, positions: numpy.typing.ArrayLike, velocities: Optional[numpy.typing.ArrayLike] = None, period: float = 0.001, start_time: float = 0.0, paths: bool = False) -> Dict[str, Any]:
+        """Evaluates the field at N probes in order as consecutive ticks (like forces()) and returns a dict of arrays: force N x 3 [N] (Fc + parts), contact_force N x 3 [N] (Fc alone), proxy N x 3 [m], normal N x 3 (unit, toward the user; zero when not touching), uv N x 2, depth N [m], primitive N (triangle or grid cell j (width - 1) + i; -1: none) and touching N (bool). paths=True adds path: a list of N arrays, each K x 3 [m], the way the proxy went in that tick (where it started, then the end of each straight piece, the last row where it stays; every piece swept against the shape), so a move that looks like a jump can be checked piece by piece. The GIL is released."""
 
 
 class VideoField(Field):
