@@ -2,7 +2,7 @@
 // (god-object's) forces come out, tick by tick, as a servo loop would feel
 // them.
 //
-//   feel_shape SHAPE --probes IN.csv [--forces OUT.csv] [--stiffness K]
+//   feel_shape SHAPE --probes IN.csv [--forces OUT.csv] [--paths PATHS.csv] [--stiffness K]
 //              [--damping B] [--friction MU_S[,MU_K]] [--radius R] [--scale S] [--facets]
 //              [--rotate AX,AY,AZ,DEG] [--translate X,Y,Z]
 //              [--kind mesh|picture|depth] [--height-scale H] [--spacing S]
@@ -17,6 +17,9 @@
 //   t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact
 // the proxy [m], the force on the HIP [N], the contact normal, the touched
 // point's uv, its triangle or grid cell (-1: none) and 1 while touching.
+// --paths PATHS.csv gets the way the proxy went in each tick, t,point,x,y,z:
+// point 0 where it started, then the end of each straight piece (every
+// piece swept against the shape), the last where it stays.
 // --radius R [m] makes the tool a ball of radius R centred on the HIP (the
 // proxy is its centre, resting R above a face; a height map's cells are two
 // flat triangles each for a ball).
@@ -71,6 +74,9 @@ constexpr const char* usage =
     "  --forces OUT.csv      where the forces go; '-' (default) is stdout. Columns:\n"
     "                        t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact\n"
     "                        [s, m, N, -]; primitive -1 and contact 0 when not touching\n"
+    "  --paths PATHS.csv     the way the proxy went in each tick: t,point,x,y,z [s, -, m], point 0\n"
+    "                        where it started, then the end of each straight piece (each one\n"
+    "                        swept against the shape), the last where it stays\n"
     "  --stiffness K         proxy spring [N/m], in (0, 1e6] (default 1500)\n"
     "  --damping B           on the normal velocity while touching [N s/m], in [0, 1e4] (default 0)\n"
     "  --friction MU         static and dynamic friction [-], MU_S,MU_K or one value for both,\n"
@@ -105,6 +111,7 @@ struct Arguments {
   std::string shape;
   std::string probes;
   std::string forces = "-";
+  std::string paths;  ///< --paths: where each tick's path goes; empty: nowhere
   hf::ProxyConfig proxy{};
   double scale = 1.0;
   bool scale_given = false;
@@ -165,6 +172,9 @@ Arguments parse(hf::cli::Parser& p) {
       if (v != "-") {  // checked by finish() like every output file
         hf::cli::check_output_file(v, "--forces");
       }
+    } else if (p.is("--paths")) {
+      a.paths = p.value();
+      hf::cli::check_output_file(a.paths, "--paths");
     } else if (p.is("--stiffness")) {
       a.proxy.stiffness = p.real(hf::cli::open_closed(0.0, 1e6));
     } else if (p.is("--damping")) {
@@ -247,11 +257,13 @@ std::vector<std::array<double, 4>> read_probes(const std::string& path) {
   return rows;
 }
 
-/// Feels the path on one shape and writes a line per probe.
+/// Feels the path on one shape and writes a line per probe (and, when
+/// `paths` is open, a line per point of each tick's path).
 template <class Field>
-void feel(Field field, const std::vector<std::array<double, 4>>& probes, std::FILE* out, std::size_t& touching,
-          double& largest) {
+void feel(Field field, const std::vector<std::array<double, 4>>& probes, std::FILE* out, std::FILE* paths,
+          std::size_t& touching, double& largest) {
   std::fprintf(out, "t,proxy_x,proxy_y,proxy_z,fx,fy,fz,nx,ny,nz,u,v,primitive,contact\n");
+  if (paths) std::fprintf(paths, "t,point,x,y,z\n");
   glm::dvec3 previous{0.0};
   for (std::size_t i = 0; i < probes.size(); ++i) {
     const auto& [t, x, y, z] = probes[i];
@@ -271,6 +283,13 @@ void feel(Field field, const std::vector<std::array<double, 4>>& probes, std::FI
     std::fprintf(out, "%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%lld,%d\n", t, proxy.x,
                  proxy.y, proxy.z, f.x, f.y, f.z, c.normal.x, c.normal.y, c.normal.z, c.surface_uv.x, c.surface_uv.y,
                  primitive, c.touching ? 1 : 0);
+    if (paths) {
+      const hf::ProxyPath& path = field.constraint().last_path();
+      for (int q = 0; q < path.count; ++q) {
+        const glm::dvec3& at = path.points[static_cast<std::size_t>(q)];
+        std::fprintf(paths, "%.12g,%d,%.17g,%.17g,%.17g\n", t, q, at.x, at.y, at.z);
+      }
+    }
     touching += c.touching ? 1 : 0;
     largest = std::fmax(largest, glm::length(f));
   }
@@ -382,6 +401,8 @@ int run(const Arguments& args) {
   const auto probes = read_probes(args.probes);
   std::FILE* out = args.forces == "-" ? stdout : std::fopen(args.forces.c_str(), "w");
   if (!out) throw hf::FileError("cannot write forces file '" + args.forces + "'");
+  std::FILE* paths = args.paths.empty() ? nullptr : std::fopen(args.paths.c_str(), "w");
+  if (!args.paths.empty() && !paths) throw hf::FileError("cannot write paths file '" + args.paths + "'");
   // the input is good: what the shape is, where it is, what the reader said
   for (const std::string& note : loaded.notes)
     std::fprintf(stderr, "feel_shape: %s: %s\n", args.shape.c_str(), note.c_str());
@@ -392,24 +413,28 @@ int run(const Arguments& args) {
       [&](auto& s) {
         using S = std::remove_cvref_t<decltype(s)>;
         if (loaded.texture.empty()) {
-          feel(hf::contact(hf::ProxyConstraint<S>(std::move(s), args.proxy)), probes, out, touching, largest);
+          feel(hf::contact(hf::ProxyConstraint<S>(std::move(s), args.proxy)), probes, out, paths, touching, largest);
         } else if (args.relief_mm > 0.0) {
           hf::material::ModelTextureConfig texture;
           texture.proxy = args.proxy;
           feel(hf::material::relief_surface(std::move(s), loaded.texture, loaded.metres_per_uv, args.relief_mm / 1000.0,
                                             texture),
-               probes, out, touching, largest);
+               probes, out, paths, touching, largest);
         } else {
           hf::material::ModelTextureConfig texture;
           texture.proxy = args.proxy;
           feel(hf::material::textured_surface(std::move(s), loaded.texture, loaded.metres_per_uv, texture), probes, out,
-               touching, largest);
+               paths, touching, largest);
         }
       },
       loaded.shape);
   const bool failed = std::ferror(out) != 0;
   if (out != stdout ? std::fclose(out) != 0 || failed : std::fflush(out) != 0 || failed)
     throw hf::FileError("cannot write forces file '" + args.forces + "'");
+  if (paths) {
+    const bool paths_failed = std::ferror(paths) != 0;
+    if (std::fclose(paths) != 0 || paths_failed) throw hf::FileError("cannot write paths file '" + args.paths + "'");
+  }
   if (out != stdout)
     std::printf("%s: %zu probes, %zu touching, largest |F| %.6g N; forces written to %s\n", args.shape.c_str(),
                 probes.size(), touching, largest, args.forces.c_str());

@@ -5,7 +5,9 @@
 // F = k depth along +z with the proxy on the plane, an icosphere gives a
 // force along the radius of size k depth, flat pictures and depth maps give
 // F = k (height - z); with --radius R a ball on the flat STL rests R above
-// it with F = k (R - z); the real meshes of the shared data run end to end.
+// it with F = k (R - z); --paths writes each tick's path, which joins the
+// proxy rows and passes through no face of a thin slab (MeshChecker's plain
+// scan); the real meshes of the shared data run end to end.
 #include <catch2/catch.hpp>
 
 #include "child_process.hpp"
@@ -36,6 +38,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "hapticfield/surface/proxy_check.hpp"
 #include "surface_meshes.hpp"
 
 extern char** environ;
@@ -251,6 +254,8 @@ TEST_CASE("feel_shape: each bad input is one line on stderr and a non-zero exit"
   check_error({plane, "--probes", empty}, 1, "no t,x,y,z rows");
   check_error({plane, "--probes", "-"}, 1, "stdin", bad_row);
   check_error({plane, "--probes", good, "--forces", in_tmp("no/such/folder/out.csv")}, 1, "--forces");
+  check_error({plane, "--probes", good, "--paths", in_tmp("no/such/folder/paths.csv")}, 1, "--paths");
+  check_error({plane, "--probes", good, "--paths", tmp.string()}, 1, "it is a folder");
   // usage errors: status 2
   check_error({plane, "--probes", good, "--stiffness", "-1500"}, 2, "--stiffness");
   check_error({plane, "--probes", good, "--stiffness", "nan"}, 2, "--stiffness");
@@ -493,6 +498,72 @@ TEST_CASE("feel_shape: a probe path into an icosphere STL gives a force along th
     INFO("worst angle to the radius " << worst_degrees << " degrees");
     CHECK(worst_degrees < (smooth ? 0.2 : 1.5));
   }
+}
+
+TEST_CASE(
+    "feel_shape --paths: each tick's path starts where the last one stayed, ends on the proxy and passes "
+    "through no face",
+    "[feel_shape]") {
+  // a slab 0.3 mm thick and 20 mm wide, pressed into 1 mm deep (through it) and slid off each of its four edges at
+  // 2 mm a tick with friction: the proxy goes round the rims in long one-tick moves of several pieces
+  hapticfield::TriangleMesh slab = hapticfield::test::box({-0.01, -0.01, -0.00015}, {0.01, 0.01, 0.00015});
+  for (glm::dvec3& p : slab.positions)  // as the STL holds them
+    p = glm::dvec3(glm::vec3(p));
+  const std::string mesh = write(in_tmp("slab.stl"), binary_stl(slab));
+  std::vector<glm::dvec3> path;
+  const std::array<glm::dvec3, 4> headings{{{1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -0.8, -0.6}}};
+  for (const glm::dvec3& heading : headings) {
+    const glm::dvec3 start{0.002, -0.001, 0.003};
+    for (int i = 0; i <= 20; ++i)
+      path.push_back(start + (i / 20.0) * glm::dvec3{0, 0, -0.004});
+    for (int i = 1; i <= 12; ++i)
+      path.push_back(path.back() + 0.002 * heading);
+    for (int i = 1; i <= 10; ++i)
+      path.push_back(path.back() + glm::dvec3{0, 0, 0.001});
+  }
+  const std::string probes = write(in_tmp("slab.csv"), probe_csv(path));
+  const std::string paths = in_tmp("slab_paths.csv");
+  const Result r = run({mesh, "--probes", probes, "--paths", paths, "--friction", "0.4,0.3"});
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  const std::vector<Row> rows = parse_rows(r.out);
+  REQUIRE(rows.size() == path.size());
+  // t,point,x,y,z: the ticks' points in order
+  std::istringstream in(slurp(paths));
+  std::string line;
+  REQUIRE(std::getline(in, line));
+  REQUIRE(line == "t,point,x,y,z");
+  std::vector<std::vector<glm::dvec3>> ticks(rows.size());
+  std::size_t tick = 0;
+  while (std::getline(in, line)) {
+    double t = 0.0, x = 0.0, y = 0.0, z = 0.0;
+    int point = -1;
+    REQUIRE(std::sscanf(line.c_str(), "%lf,%d,%lf,%lf,%lf", &t, &point, &x, &y, &z) == 5);
+    if (point == 0 && !ticks[tick].empty()) ++tick;
+    REQUIRE(tick < rows.size());
+    REQUIRE(t == Approx(rows[tick].t).margin(1e-12));
+    REQUIRE(point == static_cast<int>(ticks[tick].size()));
+    ticks[tick].push_back({x, y, z});
+  }
+  REQUIRE(tick + 1 == rows.size());
+  const hapticfield::MeshChecker checker(slab);
+  std::size_t pieces = 0, long_moves = 0;
+  for (std::size_t i = 0; i < ticks.size(); ++i) {
+    INFO("tick " << i);
+    REQUIRE(!ticks[i].empty());
+    // the forces file rounds the proxy to 12 digits
+    CHECK(glm::length(ticks[i].back() - rows[i].proxy) < 1e-12);
+    if (i > 0) CHECK(glm::length(ticks[i].front() - rows[i - 1].proxy) < 1e-12);
+    for (std::size_t q = 0; q + 1 < ticks[i].size(); ++q) {
+      ++pieces;
+      const hapticfield::PathCrossing c = checker.crossing(ticks[i][q], ticks[i][q + 1]);
+      INFO("piece " << q << " crosses triangle " << c.triangle);
+      CHECK(!c.found());
+    }
+    if (ticks[i].size() > 3 && glm::length(ticks[i].back() - ticks[i].front()) > 5e-4) ++long_moves;
+  }
+  CHECK(pieces > rows.size());
+  CHECK(long_moves >= 4);  // round each rim
 }
 
 TEST_CASE("feel_shape: a flat picture and a 16-bit depth map give F = k (height - z) above their footprint",
