@@ -15,11 +15,14 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <mutex>
+#include <new>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -168,9 +171,11 @@ struct ContactArrays {
   double* contact_force = nullptr;    ///< N x 3, Fc alone [N]
   std::int64_t* primitive = nullptr;  ///< N, -1: none
   bool* touching = nullptr;           ///< N
-  /// Optional: each tick's path (ProxyConstraint::last_path): N x proxy_max_path x 3 [m], and its points, N.
-  double* path = nullptr;
-  std::int32_t* path_points = nullptr;
+  /// Optional: each tick's path (ProxyConstraint::last_path), its points one after another (x, y, z [m] each),
+  /// where each tick's points end (a count of points), and whether memory ran out on the way.
+  std::vector<double>* path = nullptr;
+  std::vector<std::size_t>* path_ends = nullptr;
+  bool* path_failed = nullptr;
 };
 
 /// A surface contact: F = Fc (the proxy on the shape) + the parts, which see |Fc|, the normal, uv, tangent
@@ -208,13 +213,16 @@ void trace_as(AnyField& any, const ProbeArrays& a, const ContactArrays& c) noexc
     c.depth[i] = k.depth;
     c.primitive[i] = k.primitive == no_primitive ? -1 : static_cast<std::int64_t>(k.primitive);
     c.touching[i] = k.touching;
-    if (c.path) {
+    if (c.path && !*c.path_failed) {
       const ProxyPath& path = field->constraint().last_path();
-      c.path_points[i] = path.count;
-      double* to = c.path + 3 * proxy_max_path * i;
-      for (int q = 0; q < path.count; ++q)
-        for (int j = 0; j < 3; ++j)
-          to[3 * q + j] = path.points[static_cast<std::size_t>(q)][j];
+      try {  // (not a servo tick: an offline run that grows its record)
+        for (int q = 0; q < path.count; ++q)
+          for (int j = 0; j < 3; ++j)
+            c.path->push_back(path.points[static_cast<std::size_t>(q)][j]);
+        c.path_ends->push_back(c.path->size() / 3);
+      } catch (const std::bad_alloc&) {
+        *c.path_failed = true;
+      }
     }
   }
 }
@@ -562,12 +570,16 @@ py::dict contacts(SurfaceField& self, const Array& positions, const std::optiona
   a.start_time = start_time;
   ContactArrays c{proxy.mutable_data(),         normal.mutable_data(),    uv.mutable_data(),      depth.mutable_data(),
                   contact_force.mutable_data(), primitive.mutable_data(), touching.mutable_data()};
-  // each tick's path, padded to the longest a tick can take, then cut to its points below
-  std::vector<double> path_buffer(paths ? static_cast<std::size_t>(n) * proxy_max_path * 3 : 0);
-  std::vector<std::int32_t> path_points(paths ? static_cast<std::size_t>(n) : 0);
+  // each tick's path: its points one after another, cut into one array a tick below
+  std::vector<double> path_points;
+  std::vector<std::size_t> path_ends;
+  bool path_failed = false;
   if (paths) {
-    c.path = path_buffer.data();
-    c.path_points = path_points.data();
+    path_points.reserve(static_cast<std::size_t>(n) * 3 * 3);  // three points a tick; more grow it
+    path_ends.reserve(static_cast<std::size_t>(n));
+    c.path = &path_points;
+    c.path_ends = &path_ends;
+    c.path_failed = &path_failed;
   }
   std::shared_ptr<AnyField> field = self.impl;
   const FieldUse use(self);
@@ -585,12 +597,15 @@ py::dict contacts(SurfaceField& self, const Array& positions, const std::optiona
   out["primitive"] = primitive;
   out["touching"] = touching;
   if (paths) {
+    if (path_failed) throw std::bad_alloc();  // pybind11 raises MemoryError
     py::list list;
-    for (py::ssize_t i = 0; i < n; ++i) {
-      const auto points = static_cast<py::ssize_t>(path_points[static_cast<std::size_t>(i)]);
-      auto piece = matrix(points, 3);
-      std::copy_n(path_buffer.data() + 3 * proxy_max_path * i, 3 * points, piece.mutable_data());
-      list.append(piece);
+    std::size_t begin = 0;
+    for (const std::size_t end : path_ends) {
+      auto tick = matrix(static_cast<py::ssize_t>(end - begin), 3);
+      std::copy(path_points.begin() + static_cast<std::ptrdiff_t>(3 * begin),
+                path_points.begin() + static_cast<std::ptrdiff_t>(3 * end), tick.mutable_data());
+      list.append(tick);
+      begin = end;
     }
     out["path"] = list;
   }
