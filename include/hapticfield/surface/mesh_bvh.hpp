@@ -444,9 +444,13 @@ class MeshBvh {
     BallLeaf leaf{this, radius, seeded};
     if (const double length = slide ? glm::length(*slide) : 0.0; length > 0.0 && std::isfinite(length)) {
       // less a few rounding units of the coordinates, so that only a triangle
-      // clearly out of reach is passed by (the full test's own rounding)
-      const double coordinate = detail::larger(largest_component(from), largest_component(to));  // [m]
-      const double rounding = 16.0 * std::numeric_limits<double>::epsilon() * (coordinate + radius);
+      // clearly out of reach is passed by (the full test's own rounding, and
+      // that of a corner's level as out_of_reach() computes it, from the
+      // triangle's first corner and its edges: as large as the mesh's
+      // coordinates, which may be far larger than the ball's)
+      const double coordinate =
+          detail::larger(detail::larger(largest_component(from), largest_component(to)), largest_coordinate());  // [m]
+      const double rounding = 32.0 * std::numeric_limits<double>::epsilon() * (coordinate + radius);
       leaf.slides = true;
       leaf.slide = *slide / length;
       leaf.behind = detail::smaller(glm::dot(leaf.slide, from), glm::dot(leaf.slide, to)) - radius - rounding;
@@ -1036,6 +1040,15 @@ class MeshBvh {
       bvh->touch(slot, from, d, *this, best_t, best);
     }
   };
+
+  /// The largest coordinate of the mesh, in magnitude: of its root box [m].
+  [[nodiscard]] double largest_coordinate() const noexcept {
+    double largest = 0.0;
+    for (std::size_t k = 0; k < 3; ++k)
+      largest = detail::larger(largest, detail::larger(std::fabs(static_cast<double>(root_.lo[k])),
+                                                       std::fabs(static_cast<double>(root_.hi[k]))));
+    return largest;
+  }
 
   /// True when the triangle lies wholly behind the plane a sliding ball
   /// cannot reach past (BallLeaf::behind): its corners all below it.
