@@ -66,6 +66,33 @@ double distance_to(const TriangleMesh& mesh, std::size_t j, const glm::dvec3& p)
   return glm::length(p - detail::closest_on_triangle(p, a, corner(mesh, j, 1) - a, corner(mesh, j, 2) - a, b1, b2));
 }
 
+/// A sheet flat but for rounding to float: each height nudged by up to
+/// 1e-6 of `size` [m], then rounded to the nearest float.
+void round_heights_to_float(TriangleMesh& mesh, double size, std::mt19937& rng,
+                            std::uniform_real_distribution<double>& u) {
+  for (glm::dvec3& p : mesh.positions)
+    p.z = static_cast<double>(static_cast<float>(p.z + size * 1e-6 * u(rng)));
+}
+
+/// A random turn: about a random axis, by up to 3 rad either way.
+struct Turn {
+  glm::dvec3 axis{0.0, 0.0, 1.0};
+  double angle{0.0};  ///< [rad]
+};
+Turn random_turn(std::mt19937& rng, std::uniform_real_distribution<double>& u) {
+  Turn turn;
+  turn.axis = glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
+  turn.angle = 3.0 * u(rng);
+  return turn;
+}
+
+/// The mesh turned (Rodrigues' formula), then moved by `shift` [m].
+void turn_and_move(TriangleMesh& mesh, const Turn& turn, const glm::dvec3& shift) {
+  const double c = std::cos(turn.angle), s = std::sin(turn.angle);
+  for (glm::dvec3& p : mesh.positions)
+    p = p * c + glm::cross(turn.axis, p) * s + turn.axis * glm::dot(turn.axis, p) * (1.0 - c) + shift;
+}
+
 /// Two answers of the same sweep asked two ways: the same, bit for bit.
 void require_same_hit(const BvhHit& asked, const BvhHit& reference) {
   REQUIRE(asked.found() == reference.found());
@@ -513,16 +540,11 @@ TEST_CASE(
         mesh.triangles.push_back({first, first + 1, first + 2});
       }
     }
-    if (kind == 5)  // a sheet flat but for rounding to float
-      for (glm::dvec3& p : mesh.positions)
-        p.z = static_cast<double>(static_cast<float>(p.z + size * 1e-6 * u(rng)));
+    if (kind == 5) round_heights_to_float(mesh, size, rng, u);
     // turned about a random axis, then moved
-    const glm::dvec3 axis = glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
-    const double angle = 3.0 * u(rng);
+    const Turn turn = random_turn(rng, u);
     const glm::dvec3 shift = (m % 3 == 0 ? 10.0 * unit() : 0.0) * glm::dvec3{u(rng), u(rng), u(rng)};
-    for (glm::dvec3& p : mesh.positions)
-      p = p * std::cos(angle) + glm::cross(axis, p) * std::sin(angle) +
-          axis * glm::dot(axis, p) * (1.0 - std::cos(angle)) + shift;
+    turn_and_move(mesh, turn, shift);
     const double rounding = 64.0 * std::numeric_limits<double>::epsilon() * (glm::length(shift) + size);  // [m]
     const MeshBvh bvh = MeshBvh::build(mesh);
     MeshBvh boxes_only = MeshBvh::build(mesh);
@@ -928,15 +950,8 @@ TEST_CASE(
   for (int m = 0; m < 40; ++m) {
     const double size = std::pow(10.0, -2.0 + 2.0 * unit());  // [m]
     TriangleMesh mesh = test::flat_sheet(size, 4 + static_cast<int>(rng() % 5));
-    mesh.uvs.clear();
-    mesh.normals.clear();
-    for (glm::dvec3& p : mesh.positions)
-      p.z = static_cast<double>(static_cast<float>(p.z + size * 1e-6 * u(rng)));
-    const glm::dvec3 axis = glm::normalize(glm::dvec3{u(rng), u(rng), u(rng)} + glm::dvec3{0.0, 0.0, 1e-3});
-    const double angle = 3.0 * u(rng);
-    for (glm::dvec3& p : mesh.positions)
-      p = p * std::cos(angle) + glm::cross(axis, p) * std::sin(angle) +
-          axis * glm::dot(axis, p) * (1.0 - std::cos(angle));
+    round_heights_to_float(mesh, size, rng, u);
+    turn_and_move(mesh, random_turn(rng, u), glm::dvec3{0.0});
     const MeshBvh bvh = MeshBvh::build(mesh);
     for (std::size_t j = 0; j < mesh.triangles.size(); ++j) {
       const glm::dvec3 a = corner(mesh, j, 0);
