@@ -76,7 +76,7 @@ constexpr const char* usage =
     "                        [s, m, N, -]; primitive -1 and contact 0 when not touching\n"
     "  --paths PATHS.csv     the way the proxy went in each tick: t,point,x,y,z [s, -, m], point 0\n"
     "                        where it started, then the end of each straight piece (each one\n"
-    "                        swept against the shape), the last where it stays\n"
+    "                        swept against the shape), the last where it stays; a file, not '-'\n"
     "  --stiffness K         proxy spring [N/m], in (0, 1e6] (default 1500)\n"
     "  --damping B           on the normal velocity while touching [N s/m], in [0, 1e4] (default 0)\n"
     "  --friction MU         static and dynamic friction [-], MU_S,MU_K or one value for both,\n"
@@ -174,6 +174,7 @@ Arguments parse(hf::cli::Parser& p) {
       }
     } else if (p.is("--paths")) {
       a.paths = p.value();
+      if (a.paths == "-") throw hf::cli::UsageError("--paths needs a file: '-' (stdout) is where the forces go");
       hf::cli::check_output_file(a.paths, "--paths");
     } else if (p.is("--stiffness")) {
       a.proxy.stiffness = p.real(hf::cli::open_closed(0.0, 1e6));

@@ -257,6 +257,7 @@ TEST_CASE("feel_shape: each bad input is one line on stderr and a non-zero exit"
   check_error({plane, "--probes", good, "--paths", in_tmp("no/such/folder/paths.csv")}, 1, "--paths");
   check_error({plane, "--probes", good, "--paths", tmp.string()}, 1, "it is a folder");
   // usage errors: status 2
+  check_error({plane, "--probes", good, "--paths", "-"}, 2, "--paths needs a file");
   check_error({plane, "--probes", good, "--stiffness", "-1500"}, 2, "--stiffness");
   check_error({plane, "--probes", good, "--stiffness", "nan"}, 2, "--stiffness");
   check_error({plane, "--probes", good, "--stiffness", "0"}, 2, "--stiffness");
